@@ -1,0 +1,307 @@
+//! Diagnostics: stable error codes, their `mochi explain` texts, and the
+//! [`Diagnostic`] value every stage produces. Nothing here renders; see `render.rs`.
+//!
+//! Codes are grouped by stage: E01 syntax, E02 names and sorts, E03 well-formedness of
+//! the choreography (Def 4.1, Sec 4.1, Def 4.4), E04 motion contracts ([AGCOMP]),
+//! E06 projection (Defs 4.7-4.8), E07 process typing (Fig 5, Table 1) and U00 for
+//! checks that could not be decided. A code never changes meaning once released.
+
+use crate::source::Span;
+use serde::Serialize;
+
+macro_rules! codes {
+    ($($variant:ident = $code:literal, $title:literal, $explain:literal;)*) => {
+        /// A stable diagnostic code.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+        pub enum Code { $($variant,)* }
+
+        impl Code {
+            /// Every code, in numeric order.
+            pub const ALL: &'static [Code] = &[$(Code::$variant,)*];
+
+            /// The code as users type it, e.g. `E0301`.
+            pub fn as_str(self) -> &'static str {
+                match self { $(Code::$variant => $code,)* }
+            }
+
+            /// A short lowercase title.
+            pub fn title(self) -> &'static str {
+                match self { $(Code::$variant => $title,)* }
+            }
+
+            /// The paragraph printed by `mochi explain CODE`.
+            pub fn explain(self) -> &'static str {
+                match self { $(Code::$variant => $explain,)* }
+            }
+        }
+    };
+}
+
+codes! {
+    UnexpectedChar = "E0101", "unexpected character",
+        "The lexer met a character that starts no token of mochi's language. mochi files are ASCII: \
+         identifiers, numbers, strings in double quotes, `//` and `/* */` comments, and the \
+         punctuation listed in LANGUAGE.md. Remove the character or replace a typographic symbol \
+         by its ASCII spelling (for example `->` for an arrow, `&&` for a conjunction).";
+    Unterminated = "E0102", "unterminated comment or string",
+        "A block comment `/* ...` or a string `\"...` runs to the end of the file. Close it with \
+         `*/` or `\"` on the same logical item.";
+    UnexpectedToken = "E0103", "unexpected token",
+        "The parser expected one kind of token and found another. The message lists what would \
+         have been accepted at that point. mochi recovers at the next `;` or top-level keyword, \
+         so later errors in the same item may be consequences of this one.";
+    BadNumber = "E0104", "malformed number",
+        "A numeric literal could not be read: integers must fit in 64 bits and reals are written \
+         with digits on both sides of the point, as in `0.65` or `1.0e-3`.";
+    ImportNotFound = "E0105", "imported file cannot be read",
+        "An `import \"path\";` names a file that does not exist or cannot be read. Paths are \
+         relative to the importing file. Each file is loaded once, so import cycles are harmless.";
+    UnknownRobot = "E0201", "unknown robot kind",
+        "A participant or a motion primitive names a robot kind that no `robot` declaration \
+         defines. Declare it, or import the file of `robots/` that does.";
+    UnknownParticipant = "E0202", "unknown participant",
+        "A choreography, process, local type or qualified variable names a participant that the \
+         `system` does not declare. Every role must be declared once as `participant Name: Kind`.";
+    UnknownPrimitive = "E0203", "unknown motion primitive",
+        "A joint motion `dt<p: a>` or a process motion names a primitive `a` that is not declared \
+         for the robot kind of `p` (Def 4.4 (3): a motion primitive must exist for each \
+         participant). Declare `motion Kind.a(...) { ... }` or use a primitive of that kind.";
+    ArityMismatch = "E0204", "wrong number of arguments",
+        "A motion primitive, recursion variable or message is used with a different number of \
+         arguments than it declares. Pass exactly one argument per declared parameter.";
+    UnknownVariable = "E0205", "unknown variable",
+        "An expression names a variable that is neither a constant, a parameter, a state or input \
+         variable of the robot in question, nor a value received or sent earlier in the protocol.";
+    Duplicate = "E0206", "duplicate definition",
+        "A name is defined twice in the same namespace: two robot kinds, two primitives of one \
+         kind, two participants, two fields of one motion, two variables of one robot, or two \
+         processes for one role. Rename or delete one of them.";
+    UnboundRecursion = "E0207", "unbound recursion variable",
+        "A recursion variable `t` is used outside any `mu t. ...` that binds it (Def 4.1: types \
+         are closed). Bind it with `mu t.` around the recursive part.";
+    SortMismatch = "E0208", "sort mismatch",
+        "An expression has the wrong sort: a predicate must be `bool`, arithmetic needs `int` or \
+         `real` (ints are promoted to reals), components need a `point` or `vector`. The message \
+         says which sort was expected and which was found.";
+    UnconnectedInput = "E0209", "input variable not connected",
+        "Sec 3.1: an input variable `w` of a participant takes its value from the unique other \
+         participant with a state variable named `w`. None, or more than one, exists. Rename the \
+         input or the state variables so that exactly one other participant provides it.";
+    MissingItem = "E0210", "missing system or choreography",
+        "`mochi check` needs one `system` block and one `choreography` in the files it reads. \
+         Library files under `robots/` and `motion-primitives/` have neither; check the \
+         choreography that imports them instead.";
+    VariableNotAllowed = "E0211", "variable not allowed in this part of a contract",
+        "Def 3.4 fixes what each part of a motion primitive may read: pre- and postconditions read \
+         state and input variables; the assumption reads inputs and `clock`; the guarantee reads \
+         state variables and `clock`; the footprint reads state variables, its point and `clock`. \
+         `old(x)` is the value of a state variable when the motion started. Parameters and \
+         constants may appear everywhere.";
+    MissingField = "E0212", "missing field",
+        "A motion primitive must say whether it can be interrupted by a message \
+         (`interruptible: true;`) or not (`interruptible: false;`), Def 3.4. Other fields default \
+         to the weakest contract: `true` predicates, a footprint filling space, duration `[0, inf]`.";
+    SelfMessage = "E0301", "message to oneself",
+        "Def 4.1 requires `p != q` in `p -> q : l`. A participant cannot send a message to itself; \
+         use a local computation in its process instead.";
+    DuplicateLabel = "E0302", "duplicate label in a choice",
+        "Def 4.1 requires distinct labels `l_i != l_j` among the branches of a choice, so the \
+         receiver can tell which branch was taken. Rename one of the labels.";
+    ChoiceMismatch = "E0303", "choice branches do not start with the same sender and receiver",
+        "Def 4.1: every branch `g_i` of `g_1 + ... + g_n` starts with a message `p -> q` with the \
+         same `p` and `q`, so that `p` decides and `q` learns the decision. Start every branch \
+         with a message from the same sender to the same receiver (different labels), and tell \
+         other participants in a second message.";
+    UnguardedRecursion = "E0304", "unguarded recursion",
+        "Def 4.1 postulates guarded recursion: between `mu t.` and an occurrence of `t` there must \
+         be at least one message or motion. `mu t. t` has no meaning.";
+    GuardNotLocal = "E0305", "guard or refinement reads a variable its sender does not know",
+        "Def 4.1: `fv(P) ⊆ p.X ∪ p.W` for the guard of `p -> q : [P] l`, and the refinement may \
+         also read the value variable. mochi also lets a sender read values it sent or received \
+         earlier. Motion arguments in `dt<p: a(e)>` follow the same rule for `p`. Move the test \
+         to the participant that owns the variable, or send the value first.";
+    DuplicateMotionParticipant = "E0306", "participant moves twice in one joint motion",
+        "A joint motion `dt<p1: a1, ..., pn: an>` gives one primitive to each participant; the \
+         participants must be distinct (a robot executes one motion primitive at a time).";
+    SeparationOverlap = "E0307", "participant on both sides of `*`",
+        "Sec 4.1: `g1 * g2` is fully separated only if `pt{g1} ∩ pt{g2} = ∅`: the two sides are \
+         independent groups that neither communicate nor move together until they merge. Move \
+         the shared participant's actions out of one side.";
+    OutOfScope = "E0308", "participant out of scope",
+        "Well-scopedness (Sec 4.1, rules (1)-(6)): each node of the once-unfolded choreography is \
+         labelled with the participants in scope; a `*` splits the scope in two. A message or \
+         motion that involves a participant outside its scope cannot be labelled. This typically \
+         happens when a recursion variable, unfolded, lands inside one side of a `*`.";
+    IncompleteMotion = "E0309", "joint motion leaves a participant in scope without a primitive",
+        "Def 4.4 (3), total motion: a joint motion `dt<...>` must give a motion primitive to every \
+         participant in scope, because time passes for all of them. Add `p: idle`-like primitives \
+         for the missing participants, or split them off with `*`.";
+    NotUniqueMinimal = "E0310", "no unique minimal communication after a motion",
+        "Synchronisability (Sec 4.1): every joint motion must have a unique immediate \
+         happens-before edge to a message `p -> q`: the message that ends it. When two messages \
+         can come first (say `p -> q` and `r -> q`), the participants in the motion cannot know \
+         whose message interrupts them. Order the messages through a common sender.";
+    SenderNotReady = "E0311", "sender of the message after a motion is not ready",
+        "Sender readiness (Sec 4.1): the message that ends a joint motion must be sent by the \
+         participant executing the only non-interruptible primitive, or every primitive of the \
+         motion must be interruptible. Otherwise the sender could still be in the middle of a \
+         motion it cannot stop. Make the other primitives interruptible or change the sender.";
+    NotTotallySynchronised = "E0312", "participant changes motion without being told",
+        "Total synchronisation (Sec 4.1, Example 4.2): between two joint motions ordered by \
+         happens-before, every participant of the first must send or receive a message, or it \
+         cannot know when to switch primitive. mochi accepts one documented exception \
+         (ARCHITECTURE.md): a lone participant whose primitive is non-interruptible may chain \
+         into another motion of its own, since it switches when its motion ends.";
+    ParticipantUnused = "E0313", "participant takes no part in the choreography",
+        "[T-SESS] requires `pt{G} = P`: every declared participant appears in the choreography. \
+         Remove the participant from the system or give it a role.";
+    NotTailPosition = "E0314", "nothing may follow `end`, a recursion or its variable",
+        "Def 4.1: `G ::= g.G | t | mu t.G` — recursion and its variables (and `end`) close a \
+         sequence. Move what follows into the recursion body.";
+    CoupledAcrossSeparation = "E0315", "motions on two sides of `*` are coupled through inputs",
+        "Sec 4.1, full separation: the assumption of a primitive in `g_i` may only depend on \
+         state variables of participants in `pt{g_i}`. An input variable connected to a \
+         participant on the other side couples the two groups. Put both participants on one side.";
+    TwoNonInterruptible = "E0401", "more than one non-interruptible primitive in a joint motion",
+        "[AGCOMP] (Sec 3.4): at most one primitive of a joint motion may be non-interruptible; the \
+         others must be ready to be interrupted by the message that ends the motion. Make all but \
+         one primitive interruptible.";
+    Unmergeable = "E0601", "projection cannot merge two branches",
+        "Projection (Def 4.8 (3)) of a choice onto a participant that neither sends nor receives \
+         the choosing message merges the projections of the branches (Def 4.7). Merging succeeds \
+         when they are equal, when both are receptions from the same sender (possibly with a \
+         default motion), or when one is a motion and the other receptions with that default. \
+         The participant cannot tell which branch was taken; inform it with a message.";
+    LocalMismatch = "E0602", "declared local type differs from the projection",
+        "A `local R = T;` item states what the projection of the choreography onto `R` must be. \
+         The projection mochi computed differs; `mochi project FILE --role R` prints it.";
+    MissingProcess = "E0701", "participant has no process",
+        "[T-SESS] types one process per participant. Add `process R = ...;` for the participant.";
+    ActionMismatch = "E0702", "process action does not match the local type",
+        "Process typing (Table 1): at this point the local type expects a different action (send, \
+         receive, motion, recursion or end) than the process performs. The message shows both.";
+    MissingBranch = "E0703", "process does not handle a message the type may deliver",
+        "[T-CHOICE1/2] and [SUB-IN]: an external choice in the process must offer every label the \
+         local type may receive from that sender; it may offer more. Add the missing branch.";
+    UnexpectedSend = "E0704", "process sends a message the type does not allow",
+        "[T-OUT] and [SUB-OUT]: each send must match a branch of the internal choice in the local \
+         type, with the same receiver and label.";
+    PrimitiveMismatch = "E0705", "process motion cannot refine the type's motion",
+        "[SUB-MOTION] lets a process run a primitive that refines the one in the type (Def 3.4, \
+         corrected direction). Refinement requires the same robot kind and the same \
+         interruptibility; the predicate and duration conditions are proof obligations.";
+    RecursionMismatch = "E0706", "process recursion does not match the local type",
+        "[T-REC]: a process variable must stand where its recursion is expected; the process loops \
+         to a different point than the type, or exits a loop the type keeps.";
+    PayloadArity = "E0707", "wrong number of values in a message",
+        "A send or receive in a process carries a different number of values than the message of \
+         the local type declares.";
+    Undecided = "U0001", "proof obligations undecided",
+        "Some checks reduce to predicate validity (total choice, [AGCOMP] compatibility, full \
+         separation of footprints, refinement and typing side conditions). When a query could not \
+         be decided — no solver in this build, a timeout, or an unsupported theory — the check is \
+         reported as unknown and the verdict is `unknown` (exit code 3), never `verified`.";
+}
+
+impl std::fmt::Display for Code {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl std::str::FromStr for Code {
+    type Err = ();
+    fn from_str(s: &str) -> Result<Code, ()> {
+        let s = s.trim().to_ascii_uppercase();
+        Code::ALL.iter().copied().find(|c| c.as_str() == s).ok_or(())
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Severity {
+    Error,
+    Warning,
+    Note,
+}
+
+/// A secondary location with a short message ("the other branch is here").
+#[derive(Clone, Debug, PartialEq)]
+pub struct Label {
+    pub span: Span,
+    pub message: String,
+}
+
+/// One finding, located in the source. Messages are lowercase without a final period.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Diagnostic {
+    pub code: Code,
+    pub severity: Severity,
+    pub span: Span,
+    pub message: String,
+    pub labels: Vec<Label>,
+    pub notes: Vec<String>,
+    pub help: Option<String>,
+}
+
+impl Diagnostic {
+    pub fn error(code: Code, span: Span, message: impl Into<String>) -> Diagnostic {
+        Diagnostic {
+            code,
+            severity: Severity::Error,
+            span,
+            message: message.into(),
+            labels: Vec::new(),
+            notes: Vec::new(),
+            help: None,
+        }
+    }
+
+    pub fn note_at(code: Code, span: Span, message: impl Into<String>) -> Diagnostic {
+        Diagnostic { severity: Severity::Note, ..Diagnostic::error(code, span, message) }
+    }
+
+    pub fn with_label(mut self, span: Span, message: impl Into<String>) -> Diagnostic {
+        self.labels.push(Label { span, message: message.into() });
+        self
+    }
+
+    pub fn with_note(mut self, note: impl Into<String>) -> Diagnostic {
+        self.notes.push(note.into());
+        self
+    }
+
+    pub fn with_help(mut self, help: impl Into<String>) -> Diagnostic {
+        self.help = Some(help.into());
+        self
+    }
+
+    pub fn is_error(&self) -> bool {
+        self.severity == Severity::Error
+    }
+}
+
+/// Sorts diagnostics by file and position so output is stable whatever the stage order.
+pub fn sort(diags: &mut [Diagnostic]) {
+    diags.sort_by(|a, b| {
+        (a.span.file, a.span.start, a.code, &a.message).cmp(&(b.span.file, b.span.start, b.code, &b.message))
+    });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn codes_are_unique_and_parse_back() {
+        let mut seen = std::collections::HashSet::new();
+        for &c in Code::ALL {
+            assert!(seen.insert(c.as_str()), "duplicate code {c}");
+            assert_eq!(c.as_str().parse::<Code>(), Ok(c));
+            assert!(c.explain().len() > 80, "{c} needs a real explanation");
+            assert_eq!(c.title(), c.title().to_lowercase(), "{c} title must be lowercase");
+        }
+        assert_eq!("e0301".parse::<Code>(), Ok(Code::SelfMessage));
+        assert!("E9999".parse::<Code>().is_err());
+    }
+}
