@@ -1,0 +1,105 @@
+//! Global types (Def 4.1): `G ::= g.G | t | mu t.G` with prefixes
+//! `g ::= dt<(p_i : a_i)> | p -> q : [P] l({v : S | P'}) | g.g | g + g | g * g`,
+//! plus `end` and parameterised recursion for refined sessions.
+
+use super::{Expr, Loc, PrimId, RoleId, Sort, ValueId};
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Global {
+    Msg(Msg),
+    Motion(Motion),
+    Seq(Vec<Global>, Loc),
+    /// Branches each start with a message from the same sender to the same receiver.
+    Choice(Vec<Global>, Loc),
+    /// The separating conjunction `*`.
+    Par(Vec<Global>, Loc),
+    Rec { var: String, params: Vec<RecParam>, body: Box<Global>, loc: Loc },
+    Var(RecVar),
+    End(Loc),
+}
+
+impl Global {
+    pub fn loc(&self) -> Loc {
+        match self {
+            Global::Msg(m) => m.loc,
+            Global::Motion(m) => m.loc,
+            Global::Seq(_, l) | Global::Choice(_, l) | Global::Par(_, l) | Global::End(l) => *l,
+            Global::Rec { loc, .. } => *loc,
+            Global::Var(v) => v.loc,
+        }
+    }
+
+    /// The participants of a global type, `pt{G}` (Sec 4.1), in order of appearance.
+    pub fn participants(&self, out: &mut Vec<RoleId>) {
+        let add = |r: RoleId, out: &mut Vec<RoleId>| {
+            if !out.contains(&r) {
+                out.push(r)
+            }
+        };
+        match self {
+            Global::Msg(m) => {
+                add(m.from, out);
+                add(m.to, out);
+            }
+            Global::Motion(m) => m.parts.iter().for_each(|(r, _)| add(*r, out)),
+            Global::Seq(gs, _) | Global::Choice(gs, _) | Global::Par(gs, _) => gs.iter().for_each(|g| g.participants(out)),
+            Global::Rec { body, .. } => body.participants(out),
+            Global::Var(_) | Global::End(_) => {}
+        }
+    }
+}
+
+/// `from -> to : [guard] label(payload)`
+#[derive(Clone, Debug, PartialEq)]
+pub struct Msg {
+    pub from: RoleId,
+    pub to: RoleId,
+    pub guard: Option<Expr>,
+    pub label: String,
+    pub payload: Vec<Field>,
+    pub loc: Loc,
+    /// Where the label is written (for duplicate-label diagnostics).
+    pub label_loc: Loc,
+}
+
+/// A refined payload field `{v : S | P}`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Field {
+    pub value: ValueId,
+    pub name: String,
+    pub sort: Sort,
+    pub refinement: Option<Expr>,
+}
+
+/// `dt<(p_i : a_i)>`
+#[derive(Clone, Debug, PartialEq)]
+pub struct Motion {
+    pub parts: Vec<(RoleId, PrimApp)>,
+    pub loc: Loc,
+}
+
+/// A primitive applied to arguments.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PrimApp {
+    pub prim: PrimId,
+    pub args: Vec<Expr>,
+    pub loc: Loc,
+}
+
+/// A parameter of a parameterised recursion (DATUM's `mu T(curr : Z {P}) <curr = 0>`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RecParam {
+    pub value: ValueId,
+    pub name: String,
+    pub sort: Sort,
+    pub refinement: Option<Expr>,
+    pub init: Expr,
+}
+
+/// An occurrence of a recursion variable with its arguments.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RecVar {
+    pub var: String,
+    pub args: Vec<Expr>,
+    pub loc: Loc,
+}

@@ -1,0 +1,57 @@
+//! Local types (Def 4.6):
+//! `T ::= dt<a>.T | ⊕{[P_i] q!l_i(P'_i).T_i} | &{p?l_i(P_i).T_i} | &{p?l_i(P_i).T_i} & dt<a>.T | mu t.T | t`
+//! plus `end`. Continuations are shared through [`Rc`], so the tail that projection pushes
+//! into every branch of a choice is stored once.
+
+use super::{Expr, Field, Loc, PrimApp, RecParam, RoleId};
+use std::rc::Rc;
+
+pub type LocalRc = Rc<Local>;
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Local {
+    /// `dt<a>.T`; more than one primitive is the merge `a ⊓ a'` of Def 4.7.
+    Motion { prims: Vec<PrimApp>, cont: LocalRc, loc: Loc },
+    Send { branches: Vec<SendBranch>, loc: Loc },
+    Recv { branches: Vec<RecvBranch>, default: Option<(Vec<PrimApp>, LocalRc)>, loc: Loc },
+    Rec { var: String, params: Vec<RecParam>, body: LocalRc, loc: Loc },
+    Var { var: String, args: Vec<Expr>, loc: Loc },
+    End(Loc),
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct SendBranch {
+    pub guard: Option<Expr>,
+    pub to: RoleId,
+    pub label: String,
+    pub payload: Vec<Field>,
+    pub cont: LocalRc,
+    pub loc: Loc,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct RecvBranch {
+    pub from: RoleId,
+    pub label: String,
+    pub payload: Vec<Field>,
+    pub cont: LocalRc,
+    pub loc: Loc,
+}
+
+impl Local {
+    pub fn loc(&self) -> Loc {
+        match self {
+            Local::Motion { loc, .. }
+            | Local::Send { loc, .. }
+            | Local::Recv { loc, .. }
+            | Local::Rec { loc, .. }
+            | Local::Var { loc, .. }
+            | Local::End(loc) => *loc,
+        }
+    }
+
+    /// Structural equality with a pointer shortcut for shared tails.
+    pub fn same(a: &LocalRc, b: &LocalRc) -> bool {
+        Rc::ptr_eq(a, b) || a == b
+    }
+}

@@ -1,0 +1,220 @@
+//! The HIR: the program after name resolution. Names are ids into the tables of
+//! [`Program`]; every node keeps a [`Loc`] for diagnostics. Equality ignores locations,
+//! so two local types written in different places compare equal when they say the same
+//! thing (the merge of Def 4.7 relies on this).
+//!
+//! Submodules follow the paper: [`expr`] (predicates and sorts), [`global`] (Def 4.1),
+//! [`local`] (Def 4.6), [`process`] (Sec 3.1), [`print`] (mochi's ASCII notation).
+
+pub mod expr;
+pub mod global;
+pub mod local;
+pub mod print;
+pub mod process;
+
+pub use expr::{Builtin, Expr, ExprKind, Slot, Sort, Var};
+pub use global::{Field, Global, Motion, Msg, PrimApp, RecParam, RecVar};
+pub use local::{Local, LocalRc, RecvBranch, SendBranch};
+pub use process::{Process, RecvArm};
+
+use crate::source::Span;
+use std::fmt;
+
+/// A source location that never takes part in equality or hashing.
+#[derive(Clone, Copy, Default)]
+pub struct Loc(pub Span);
+
+impl PartialEq for Loc {
+    fn eq(&self, _: &Loc) -> bool {
+        true
+    }
+}
+impl Eq for Loc {}
+impl std::hash::Hash for Loc {
+    fn hash<H: std::hash::Hasher>(&self, _: &mut H) {}
+}
+impl fmt::Debug for Loc {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "@{:?}", self.0)
+    }
+}
+
+macro_rules! id {
+    ($(#[$m:meta])* $name:ident) => {
+        $(#[$m])*
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+        pub struct $name(pub u32);
+        impl $name {
+            pub fn idx(self) -> usize {
+                self.0 as usize
+            }
+        }
+    };
+}
+
+id!(/// A named constant.
+    ConstId);
+id!(/// A robot kind (`robot K { ... }`).
+    KindId);
+id!(/// A motion primitive of some kind.
+    PrimId);
+id!(/// A participant (role) of the system.
+    RoleId);
+id!(/// A value variable: a payload field, a recursion parameter or a process binder.
+    ValueId);
+
+#[derive(Clone, Debug)]
+pub struct Const {
+    pub name: String,
+    pub sort: Sort,
+    pub value: Expr,
+    pub span: Span,
+}
+
+/// A robot kind: state variables X, input variables W (Sec 3.1), geometry, invariant.
+#[derive(Clone, Debug)]
+pub struct RobotKind {
+    pub name: String,
+    pub state: Vec<(String, Sort)>,
+    pub inputs: Vec<(String, Sort)>,
+    /// Shape and arguments as written; interpreted by the geometry stage (a later part).
+    pub geometry: Option<crate::syntax::ast::Geometry>,
+    pub invariant: Option<Expr>,
+    pub span: Span,
+}
+
+/// The footprint of a primitive: a predicate over the point `(x, y, z)` named by the
+/// user, the state and `clock` (Def 3.4). `None` fills all space.
+#[derive(Clone, Debug)]
+pub struct Footprint {
+    pub point: [String; 3],
+    pub pred: Expr,
+}
+
+/// `[lo, hi]`, `hi = None` for infinity (Def 3.4's `D`).
+#[derive(Clone, Debug)]
+pub struct Duration {
+    pub lo: Expr,
+    pub hi: Option<Expr>,
+}
+
+/// A motion primitive `a ⊢ (Pre, A, G, Post, FP, D, ‡)` (Def 3.4). Predicates read the
+/// kind's variables through [`Var::Own`], parameters through [`Var::Param`].
+#[derive(Clone, Debug)]
+pub struct Primitive {
+    pub name: String,
+    pub kind: KindId,
+    pub params: Vec<(String, Sort)>,
+    pub pre: Expr,
+    pub assume: Expr,
+    pub guarantee: Expr,
+    pub post: Expr,
+    pub footprint: Option<Footprint>,
+    pub duration: Duration,
+    pub interruptible: bool,
+    pub span: Span,
+    pub name_span: Span,
+}
+
+/// A participant: an instance of a robot kind with an initial-state predicate and a pose.
+#[derive(Clone, Debug)]
+pub struct Participant {
+    pub name: String,
+    pub kind: KindId,
+    /// Over the participant's own variables ([`Var::Role`]).
+    pub init: Option<Expr>,
+    /// `x, y, z[, roll, pitch, yaw]`, constants only.
+    pub pose: Vec<Expr>,
+    /// For each input variable of the kind, the participant whose state feeds it.
+    pub input_sources: Vec<Option<RoleId>>,
+    pub span: Span,
+}
+
+/// Where a value variable comes from, which decides who knows it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ValueOrigin {
+    /// A payload field of `from -> to`: known to both.
+    Message { from: RoleId, to: RoleId },
+    /// A recursion parameter: protocol state known to every participant.
+    RecParam,
+    /// A variable bound by a receive (or a recursion) in `role`'s process or local type.
+    Bound { role: RoleId },
+}
+
+#[derive(Clone, Debug)]
+pub struct ValueVar {
+    pub name: String,
+    pub sort: Sort,
+    pub origin: ValueOrigin,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug)]
+pub struct Choreography {
+    pub name: String,
+    pub body: Global,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug)]
+pub struct ProcessDef {
+    pub role: RoleId,
+    pub body: Process,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug)]
+pub struct LocalDef {
+    pub role: RoleId,
+    pub body: LocalRc,
+    pub span: Span,
+}
+
+/// A whole resolved program: the tables every later stage reads.
+#[derive(Clone, Debug, Default)]
+pub struct Program {
+    pub consts: Vec<Const>,
+    pub kinds: Vec<RobotKind>,
+    pub prims: Vec<Primitive>,
+    pub roles: Vec<Participant>,
+    pub values: Vec<ValueVar>,
+    pub system: Option<(String, Span)>,
+    pub choreography: Option<Choreography>,
+    pub processes: Vec<ProcessDef>,
+    pub locals: Vec<LocalDef>,
+}
+
+impl Program {
+    pub fn role(&self, r: RoleId) -> &Participant {
+        &self.roles[r.idx()]
+    }
+    pub fn role_name(&self, r: RoleId) -> &str {
+        &self.roles[r.idx()].name
+    }
+    pub fn role_by_name(&self, name: &str) -> Option<RoleId> {
+        self.roles.iter().position(|p| p.name == name).map(|i| RoleId(i as u32))
+    }
+    pub fn role_ids(&self) -> impl Iterator<Item = RoleId> {
+        (0..self.roles.len() as u32).map(RoleId)
+    }
+    pub fn prim(&self, p: PrimId) -> &Primitive {
+        &self.prims[p.idx()]
+    }
+    pub fn kind(&self, k: KindId) -> &RobotKind {
+        &self.kinds[k.idx()]
+    }
+    pub fn kind_of(&self, r: RoleId) -> &RobotKind {
+        self.kind(self.role(r).kind)
+    }
+    pub fn value(&self, v: ValueId) -> &ValueVar {
+        &self.values[v.idx()]
+    }
+    /// The name of a participant's variable, qualified: `Cart.x`.
+    pub fn slot_name(&self, kind: KindId, slot: Slot) -> &str {
+        let k = self.kind(kind);
+        match slot {
+            Slot::State(i) => &k.state[i].0,
+            Slot::Input(i) => &k.inputs[i].0,
+        }
+    }
+}

@@ -1,0 +1,381 @@
+//! Printing the HIR in mochi's ASCII notation (LANGUAGE.md). What is printed parses back
+//! to an equal term, so projections can be golden-tested and pasted into `local` items.
+//! Participants' variables are always qualified (`Cart.x`).
+
+use super::*;
+use crate::syntax::ast::{BinOp, UnOp};
+use std::fmt::Write;
+
+/// Prints a local type over several lines, choices indented by two spaces.
+pub fn local(prog: &Program, t: &Local) -> String {
+    let mut p = Printer { prog, prim: None, out: String::new(), indent: 0 };
+    p.local(t);
+    p.out
+}
+
+/// Prints a global type on several lines, choices and separations indented.
+pub fn global(prog: &Program, g: &Global) -> String {
+    let mut p = Printer { prog, prim: None, out: String::new(), indent: 0 };
+    p.global(g);
+    p.out
+}
+
+/// Prints an expression; `prim` names the primitive whose parameters and kind variables
+/// it may mention.
+pub fn expr(prog: &Program, prim: Option<PrimId>, e: &Expr) -> String {
+    let mut p = Printer { prog, prim, out: String::new(), indent: 0 };
+    p.expr(e, 0);
+    p.out
+}
+
+/// `a(args)`
+pub fn prim_app(prog: &Program, a: &PrimApp) -> String {
+    let mut p = Printer { prog, prim: None, out: String::new(), indent: 0 };
+    p.prim_app(a);
+    p.out
+}
+
+struct Printer<'a> {
+    prog: &'a Program,
+    prim: Option<PrimId>,
+    out: String,
+    indent: usize,
+}
+
+impl Printer<'_> {
+    fn newline(&mut self) {
+        self.out.push('\n');
+        for _ in 0..self.indent {
+            self.out.push(' ');
+        }
+    }
+
+    fn local(&mut self, t: &Local) {
+        match t {
+            Local::Motion { prims, cont, .. } => {
+                self.motion(prims);
+                self.out.push('.');
+                self.local(cont);
+            }
+            Local::Send { branches, .. } if branches.len() == 1 => self.send(&branches[0]),
+            Local::Send { branches, .. } => {
+                self.out.push_str("+{");
+                self.indent += 2;
+                for (i, b) in branches.iter().enumerate() {
+                    if i > 0 {
+                        self.out.push(',');
+                    }
+                    self.newline();
+                    self.send(b);
+                }
+                self.indent -= 2;
+                self.newline();
+                self.out.push('}');
+            }
+            Local::Recv { branches, default: None, .. } if branches.len() == 1 => self.recv(&branches[0]),
+            Local::Recv { branches, default, .. } => {
+                self.out.push_str("&{");
+                self.indent += 2;
+                for (i, b) in branches.iter().enumerate() {
+                    if i > 0 {
+                        self.out.push(',');
+                    }
+                    self.newline();
+                    self.recv(b);
+                }
+                self.indent -= 2;
+                self.newline();
+                self.out.push('}');
+                if let Some((prims, cont)) = default {
+                    self.out.push_str(" & ");
+                    self.motion(prims);
+                    self.out.push('.');
+                    self.local(cont);
+                }
+            }
+            Local::Rec { var, params, body, .. } => {
+                let _ = write!(self.out, "mu {var}");
+                self.rec_params(params);
+                self.out.push_str(". ");
+                self.local(body);
+            }
+            Local::Var { var, args, .. } => {
+                self.out.push_str(var);
+                self.args(args);
+            }
+            Local::End(_) => self.out.push_str("end"),
+        }
+    }
+
+    fn send(&mut self, b: &SendBranch) {
+        if let Some(g) = &b.guard {
+            self.out.push('[');
+            self.expr(g, 0);
+            self.out.push_str("] ");
+        }
+        let _ = write!(self.out, "{}!{}", self.prog.role_name(b.to), b.label);
+        self.fields(&b.payload);
+        self.out.push('.');
+        self.local(&b.cont);
+    }
+
+    fn recv(&mut self, b: &RecvBranch) {
+        let _ = write!(self.out, "{}?{}", self.prog.role_name(b.from), b.label);
+        self.fields(&b.payload);
+        self.out.push('.');
+        self.local(&b.cont);
+    }
+
+    fn motion(&mut self, prims: &[PrimApp]) {
+        self.out.push_str("dt<");
+        for (i, a) in prims.iter().enumerate() {
+            if i > 0 {
+                self.out.push_str(" /\\ ");
+            }
+            self.prim_app(a);
+        }
+        self.out.push('>');
+    }
+
+    fn prim_app(&mut self, a: &PrimApp) {
+        self.out.push_str(&self.prog.prim(a.prim).name);
+        self.args(&a.args);
+    }
+
+    fn args(&mut self, args: &[Expr]) {
+        if args.is_empty() {
+            return;
+        }
+        self.out.push('(');
+        for (i, e) in args.iter().enumerate() {
+            if i > 0 {
+                self.out.push_str(", ");
+            }
+            self.expr(e, 0);
+        }
+        self.out.push(')');
+    }
+
+    fn fields(&mut self, fields: &[Field]) {
+        if fields.is_empty() {
+            return;
+        }
+        self.out.push('(');
+        for (i, f) in fields.iter().enumerate() {
+            if i > 0 {
+                self.out.push_str(", ");
+            }
+            let _ = write!(self.out, "{}: {}", f.name, f.sort);
+            if let Some(r) = &f.refinement {
+                self.out.push_str(" { ");
+                self.expr(r, 0);
+                self.out.push_str(" }");
+            }
+        }
+        self.out.push(')');
+    }
+
+    fn rec_params(&mut self, params: &[RecParam]) {
+        if params.is_empty() {
+            return;
+        }
+        self.out.push('(');
+        for (i, p) in params.iter().enumerate() {
+            if i > 0 {
+                self.out.push_str(", ");
+            }
+            let _ = write!(self.out, "{}: {}", p.name, p.sort);
+            if let Some(r) = &p.refinement {
+                self.out.push_str(" { ");
+                self.expr(r, 0);
+                self.out.push_str(" }");
+            }
+            self.out.push_str(" = ");
+            self.expr(&p.init, 0);
+        }
+        self.out.push(')');
+    }
+
+    fn global(&mut self, g: &Global) {
+        match g {
+            Global::Msg(m) => {
+                let _ = write!(self.out, "{} -> {} : ", self.prog.role_name(m.from), self.prog.role_name(m.to));
+                if let Some(gd) = &m.guard {
+                    self.out.push('[');
+                    self.expr(gd, 0);
+                    self.out.push_str("] ");
+                }
+                self.out.push_str(&m.label);
+                self.fields(&m.payload);
+            }
+            Global::Motion(m) => {
+                self.out.push_str("dt<");
+                for (i, (r, a)) in m.parts.iter().enumerate() {
+                    if i > 0 {
+                        self.out.push_str(", ");
+                    }
+                    let _ = write!(self.out, "{}: ", self.prog.role_name(*r));
+                    self.prim_app(a);
+                }
+                self.out.push('>');
+            }
+            Global::Seq(gs, _) => {
+                for (i, g) in gs.iter().enumerate() {
+                    if i > 0 {
+                        self.out.push_str(". ");
+                    }
+                    self.global_atom(g);
+                }
+            }
+            Global::Choice(gs, _) | Global::Par(gs, _) => {
+                let op = if matches!(g, Global::Choice(..)) { "+ " } else { "* " };
+                self.out.push('(');
+                self.indent += 2;
+                for (i, g) in gs.iter().enumerate() {
+                    self.newline();
+                    if i > 0 {
+                        self.out.push_str(op);
+                    }
+                    self.global_atom(g);
+                }
+                self.indent -= 2;
+                self.newline();
+                self.out.push(')');
+            }
+            Global::Rec { var, params, body, .. } => {
+                let _ = write!(self.out, "mu {var}");
+                self.rec_params(params);
+                self.out.push_str(". ");
+                self.global(body);
+            }
+            Global::Var(v) => {
+                self.out.push_str(&v.var);
+                self.args(&v.args);
+            }
+            Global::End(_) => self.out.push_str("end"),
+        }
+    }
+
+    /// A global type in a position where `.`, `*` or `+` would capture too much.
+    fn global_atom(&mut self, g: &Global) {
+        if matches!(g, Global::Seq(..) | Global::Rec { .. }) {
+            self.out.push('(');
+            self.global(g);
+            self.out.push(')');
+        } else {
+            self.global(g);
+        }
+    }
+
+    fn var_name(&self, v: &Var) -> String {
+        let prim = self.prim.map(|p| self.prog.prim(p));
+        let own = |slot: Slot| match prim {
+            Some(pr) => self.prog.slot_name(pr.kind, slot).to_string(),
+            None => "?".to_string(),
+        };
+        match v {
+            Var::Const(c) => self.prog.consts[c.idx()].name.clone(),
+            Var::Own(slot) => own(*slot),
+            Var::Old(i) => format!("old({})", own(Slot::State(*i))),
+            Var::Param(i) => prim.map(|p| p.params[*i].0.clone()).unwrap_or_else(|| format!("param{i}")),
+            Var::Point(i) => match prim.and_then(|p| p.footprint.as_ref()) {
+                Some(fp) => fp.point[*i].clone(),
+                None => ["px", "py", "pz"][*i].to_string(),
+            },
+            Var::Clock => "clock".to_string(),
+            Var::Role(r, slot) => {
+                let kind = self.prog.role(*r).kind;
+                format!("{}.{}", self.prog.role_name(*r), self.prog.slot_name(kind, *slot))
+            }
+            Var::Value(_, name) => name.clone(),
+        }
+    }
+
+    /// Prints `e`, parenthesised when it binds looser than `ctx`.
+    fn expr(&mut self, e: &Expr, ctx: u8) {
+        match &e.kind {
+            ExprKind::Int(i) => {
+                if *i < 0 && ctx > 0 {
+                    let _ = write!(self.out, "({i})");
+                } else {
+                    let _ = write!(self.out, "{i}");
+                }
+            }
+            ExprKind::Real(r) => self.out.push_str(r),
+            ExprKind::Bool(b) => self.out.push_str(if *b { "true" } else { "false" }),
+            ExprKind::Var(v) => {
+                let s = self.var_name(v);
+                self.out.push_str(&s);
+            }
+            ExprKind::Unary(op, a) => {
+                let (sym, prec) = match op {
+                    UnOp::Neg => ("-", 7),
+                    UnOp::Not => ("!", 4),
+                };
+                let paren = prec < ctx;
+                if paren {
+                    self.out.push('(');
+                }
+                self.out.push_str(sym);
+                self.expr(a, if *op == UnOp::Neg { BinOp::Pow.precedence() } else { 4 });
+                if paren {
+                    self.out.push(')');
+                }
+            }
+            ExprKind::Binary(op, a, b) => {
+                let prec = op.precedence();
+                let paren = prec < ctx || (op.is_comparison() && ctx == prec);
+                if paren {
+                    self.out.push('(');
+                }
+                let right_assoc = matches!(op, BinOp::Implies | BinOp::Pow);
+                self.expr(a, if right_assoc { prec + 1 } else { prec });
+                let _ = write!(self.out, " {} ", op.symbol());
+                self.expr(b, if right_assoc { prec } else { prec + 1 });
+                if paren {
+                    self.out.push(')');
+                }
+            }
+            ExprKind::Call(f, args) => {
+                self.out.push_str(f.name());
+                self.out.push('(');
+                for (i, a) in args.iter().enumerate() {
+                    if i > 0 {
+                        self.out.push_str(", ");
+                    }
+                    self.expr(a, 0);
+                }
+                self.out.push(')');
+            }
+            ExprKind::If(c, a, b) => {
+                let paren = ctx > 0;
+                if paren {
+                    self.out.push('(');
+                }
+                self.out.push_str("if ");
+                self.expr(c, 0);
+                self.out.push_str(" then ");
+                self.expr(a, 0);
+                self.out.push_str(" else ");
+                self.expr(b, 0);
+                if paren {
+                    self.out.push(')');
+                }
+            }
+            ExprKind::Tuple(items) => {
+                self.out.push('(');
+                for (i, a) in items.iter().enumerate() {
+                    if i > 0 {
+                        self.out.push_str(", ");
+                    }
+                    self.expr(a, 0);
+                }
+                self.out.push(')');
+            }
+            ExprKind::Component(a, i) => {
+                self.expr(a, 10);
+                let _ = write!(self.out, ".{}", ["x", "y", "z"][*i]);
+            }
+        }
+    }
+}
