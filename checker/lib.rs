@@ -12,3 +12,4 @@ pub mod source;
 pub mod syntax;
 pub mod driver;
 pub mod hir;
+pub mod lower;
