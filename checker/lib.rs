@@ -13,3 +13,4 @@ pub mod syntax;
 pub mod driver;
 pub mod hir;
 pub mod lower;
+pub mod obligation;

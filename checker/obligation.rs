@@ -1,0 +1,119 @@
+//! Proof obligations: the predicate side conditions that the structural checks meet
+//! and cannot decide themselves. Each names the rule that produced it and the source
+//! span it comes from. The SMT stage (a later part) discharges them; until then
+//! [`Obligation::trivially_holds`] settles the syntactically trivial ones and the rest
+//! are reported as undecided, never as passed.
+
+use crate::hir::{Expr, ExprKind, PrimApp, RoleId};
+use crate::source::Span;
+use serde::Serialize;
+
+/// The rule of the paper an obligation comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
+pub enum Rule {
+    /// Def 4.4 (1): the guards of a choice cover every state.
+    TotalChoice,
+    /// [AGCOMP] (Sec 3.4) and Def 4.4 (3): a joint motion is compatible.
+    AgComp,
+    /// Sec 4.1: the footprints of the two sides of `*` are separated.
+    FullSeparation,
+    /// Def 3.4 (corrected direction) via [SUB-MOTION] or the merge of Def 4.7.
+    Refinement,
+    /// Table 1 [T-MOTION]: the context implies the primitive's precondition.
+    TMotion,
+    /// Table 1 [T-OUT]: the context implies the guard and the refinement of the value.
+    TOut,
+    /// Table 1 [T-COND]: the condition selects a branch whose guard holds.
+    TCond,
+    /// Fig 5 [SUB-OUT] / [SUB-IN]: predicate implications between local types.
+    Subtype,
+    /// Table 1 [T-SESS]: initial states are collision free.
+    TSess,
+}
+
+impl Rule {
+    pub fn name(self) -> &'static str {
+        match self {
+            Rule::TotalChoice => "total choice (Def 4.4 (1))",
+            Rule::AgComp => "[AGCOMP] compatibility",
+            Rule::FullSeparation => "full separation of `*`",
+            Rule::Refinement => "primitive refinement (Def 3.4)",
+            Rule::TMotion => "[T-MOTION]",
+            Rule::TOut => "[T-OUT]",
+            Rule::TCond => "[T-COND]",
+            Rule::Subtype => "[SUB-OUT]/[SUB-IN]",
+            Rule::TSess => "[T-SESS]",
+        }
+    }
+
+    /// The check (in the report's list of checks) this obligation belongs to.
+    pub fn check(self) -> &'static str {
+        match self {
+            Rule::TotalChoice => "total-choice",
+            Rule::AgComp => "compatibility",
+            Rule::FullSeparation => "separation",
+            Rule::Refinement | Rule::TMotion | Rule::TOut | Rule::TCond | Rule::Subtype | Rule::TSess => "typing-obligations",
+        }
+    }
+}
+
+/// What must be shown.
+#[derive(Clone, Debug)]
+pub enum Goal {
+    /// `hyps => pred` is valid.
+    Valid(Expr),
+    /// The joint motion is compatible from the context ([AGCOMP] applied repeatedly).
+    Compatible { parts: Vec<(RoleId, PrimApp)> },
+    /// `concrete <= meet(abstract)`, in the corrected direction of the seeds README.
+    Refines { role: RoleId, concrete: PrimApp, abstract_: Vec<PrimApp> },
+    /// The two groups of a `*` have disjoint footprints containing all their motions'.
+    Separated { left: Vec<RoleId>, right: Vec<RoleId> },
+    /// The participants' initial geometries are pairwise disjoint.
+    InitiallyDisjoint,
+}
+
+#[derive(Clone, Debug)]
+pub struct Obligation {
+    pub rule: Rule,
+    pub span: Span,
+    /// A short description in the user's terms ("guards of the choice at Cart -> GRobot").
+    pub what: String,
+    /// The logical context Σ assumed (conjuncts).
+    pub hyps: Vec<Expr>,
+    pub goal: Goal,
+}
+
+impl Obligation {
+    /// Settles what needs no solver: a goal `true`, or a goal among the hypotheses.
+    pub fn trivially_holds(&self) -> bool {
+        match &self.goal {
+            Goal::Valid(e) => {
+                e.is_true() || self.hyps.iter().any(|h| h == e) || matches!(&e.kind, ExprKind::Binary(crate::hir::expr::BinOp::Or, a, b) if a.is_true() || b.is_true())
+            }
+            _ => false,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hir::{Loc, Sort};
+
+    #[test]
+    fn only_syntactically_trivial_goals_hold_without_a_solver() {
+        let t = Expr::bool(true, Loc::default());
+        let x = Expr { kind: ExprKind::Int(1), sort: Sort::Int, loc: Loc::default() };
+        let ob = |hyps: Vec<Expr>, goal: Expr| Obligation {
+            rule: Rule::TOut,
+            span: Span::default(),
+            what: String::new(),
+            hyps,
+            goal: Goal::Valid(goal),
+        };
+        assert!(ob(vec![], t.clone()).trivially_holds());
+        assert!(ob(vec![x.clone()], x.clone()).trivially_holds());
+        assert!(!ob(vec![], x).trivially_holds());
+        assert!(!Obligation { goal: Goal::InitiallyDisjoint, ..ob(vec![], t) }.trivially_holds());
+    }
+}
