@@ -1,17 +1,20 @@
 //! mochi: a type checker and verifier for motion choreographies.
 //!
 //! The pipeline, in reading order (ARCHITECTURE.md tells the whole story):
-//! source text → [`syntax`] (tokens, AST) → [`lower`] (names resolved, HIR) →
+//! source text → [`syntax`] (tokens, AST) → [`lower`] (names resolved, [`hir`]) →
 //! [`wf`] (Def 4.1 side conditions, well-scopedness, synchronisability) →
 //! [`project`] (local types, Defs 4.7-4.8) → [`typeck`] (processes, Table 1) →
 //! [`driver`] (the verdict). Predicates met on the way become [`obligation`]s for the
 //! SMT stage of a later part; until it lands they are reported as undecided.
+//! [`render`] turns diagnostics and reports into text or JSON.
 
 pub mod diag;
 pub mod source;
 pub mod syntax;
-pub mod driver;
 pub mod hir;
 pub mod lower;
-pub mod obligation;
 pub mod wf;
+pub mod obligation;
+pub mod driver;
+pub mod render;
+pub mod lanes;

@@ -1,0 +1,245 @@
+//! End-to-end runs of the `mochi` binary: exit codes, text and JSON output.
+//!
+//! Each test writes its inputs into its own directory under the system temp dir, runs
+//! the binary built by cargo and checks what a user or a script would see.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// A fresh directory for one test, removed when the test ends (even on failure).
+struct TempDir(PathBuf);
+
+impl TempDir {
+    fn new(test: &str) -> TempDir {
+        let dir = std::env::temp_dir().join(format!("mochi-cli-{}-{test}", std::process::id()));
+        // A leftover from an earlier run with the same pid would mix in stale files.
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("create a temp dir");
+        TempDir(dir)
+    }
+
+    fn write(&self, name: &str, text: &str) -> PathBuf {
+        let path = self.0.join(name);
+        std::fs::write(&path, text).expect("write a test input");
+        path
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn mochi(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_mochi"))
+        .args(args)
+        .env_remove("NO_COLOR")
+        .output()
+        .expect("run mochi")
+}
+
+fn path_arg(p: &Path) -> &str {
+    p.to_str().expect("temp paths are UTF-8")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+const SYNTAX_ERROR: &str = "const a = ;\n";
+
+#[test]
+fn explain_prints_the_title_and_the_paragraph() {
+    let o = mochi(&["explain", "E0301"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(out.starts_with("E0301: message to oneself\n"), "{out}");
+    assert!(out.contains("Def 4.1 requires"), "{out}");
+    assert!(
+        out.lines().all(|l| l.chars().count() <= 90),
+        "wrapped at 90 columns: {out}"
+    );
+}
+
+#[test]
+fn explain_rejects_an_unknown_code_as_a_usage_error() {
+    let o = mochi(&["explain", "E9999"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stdout(&o).is_empty());
+    assert!(stderr(&o).contains("E9999"), "{}", stderr(&o));
+}
+
+#[test]
+fn explain_list_names_every_code() {
+    let o = mochi(&["explain", "--list"]);
+    assert_eq!(o.status.code(), Some(0));
+    let out = stdout(&o);
+    assert!(
+        out.lines()
+            .any(|l| l.starts_with("E0103") && l.contains("unexpected token")),
+        "{out}"
+    );
+    assert!(out.lines().any(|l| l.starts_with("U0001")), "{out}");
+}
+
+#[test]
+fn a_bad_flag_is_a_usage_error() {
+    let o = mochi(&["check", "--no-such-flag", "x.chor"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--no-such-flag"), "{}", stderr(&o));
+    assert_eq!(
+        mochi(&["check", "--format", "yaml", "x.chor"])
+            .status
+            .code(),
+        Some(2)
+    );
+    assert_eq!(
+        mochi(&[]).status.code(),
+        Some(2),
+        "a subcommand is required"
+    );
+}
+
+#[test]
+fn help_and_version_succeed() {
+    let help = mochi(&["--help"]);
+    assert_eq!(help.status.code(), Some(0));
+    assert!(stdout(&help).contains("check"));
+    let version = mochi(&["--version"]);
+    assert_eq!(version.status.code(), Some(0));
+    assert!(
+        stdout(&version).starts_with("mochi "),
+        "{}",
+        stdout(&version)
+    );
+}
+
+#[test]
+fn a_syntax_error_is_reported_in_text() {
+    let dir = TempDir::new("syntax-text");
+    let file = dir.write("bad.chor", SYNTAX_ERROR);
+    let o = mochi(&["check", path_arg(&file)]);
+    assert_eq!(o.status.code(), Some(1));
+    let out = stdout(&o);
+    assert!(out.contains("error[E0103]"), "{out}");
+    assert!(out.contains(&format!("{}:1:11", file.display())), "{out}");
+    assert!(out.contains("1 | const a = ;"), "{out}");
+    assert!(out.contains("verdict: rejected"), "{out}");
+    assert!(
+        !out.contains('\x1b'),
+        "no colour when stdout is a pipe: {out}"
+    );
+}
+
+#[test]
+fn colour_can_be_forced_on() {
+    let dir = TempDir::new("colour");
+    let file = dir.write("bad.chor", SYNTAX_ERROR);
+    let o = mochi(&["check", "--color", "always", path_arg(&file)]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stdout(&o).contains('\x1b'), "{}", stdout(&o));
+}
+
+#[test]
+fn a_syntax_error_is_reported_in_json() {
+    let dir = TempDir::new("syntax-json");
+    let file = dir.write("bad.chor", SYNTAX_ERROR);
+    let o = mochi(&["check", "--format", "json", path_arg(&file)]);
+    assert_eq!(o.status.code(), Some(1));
+    let v: Value = serde_json::from_slice(&o.stdout).expect("stdout is one JSON document");
+    assert_eq!(v["file"], path_arg(&file));
+    assert_eq!(v["verdict"], "rejected");
+    let d = &v["diagnostics"][0];
+    assert_eq!(d["code"], "E0103");
+    assert_eq!(d["severity"], "error");
+    assert_eq!(d["file"], path_arg(&file));
+    assert_eq!(d["line"], 1);
+    assert_eq!(d["column"], 11);
+    assert!(
+        d["message"]
+            .as_str()
+            .is_some_and(|m| m.contains("expected")),
+        "{d}"
+    );
+    assert!(d["notes"].is_array() && d["labels"].is_array(), "{d}");
+    assert_eq!(v["checks"][0]["name"], "parse");
+    assert_eq!(v["checks"][0]["status"], "fail");
+    assert!(v["checks"][0]["millis"].is_number());
+}
+
+#[test]
+fn a_missing_file_is_invalid_input() {
+    let dir = TempDir::new("missing");
+    let file = dir.0.join("does-not-exist.chor");
+    let o = mochi(&["check", path_arg(&file)]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stdout(&o).is_empty(), "{}", stdout(&o));
+    let err = stderr(&o);
+    assert!(
+        err.starts_with(&format!("error: cannot read {}: ", file.display())),
+        "{err}"
+    );
+}
+
+#[test]
+fn several_files_in_json_give_one_line_each() {
+    let dir = TempDir::new("json-lines");
+    let first = dir.write("first.chor", SYNTAX_ERROR);
+    let second = dir.write("second.chor", "const b = 1;\nconst c = ;\n");
+    let o = mochi(&[
+        "check",
+        "--format",
+        "json",
+        path_arg(&first),
+        path_arg(&second),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    let out = stdout(&o);
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines.len(), 2, "{out}");
+    let parsed: Vec<Value> = lines
+        .iter()
+        .map(|l| serde_json::from_str(l).expect("each line is JSON"))
+        .collect();
+    assert_eq!(parsed[0]["file"], path_arg(&first));
+    assert_eq!(parsed[1]["file"], path_arg(&second));
+    assert_eq!(parsed[1]["diagnostics"][0]["line"], 2);
+    assert_eq!(parsed[1]["diagnostics"][0]["column"], 11);
+}
+
+#[test]
+fn an_unreadable_file_among_others_fails_the_run() {
+    let dir = TempDir::new("mixed");
+    let bad = dir.write("bad.chor", SYNTAX_ERROR);
+    let missing = dir.0.join("missing.chor");
+    let o = mochi(&[
+        "check",
+        "--format",
+        "json",
+        path_arg(&bad),
+        path_arg(&missing),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        stdout(&o).lines().count(),
+        1,
+        "only readable files produce a report"
+    );
+    assert!(stderr(&o).contains("cannot read"), "{}", stderr(&o));
+}
+
+#[test]
+fn project_explains_why_there_is_no_local_type() {
+    let dir = TempDir::new("project");
+    let file = dir.write("bad.chor", SYNTAX_ERROR);
+    let o = mochi(&["project", path_arg(&file), "--role", "A"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stdout(&o).is_empty(), "{}", stdout(&o));
+    assert!(stderr(&o).contains("error[E0103]"), "{}", stderr(&o));
+}
