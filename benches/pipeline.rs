@@ -1,0 +1,201 @@
+//! Pipeline benchmark on the parallel-lanes family (paper Sec 5 (1), Fig 7).
+//!
+//! ```text
+//! cargo bench --bench pipeline                  # n = 10, 100, 1000
+//! cargo bench --bench pipeline -- --quick       # fewer iterations
+//! MOCHI_BENCH_LARGE=1 cargo bench --bench pipeline   # also n = 300, 3000
+//! ```
+//!
+//! For each size the benchmark generates the source with [`mochi::lanes::parallel_lanes`],
+//! runs `check_source` for a tenth of the budget to warm up, then repeatedly until the time budget is spent
+//! (at least three runs), and prints the mean, median and minimum wall time, the mean time of
+//! each stage as reported in `Report::checks`, the time per cart and the ratio
+//! time(n) / time(n/10). All sizes run in the same process, one after the other, so the
+//! ratios compare like with like. With the separating conjunction the checker should
+//! grow about linearly, i.e. ratios near 10. Peak RSS (`VmHWM`) is printed at the end.
+//!
+//! No dependencies (no criterion): the numbers are meant to be read, not tracked.
+
+use mochi::driver::{check_source, Config, Report};
+use mochi::lanes::parallel_lanes;
+use mochi::source::SourceDb;
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+
+/// Minimum number of timed runs per size.
+const MIN_RUNS: usize = 3;
+
+struct Row {
+    n: usize,
+    bytes: usize,
+    gen_ms: f64,
+    runs: usize,
+    mean_ms: f64,
+    median_ms: f64,
+    min_ms: f64,
+    /// Mean milliseconds per stage, in the order the driver ran them.
+    stages: Vec<(&'static str, f64)>,
+    verdict: String,
+    errors: usize,
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    // `cargo bench` passes `--bench`; a name filter, if any, is ignored.
+    let quick = args.iter().any(|a| a == "--quick");
+    let large = std::env::var("MOCHI_BENCH_LARGE").is_ok_and(|v| !v.is_empty() && v != "0");
+    let budget = Duration::from_millis(if quick { 50 } else { 500 });
+
+    let mut sizes = vec![10, 100, 1000];
+    if large {
+        sizes.extend([300, 3000]);
+        sizes.sort_unstable();
+    }
+
+    println!(
+        "mochi pipeline benchmark: parallel lanes, budget {} ms per size, >= {MIN_RUNS} runs{}",
+        budget.as_millis(),
+        if quick { " (quick)" } else { "" }
+    );
+    let rows: Vec<Row> = sizes.iter().map(|&n| measure(n, budget)).collect();
+    print_table(&rows);
+
+    match peak_rss_kib() {
+        Some(kib) => println!("\npeak RSS (VmHWM): {:.1} MiB", kib as f64 / 1024.0),
+        None => println!("\npeak RSS (VmHWM): unavailable"),
+    }
+}
+
+/// One timed `check_source` on a fresh database.
+fn run_once(name: &str, src: &str, cfg: &Config) -> (f64, Report) {
+    let mut db = SourceDb::new();
+    let t = Instant::now();
+    let report = check_source(&mut db, name, black_box(src), cfg);
+    let ms = t.elapsed().as_secs_f64() * 1000.0;
+    (ms, black_box(report))
+}
+
+fn measure(n: usize, budget: Duration) -> Row {
+    let t = Instant::now();
+    let src = parallel_lanes(n);
+    let gen_ms = t.elapsed().as_secs_f64() * 1000.0;
+    let name = format!("lanes{n}.chor");
+    let cfg = Config::default();
+
+    // Warm up caches and the allocator for a tenth of the budget (at least one run).
+    let (_, warm) = run_once(&name, &src, &cfg);
+    let verdict = format!("{:?}", warm.verdict).to_lowercase();
+    let errors = warm.diagnostics.iter().filter(|d| d.is_error()).count();
+    drop(warm);
+    let warm_start = Instant::now();
+    while warm_start.elapsed() < budget / 10 {
+        run_once(&name, &src, &cfg);
+    }
+
+    let mut times = Vec::new();
+    let mut stages: Vec<(&'static str, f64)> = Vec::new();
+    let start = Instant::now();
+    while times.len() < MIN_RUNS || start.elapsed() < budget {
+        let (ms, report) = run_once(&name, &src, &cfg);
+        times.push(ms);
+        for c in &report.checks {
+            match stages.iter_mut().find(|(s, _)| *s == c.name) {
+                Some((_, total)) => *total += c.millis,
+                None => stages.push((c.name, c.millis)),
+            }
+        }
+    }
+    let runs = times.len();
+    for (_, total) in &mut stages {
+        *total /= runs as f64;
+    }
+    Row {
+        n,
+        bytes: src.len(),
+        gen_ms,
+        runs,
+        mean_ms: times.iter().sum::<f64>() / runs as f64,
+        median_ms: median(&mut times),
+        min_ms: times.iter().copied().fold(f64::INFINITY, f64::min),
+        stages,
+        verdict,
+        errors,
+    }
+}
+
+fn print_table(rows: &[Row]) {
+    // Stage columns: every stage any size reported, in first-seen order.
+    let mut names: Vec<&'static str> = Vec::new();
+    for r in rows {
+        for (s, _) in &r.stages {
+            if !names.contains(s) {
+                names.push(s);
+            }
+        }
+    }
+    let mut header = format!(
+        "\n{:>6} {:>9} {:>5} {:>10} {:>10} {:>10}",
+        "n", "src KiB", "runs", "mean ms", "median ms", "min ms"
+    );
+    for s in &names {
+        header.push_str(&format!(
+            " {:>w$}",
+            format!("{s} ms"),
+            w = s.len().max(6) + 3
+        ));
+    }
+    header.push_str(&format!(
+        " {:>11} {:>12} {:>8} {:>9}  verdict",
+        "ms/cart", "t(n)/t(n/10)", "gen ms", "errors"
+    ));
+    println!("{header}");
+    for r in rows {
+        let mut line = format!(
+            "{:>6} {:>9.1} {:>5} {:>10.3} {:>10.3} {:>10.3}",
+            r.n,
+            r.bytes as f64 / 1024.0,
+            r.runs,
+            r.mean_ms,
+            r.median_ms,
+            r.min_ms
+        );
+        for s in &names {
+            let w = s.len().max(6) + 3;
+            match r.stages.iter().find(|(x, _)| x == s) {
+                Some((_, ms)) => line.push_str(&format!(" {ms:>w$.3}")),
+                None => line.push_str(&format!(" {:>w$}", "-")),
+            }
+        }
+        let ratio = (r.n % 10 == 0)
+            .then(|| rows.iter().find(|p| p.n == r.n / 10))
+            .flatten()
+            .map(|p| format!("{:.2}", r.mean_ms / p.mean_ms))
+            .unwrap_or_else(|| "-".to_string());
+        line.push_str(&format!(
+            " {:>11.5} {:>12} {:>8.3} {:>9}  {}",
+            r.mean_ms / r.n as f64,
+            ratio,
+            r.gen_ms,
+            r.errors,
+            r.verdict
+        ));
+        println!("{line}");
+    }
+}
+
+fn median(xs: &mut [f64]) -> f64 {
+    xs.sort_by(f64::total_cmp);
+    let m = xs.len() / 2;
+    if xs.len() % 2 == 1 {
+        xs[m]
+    } else {
+        (xs[m - 1] + xs[m]) / 2.0
+    }
+}
+
+/// Peak resident set size in KiB, from `/proc/self/status` (Linux only).
+fn peak_rss_kib() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
+}
