@@ -1,0 +1,81 @@
+//! The rejected-variants corpus: each file under `choreographies/rejected/` breaks
+//! exactly one rule. Its first line says which, as `// expect: E0301 at 5:3`: the check
+//! must reject the file, every error must carry that code, and one of them must start
+//! at that line and column. The file name starts with the code, and every error code
+//! mochi has is exercised by at least one file.
+
+use mochi::diag::{Code, Severity};
+use mochi::driver::{check_file, Config, Verdict};
+use mochi::source::SourceDb;
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+fn corpus() -> Vec<PathBuf> {
+    let dir = Path::new("choreographies/rejected");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .expect("choreographies/rejected exists")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "chor"))
+        .collect();
+    files.sort();
+    files
+}
+
+/// Parses `// expect: CODE at LINE:COL`.
+fn expectation(path: &Path) -> (Code, usize, usize) {
+    let text = std::fs::read_to_string(path).expect("readable");
+    let first = text.lines().next().unwrap_or_default();
+    let rest = first.strip_prefix("// expect: ").unwrap_or_else(|| panic!("{}: no `// expect:` line", path.display()));
+    let (code, pos) = rest.split_once(" at ").unwrap_or_else(|| panic!("{}: malformed expect line", path.display()));
+    let code: Code = code.parse().unwrap_or_else(|_| panic!("{}: unknown code {code}", path.display()));
+    let (l, c) = pos.trim().split_once(':').expect("LINE:COL");
+    (code, l.parse().expect("line"), c.parse().expect("column"))
+}
+
+#[test]
+fn each_rejected_file_fails_with_exactly_its_code_at_its_position() {
+    let files = corpus();
+    assert!(files.len() >= 25, "the corpus has {} files, at least 25 expected", files.len());
+    let mut failures = Vec::new();
+    for path in &files {
+        let (code, line, col) = expectation(path);
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+        if !name.starts_with(code.as_str()) {
+            failures.push(format!("{name}: file name does not start with {code}"));
+        }
+        let mut db = SourceDb::new();
+        let report = check_file(&mut db, path, &Config::default()).expect("readable");
+        let errors: Vec<_> = report.diagnostics.iter().filter(|d| d.severity == Severity::Error).collect();
+        let summary: Vec<String> = errors
+            .iter()
+            .map(|d| {
+                let (f, l, c) = db.location(d.span);
+                format!("{} at {f}:{l}:{c}: {}", d.code, d.message)
+            })
+            .collect();
+        if report.verdict != Verdict::Rejected {
+            failures.push(format!("{name}: verdict {:?}, expected Rejected", report.verdict));
+            continue;
+        }
+        if errors.iter().any(|d| d.code != code) {
+            failures.push(format!("{name}: expected only {code}, got {summary:#?}"));
+            continue;
+        }
+        let at = errors.iter().any(|d| {
+            let (f, l, c) = db.location(d.span);
+            l == line && c == col && Path::new(&f) == path.as_path()
+        });
+        if !at {
+            failures.push(format!("{name}: no {code} at {line}:{col}; got {summary:#?}"));
+        }
+    }
+    assert!(failures.is_empty(), "{} of {} files fail:\n{}", failures.len(), files.len(), failures.join("\n"));
+}
+
+#[test]
+fn every_error_code_has_a_rejected_example() {
+    let covered: BTreeSet<Code> = corpus().iter().map(|p| expectation(p).0).collect();
+    let missing: Vec<&str> =
+        Code::ALL.iter().filter(|c| c.as_str().starts_with('E') && !covered.contains(c)).map(|c| c.as_str()).collect();
+    assert!(missing.is_empty(), "codes without a file in choreographies/rejected/: {missing:?}");
+}
