@@ -80,6 +80,8 @@ struct Lowerer {
     /// Spans of the declarations, for duplicate reports.
     const_spans: Vec<Span>,
     kind_spans: Vec<Span>,
+    /// Participants whose kind is unknown: already reported, so uses stay silent.
+    poisoned: std::collections::HashSet<String>,
     /// Process and local type declarations seen per role.
     process_roles: HashMap<RoleId, Span>,
     local_roles: HashMap<RoleId, Span>,
@@ -368,7 +370,10 @@ impl Lowerer {
                 self.diags.push(d);
                 continue;
             }
-            let Some(kind) = self.kind_of_name(&p.kind) else { continue };
+            let Some(kind) = self.kind_of_name(&p.kind) else {
+                self.poisoned.insert(p.name.name.clone());
+                continue;
+            };
             let n_inputs = self.prog.kind(kind).inputs.len();
             self.prog.roles.push(Participant {
                 name: p.name.name.clone(),
@@ -436,6 +441,7 @@ impl Lowerer {
     fn role(&mut self, name: &ast::Ident) -> Option<RoleId> {
         match self.prog.role_by_name(&name.name) {
             Some(r) => Some(r),
+            None if self.poisoned.contains(&name.name) => None,
             None => {
                 let names: Vec<_> = self.prog.roles.iter().map(|p| format!("`{}`", p.name)).collect();
                 let help = if names.is_empty() {
@@ -897,9 +903,28 @@ impl Lowerer {
                         if let Some(r) = self.prog.role_by_name(b) {
                             return self.role_var(r, field, e.span, env);
                         }
+                        if !self.resolves(b, env) {
+                            if !self.poisoned.contains(b) {
+                                let names: Vec<_> = self.prog.roles.iter().map(|p| format!("`{}`", p.name)).collect();
+                                self.err(
+                                    Code::UnknownParticipant,
+                                    base.span,
+                                    format!("unknown participant `{b}` in `{b}.{}`", field.name),
+                                    if names.is_empty() {
+                                        "declare participants in the `system` block".to_string()
+                                    } else {
+                                        format!("the participants are {}", names.join(", "))
+                                    },
+                                );
+                            }
+                            return mk(ExprKind::Bool(true), Sort::Any);
+                        }
                     }
                 }
                 let b = self.expr(base, env);
+                if b.sort == Sort::Any {
+                    return mk(ExprKind::Bool(true), Sort::Any);
+                }
                 let axis = match field.name.as_str() {
                     "x" => Some(0),
                     "y" => Some(1),
@@ -1106,6 +1131,17 @@ impl Lowerer {
         env.values.iter().any(|v| self.prog.value(*v).name == name)
             || env.params.iter().any(|(n, _)| n == name)
             || env.point.is_some_and(|p| p.iter().any(|n| n == name))
+    }
+
+    /// Whether an unqualified name resolves to anything in `env`.
+    fn resolves(&self, name: &str, env: &Env) -> bool {
+        if self.is_local_name(name, env) || self.consts.contains_key(name) || (name == "clock" && env.part.is_some()) {
+            return true;
+        }
+        self.own_kind(env).is_some_and(|k| {
+            let k = self.prog.kind(k);
+            k.state.iter().chain(&k.inputs).any(|(n, _)| n == name)
+        })
     }
 
     fn own_kind(&self, env: &Env) -> Option<KindId> {

@@ -34,8 +34,9 @@ pub fn check(prog: &Program, g: &Global) -> (Vec<Diagnostic>, Vec<Obligation>) {
             );
         }
     }
-    let all: Vec<RoleId> = prog.role_ids().collect();
-    s.walk(g, &all, true);
+    // The root scope is P; an unused participant was reported above (E0313), so scope
+    // with pt{G} to avoid reporting it again at every motion.
+    s.walk(g, &used, true);
     (s.diags, s.obligations)
 }
 

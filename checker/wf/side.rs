@@ -12,7 +12,7 @@ use std::collections::HashSet;
 
 pub fn check(prog: &Program, g: &Global) -> Vec<Diagnostic> {
     let mut c = Side { prog, diags: Vec::new() };
-    c.walk(g, true);
+    c.walk(g, true, false);
     c.diags
 }
 
@@ -31,28 +31,28 @@ pub fn first_message(g: &Global) -> Option<&Msg> {
 }
 
 impl Side<'_> {
-    fn walk(&mut self, g: &Global, tail: bool) {
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.walk_inner(g, tail))
+    fn walk(&mut self, g: &Global, tail: bool, in_par: bool) {
+        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.walk_inner(g, tail, in_par))
     }
 
-    fn walk_inner(&mut self, g: &Global, tail: bool) {
+    fn walk_inner(&mut self, g: &Global, tail: bool, in_par: bool) {
         match g {
             Global::Msg(m) => self.msg(m),
             Global::Motion(m) => self.motion(m),
             Global::Seq(items, _) => {
                 for (i, it) in items.iter().enumerate() {
-                    self.walk(it, tail && i + 1 == items.len());
+                    self.walk(it, tail && i + 1 == items.len(), in_par);
                 }
             }
             Global::Choice(branches, loc) => {
                 self.choice(branches, *loc);
                 for b in branches {
-                    self.walk(b, tail);
+                    self.walk(b, tail, in_par);
                 }
             }
             Global::Par(sides, _) => {
                 for s in sides {
-                    self.walk(s, false);
+                    self.walk(s, false, true);
                 }
             }
             Global::Rec { var, body, loc, params } => {
@@ -69,9 +69,12 @@ impl Side<'_> {
                             .with_help(format!("put a message or a motion between `mu {var}.` and `{var}`")),
                     );
                 }
-                self.walk(body, true);
+                self.walk(body, true, false);
             }
-            Global::Var(v) => self.closes(tail, v.loc, &format!("`{}`", v.var)),
+            // Inside a side of `*` a variable is judged by well-scopedness (E0308), which
+            // is what the paper's once-unfolded labelling reports for it.
+            Global::Var(v) if !in_par => self.closes(tail, v.loc, &format!("`{}`", v.var)),
+            Global::Var(_) => {}
             Global::End(loc) => self.closes(tail, *loc, "`end`"),
         }
     }
@@ -151,7 +154,8 @@ impl Side<'_> {
                 );
                 continue;
             };
-            if m.from != head.from || m.to != head.to {
+            let shape_ok = m.from == head.from && m.to == head.to;
+            if !shape_ok {
                 self.diags.push(
                     Diagnostic::error(
                         Code::ChoiceMismatch,
@@ -171,6 +175,9 @@ impl Side<'_> {
                         self.prog.role_name(head.to)
                     )),
                 );
+            }
+            if !shape_ok {
+                continue; // labels only distinguish branches of the same shape
             }
             if let Some((_, first)) = labels.iter().find(|(l, _)| *l == m.label) {
                 self.diags.push(

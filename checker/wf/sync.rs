@@ -275,8 +275,8 @@ impl Checker<'_, '_> {
                 } else {
                     format!("`{sender}` is not in this motion, so all its primitives must be interruptible; `{}` runs `{}`", self.prog.role_name(*r), self.prog.prim(a.prim).name)
                 };
-                let d = Diagnostic::error(Code::SenderNotReady, self.ev[n].loc().0, format!("the message after this motion is sent too early: {why}"))
-                    .with_label(self.ev[m].loc().0, "the message that ends the motion")
+                let d = Diagnostic::error(Code::SenderNotReady, self.ev[m].loc().0, format!("this message may be sent while the motion before it cannot be interrupted: {why}"))
+                    .with_label(self.ev[n].loc().0, "the motion this message ends")
                     .with_label(a.loc.0, "non-interruptible primitive")
                     .with_note("Sec 4.1, sender readiness: the sender runs the unique non-interruptible primitive, or every primitive is interruptible")
                     .with_help(format!("let `{}` send this message, or make `{}` interruptible", self.prog.role_name(*r), self.prog.prim(a.prim).name));
