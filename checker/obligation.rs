@@ -66,8 +66,9 @@ pub enum Goal {
     Compatible { parts: Vec<(RoleId, PrimApp)> },
     /// `concrete <= meet(abstract)`, in the corrected direction of the seeds README.
     Refines { role: RoleId, concrete: PrimApp, abstract_: Vec<PrimApp> },
-    /// The two groups of a `*` have disjoint footprints containing all their motions'.
-    Separated { left: Vec<RoleId>, right: Vec<RoleId> },
+    /// The groups of `g1 * ... * gn` (their participants) have pairwise disjoint
+    /// footprints, each containing the footprints of its own motions.
+    Separated { sides: Vec<Vec<RoleId>> },
     /// The participants' initial geometries are pairwise disjoint.
     InitiallyDisjoint,
 }

@@ -217,25 +217,34 @@ impl<'a> Scope<'a> {
             })
             .collect();
         if original {
-            for i in 0..sides.len() {
-                for j in 0..i {
-                    let shared: Vec<RoleId> = pts[i].iter().copied().filter(|r| pts[j].contains(r)).collect();
-                    if !shared.is_empty() {
-                        self.diags.push(
-                            Diagnostic::error(
-                                Code::SeparationOverlap,
-                                sides[i].loc().0,
-                                format!("{} on both sides of `*`", names(self.prog, &shared)),
-                            )
-                            .with_label(sides[j].loc().0, "the other side")
-                            .with_note("Sec 4.1, full separation: pt{g1} ∩ pt{g2} = ∅")
-                            .with_help("keep each participant's actions on one side of the `*`"),
-                        );
+            // Each participant's side, found in one pass (n-ary `*` of PGCD's lanes has
+            // hundreds of sides, so no pairwise comparison of sides).
+            let mut owner: HashMap<RoleId, usize> = HashMap::new();
+            let mut reported: Vec<RoleId> = Vec::new();
+            for (i, pt) in pts.iter().enumerate() {
+                for r in pt {
+                    match owner.get(r) {
+                        Some(&j) if j != i && !reported.contains(r) => {
+                            reported.push(*r);
+                            self.diags.push(
+                                Diagnostic::error(
+                                    Code::SeparationOverlap,
+                                    sides[i].loc().0,
+                                    format!("{} on both sides of `*`", names(self.prog, &[*r])),
+                                )
+                                .with_label(sides[j].loc().0, "the other side")
+                                .with_note("Sec 4.1, full separation: pt{g1} ∩ pt{g2} = ∅")
+                                .with_help("keep each participant's actions on one side of the `*`"),
+                            );
+                        }
+                        Some(_) => {}
+                        None => {
+                            owner.insert(*r, i);
+                        }
                     }
                 }
             }
-            let covered: Vec<RoleId> = pts.iter().flatten().copied().collect();
-            let dropped: Vec<RoleId> = scope.iter().copied().filter(|r| !covered.contains(r)).collect();
+            let dropped: Vec<RoleId> = scope.iter().copied().filter(|r| !owner.contains_key(r)).collect();
             if !dropped.is_empty() {
                 self.diags.push(
                     Diagnostic::error(
@@ -247,32 +256,32 @@ impl<'a> Scope<'a> {
                     .with_help("add a side `dt<P: idle>` for them"),
                 );
             }
-            self.coupling(sides, &pts);
+            self.coupling(sides, &pts, &owner);
             if sides.len() > 1 {
-                for (i, side) in sides.iter().enumerate() {
-                    let rest: Vec<RoleId> = pts.iter().enumerate().filter(|(j, _)| *j != i).flat_map(|(_, p)| p.clone()).collect();
-                    if i + 1 < sides.len() {
-                        self.obligations.push(Obligation {
-                            rule: Rule::FullSeparation,
-                            span: side.loc().0,
-                            what: format!("footprints of {} against {}", names(self.prog, &pts[i]), names(self.prog, &rest)),
-                            hyps: Vec::new(),
-                            goal: Goal::Separated { left: pts[i].clone(), right: rest },
-                        });
-                    }
-                }
+                self.obligations.push(Obligation {
+                    rule: Rule::FullSeparation,
+                    span: loc.0,
+                    what: format!("footprints of the {} sides of `*`", sides.len()),
+                    hyps: Vec::new(),
+                    goal: Goal::Separated { sides: pts.clone() },
+                });
             }
         }
         for (side, pt) in sides.iter().zip(&pts) {
-            let sub: Vec<RoleId> = pt.iter().copied().filter(|r| scope.contains(r)).collect();
+            let sub: Vec<RoleId> = if pt.len() * scope.len() > 4096 {
+                let in_scope: std::collections::HashSet<&RoleId> = scope.iter().collect();
+                pt.iter().copied().filter(|r| in_scope.contains(r)).collect()
+            } else {
+                pt.iter().copied().filter(|r| scope.contains(r)).collect()
+            };
             self.walk(side, &sub, original);
         }
     }
 
     /// Full separation, coupling half (Sec 4.1): the assumption of a primitive in side i
     /// reads only inputs fed by participants of side i.
-    fn coupling(&mut self, sides: &[Global], pts: &[Vec<RoleId>]) {
-        for (side, pt) in sides.iter().zip(pts) {
+    fn coupling(&mut self, sides: &[Global], pts: &[Vec<RoleId>], owner: &HashMap<RoleId, usize>) {
+        for (i, side) in sides.iter().enumerate() {
             let mut motions = Vec::new();
             collect_motions(side, &mut motions);
             for m in motions {
@@ -283,7 +292,7 @@ impl<'a> Scope<'a> {
                     prim.assume.visit_vars(&mut |v, _| {
                         if let Var::Own(Slot::Input(k)) = v {
                             if let Some(Some(src)) = sources.get(*k) {
-                                if !pt.contains(src) && !bad.iter().any(|(kk, _)| kk == k) {
+                                if owner.get(src) != Some(&i) && !bad.iter().any(|(kk, _)| kk == k) {
                                     bad.push((*k, *src));
                                 }
                             }
