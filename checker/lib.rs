@@ -14,3 +14,4 @@ pub mod driver;
 pub mod hir;
 pub mod lower;
 pub mod obligation;
+pub mod project;
