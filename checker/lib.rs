@@ -15,3 +15,4 @@ pub mod hir;
 pub mod lower;
 pub mod obligation;
 pub mod project;
+pub mod subtype;
