@@ -24,7 +24,7 @@
 use crate::diag::{Code, Diagnostic};
 use crate::hir::print;
 use crate::hir::*;
-use std::collections::{BTreeMap, HashSet};
+use std::collections::{BTreeMap, HashMap, HashSet};
 use std::rc::Rc;
 
 /// Projects the choreography onto every participant of the system. A participant whose
@@ -67,7 +67,7 @@ pub fn check_declared(prog: &Program, projections: &BTreeMap<RoleId, LocalRc>) -
             )
             .with_label(declared.0, "the declared type says this")
             .with_label(projected.0, "where the choreography says this")
-            .with_note(format!("the projection onto `{name}` is:\n{}", print::local(prog, proj)))
+            .with_note(format!("the projection onto `{name}` is:\n{}", print_bounded(prog, proj, 20_000)))
             .with_help(format!(
                 "use `mochi project FILE --role {name}` to print the projection and paste it, or change the choreography"
             )),
@@ -147,11 +147,59 @@ pub fn describe(prog: &Program, t: &Local) -> String {
     }
 }
 
+/// Prints a local type for a diagnostic. Shared tails make a local type a DAG whose
+/// printed tree can be exponentially larger, so a type that would print more than
+/// `max_nodes` nodes is summarised by its first action.
+pub fn print_bounded(prog: &Program, t: &LocalRc, max_nodes: usize) -> String {
+    if tree_size(t, max_nodes + 1, &mut HashMap::new()) <= max_nodes {
+        print::local(prog, t)
+    } else {
+        format!(
+            "{}. ... (too large to print here; use `mochi project`)",
+            describe(prog, t)
+        )
+    }
+}
+
+/// The number of nodes of `t` printed as a tree, saturating at `cap`.
+fn tree_size(t: &LocalRc, cap: usize, memo: &mut HashMap<usize, usize>) -> usize {
+    let key = Rc::as_ptr(t) as usize;
+    if let Some(&n) = memo.get(&key) {
+        return n;
+    }
+    let n = stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || {
+        let mut n = 1usize;
+        let mut add = |c: &LocalRc, memo: &mut HashMap<usize, usize>| {
+            n = n.saturating_add(tree_size(c, cap, memo)).min(cap);
+        };
+        match &**t {
+            Local::Motion { cont, .. } => add(cont, memo),
+            Local::Send { branches, .. } => branches.iter().for_each(|b| add(&b.cont, memo)),
+            Local::Recv {
+                branches, default, ..
+            } => {
+                branches.iter().for_each(|b| add(&b.cont, memo));
+                if let Some((_, c)) = default {
+                    add(c, memo);
+                }
+            }
+            Local::Rec { body, .. } => add(body, memo),
+            Local::Var { .. } | Local::End(_) => {}
+        }
+        n
+    });
+    memo.insert(key, n);
+    n
+}
+
 /// `dt<a>` or `dt<a /\ b>`.
 pub fn motion_text(prog: &Program, prims: &[PrimApp]) -> String {
     let items: Vec<String> = prims.iter().map(|a| print::prim_app(prog, a)).collect();
     format!("dt<{}>", items.join(" /\\ "))
 }
+
+/// How many nodes a local type printed in a note may have.
+pub(crate) const NOTE_NODES: usize = 400;
 
 struct Projector<'a> {
     prog: &'a Program,
@@ -335,8 +383,8 @@ impl Projector<'_> {
     fn unmergeable(
         &self,
         choice: &Msg,
-        left: (&str, &Local),
-        right: (&str, &Local),
+        left: (&str, &LocalRc),
+        right: (&str, &LocalRc),
         c: Clash,
     ) -> Diagnostic {
         let r = self.name();
@@ -363,8 +411,8 @@ impl Projector<'_> {
         }
         d.with_note(format!(
             "`{r}` takes no part in `{p} -> {q}`, so it cannot tell the branches apart (Def 4.8 (3), merge of Def 4.7); its projections are\nafter {left}: {}\nafter {right}: {}",
-            print::local(self.prog, lt),
-            print::local(self.prog, rt)
+            print_bounded(self.prog, lt, NOTE_NODES),
+            print_bounded(self.prog, rt, NOTE_NODES)
         ))
         .with_help(format!(
             "inform `{r}` of the choice: start each branch's part for `{r}` with a message to it (e.g. `{p} -> {r} : ...` or `{q} -> {r} : ...` with distinct labels)"
@@ -738,7 +786,7 @@ impl Differ {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::diag::Code;
     use crate::lower::tests::lower_src;
@@ -979,6 +1027,43 @@ mod tests {
         assert!(d[0].message.contains("`C`"));
         assert!(d[0].notes[0].contains("B?y.end"), "{:?}", d[0].notes);
         assert!(d[0].help.as_deref().unwrap_or("").contains("mochi project"));
+    }
+
+    #[test]
+    fn ill_formed_choreographies_get_diagnostics_not_panics() {
+        let src = format!("{ABC} choreography G = dt<A: m> + A -> B : x;");
+        let (_, _, diags) = projections(&src);
+        assert!(
+            diags.iter().all(|d| d.code == Code::ChoiceMismatch) && !diags.is_empty(),
+            "{diags:?}"
+        );
+        let src = format!("{ABC} choreography G = A -> B : x + A -> C : y;");
+        let (_, _, diags) = projections(&src);
+        assert!(
+            diags.iter().all(|d| d.code == Code::ChoiceMismatch) && !diags.is_empty(),
+            "{diags:?}"
+        );
+        let src = format!("{ABC} choreography G = A -> B : x * A -> C : y;");
+        let (_, map, diags) = projections(&src);
+        assert_eq!(diags.len(), 1, "{diags:?}");
+        assert_eq!(diags[0].code, Code::SeparationOverlap);
+        assert_eq!(map.len(), 2);
+    }
+
+    #[test]
+    fn large_shared_types_are_summarised_in_notes() {
+        // Each choice doubles the printed size of A's projection, not its size in memory.
+        let choices: Vec<String> = (0..40)
+            .map(|i| format!("(A -> B : a{i} + A -> B : b{i})"))
+            .collect();
+        let src = format!("{ABC} choreography G = {}. end;", choices.join(". "));
+        let (prog, map, diags) = projections(&src);
+        assert!(diags.is_empty(), "{diags:?}");
+        let a = map.get(&RoleId(0)).expect("A is projected");
+        let text = print_bounded(&prog, a, NOTE_NODES);
+        assert!(text.starts_with("+{B!a0, B!b0}. ..."), "{text}");
+        let small = map.get(&RoleId(2)).expect("C is projected");
+        assert_eq!(print_bounded(&prog, small, NOTE_NODES), "end");
     }
 
     #[test]
