@@ -16,3 +16,4 @@ pub mod lower;
 pub mod obligation;
 pub mod project;
 pub mod subtype;
+pub mod typeck;

@@ -20,7 +20,7 @@
 //! The module also holds the predicate helpers that process typing shares.
 
 use crate::diag::{Code, Diagnostic};
-use crate::hir::expr::BinOp;
+use crate::hir::expr::{BinOp, UnOp};
 use crate::hir::*;
 use crate::obligation::{Goal, Obligation, Rule};
 use crate::project::{describe, motion_text};
@@ -55,11 +55,11 @@ const UNFOLD_LIMIT: usize = 256;
 
 /// Unfolds `mu t. T` (binding `t`) and `t` (jumping back to the body of its `mu`) until
 /// an action or `end` comes first. Returns that node and, when the last step was a
-/// jump back, the variable it went through.
+/// jump back, the variable it went through and where it is written.
 pub(crate) fn unfold(
     t: &LocalRc,
     env: &mut RecEnv,
-) -> Result<(LocalRc, Option<String>), Diagnostic> {
+) -> Result<(LocalRc, Option<(String, Loc)>), Diagnostic> {
     let mut t = t.clone();
     let mut looped = None;
     for _ in 0..UNFOLD_LIMIT {
@@ -82,7 +82,7 @@ pub(crate) fn unfold(
                 let Local::Rec { body, .. } = &**rec else {
                     break;
                 };
-                looped = Some(var.clone());
+                looped = Some((var.clone(), *loc));
                 body.clone()
             }
             _ => return Ok((t, looped)),
@@ -518,11 +518,12 @@ pub(crate) fn value_expr(id: ValueId, name: &str, sort: &Sort) -> Expr {
     }
 }
 
-/// Rebuilds `e`, replacing each variable occurrence for which `f` answers.
-pub(crate) fn map_vars(e: &Expr, f: &mut dyn FnMut(&Var) -> Option<Expr>) -> Expr {
+/// Rebuilds `e`, replacing each variable occurrence (given with its sort) for which
+/// `f` answers.
+pub(crate) fn map_vars(e: &Expr, f: &mut dyn FnMut(&Var, &Sort) -> Option<Expr>) -> Expr {
     stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || {
         let kind = match &e.kind {
-            ExprKind::Var(v) => match f(v) {
+            ExprKind::Var(v) => match f(v, &e.sort) {
                 Some(r) => return Expr { loc: e.loc, ..r },
                 None => ExprKind::Var(v.clone()),
             },
@@ -555,9 +556,33 @@ pub(crate) fn subst_values(e: &Expr, map: &HashMap<String, Expr>) -> Expr {
     if map.is_empty() {
         return e.clone();
     }
-    map_vars(e, &mut |v| match v {
+    map_vars(e, &mut |v, _| match v {
         Var::Value(_, name) => map.get(name).cloned(),
         _ => None,
+    })
+}
+
+/// Whether some variable of `e` satisfies `pred`.
+pub(crate) fn mentions(e: &Expr, pred: &dyn Fn(&Var) -> bool) -> bool {
+    stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || match &e.kind {
+        ExprKind::Var(v) => pred(v),
+        ExprKind::Int(_) | ExprKind::Real(_) | ExprKind::Bool(_) => false,
+        ExprKind::Unary(_, a) | ExprKind::Component(a, _) => mentions(a, pred),
+        ExprKind::Binary(_, a, b) => mentions(a, pred) || mentions(b, pred),
+        ExprKind::If(a, b, c) => mentions(a, pred) || mentions(b, pred) || mentions(c, pred),
+        ExprKind::Call(_, args) | ExprKind::Tuple(args) => args.iter().any(|a| mentions(a, pred)),
+    })
+}
+
+/// The conjuncts of `e`, without `true`.
+pub(crate) fn conjuncts(e: &Expr, out: &mut Vec<Expr>) {
+    stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || match &e.kind {
+        ExprKind::Binary(BinOp::And, a, b) => {
+            conjuncts(a, out);
+            conjuncts(b, out);
+        }
+        _ if e.is_true() => {}
+        _ => out.push(e.clone()),
     })
 }
 
@@ -573,6 +598,16 @@ pub(crate) fn implies(a: Expr, b: Expr) -> Expr {
     let loc = b.loc;
     Expr {
         kind: ExprKind::Binary(BinOp::Implies, Box::new(a), Box::new(b)),
+        sort: Sort::Bool,
+        loc,
+    }
+}
+
+/// `!a`.
+pub(crate) fn not(a: Expr) -> Expr {
+    let loc = a.loc;
+    Expr {
+        kind: ExprKind::Unary(UnOp::Not, Box::new(a)),
         sort: Sort::Bool,
         loc,
     }
