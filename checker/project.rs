@@ -307,12 +307,7 @@ impl Projector<'_> {
     fn choice(&self, branches: &[Global], loc: Loc, tail: LocalRc) -> Result<LocalRc, Diagnostic> {
         let mut split: Vec<(&Msg, Vec<&Global>)> = Vec::new();
         for b in branches {
-            let mut items = Vec::new();
-            flatten_seq(b, &mut items);
-            match items.split_first() {
-                Some((Global::Msg(m), rest)) => split.push((m, rest.to_vec())),
-                _ => return Err(not_a_choice(b.loc())),
-            }
+            split_branch(b, &[], &mut split).map_err(not_a_choice)?;
         }
         let Some(&(first, _)) = split.first() else {
             return Err(not_a_choice(loc));
@@ -624,6 +619,32 @@ fn not_a_choice(loc: Loc) -> Diagnostic {
     Diagnostic::error(Code::ChoiceMismatch, loc.0, "this branch of a choice does not start with the choosing message")
         .with_note("Def 4.1: every branch of `+` starts with a message from the same sender to the same receiver")
         .with_help("start every branch with `p -> q : label` for the same `p` and `q`")
+}
+
+/// Splits a branch of a choice, followed by `rest`, into its choosing message and
+/// what follows it. A nested choice at the front is distributed over the rest,
+/// `(g1 + g2).g = g1.g + g2.g`, as Sec 4.1 writes choices. Fails with the location of
+/// a branch that does not start with a message.
+fn split_branch<'g>(
+    b: &'g Global,
+    rest: &[&'g Global],
+    out: &mut Vec<(&'g Msg, Vec<&'g Global>)>,
+) -> Result<(), Loc> {
+    stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || {
+        let mut items = Vec::new();
+        flatten_seq(b, &mut items);
+        items.extend_from_slice(rest);
+        match items.split_first() {
+            Some((Global::Msg(m), tail)) => {
+                out.push((m, tail.to_vec()));
+                Ok(())
+            }
+            Some((Global::Choice(inner, _), tail)) => {
+                inner.iter().try_for_each(|i| split_branch(i, tail, out))
+            }
+            _ => Err(b.loc()),
+        }
+    })
 }
 
 /// The items of a (possibly nested) sequence, in order.
@@ -1048,6 +1069,24 @@ pub(crate) mod tests {
         assert_eq!(diags.len(), 1, "{diags:?}");
         assert_eq!(diags[0].code, Code::SeparationOverlap);
         assert_eq!(map.len(), 2);
+    }
+
+    #[test]
+    fn nested_choices_are_distributed() {
+        let src = format!(
+            "{ABC} choreography G = (A -> B : x + A -> B : y). B -> C : z. end + A -> B : w. B -> C : v. end;"
+        );
+        let (prog, map, diags) = projections(&src);
+        assert!(diags.is_empty(), "{diags:?}");
+        assert_eq!(
+            printed(&prog, &map, "A"),
+            "+{\n  B!x.end,\n  B!y.end,\n  B!w.end\n}"
+        );
+        assert_eq!(
+            printed(&prog, &map, "B"),
+            "&{\n  A?x.C!z.end,\n  A?y.C!z.end,\n  A?w.C!v.end\n}"
+        );
+        assert_eq!(printed(&prog, &map, "C"), "&{\n  B?z.end,\n  B?v.end\n}");
     }
 
     #[test]
