@@ -1033,6 +1033,40 @@ mod tests {
     }
 
     #[test]
+    fn nested_loops_and_conditionals_in_loops() {
+        for c in [
+            "process C = mu k. mu j. A!go(x + 1).dt<move(x + 1)>.A?done.k;",
+            "process C = mu k. A!go(x + 1).dt<move(x + 1)>.mu j. A?done.k;",
+            "process C = mu k. if x > 0 then A!go(1.0).dt<move(1.0)>.A?done.k else A!go(2.0).dt<move(2.0)>.A?done.k;",
+            "process C = mu k. A!go(x + 1).dt<move(x + 1)>.A?done.mu j. A!go(x + 2).dt<move(x + 2)>.A?done.j;",
+        ] {
+            let (_, d, _) = check(&format!("{c} {GOOD_A}"));
+            assert!(d.is_empty(), "{c}: {d:?}");
+        }
+        // Jumping to an outer loop from an inner one at the wrong point.
+        let (_, d, _) = check(&format!(
+            "process C = mu k. A!go(x + 1).mu j. dt<move(x + 1)>.A?done.j; {GOOD_A}"
+        ));
+        assert_eq!(codes(&d), vec![Code::RecursionMismatch], "{d:?}");
+    }
+
+    #[test]
+    fn long_sequences_are_checked_without_deep_recursion() {
+        let n = 400;
+        let msgs: Vec<String> = (0..n).map(|i| format!("C -> A : m{i}")).collect();
+        let sends: Vec<String> = (0..n).map(|i| format!("A!m{i}")).collect();
+        let recvs: Vec<String> = (0..n).map(|i| format!("C?m{i}")).collect();
+        let chor = format!("choreography G = {}. end;", msgs.join(". "));
+        let procs = format!(
+            "process C = {}.end; process A = {}.end;",
+            sends.join("."),
+            recvs.join(".")
+        );
+        let (_, d, _) = check_with(&chor, &procs);
+        assert!(d.is_empty(), "{d:?}");
+    }
+
+    #[test]
     fn received_refinements_enter_the_context() {
         let chor = "choreography G = C -> A : go(tf: real { tf > 0 }). A -> C : [tf > 0] ack(u: real { u == tf }). end;";
         let (prog, d, obs) = check_with(
