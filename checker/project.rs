@@ -1,0 +1,1134 @@
+//! Projection of a global type onto a participant (Def 4.8) and the merge operator of
+//! Def 4.7, with Def 4.8 (3) read as the merge `⊓` (seeds README, known error 3).
+//!
+//! Projection is continuation-passing: [`project`] takes the local type `tail` that
+//! follows `g` and pushes it into every branch of a choice. Tails are [`Rc`]-shared,
+//! so a sequence of choices costs linear space, and the result is in the prefix form of
+//! Def 4.6 (`dt<a>.T`, `⊕{..}`, `&{..}`, `&{..} & dt<a>.T`, `mu t.T`, `t`, `end`).
+//!
+//! The rules, for a role `r`:
+//! - `p -> q : {[P_i] l_i(F_i).G_i}`: the sender gets `⊕{[P_i] q!l_i(F_i).T_i}`, the
+//!   receiver `&{p?l_i(F_i).T_i}`, anybody else the merge `⊓_i T_i` (a single message
+//!   is a choice with one branch);
+//! - `dt<(p_i : a_i)>.T` is `dt<a_j>.T` for `r = p_j` and `T` otherwise;
+//! - `g1 * g2` is the projection of the side that contains `r` (and `T` if none does);
+//! - sequences fold from the right; `t` and `end` ignore the tail;
+//! - `mu t.G` is `mu t.T'` when `r ∈ pt{G}`. Def 4.8 (4) leaves the projection
+//!   undefined otherwise; we follow the usual MPST convention that `r` has left the
+//!   protocol and project to `end`.
+//!
+//! Equality of local types ([`equal`]) ignores source locations and the ids of payload
+//! fields and recursion parameters (they are compared by name, as value variables are),
+//! and it compares the branches of a choice as a set.
+
+use crate::diag::{Code, Diagnostic};
+use crate::hir::print;
+use crate::hir::*;
+use std::collections::{BTreeMap, HashMap, HashSet};
+use std::rc::Rc;
+
+/// Projects the choreography onto every participant of the system. A participant whose
+/// projection fails is missing from the map and has a diagnostic (E0601) instead.
+pub fn project_all(prog: &Program) -> (BTreeMap<RoleId, LocalRc>, Vec<Diagnostic>) {
+    let mut out = BTreeMap::new();
+    let mut diags = Vec::new();
+    let Some(chor) = &prog.choreography else {
+        return (out, diags);
+    };
+    let tail: LocalRc = Rc::new(Local::End(Loc(chor.span)));
+    for role in prog.role_ids() {
+        match project(prog, &chor.body, role, tail.clone()) {
+            Ok(t) => {
+                out.insert(role, t);
+            }
+            Err(d) => diags.push(d),
+        }
+    }
+    (out, diags)
+}
+
+/// Checks every `local R = T;` item against the projection onto `R` (E0602). Roles
+/// whose projection failed are skipped: their error is already reported.
+pub fn check_declared(prog: &Program, projections: &BTreeMap<RoleId, LocalRc>) -> Vec<Diagnostic> {
+    let mut diags = Vec::new();
+    for def in &prog.locals {
+        let Some(proj) = projections.get(&def.role) else {
+            continue;
+        };
+        let Some((declared, projected)) = first_difference(&def.body, proj) else {
+            continue;
+        };
+        let name = prog.role_name(def.role);
+        diags.push(
+            Diagnostic::error(
+                Code::LocalMismatch,
+                def.span,
+                format!("the declared local type of `{name}` differs from the projection of the choreography"),
+            )
+            .with_label(declared.0, "the declared type says this")
+            .with_label(projected.0, "where the choreography says this")
+            .with_note(format!("the projection onto `{name}` is:\n{}", print_bounded(prog, proj, 20_000)))
+            .with_help(format!(
+                "use `mochi project FILE --role {name}` to print the projection and paste it, or change the choreography"
+            )),
+        );
+    }
+    diags
+}
+
+/// The projection of `g` onto `role`, followed by `tail` (Def 4.8).
+pub fn project(
+    prog: &Program,
+    g: &Global,
+    role: RoleId,
+    tail: LocalRc,
+) -> Result<LocalRc, Diagnostic> {
+    Projector { prog, role }.project(g, tail)
+}
+
+/// Whether two local types are equal up to locations, value-variable ids and the order
+/// of choice branches.
+pub fn equal(a: &LocalRc, b: &LocalRc) -> bool {
+    first_difference(a, b).is_none()
+}
+
+/// The locations of the first pair of nodes where `a` and `b` differ, if any.
+pub fn first_difference(a: &LocalRc, b: &LocalRc) -> Option<(Loc, Loc)> {
+    Differ {
+        same: HashSet::new(),
+    }
+    .diff(a, b)
+}
+
+/// A short description of the first action of a local type, for messages:
+/// `GRobot!ready`, `&{Cart?ok, Cart?ko} & dt<m_idle>`, `dt<a /\ b>`, `end`.
+pub fn describe(prog: &Program, t: &Local) -> String {
+    match t {
+        Local::Motion { prims, .. } => motion_text(prog, prims),
+        Local::Send { branches, .. } => {
+            let items: Vec<String> = branches
+                .iter()
+                .map(|b| format!("{}!{}", prog.role_name(b.to), b.label))
+                .collect();
+            if items.len() == 1 {
+                items.join("")
+            } else {
+                format!("+{{{}}}", items.join(", "))
+            }
+        }
+        Local::Recv {
+            branches, default, ..
+        } => {
+            let items: Vec<String> = branches
+                .iter()
+                .map(|b| format!("{}?{}", prog.role_name(b.from), b.label))
+                .collect();
+            let mut s = if items.len() == 1 && default.is_none() {
+                items.join("")
+            } else {
+                format!("&{{{}}}", items.join(", "))
+            };
+            if let Some((prims, _)) = default {
+                s.push_str(" & ");
+                s.push_str(&motion_text(prog, prims));
+            }
+            s
+        }
+        Local::Rec { var, body, .. } => format!("mu {var}. {}", describe(prog, body)),
+        Local::Var { var, args, .. } => {
+            if args.is_empty() {
+                var.clone()
+            } else {
+                let args: Vec<String> = args.iter().map(|a| print::expr(prog, None, a)).collect();
+                format!("{var}({})", args.join(", "))
+            }
+        }
+        Local::End(_) => "end".to_string(),
+    }
+}
+
+/// Prints a local type for a diagnostic. Shared tails make a local type a DAG whose
+/// printed tree can be exponentially larger, so a type that would print more than
+/// `max_nodes` nodes is summarised by its first action.
+pub fn print_bounded(prog: &Program, t: &LocalRc, max_nodes: usize) -> String {
+    if tree_size(t, max_nodes + 1, &mut HashMap::new()) <= max_nodes {
+        print::local(prog, t)
+    } else {
+        format!(
+            "{}. ... (too large to print here; use `mochi project`)",
+            describe(prog, t)
+        )
+    }
+}
+
+/// The number of nodes of `t` printed as a tree, saturating at `cap`.
+fn tree_size(t: &LocalRc, cap: usize, memo: &mut HashMap<usize, usize>) -> usize {
+    let key = Rc::as_ptr(t) as usize;
+    if let Some(&n) = memo.get(&key) {
+        return n;
+    }
+    let n = stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || {
+        let mut n = 1usize;
+        let mut add = |c: &LocalRc, memo: &mut HashMap<usize, usize>| {
+            n = n.saturating_add(tree_size(c, cap, memo)).min(cap);
+        };
+        match &**t {
+            Local::Motion { cont, .. } => add(cont, memo),
+            Local::Send { branches, .. } => branches.iter().for_each(|b| add(&b.cont, memo)),
+            Local::Recv {
+                branches, default, ..
+            } => {
+                branches.iter().for_each(|b| add(&b.cont, memo));
+                if let Some((_, c)) = default {
+                    add(c, memo);
+                }
+            }
+            Local::Rec { body, .. } => add(body, memo),
+            Local::Var { .. } | Local::End(_) => {}
+        }
+        n
+    });
+    memo.insert(key, n);
+    n
+}
+
+/// `dt<a>` or `dt<a /\ b>`.
+pub fn motion_text(prog: &Program, prims: &[PrimApp]) -> String {
+    let items: Vec<String> = prims.iter().map(|a| print::prim_app(prog, a)).collect();
+    format!("dt<{}>", items.join(" /\\ "))
+}
+
+/// How many nodes a local type printed in a note may have.
+pub(crate) const NOTE_NODES: usize = 400;
+
+struct Projector<'a> {
+    prog: &'a Program,
+    role: RoleId,
+}
+
+/// Why two branch projections could not be merged: the two nodes that differ.
+struct Clash {
+    left: Loc,
+    left_text: String,
+    right: Loc,
+    right_text: String,
+    why: Option<String>,
+}
+
+impl Projector<'_> {
+    fn project(&self, g: &Global, tail: LocalRc) -> Result<LocalRc, Diagnostic> {
+        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.project_inner(g, tail))
+    }
+
+    fn project_inner(&self, g: &Global, tail: LocalRc) -> Result<LocalRc, Diagnostic> {
+        match g {
+            Global::Msg(m) => self.choice(std::slice::from_ref(g), m.loc, tail),
+            Global::Choice(branches, loc) => self.choice(branches, *loc, tail),
+            Global::Motion(m) => Ok(match m.parts.iter().find(|(r, _)| *r == self.role) {
+                Some((_, a)) => Rc::new(Local::Motion {
+                    prims: vec![a.clone()],
+                    cont: tail,
+                    loc: a.loc,
+                }),
+                None => tail,
+            }),
+            Global::Seq(items, _) => {
+                let mut t = tail;
+                for item in items.iter().rev() {
+                    t = self.project(item, t)?;
+                }
+                Ok(t)
+            }
+            Global::Par(sides, loc) => {
+                let mine: Vec<&Global> = sides.iter().filter(|s| self.occurs_in(s)).collect();
+                match mine.as_slice() {
+                    [] => Ok(tail),
+                    [side] => self.project(side, tail),
+                    [..] => Err(Diagnostic::error(
+                        Code::SeparationOverlap,
+                        loc.0,
+                        format!("`{}` occurs on more than one side of `*`", self.name()),
+                    )
+                    .with_note("projection (Def 4.8 (7)) needs the sides of `*` to have disjoint participants")
+                    .with_help("move the participant's actions out of all sides but one")),
+                }
+            }
+            Global::Rec {
+                var,
+                params,
+                body,
+                loc,
+            } => {
+                if !self.occurs_in(body) {
+                    // Def 4.8 (4) is undefined here; the role has left the protocol.
+                    return Ok(Rc::new(Local::End(*loc)));
+                }
+                let body = self.project(body, tail)?;
+                if matches!(&*body, Local::Var { var: v, .. } if v == var) {
+                    // `mu t. t` would be unguarded: the role never acts in the loop.
+                    return Ok(Rc::new(Local::End(*loc)));
+                }
+                Ok(Rc::new(Local::Rec {
+                    var: var.clone(),
+                    params: params.clone(),
+                    body,
+                    loc: *loc,
+                }))
+            }
+            Global::Var(v) => Ok(Rc::new(Local::Var {
+                var: v.var.clone(),
+                args: v.args.clone(),
+                loc: v.loc,
+            })),
+            Global::End(loc) => Ok(Rc::new(Local::End(*loc))),
+        }
+    }
+
+    fn name(&self) -> &str {
+        self.prog.role_name(self.role)
+    }
+
+    fn occurs_in(&self, g: &Global) -> bool {
+        let mut pt = Vec::new();
+        g.participants(&mut pt);
+        pt.contains(&self.role)
+    }
+
+    /// Projects the items of a sequence, right to left, in front of `tail`.
+    fn seq(&self, items: &[&Global], tail: LocalRc) -> Result<LocalRc, Diagnostic> {
+        let mut t = tail;
+        for item in items.iter().rev() {
+            t = self.project(item, t)?;
+        }
+        Ok(t)
+    }
+
+    /// Def 4.8 (1)-(3): a choice whose branches each start with a message `p -> q`.
+    fn choice(&self, branches: &[Global], loc: Loc, tail: LocalRc) -> Result<LocalRc, Diagnostic> {
+        let mut split: Vec<(&Msg, Vec<&Global>)> = Vec::new();
+        for b in branches {
+            split_branch(b, &[], &mut split).map_err(not_a_choice)?;
+        }
+        let Some(&(first, _)) = split.first() else {
+            return Err(not_a_choice(loc));
+        };
+        if let Some((m, _)) = split
+            .iter()
+            .find(|(m, _)| m.from != first.from || m.to != first.to)
+        {
+            return Err(not_a_choice(m.loc));
+        }
+        if self.role == first.from {
+            let mut out = Vec::new();
+            for (m, rest) in &split {
+                out.push(SendBranch {
+                    guard: m.guard.clone(),
+                    to: m.to,
+                    label: m.label.clone(),
+                    payload: m.payload.clone(),
+                    cont: self.seq(rest, tail.clone())?,
+                    loc: m.loc,
+                });
+            }
+            return Ok(Rc::new(Local::Send {
+                branches: out,
+                loc: first.loc,
+            }));
+        }
+        if self.role == first.to {
+            let mut out = Vec::new();
+            for (m, rest) in &split {
+                out.push(RecvBranch {
+                    from: m.from,
+                    label: m.label.clone(),
+                    payload: m.payload.clone(),
+                    cont: self.seq(rest, tail.clone())?,
+                    loc: m.loc,
+                });
+            }
+            return Ok(Rc::new(Local::Recv {
+                branches: out,
+                default: None,
+                loc: first.loc,
+            }));
+        }
+        // Def 4.8 (3) with the merge of Def 4.7.
+        let mut acc: Option<(LocalRc, Vec<&str>)> = None;
+        for (m, rest) in &split {
+            let t = self.seq(rest, tail.clone())?;
+            acc = Some(match acc {
+                None => (t, vec![m.label.as_str()]),
+                Some((prev, mut labels)) => match self.merge(&prev, &t) {
+                    Ok(merged) => {
+                        labels.push(&m.label);
+                        (merged, labels)
+                    }
+                    Err(clash) => {
+                        let left = format!("`{}`", labels.join("`/`"));
+                        let right = format!("`{}`", m.label);
+                        return Err(self.unmergeable(first, (&left, &prev), (&right, &t), clash));
+                    }
+                },
+            });
+        }
+        Ok(acc.map(|(t, _)| t).unwrap_or(tail))
+    }
+
+    /// E0601. `left` and `right` are the labels of the branches with their projections.
+    fn unmergeable(
+        &self,
+        choice: &Msg,
+        left: (&str, &LocalRc),
+        right: (&str, &LocalRc),
+        c: Clash,
+    ) -> Diagnostic {
+        let r = self.name();
+        let (p, q) = (
+            self.prog.role_name(choice.from),
+            self.prog.role_name(choice.to),
+        );
+        let ((left, lt), (right, rt)) = (left, right);
+        let mut d = Diagnostic::error(
+            Code::Unmergeable,
+            choice.loc.0,
+            format!("cannot merge the projections onto `{r}` of two branches"),
+        )
+        .with_label(
+            c.left.0,
+            format!("after {left}, `{r}` does `{}`", c.left_text),
+        )
+        .with_label(
+            c.right.0,
+            format!("after {right}, `{r}` does `{}`", c.right_text),
+        );
+        if let Some(why) = c.why {
+            d = d.with_note(why);
+        }
+        d.with_note(format!(
+            "`{r}` takes no part in `{p} -> {q}`, so it cannot tell the branches apart (Def 4.8 (3), merge of Def 4.7); its projections are\nafter {left}: {}\nafter {right}: {}",
+            print_bounded(self.prog, lt, NOTE_NODES),
+            print_bounded(self.prog, rt, NOTE_NODES)
+        ))
+        .with_help(format!(
+            "inform `{r}` of the choice: start each branch's part for `{r}` with a message to it (e.g. `{p} -> {r} : ...` or `{q} -> {r} : ...` with distinct labels)"
+        ))
+    }
+
+    /// The merge `T1 ⊓ T2` of Def 4.7.
+    fn merge(&self, a: &LocalRc, b: &LocalRc) -> Result<LocalRc, Clash> {
+        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.merge_inner(a, b))
+    }
+
+    fn merge_inner(&self, a: &LocalRc, b: &LocalRc) -> Result<LocalRc, Clash> {
+        if equal(a, b) {
+            return Ok(a.clone());
+        }
+        match (&**a, &**b) {
+            (
+                Local::Recv {
+                    branches: b1,
+                    default: d1,
+                    loc,
+                },
+                Local::Recv {
+                    branches: b2,
+                    default: d2,
+                    ..
+                },
+            ) => {
+                let branches = self.union(b1, b2)?;
+                let default = match (d1, d2) {
+                    (None, None) => None,
+                    (Some(d), None) | (None, Some(d)) => Some(d.clone()),
+                    (Some((p1, c1)), Some((p2, c2))) => Some(self.merge_default(p1, c1, p2, c2)?),
+                };
+                Ok(Rc::new(Local::Recv {
+                    branches,
+                    default,
+                    loc: *loc,
+                }))
+            }
+            (
+                Local::Motion { prims, cont, .. },
+                Local::Recv {
+                    branches,
+                    default,
+                    loc,
+                },
+            ) => {
+                let default = match default {
+                    None => (prims.clone(), cont.clone()),
+                    Some((p2, c2)) => self.merge_default(prims, cont, p2, c2)?,
+                };
+                Ok(Rc::new(Local::Recv {
+                    branches: branches.clone(),
+                    default: Some(default),
+                    loc: *loc,
+                }))
+            }
+            (
+                Local::Recv {
+                    branches,
+                    default,
+                    loc,
+                },
+                Local::Motion { prims, cont, .. },
+            ) => {
+                let default = match default {
+                    None => (prims.clone(), cont.clone()),
+                    Some((p1, c1)) => self.merge_default(p1, c1, prims, cont)?,
+                };
+                Ok(Rc::new(Local::Recv {
+                    branches: branches.clone(),
+                    default: Some(default),
+                    loc: *loc,
+                }))
+            }
+            _ => Err(self.clash(a, b, None)),
+        }
+    }
+
+    fn clash(&self, a: &Local, b: &Local, why: Option<String>) -> Clash {
+        Clash {
+            left: a.loc(),
+            left_text: describe(self.prog, a),
+            right: b.loc(),
+            right_text: describe(self.prog, b),
+            why,
+        }
+    }
+
+    /// `dt<a ⊓ a'>.T'` from two default motions with the same continuation `T'`.
+    fn merge_default(
+        &self,
+        p1: &[PrimApp],
+        c1: &LocalRc,
+        p2: &[PrimApp],
+        c2: &LocalRc,
+    ) -> Result<(Vec<PrimApp>, LocalRc), Clash> {
+        if !equal(c1, c2) {
+            let why = "the default motions of the two branches continue differently; Def 4.7 merges them only when the continuations are equal".to_string();
+            let (l, r) = first_difference(c1, c2).unwrap_or((c1.loc(), c2.loc()));
+            return Err(Clash {
+                left: l,
+                left_text: format!(
+                    "{}. {}",
+                    motion_text(self.prog, p1),
+                    describe(self.prog, c1)
+                ),
+                right: r,
+                right_text: format!(
+                    "{}. {}",
+                    motion_text(self.prog, p2),
+                    describe(self.prog, c2)
+                ),
+                why: Some(why),
+            });
+        }
+        Ok((self.meet(p1, p2)?, c1.clone()))
+    }
+
+    /// The motion merge `a ⊓ a'`: the list of both primitives, which the refinement
+    /// obligations read as their meet. Def 3.4 (6): a primitive refining both must
+    /// have the interruptibility of each, so they must agree.
+    fn meet(&self, p1: &[PrimApp], p2: &[PrimApp]) -> Result<Vec<PrimApp>, Clash> {
+        let mut out: Vec<PrimApp> = p1.to_vec();
+        for a in p2 {
+            if !out.contains(a) {
+                out.push(a.clone());
+            }
+        }
+        let first = out.first().map(|a| self.prog.prim(a.prim));
+        if let Some(bad) = out.iter().find(|a| {
+            let p = self.prog.prim(a.prim);
+            first.is_some_and(|f| f.interruptible != p.interruptible || f.kind != p.kind)
+        }) {
+            let anchor = p1.first().map(|a| a.loc).unwrap_or(bad.loc);
+            return Err(Clash {
+                left: anchor,
+                left_text: motion_text(self.prog, p1),
+                right: bad.loc,
+                right_text: motion_text(self.prog, p2),
+                why: Some(
+                    "Def 3.4 (6): a motion refining both primitives must have the interruptibility of each, and one is interruptible while the other is not"
+                        .to_string(),
+                ),
+            });
+        }
+        Ok(out)
+    }
+
+    /// The union of two external choices from the same sender; shared labels merge
+    /// their continuations and must carry equal payloads.
+    fn union(&self, b1: &[RecvBranch], b2: &[RecvBranch]) -> Result<Vec<RecvBranch>, Clash> {
+        let mut out: Vec<RecvBranch> = b1.to_vec();
+        let sender = b1.first().map(|b| b.from);
+        for b in b2 {
+            if let Some(s) = sender.filter(|s| *s != b.from) {
+                let first = b1.first().map(|x| x.loc).unwrap_or(b.loc);
+                return Err(Clash {
+                    left: first,
+                    left_text: format!("{}?...", self.prog.role_name(s)),
+                    right: b.loc,
+                    right_text: format!("{}?{}", self.prog.role_name(b.from), b.label),
+                    why: Some("Def 4.7 merges receptions only from the same sender".to_string()),
+                });
+            }
+            match out.iter_mut().find(|x| x.label == b.label) {
+                None => out.push(b.clone()),
+                Some(x) => {
+                    if !fields_equal(&x.payload, &b.payload) {
+                        return Err(Clash {
+                            left: x.loc,
+                            left_text: recv_text(self.prog, x),
+                            right: b.loc,
+                            right_text: recv_text(self.prog, b),
+                            why: Some(format!(
+                                "the two branches receive `{}` with different payloads",
+                                b.label
+                            )),
+                        });
+                    }
+                    x.cont = self.merge(&x.cont, &b.cont)?;
+                }
+            }
+        }
+        Ok(out)
+    }
+}
+
+fn recv_text(prog: &Program, b: &RecvBranch) -> String {
+    let fields: Vec<String> = b
+        .payload
+        .iter()
+        .map(|f| format!("{}: {}", f.name, f.sort))
+        .collect();
+    if fields.is_empty() {
+        format!("{}?{}", prog.role_name(b.from), b.label)
+    } else {
+        format!(
+            "{}?{}({})",
+            prog.role_name(b.from),
+            b.label,
+            fields.join(", ")
+        )
+    }
+}
+
+fn not_a_choice(loc: Loc) -> Diagnostic {
+    Diagnostic::error(Code::ChoiceMismatch, loc.0, "this branch of a choice does not start with the choosing message")
+        .with_note("Def 4.1: every branch of `+` starts with a message from the same sender to the same receiver")
+        .with_help("start every branch with `p -> q : label` for the same `p` and `q`")
+}
+
+/// Splits a branch of a choice, followed by `rest`, into its choosing message and
+/// what follows it. A nested choice at the front is distributed over the rest,
+/// `(g1 + g2).g = g1.g + g2.g`, as Sec 4.1 writes choices. Fails with the location of
+/// a branch that does not start with a message.
+fn split_branch<'g>(
+    b: &'g Global,
+    rest: &[&'g Global],
+    out: &mut Vec<(&'g Msg, Vec<&'g Global>)>,
+) -> Result<(), Loc> {
+    stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || {
+        let mut items = Vec::new();
+        flatten_seq(b, &mut items);
+        items.extend_from_slice(rest);
+        match items.split_first() {
+            Some((Global::Msg(m), tail)) => {
+                out.push((m, tail.to_vec()));
+                Ok(())
+            }
+            Some((Global::Choice(inner, _), tail)) => {
+                inner.iter().try_for_each(|i| split_branch(i, tail, out))
+            }
+            _ => Err(b.loc()),
+        }
+    })
+}
+
+/// The items of a (possibly nested) sequence, in order.
+fn flatten_seq<'g>(g: &'g Global, out: &mut Vec<&'g Global>) {
+    match g {
+        Global::Seq(items, _) => items.iter().for_each(|i| flatten_seq(i, out)),
+        other => out.push(other),
+    }
+}
+
+/// Payload fields compared by name, sort and refinement (not by value id).
+pub(crate) fn fields_equal(a: &[Field], b: &[Field]) -> bool {
+    a.len() == b.len()
+        && a.iter()
+            .zip(b)
+            .all(|(x, y)| x.name == y.name && x.sort == y.sort && x.refinement == y.refinement)
+}
+
+fn params_equal(a: &[RecParam], b: &[RecParam]) -> bool {
+    a.len() == b.len()
+        && a.iter().zip(b).all(|(x, y)| {
+            x.name == y.name && x.sort == y.sort && x.refinement == y.refinement && x.init == y.init
+        })
+}
+
+fn same_prims(a: &[PrimApp], b: &[PrimApp]) -> bool {
+    a.len() == b.len() && a.iter().all(|x| b.contains(x)) && b.iter().all(|y| a.contains(y))
+}
+
+/// Structural comparison of two local types. Pairs already found equal (or being
+/// compared) are remembered, so shared tails are compared once.
+struct Differ {
+    same: HashSet<(usize, usize)>,
+}
+
+impl Differ {
+    fn diff(&mut self, a: &LocalRc, b: &LocalRc) -> Option<(Loc, Loc)> {
+        if Rc::ptr_eq(a, b)
+            || !self
+                .same
+                .insert((Rc::as_ptr(a) as usize, Rc::as_ptr(b) as usize))
+        {
+            return None;
+        }
+        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.diff_inner(a, b))
+    }
+
+    fn diff_inner(&mut self, a: &LocalRc, b: &LocalRc) -> Option<(Loc, Loc)> {
+        let here = Some((a.loc(), b.loc()));
+        match (&**a, &**b) {
+            (
+                Local::Motion {
+                    prims: p1,
+                    cont: c1,
+                    ..
+                },
+                Local::Motion {
+                    prims: p2,
+                    cont: c2,
+                    ..
+                },
+            ) => {
+                if !same_prims(p1, p2) {
+                    return here;
+                }
+                self.diff(c1, c2)
+            }
+            (Local::Send { branches: b1, .. }, Local::Send { branches: b2, .. }) => {
+                if b1.len() != b2.len() {
+                    return here;
+                }
+                for x in b1 {
+                    let Some(y) = b2.iter().find(|y| y.to == x.to && y.label == x.label) else {
+                        return Some((x.loc, b.loc()));
+                    };
+                    if x.guard != y.guard || !fields_equal(&x.payload, &y.payload) {
+                        return Some((x.loc, y.loc));
+                    }
+                    if let Some(d) = self.diff(&x.cont, &y.cont) {
+                        return Some(d);
+                    }
+                }
+                None
+            }
+            (
+                Local::Recv {
+                    branches: b1,
+                    default: d1,
+                    ..
+                },
+                Local::Recv {
+                    branches: b2,
+                    default: d2,
+                    ..
+                },
+            ) => {
+                if b1.len() != b2.len() {
+                    return here;
+                }
+                for x in b1 {
+                    let Some(y) = b2.iter().find(|y| y.from == x.from && y.label == x.label) else {
+                        return Some((x.loc, b.loc()));
+                    };
+                    if !fields_equal(&x.payload, &y.payload) {
+                        return Some((x.loc, y.loc));
+                    }
+                    if let Some(d) = self.diff(&x.cont, &y.cont) {
+                        return Some(d);
+                    }
+                }
+                match (d1, d2) {
+                    (None, None) => None,
+                    (Some((p1, c1)), Some((p2, c2))) => {
+                        if !same_prims(p1, p2) {
+                            let l1 = p1.first().map(|p| p.loc).unwrap_or(a.loc());
+                            let l2 = p2.first().map(|p| p.loc).unwrap_or(b.loc());
+                            return Some((l1, l2));
+                        }
+                        self.diff(c1, c2)
+                    }
+                    _ => here,
+                }
+            }
+            (
+                Local::Rec {
+                    var: v1,
+                    params: p1,
+                    body: c1,
+                    ..
+                },
+                Local::Rec {
+                    var: v2,
+                    params: p2,
+                    body: c2,
+                    ..
+                },
+            ) => {
+                if v1 != v2 || !params_equal(p1, p2) {
+                    return here;
+                }
+                self.diff(c1, c2)
+            }
+            (
+                Local::Var {
+                    var: v1, args: a1, ..
+                },
+                Local::Var {
+                    var: v2, args: a2, ..
+                },
+            ) => {
+                if v1 != v2 || a1 != a2 {
+                    return here;
+                }
+                None
+            }
+            (Local::End(_), Local::End(_)) => None,
+            _ => here,
+        }
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::diag::Code;
+    use crate::lower::tests::lower_src;
+
+    /// The cart-and-arms example (Fig 2 as corrected in wf-rules.md): the cart tells
+    /// both arms which one it serves, moves there, and comes back.
+    pub(crate) const CART_ARMS: &str = "
+        robot Cart { state x: real; }
+        robot Arm { state h: real; }
+        motion Cart.m_move(p: real) { interruptible: false; post: x == p; }
+        motion Cart.m_idle { interruptible: true; }
+        motion Arm.work { interruptible: true; }
+        motion Arm.pick { interruptible: false; }
+        system CartAndArms {
+          participant Cart: Cart { init: x == 0; }
+          participant G: Arm;
+          participant R: Arm;
+        }
+        choreography Fig2 = mu t. (
+            Cart -> G : arrive. Cart -> R : free.
+            ((dt<Cart: m_move(1.0), G: work>. Cart -> G : ready. dt<Cart: m_idle, G: pick>. G -> Cart : ok.
+              (dt<Cart: m_move(0.0)> * dt<G: work>)) * dt<R: work>). t
+          + Cart -> G : free. Cart -> R : arrive.
+            ((dt<Cart: m_move(2.0), R: work>. Cart -> R : ready. dt<Cart: m_idle, R: pick>. R -> Cart : ok.
+              (dt<Cart: m_move(0.0)> * dt<R: work>)) * dt<G: work>). t
+        );
+    ";
+
+    fn projections(src: &str) -> (Program, BTreeMap<RoleId, LocalRc>, Vec<Diagnostic>) {
+        let (prog, d) = lower_src(src);
+        assert!(d.is_empty(), "{d:?}");
+        let (map, diags) = project_all(&prog);
+        (prog, map, diags)
+    }
+
+    fn printed(prog: &Program, map: &BTreeMap<RoleId, LocalRc>, role: &str) -> String {
+        let r = prog.role_by_name(role).expect("role exists");
+        print::local(prog, map.get(&r).expect("projection exists"))
+    }
+
+    #[test]
+    fn example_4_9_cart_and_arms() {
+        let (prog, map, diags) = projections(CART_ARMS);
+        assert!(diags.is_empty(), "{diags:?}");
+        assert_eq!(
+            printed(&prog, &map, "Cart"),
+            "mu t. +{
+  G!arrive.R!free.dt<m_move(1.0)>.G!ready.dt<m_idle>.G?ok.dt<m_move(0.0)>.t,
+  G!free.R!arrive.dt<m_move(2.0)>.R!ready.dt<m_idle>.R?ok.dt<m_move(0.0)>.t
+}"
+        );
+        assert_eq!(
+            printed(&prog, &map, "G"),
+            "mu t. &{
+  Cart?arrive.dt<work>.Cart?ready.dt<pick>.Cart!ok.dt<work>.t,
+  Cart?free.dt<work>.t
+}"
+        );
+        // R does not take part in the choosing message: its branches are merged.
+        assert_eq!(
+            printed(&prog, &map, "R"),
+            "mu t. &{
+  Cart?free.dt<work>.t,
+  Cart?arrive.dt<work>.Cart?ready.dt<pick>.Cart!ok.dt<work>.t
+}"
+        );
+    }
+
+    const ABC: &str = "
+        robot K { state x: real; }
+        motion K.m { interruptible: true; }
+        motion K.n { interruptible: true; }
+        motion K.w { interruptible: true; }
+        motion K.stop { interruptible: false; }
+        system S { participant A: K; participant B: K; participant C: K; }
+    ";
+
+    #[test]
+    fn tails_are_shared_not_copied() {
+        let src =
+            format!("{ABC} choreography G = (A -> B : x. B -> A : y + A -> B : z). dt<A: m>. end;");
+        let (prog, map, _) = projections(&src);
+        let Some(a) = map.get(&RoleId(0)) else {
+            panic!()
+        };
+        assert_eq!(
+            print::local(&prog, a),
+            "+{\n  B!x.B?y.dt<m>.end,\n  B!z.dt<m>.end\n}"
+        );
+        let Local::Send { branches, .. } = &**a else {
+            panic!()
+        };
+        let Local::Recv {
+            branches: inner, ..
+        } = &*branches[0].cont
+        else {
+            panic!()
+        };
+        assert!(Rc::ptr_eq(&inner[0].cont, &branches[1].cont));
+    }
+
+    #[test]
+    fn a_motion_merges_with_receptions_into_a_default() {
+        let src = format!(
+            "{ABC} choreography G =
+                A -> B : l1. dt<A: m, B: n, C: w>. A -> C : stop. end
+              + A -> B : l2. A -> C : go. end;"
+        );
+        let (prog, map, diags) = projections(&src);
+        assert!(diags.is_empty(), "{diags:?}");
+        assert_eq!(
+            printed(&prog, &map, "C"),
+            "&{\n  A?go.end\n} & dt<w>.A?stop.end"
+        );
+    }
+
+    #[test]
+    fn two_defaults_merge_into_the_meet_of_their_motions() {
+        let src = format!(
+            "{ABC} choreography G =
+                A -> B : l1. dt<A: m, B: n, C: w>. A -> C : stop. end
+              + A -> B : l2. A -> C : go. end
+              + A -> B : l3. dt<A: m, B: n, C: n>. A -> C : stop. end;"
+        );
+        let (prog, map, diags) = projections(&src);
+        assert!(diags.is_empty(), "{diags:?}");
+        assert_eq!(
+            printed(&prog, &map, "C"),
+            "&{\n  A?go.end\n} & dt<w /\\ n>.A?stop.end"
+        );
+    }
+
+    #[test]
+    fn motions_of_different_interruptibility_do_not_merge() {
+        let src = format!(
+            "{ABC} choreography G =
+                A -> B : l1. A -> C : go. end
+              + A -> B : l2. dt<A: m, B: n, C: w>. A -> C : done. end
+              + A -> B : l3. dt<A: m, B: n, C: stop>. A -> C : done. end;"
+        );
+        let (_, _, diags) = projections(&src);
+        assert_eq!(diags.len(), 1, "{diags:?}");
+        assert_eq!(diags[0].code, Code::Unmergeable);
+        assert!(
+            diags[0].notes[0].contains("interruptibility"),
+            "{:?}",
+            diags[0].notes
+        );
+    }
+
+    #[test]
+    fn unmergeable_branches_are_e0601_with_both_labels() {
+        let src = format!(
+            "{ABC} choreography G =
+                A -> B : l1. C -> A : x. end
+              + A -> B : l2. C -> A : y. end;"
+        );
+        let (prog, map, diags) = projections(&src);
+        assert_eq!(diags.len(), 1, "{diags:?}");
+        let d = &diags[0];
+        assert_eq!(d.code, Code::Unmergeable);
+        assert!(d.message.contains("onto `C`"), "{}", d.message);
+        assert_eq!(d.labels.len(), 2);
+        let text = &src;
+        let snippet = |s: crate::source::Span| &text[s.range()];
+        assert_eq!(snippet(d.span), "A -> B : l1");
+        assert_eq!(snippet(d.labels[0].span), "C -> A : x");
+        assert_eq!(snippet(d.labels[1].span), "C -> A : y");
+        assert!(d.labels[0].message.contains("A!x"), "{:?}", d.labels);
+        assert!(d.help.as_deref().unwrap_or("").contains("inform `C`"));
+        // The other participants still have projections.
+        assert!(map.contains_key(&RoleId(0)) && map.contains_key(&RoleId(1)));
+        assert!(!map.contains_key(&RoleId(2)));
+        let _ = prog;
+    }
+
+    #[test]
+    fn shared_labels_merge_their_continuations() {
+        let src = format!(
+            "{ABC} choreography G =
+                A -> B : l1. A -> C : go. dt<C: m>. C -> A : a. end
+              + A -> B : l2. A -> C : go. A -> C : more. end;"
+        );
+        let (prog, map, diags) = projections(&src);
+        assert!(diags.is_empty(), "{diags:?}");
+        assert_eq!(
+            printed(&prog, &map, "C"),
+            "A?go.&{\n  A?more.end\n} & dt<m>.A!a.end"
+        );
+    }
+
+    #[test]
+    fn a_role_outside_a_recursion_gets_end() {
+        let src =
+            format!("{ABC} choreography G = A -> C : hi. mu t. A -> B : ping. B -> A : pong. t;");
+        let (prog, map, diags) = projections(&src);
+        assert!(diags.is_empty(), "{diags:?}");
+        assert_eq!(printed(&prog, &map, "C"), "A?hi.end");
+        assert_eq!(printed(&prog, &map, "B"), "mu t. A?ping.A!pong.t");
+    }
+
+    #[test]
+    fn separation_projects_the_side_of_the_role() {
+        let src = format!(
+            "{ABC} choreography G = (dt<A: m> * dt<B: n>). A -> B : x. (dt<A: m> * dt<C: w>). end;"
+        );
+        let (prog, map, diags) = projections(&src);
+        assert!(diags.is_empty(), "{diags:?}");
+        assert_eq!(printed(&prog, &map, "A"), "dt<m>.B!x.dt<m>.end");
+        assert_eq!(printed(&prog, &map, "B"), "dt<n>.A?x.end");
+        assert_eq!(printed(&prog, &map, "C"), "dt<w>.end");
+    }
+
+    #[test]
+    fn guards_and_refined_payloads_are_kept() {
+        let src =
+            format!("{ABC} choreography G = A -> B : [x > 0] go(v: real {{ v > A.x }}). end;");
+        let (prog, map, _) = projections(&src);
+        assert_eq!(
+            printed(&prog, &map, "A"),
+            "[A.x > 0] B!go(v: real { v > A.x }).end"
+        );
+        assert_eq!(printed(&prog, &map, "B"), "A?go(v: real { v > A.x }).end");
+    }
+
+    #[test]
+    fn declared_local_types_must_equal_the_projection() {
+        let src = format!(
+            "{ABC} choreography G = A -> B : l1(v: real). B -> C : x. end + A -> B : l2. B -> C : y. end;
+             local B = &{{ A?l2.C!y.end, A?l1(v: real).C!x.end }};
+             local C = &{{ B?x.end }};"
+        );
+        let (prog, map, diags) = projections(&src);
+        assert!(diags.is_empty(), "{diags:?}");
+        let d = check_declared(&prog, &map);
+        assert_eq!(d.len(), 1, "{d:?}");
+        assert_eq!(d[0].code, Code::LocalMismatch);
+        assert!(d[0].message.contains("`C`"));
+        assert!(d[0].notes[0].contains("B?y.end"), "{:?}", d[0].notes);
+        assert!(d[0].help.as_deref().unwrap_or("").contains("mochi project"));
+    }
+
+    #[test]
+    fn ill_formed_choreographies_get_diagnostics_not_panics() {
+        let src = format!("{ABC} choreography G = dt<A: m> + A -> B : x;");
+        let (_, _, diags) = projections(&src);
+        assert!(
+            diags.iter().all(|d| d.code == Code::ChoiceMismatch) && !diags.is_empty(),
+            "{diags:?}"
+        );
+        let src = format!("{ABC} choreography G = A -> B : x + A -> C : y;");
+        let (_, _, diags) = projections(&src);
+        assert!(
+            diags.iter().all(|d| d.code == Code::ChoiceMismatch) && !diags.is_empty(),
+            "{diags:?}"
+        );
+        let src = format!("{ABC} choreography G = A -> B : x * A -> C : y;");
+        let (_, map, diags) = projections(&src);
+        assert_eq!(diags.len(), 1, "{diags:?}");
+        assert_eq!(diags[0].code, Code::SeparationOverlap);
+        assert_eq!(map.len(), 2);
+    }
+
+    #[test]
+    fn nested_choices_are_distributed() {
+        let src = format!(
+            "{ABC} choreography G = (A -> B : x + A -> B : y). B -> C : z. end + A -> B : w. B -> C : v. end;"
+        );
+        let (prog, map, diags) = projections(&src);
+        assert!(diags.is_empty(), "{diags:?}");
+        assert_eq!(
+            printed(&prog, &map, "A"),
+            "+{\n  B!x.end,\n  B!y.end,\n  B!w.end\n}"
+        );
+        assert_eq!(
+            printed(&prog, &map, "B"),
+            "&{\n  A?x.C!z.end,\n  A?y.C!z.end,\n  A?w.C!v.end\n}"
+        );
+        assert_eq!(printed(&prog, &map, "C"), "&{\n  B?z.end,\n  B?v.end\n}");
+    }
+
+    #[test]
+    fn large_shared_types_are_summarised_in_notes() {
+        // Each choice doubles the printed size of A's projection, not its size in memory.
+        let choices: Vec<String> = (0..40)
+            .map(|i| format!("(A -> B : a{i} + A -> B : b{i})"))
+            .collect();
+        let src = format!("{ABC} choreography G = {}. end;", choices.join(". "));
+        let (prog, map, diags) = projections(&src);
+        assert!(diags.is_empty(), "{diags:?}");
+        let a = map.get(&RoleId(0)).expect("A is projected");
+        let text = print_bounded(&prog, a, NOTE_NODES);
+        assert!(text.starts_with("+{B!a0, B!b0}. ..."), "{text}");
+        let small = map.get(&RoleId(2)).expect("C is projected");
+        assert_eq!(print_bounded(&prog, small, NOTE_NODES), "end");
+    }
+
+    #[test]
+    fn deep_sequences_and_choices_do_not_overflow() {
+        let mut g = String::from("end");
+        for i in 0..150 {
+            g = format!("(A -> B : a{i}. {g} + A -> B : b{i}. end)");
+        }
+        let seq: Vec<String> = (0..3000).map(|i| format!("A -> B : s{i}")).collect();
+        let src = format!("{ABC} choreography G = {}. {g};", seq.join(". "));
+        let (prog, d) = lower_src(&src);
+        assert!(d.is_empty(), "{d:?}");
+        let (map, diags) = project_all(&prog);
+        assert!(diags.is_empty(), "{diags:?}");
+        assert_eq!(map.len(), 3);
+        let b = map.get(&RoleId(1)).cloned().expect("B is projected");
+        let Some(chor) = &prog.choreography else {
+            panic!()
+        };
+        let again = project(
+            &prog,
+            &chor.body,
+            RoleId(1),
+            Rc::new(Local::End(Loc::default())),
+        )
+        .expect("projects");
+        assert!(!Rc::ptr_eq(&b, &again) && equal(&b, &again));
+    }
+}

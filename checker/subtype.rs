@@ -1,0 +1,787 @@
+//! Subtyping of local types (Fig 5, Def 4.10): `sub <= sup` when a process of type
+//! `sub` may stand where `sup` is expected.
+//!
+//! - [SUB-MOTION] `dt<a>.T <= dt<a'>.T'` if `a <= a'` (Def 3.4 in the corrected
+//!   direction of the seeds README, error 1: the concrete primitive on the left) and
+//!   `T <= T'`. Equal primitives need nothing; otherwise both must have the same
+//!   interruptibility (E0705) and the refinement becomes an obligation.
+//! - [SUB-OUT] the sub type's sends are among the super type's, with `P_i => P''_i`
+//!   (guards) and `P'_i => P'''_i` (refinements) as obligations.
+//! - [SUB-IN1,2,3] the sub type receives at least the super type's labels from the
+//!   same sender, with `P'_i => P_i`; a default motion of the sub type may be dropped
+//!   (SUB-IN2) or stand for a motion of the super type (SUB-IN3).
+//! - `end <= end`.
+//!
+//! The relation is the largest one closed under these rules, so it is checked
+//! coinductively: recursion is unfolded through an environment of the enclosing `mu`s,
+//! and a pair of nodes met again is assumed to be related. Payload fields of the super
+//! type are renamed to the sub type's, so the implications speak about one value.
+//!
+//! The module also holds the predicate helpers that process typing shares.
+
+use crate::diag::{Code, Diagnostic};
+use crate::hir::expr::{BinOp, UnOp};
+use crate::hir::*;
+use crate::obligation::{Goal, Obligation, Rule};
+use crate::project::{describe, motion_text};
+use crate::source::Span;
+use std::collections::{HashMap, HashSet};
+use std::rc::Rc;
+
+/// Checks `sub <= sup` for local types of `role` (the role instantiates the refinement
+/// obligations). Returns the predicate obligations, or the first structural failure.
+pub fn subtype(
+    prog: &Program,
+    role: RoleId,
+    sub: &LocalRc,
+    sup: &LocalRc,
+) -> Result<Vec<Obligation>, Diagnostic> {
+    let mut s = Sub {
+        prog,
+        role,
+        assumed: HashSet::new(),
+        obligations: Vec::new(),
+    };
+    s.check(sub, &mut Vec::new(), sup, &mut Vec::new(), &HashMap::new())?;
+    Ok(s.obligations)
+}
+
+/// The enclosing `mu t. T` nodes of a local type, innermost last.
+pub(crate) type RecEnv = Vec<(String, LocalRc)>;
+
+/// How many `mu`/variable steps may follow each other before recursion counts as
+/// unguarded.
+const UNFOLD_LIMIT: usize = 256;
+
+/// Unfolds `mu t. T` (binding `t`) and `t` (jumping back to the body of its `mu`) until
+/// an action or `end` comes first. Returns that node and, when the last step was a
+/// jump back, the variable it went through and where it is written.
+pub(crate) fn unfold(
+    t: &LocalRc,
+    env: &mut RecEnv,
+) -> Result<(LocalRc, Option<(String, Loc)>), Diagnostic> {
+    let mut t = t.clone();
+    let mut looped = None;
+    for _ in 0..UNFOLD_LIMIT {
+        let next = match &*t {
+            Local::Rec { var, body, .. } => {
+                env.push((var.clone(), t.clone()));
+                body.clone()
+            }
+            Local::Var { var, loc, .. } => {
+                let Some(i) = env.iter().rposition(|(v, _)| v == var) else {
+                    return Err(Diagnostic::error(
+                        Code::RecursionMismatch,
+                        loc.0,
+                        format!("recursion variable `{var}` of the local type is not bound"),
+                    )
+                    .with_help(format!("bind it with `mu {var}. ...`")));
+                };
+                env.truncate(i + 1);
+                let Some((_, rec)) = env.get(i) else { break };
+                let Local::Rec { body, .. } = &**rec else {
+                    break;
+                };
+                looped = Some((var.clone(), *loc));
+                body.clone()
+            }
+            _ => return Ok((t, looped)),
+        };
+        t = next;
+    }
+    Err(Diagnostic::error(
+        Code::RecursionMismatch,
+        t.loc().0,
+        "unguarded recursion in a local type",
+    )
+    .with_help("put a message or a motion between `mu t.` and `t`"))
+}
+
+/// Renaming of the super type's value variables (by name) to expressions of the sub
+/// type.
+type Renaming = HashMap<String, Expr>;
+
+struct Sub<'a> {
+    prog: &'a Program,
+    role: RoleId,
+    assumed: HashSet<(usize, usize)>,
+    obligations: Vec<Obligation>,
+}
+
+impl Sub<'_> {
+    fn check(
+        &mut self,
+        s: &LocalRc,
+        senv: &mut RecEnv,
+        t: &LocalRc,
+        tenv: &mut RecEnv,
+        ren: &Renaming,
+    ) -> Result<(), Diagnostic> {
+        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || {
+            self.check_inner(s, senv, t, tenv, ren)
+        })
+    }
+
+    fn check_inner(
+        &mut self,
+        s: &LocalRc,
+        senv: &mut RecEnv,
+        t: &LocalRc,
+        tenv: &mut RecEnv,
+        ren: &Renaming,
+    ) -> Result<(), Diagnostic> {
+        let (s, _) = unfold(s, senv)?;
+        let (t, _) = unfold(t, tenv)?;
+        // Coinduction: a pair met again is assumed related. Which `mu` binds a variable
+        // is lexical, so the node pointers determine the environments.
+        if !self
+            .assumed
+            .insert((Rc::as_ptr(&s) as usize, Rc::as_ptr(&t) as usize))
+        {
+            return Ok(());
+        }
+        match (&*s, &*t) {
+            (Local::End(_), Local::End(_)) => Ok(()),
+            (
+                Local::Motion {
+                    prims: sp,
+                    cont: sc,
+                    loc: sl,
+                },
+                Local::Motion {
+                    prims: tp,
+                    cont: tc,
+                    loc: tl,
+                },
+            ) => {
+                self.motion(sp, *sl, tp, *tl, ren)?;
+                self.check(sc, senv, tc, tenv, ren)
+            }
+            (
+                Local::Send { branches: sb, .. },
+                Local::Send {
+                    branches: tb,
+                    loc: tloc,
+                },
+            ) => {
+                for x in sb {
+                    let Some(y) = tb.iter().find(|y| y.to == x.to && y.label == x.label) else {
+                        let allowed: Vec<String> = tb
+                            .iter()
+                            .map(|y| format!("`{}!{}`", self.prog.role_name(y.to), y.label))
+                            .collect();
+                        return Err(Diagnostic::error(
+                            Code::UnexpectedSend,
+                            x.loc.0,
+                            format!(
+                                "`{}!{}` is not among the sends the super type allows",
+                                self.prog.role_name(x.to),
+                                x.label
+                            ),
+                        )
+                        .with_label(tloc.0, format!("allowed here: {}", allowed.join(", ")))
+                        .with_note("[SUB-OUT]: every send of the sub type must be a send of the super type"));
+                    };
+                    self.payload(&x.payload, x.loc, &y.payload, y.loc)?;
+                    let mut inner = ren.clone();
+                    rename_fields(&mut inner, &y.payload, &x.payload);
+                    if let Some(g) = &y.guard {
+                        let sup_guard = subst_values(g, ren);
+                        let sub_guard = x.guard.clone().unwrap_or_else(|| Expr::bool(true, x.loc));
+                        self.implication(
+                            sub_guard,
+                            sup_guard,
+                            x.loc.0,
+                            format!("the guard of `{}`", x.label),
+                        );
+                    }
+                    let sub_ref =
+                        and_all(x.payload.iter().filter_map(|f| f.refinement.clone()), x.loc);
+                    let sup_ref = and_all(
+                        y.payload
+                            .iter()
+                            .filter_map(|f| f.refinement.as_ref().map(|r| subst_values(r, &inner))),
+                        y.loc,
+                    );
+                    self.implication(
+                        sub_ref,
+                        sup_ref,
+                        x.loc.0,
+                        format!("the payload refinement of `{}`", x.label),
+                    );
+                    self.check(
+                        &x.cont,
+                        &mut senv.clone(),
+                        &y.cont,
+                        &mut tenv.clone(),
+                        &inner,
+                    )?;
+                }
+                Ok(())
+            }
+            (
+                Local::Recv {
+                    branches: sb,
+                    default: sd,
+                    loc: sloc,
+                },
+                Local::Recv {
+                    branches: tb,
+                    default: td,
+                    loc: tloc,
+                },
+            ) => {
+                if let (Some(x), Some(y)) = (sb.first(), tb.first()) {
+                    if x.from != y.from {
+                        return Err(self.mismatch(&s, &t));
+                    }
+                }
+                for y in tb {
+                    let Some(x) = sb.iter().find(|x| x.label == y.label) else {
+                        return Err(Diagnostic::error(
+                            Code::MissingBranch,
+                            sloc.0,
+                            format!(
+                                "the sub type does not receive `{}?{}`, which the super type may deliver",
+                                self.prog.role_name(y.from),
+                                y.label
+                            ),
+                        )
+                        .with_label(y.loc.0, "the super type receives it here")
+                        .with_note("[SUB-IN]: the sub type handles every label of the super type"));
+                    };
+                    self.payload(&x.payload, x.loc, &y.payload, y.loc)?;
+                    let mut inner = ren.clone();
+                    rename_fields(&mut inner, &y.payload, &x.payload);
+                    let sup_ref = and_all(
+                        y.payload
+                            .iter()
+                            .filter_map(|f| f.refinement.as_ref().map(|r| subst_values(r, &inner))),
+                        y.loc,
+                    );
+                    let sub_ref =
+                        and_all(x.payload.iter().filter_map(|f| f.refinement.clone()), x.loc);
+                    self.implication(
+                        sup_ref,
+                        sub_ref,
+                        x.loc.0,
+                        format!("the payload refinement of `{}`", x.label),
+                    );
+                    self.check(
+                        &x.cont,
+                        &mut senv.clone(),
+                        &y.cont,
+                        &mut tenv.clone(),
+                        &inner,
+                    )?;
+                }
+                match (sd, td) {
+                    // [SUB-IN1]
+                    (Some((sp, sc)), Some((tp, tc))) => {
+                        let sl = sp.first().map(|a| a.loc).unwrap_or(*sloc);
+                        let tl = tp.first().map(|a| a.loc).unwrap_or(*tloc);
+                        self.motion(sp, sl, tp, tl, ren)?;
+                        self.check(sc, senv, tc, tenv, ren)
+                    }
+                    // [SUB-IN2] drops the sub type's default, or neither has one.
+                    (_, None) => Ok(()),
+                    (None, Some((tp, _))) => Err(Diagnostic::error(
+                        Code::ActionMismatch,
+                        sloc.0,
+                        format!("the super type may move with `{}` here, the sub type only waits", motion_text(self.prog, tp)),
+                    )
+                    .with_label(t.loc().0, "the default motion comes from here")
+                    .with_note("[SUB-IN1,2]: a default motion of the super type must be one of the sub type")),
+                }
+            }
+            // [SUB-IN3]
+            (
+                Local::Recv {
+                    default: Some((sp, sc)),
+                    loc: sloc,
+                    ..
+                },
+                Local::Motion {
+                    prims: tp,
+                    cont: tc,
+                    loc: tl,
+                },
+            ) => {
+                let sl = sp.first().map(|a| a.loc).unwrap_or(*sloc);
+                self.motion(sp, sl, tp, *tl, ren)?;
+                self.check(sc, senv, tc, tenv, ren)
+            }
+            _ => Err(self.mismatch(&s, &t)),
+        }
+    }
+
+    fn mismatch(&self, s: &Local, t: &Local) -> Diagnostic {
+        Diagnostic::error(
+            Code::ActionMismatch,
+            s.loc().0,
+            format!(
+                "`{}` is not a subtype of `{}`",
+                describe(self.prog, s),
+                describe(self.prog, t)
+            ),
+        )
+        .with_label(t.loc().0, "the super type expects this")
+        .with_note(
+            "Fig 5: a subtype performs the same kind of action (motion, send, receive or end)",
+        )
+    }
+
+    /// [SUB-MOTION]: the sub type's motion refines the super type's.
+    fn motion(
+        &mut self,
+        sub: &[PrimApp],
+        sloc: Loc,
+        sup: &[PrimApp],
+        tloc: Loc,
+        ren: &Renaming,
+    ) -> Result<(), Diagnostic> {
+        let sup: Vec<PrimApp> = sup.iter().map(|a| rename_app(a, ren)).collect();
+        if let Some(ob) = refinement(self.prog, self.role, sub, sloc, &sup, tloc)? {
+            self.obligations.push(ob);
+        }
+        Ok(())
+    }
+
+    /// Same number of payload values with compatible sorts.
+    fn payload(
+        &self,
+        sub: &[Field],
+        sloc: Loc,
+        sup: &[Field],
+        tloc: Loc,
+    ) -> Result<(), Diagnostic> {
+        if sub.len() != sup.len() {
+            return Err(Diagnostic::error(
+                Code::PayloadArity,
+                sloc.0,
+                format!(
+                    "this message carries {} value(s), the super type's carries {}",
+                    sub.len(),
+                    sup.len()
+                ),
+            )
+            .with_label(tloc.0, "the super type's message"));
+        }
+        for (x, y) in sub.iter().zip(sup) {
+            if !x.sort.fits(&y.sort) && !y.sort.fits(&x.sort) {
+                return Err(Diagnostic::error(
+                    Code::SortMismatch,
+                    sloc.0,
+                    format!(
+                        "field `{}` has sort `{}`, the super type's `{}` has sort `{}`",
+                        x.name, x.sort, y.name, y.sort
+                    ),
+                )
+                .with_label(tloc.0, "the super type's message"));
+            }
+        }
+        Ok(())
+    }
+
+    /// Records `lhs => rhs` unless it holds syntactically.
+    fn implication(&mut self, lhs: Expr, rhs: Expr, span: Span, what: String) {
+        if rhs.is_true() || lhs == rhs {
+            return;
+        }
+        self.obligations.push(Obligation {
+            rule: Rule::Subtype,
+            span,
+            what: format!("{what} implies the super type's"),
+            hyps: Vec::new(),
+            goal: Goal::Valid(implies(lhs, rhs)),
+        });
+    }
+}
+
+/// Def 3.4 refinement of `sub` (a motion, possibly a merge `a ⊓ b`) by `sup`: `None`
+/// when it holds syntactically (every primitive of `sup` is among `sub`'s, so the meet
+/// of `sub` is below the meet of `sup`), E0705 when interruptibility or robot kind
+/// differ (Def 3.4 (6)), and otherwise the obligation that the first primitive of
+/// `sub` refines the meet of `sup`. For a merged `sub` this asks for more than needed
+/// (the meet of `sub` is below its first primitive), which is sound.
+pub(crate) fn refinement(
+    prog: &Program,
+    role: RoleId,
+    sub: &[PrimApp],
+    sloc: Loc,
+    sup: &[PrimApp],
+    tloc: Loc,
+) -> Result<Option<Obligation>, Diagnostic> {
+    if sup.iter().all(|a| sub.contains(a)) {
+        return Ok(None);
+    }
+    let Some(concrete) = sub.first() else {
+        return Err(Diagnostic::error(
+            Code::PrimitiveMismatch,
+            sloc.0,
+            "this motion names no primitive",
+        ));
+    };
+    let c = prog.prim(concrete.prim);
+    for a in sub.iter().chain(sup) {
+        let p = prog.prim(a.prim);
+        if p.interruptible != c.interruptible || p.kind != c.kind {
+            let word = |i: bool| {
+                if i {
+                    "interruptible"
+                } else {
+                    "not interruptible"
+                }
+            };
+            let why = if p.kind != c.kind {
+                format!(
+                    "`{}` is a primitive of `{}`, `{}` one of `{}`",
+                    c.name,
+                    prog.kind(c.kind).name,
+                    p.name,
+                    prog.kind(p.kind).name
+                )
+            } else {
+                format!(
+                    "`{}` is {}, `{}` is {}",
+                    c.name,
+                    word(c.interruptible),
+                    p.name,
+                    word(p.interruptible)
+                )
+            };
+            return Err(Diagnostic::error(
+                Code::PrimitiveMismatch,
+                sloc.0,
+                format!(
+                    "`{}` cannot refine `{}`: {why}",
+                    motion_text(prog, sub),
+                    motion_text(prog, sup)
+                ),
+            )
+            .with_label(tloc.0, "the motion the type expects")
+            .with_note("Def 3.4 (6): a refinement has the same interruptibility (and robot kind)")
+            .with_help(format!(
+                "use a primitive that is {} here",
+                word(
+                    prog.prim(sup.first().map(|a| a.prim).unwrap_or(concrete.prim))
+                        .interruptible
+                )
+            )));
+        }
+    }
+    Ok(Some(Obligation {
+        rule: Rule::Refinement,
+        span: sloc.0,
+        what: format!(
+            "`{}` of `{}` refines `{}` (Def 3.4, concrete on the left)",
+            crate::hir::print::prim_app(prog, concrete),
+            prog.role_name(role),
+            motion_text(prog, sup)
+        ),
+        hyps: Vec::new(),
+        goal: Goal::Refines {
+            role,
+            concrete: concrete.clone(),
+            abstract_: sup.to_vec(),
+        },
+    }))
+}
+
+/// Maps the super type's payload names to the sub type's value variables.
+fn rename_fields(ren: &mut Renaming, sup: &[Field], sub: &[Field]) {
+    for (y, x) in sup.iter().zip(sub) {
+        if x.name == y.name {
+            ren.remove(&y.name);
+        } else {
+            ren.insert(y.name.clone(), value_expr(x.value, &x.name, &x.sort));
+        }
+    }
+}
+
+fn rename_app(a: &PrimApp, ren: &Renaming) -> PrimApp {
+    PrimApp {
+        prim: a.prim,
+        args: a.args.iter().map(|e| subst_values(e, ren)).collect(),
+        loc: a.loc,
+    }
+}
+
+// ---- predicate helpers (shared with process typing) ------------------------------
+
+/// A value variable as an expression.
+pub(crate) fn value_expr(id: ValueId, name: &str, sort: &Sort) -> Expr {
+    Expr {
+        kind: ExprKind::Var(Var::Value(id, name.to_string())),
+        sort: sort.clone(),
+        loc: Loc::default(),
+    }
+}
+
+/// Rebuilds `e`, replacing each variable occurrence (given with its sort) for which
+/// `f` answers.
+pub(crate) fn map_vars(e: &Expr, f: &mut dyn FnMut(&Var, &Sort) -> Option<Expr>) -> Expr {
+    stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || {
+        let kind = match &e.kind {
+            ExprKind::Var(v) => match f(v, &e.sort) {
+                Some(r) => return Expr { loc: e.loc, ..r },
+                None => ExprKind::Var(v.clone()),
+            },
+            ExprKind::Int(_) | ExprKind::Real(_) | ExprKind::Bool(_) => e.kind.clone(),
+            ExprKind::Unary(op, a) => ExprKind::Unary(*op, Box::new(map_vars(a, f))),
+            ExprKind::Component(a, i) => ExprKind::Component(Box::new(map_vars(a, f)), *i),
+            ExprKind::Binary(op, a, b) => {
+                ExprKind::Binary(*op, Box::new(map_vars(a, f)), Box::new(map_vars(b, f)))
+            }
+            ExprKind::If(a, b, c) => ExprKind::If(
+                Box::new(map_vars(a, f)),
+                Box::new(map_vars(b, f)),
+                Box::new(map_vars(c, f)),
+            ),
+            ExprKind::Call(b, args) => {
+                ExprKind::Call(*b, args.iter().map(|a| map_vars(a, f)).collect())
+            }
+            ExprKind::Tuple(args) => ExprKind::Tuple(args.iter().map(|a| map_vars(a, f)).collect()),
+        };
+        Expr {
+            kind,
+            sort: e.sort.clone(),
+            loc: e.loc,
+        }
+    })
+}
+
+/// Substitutes value variables by name.
+pub(crate) fn subst_values(e: &Expr, map: &HashMap<String, Expr>) -> Expr {
+    if map.is_empty() {
+        return e.clone();
+    }
+    map_vars(e, &mut |v, _| match v {
+        Var::Value(_, name) => map.get(name).cloned(),
+        _ => None,
+    })
+}
+
+/// Whether some variable of `e` satisfies `pred`.
+pub(crate) fn mentions(e: &Expr, pred: &dyn Fn(&Var) -> bool) -> bool {
+    stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || match &e.kind {
+        ExprKind::Var(v) => pred(v),
+        ExprKind::Int(_) | ExprKind::Real(_) | ExprKind::Bool(_) => false,
+        ExprKind::Unary(_, a) | ExprKind::Component(a, _) => mentions(a, pred),
+        ExprKind::Binary(_, a, b) => mentions(a, pred) || mentions(b, pred),
+        ExprKind::If(a, b, c) => mentions(a, pred) || mentions(b, pred) || mentions(c, pred),
+        ExprKind::Call(_, args) | ExprKind::Tuple(args) => args.iter().any(|a| mentions(a, pred)),
+    })
+}
+
+/// The conjuncts of `e`, without `true`.
+pub(crate) fn conjuncts(e: &Expr, out: &mut Vec<Expr>) {
+    stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || match &e.kind {
+        ExprKind::Binary(BinOp::And, a, b) => {
+            conjuncts(a, out);
+            conjuncts(b, out);
+        }
+        _ if e.is_true() => {}
+        _ => out.push(e.clone()),
+    })
+}
+
+/// The conjunction of `items` (`true` when empty).
+pub(crate) fn and_all(items: impl IntoIterator<Item = Expr>, loc: Loc) -> Expr {
+    items.into_iter().fold(Expr::bool(true, loc), Expr::and)
+}
+
+pub(crate) fn implies(a: Expr, b: Expr) -> Expr {
+    if a.is_true() {
+        return b;
+    }
+    let loc = b.loc;
+    Expr {
+        kind: ExprKind::Binary(BinOp::Implies, Box::new(a), Box::new(b)),
+        sort: Sort::Bool,
+        loc,
+    }
+}
+
+/// `!a`.
+pub(crate) fn not(a: Expr) -> Expr {
+    let loc = a.loc;
+    Expr {
+        kind: ExprKind::Unary(UnOp::Not, Box::new(a)),
+        sort: Sort::Bool,
+        loc,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lower::tests::lower_src;
+
+    /// Two carts of one kind, so `local P = ...; local Q = ...;` give a sub and a
+    /// super type over the same primitives.
+    const PAIR: &str = "
+        robot Cart { state x: real; }
+        motion Cart.idle { interruptible: true; }
+        motion Cart.creep { interruptible: true; }
+        motion Cart.rush(xf: real) { interruptible: false; }
+        system S { participant P: Cart; participant Q: Cart; participant O: Cart; }
+        choreography G = end;
+    ";
+
+    fn run(sub: &str, sup: &str) -> (Program, Result<Vec<Obligation>, Diagnostic>) {
+        let src = format!("{PAIR} local P = {sub}; local Q = {sup};");
+        let (prog, d) = lower_src(&src);
+        assert!(d.is_empty(), "{d:?}");
+        let (Some(s), Some(t)) = (prog.locals.first(), prog.locals.get(1)) else {
+            panic!("two local types")
+        };
+        let r = subtype(&prog, RoleId(0), &s.body, &t.body);
+        (prog, r)
+    }
+
+    fn obligations(sub: &str, sup: &str) -> Vec<Obligation> {
+        match run(sub, sup).1 {
+            Ok(o) => o,
+            Err(d) => panic!("{sub} <= {sup} failed: {d:?}"),
+        }
+    }
+
+    fn fails(sub: &str, sup: &str) -> Diagnostic {
+        match run(sub, sup).1 {
+            Ok(o) => panic!("{sub} <= {sup} holds: {o:?}"),
+            Err(d) => d,
+        }
+    }
+
+    #[test]
+    fn end_is_a_subtype_of_end_only() {
+        assert!(obligations("end", "end").is_empty());
+        assert_eq!(fails("end", "dt<idle>.end").code, Code::ActionMismatch);
+    }
+
+    #[test]
+    fn sub_motion_equal_primitives_need_nothing() {
+        assert!(obligations("dt<idle>.end", "dt<idle>.end").is_empty());
+        // A merged motion of the sub type already contains the super type's.
+        assert!(obligations("dt<idle /\\ creep>.end", "dt<creep>.end").is_empty());
+    }
+
+    #[test]
+    fn sub_motion_different_primitives_is_a_refinement_obligation() {
+        let obs = obligations("dt<creep>.end", "dt<idle /\\ creep>.end");
+        assert_eq!(obs.len(), 1);
+        assert_eq!(obs[0].rule, Rule::Refinement);
+        let Goal::Refines {
+            role,
+            concrete,
+            abstract_,
+        } = &obs[0].goal
+        else {
+            panic!()
+        };
+        assert_eq!(
+            (*role, concrete.prim, abstract_.len()),
+            (RoleId(0), PrimId(1), 2)
+        );
+    }
+
+    #[test]
+    fn sub_motion_fails_on_interruptibility() {
+        let d = fails("dt<rush(1.0)>.end", "dt<idle>.end");
+        assert_eq!(d.code, Code::PrimitiveMismatch);
+        assert!(d.message.contains("interruptible"), "{}", d.message);
+    }
+
+    #[test]
+    fn sub_out_fewer_sends_with_implied_predicates() {
+        let obs = obligations(
+            "[x > 1] O!a(v: real { v > 2 }).end",
+            "+{ [P.x > 0] O!a(w: real { w > 0 }).end, O!b.end }",
+        );
+        assert_eq!(obs.len(), 2, "{obs:?}");
+        assert!(obs.iter().all(|o| o.rule == Rule::Subtype));
+        let prog = run("end", "end").0;
+        let texts: Vec<String> = obs
+            .iter()
+            .map(|o| match &o.goal {
+                Goal::Valid(e) => print::expr(&prog, None, e),
+                _ => String::new(),
+            })
+            .collect();
+        // The super type's field `w` is renamed to the sub type's `v`.
+        assert_eq!(texts, vec!["P.x > 1 => P.x > 0", "v > 2 => v > 0"]);
+    }
+
+    #[test]
+    fn sub_out_fails_on_a_send_the_super_type_lacks() {
+        let d = fails("+{ O!a.end, O!c.end }", "+{ O!a.end, O!b.end }");
+        assert_eq!(d.code, Code::UnexpectedSend);
+        assert!(d.message.contains("O!c"));
+        assert_eq!(
+            fails("O!a(v: real).end", "O!a.end").code,
+            Code::PayloadArity
+        );
+    }
+
+    #[test]
+    fn sub_in_more_receptions_with_reversed_implication() {
+        let obs = obligations(
+            "&{ O?a(v: real { v > 0 }).end, O?b.end }",
+            "O?a(w: real { w > 1 }).end",
+        );
+        assert_eq!(obs.len(), 1);
+        let Goal::Valid(e) = &obs[0].goal else {
+            panic!()
+        };
+        let prog = run("end", "end").0;
+        assert_eq!(print::expr(&prog, None, e), "v > 1 => v > 0");
+    }
+
+    #[test]
+    fn sub_in_fails_on_a_missing_label_or_sender() {
+        assert_eq!(
+            fails("O?a.end", "&{ O?a.end, O?b.end }").code,
+            Code::MissingBranch
+        );
+        assert_eq!(fails("Q?a.end", "O?a.end").code, Code::ActionMismatch);
+    }
+
+    #[test]
+    fn sub_in_defaults() {
+        // [SUB-IN1]: both have defaults, the motions are compared.
+        assert!(
+            obligations("&{ O?a.end } & dt<idle>.end", "&{ O?a.end } & dt<idle>.end").is_empty()
+        );
+        // [SUB-IN2]: the sub type's default may be dropped.
+        assert!(obligations("&{ O?a.end } & dt<idle>.end", "O?a.end").is_empty());
+        // [SUB-IN3]: receptions with a default may stand for the motion alone.
+        assert_eq!(
+            obligations("&{ O?a.end } & dt<creep>.end", "dt<idle>.end").len(),
+            1
+        );
+        // A default of the super type the sub type lacks fails.
+        assert_eq!(
+            fails("O?a.end", "&{ O?a.end } & dt<idle>.end").code,
+            Code::ActionMismatch
+        );
+        assert_eq!(
+            fails(
+                "&{ O?a.end } & dt<rush(1.0)>.end",
+                "&{ O?a.end } & dt<idle>.end"
+            )
+            .code,
+            Code::PrimitiveMismatch
+        );
+    }
+
+    #[test]
+    fn recursion_is_coinductive_and_may_unfold_at_different_points() {
+        assert!(obligations("mu t. O!a.O?b.t", "O!a.mu s. O?b.O!a.s").is_empty());
+        assert!(obligations("mu t. O!a.O?b.O!a.O?b.t", "mu s. O!a.O?b.s").is_empty());
+        assert_eq!(
+            fails("mu t. O!a.O?b.t", "mu s. O!a.O?b.end").code,
+            Code::ActionMismatch
+        );
+    }
+}
