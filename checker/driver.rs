@@ -8,7 +8,8 @@
 use crate::diag::{self, Code, Diagnostic};
 use crate::obligation::Obligation;
 use crate::source::{FileId, SourceDb};
-use crate::{lower, syntax, wf};
+use crate::hir::print;
+use crate::{lower, project, syntax, typeck, wf};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -90,7 +91,24 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, _cfg: &Config) -> Report {
         return run.finish();
     }
     let mut obligations = wf.obligations;
-    run.obligations(&mut obligations);
+    let (locals, diags) = run.stage(|| project::project_all(&prog));
+    for (role, t) in &locals {
+        run.projections.insert(prog.role_name(*role).to_string(), print::local(&prog, t));
+    }
+    let projected = run.record("projection", diags);
+    if projected && !prog.locals.is_empty() {
+        let diags = run.stage(|| project::check_declared(&prog, &locals));
+        run.record("declared-locals", diags);
+    }
+    if projected {
+        let (diags, obs) = run.stage(|| typeck::check_processes(&prog, &locals));
+        if run.record("typing", diags) {
+            obligations.extend(obs);
+        }
+    }
+    if !run.checks.iter().any(|c| c.status == Status::Fail) {
+        run.obligations(&mut obligations);
+    }
     run.finish()
 }
 
@@ -151,15 +169,25 @@ impl Run {
                 millis,
                 detail: format!("{n} of {total} obligation(s) undecided"),
             });
+            let mut rules: Vec<&str> = open.iter().map(|o| o.rule.name()).collect();
+            rules.sort_unstable();
+            rules.dedup();
             let mut d = Diagnostic::note_at(
                 Code::Undecided,
                 open[0].span,
-                format!("{n} proof obligation(s) for {} left undecided", open[0].rule.name()),
+                format!("{n} proof obligation(s) of {} left undecided", rules.join(", ")),
             )
             .with_help("this version decides no predicates; the SMT stage (Z3) will, so the verdict is `unknown`, not `verified`");
             d = d.with_note(format!("first: {}", open[0].what));
-            for ob in open.iter().skip(1).take(4) {
-                d = d.with_label(ob.span, ob.what.clone());
+            let mut shown = vec![open[0].span];
+            for ob in open.iter().skip(1) {
+                if shown.len() == 5 {
+                    break;
+                }
+                if !shown.contains(&ob.span) {
+                    shown.push(ob.span);
+                    d = d.with_label(ob.span, ob.what.clone());
+                }
             }
             if n > 5 {
                 d = d.with_note(format!("and {} more", n - 5));

@@ -70,6 +70,17 @@ pub fn lower(parsed: &Parsed) -> (Program, Vec<Diagnostic>) {
     (l.prog, l.diags)
 }
 
+/// Lowers a local type written for `role` in the context of an already lowered
+/// program; `mochi project`'s output goes back through this in the round-trip tests.
+pub fn lower_local(prog: &Program, role: RoleId, t: &ast::Local) -> (LocalRc, Vec<Diagnostic>) {
+    let mut l = Lowerer { prog: prog.clone(), ..Lowerer::default() };
+    l.consts = prog.consts.iter().enumerate().map(|(i, c)| (c.name.clone(), ConstId(i as u32))).collect();
+    l.kinds = prog.kinds.iter().enumerate().map(|(i, k)| (k.name.clone(), KindId(i as u32))).collect();
+    l.prims = prog.prims.iter().enumerate().map(|(i, p)| ((p.kind, p.name.clone()), PrimId(i as u32))).collect();
+    let body = l.local(t, role, &mut Scopes::default());
+    (body, l.diags)
+}
+
 #[derive(Default)]
 struct Lowerer {
     prog: Program,

@@ -977,7 +977,7 @@ mod tests {
         assert_eq!(goals(&prog, &obs, Rule::TOut), vec!["C.x + 1 > C.x"; 2]);
         assert_eq!(
             goals(&prog, &obs, Rule::TMotion),
-            vec!["C.x + 1 > C.x && (C.v == 0)"; 2]
+            vec!["C.x + 1 > C.x && C.v == 0"; 2]
         );
         let hyps: Vec<Vec<String>> = obs
             .iter()
@@ -1077,7 +1077,7 @@ mod tests {
         let outs: Vec<&Obligation> = obs.iter().filter(|o| o.rule == Rule::TOut).collect();
         assert_eq!(
             goals(&prog, &obs, Rule::TOut),
-            vec!["1.0 > 0", "y > 0 && (y == y)"]
+            vec!["1.0 > 0", "y > 0 && y == y"]
         );
         assert!(outs[1]
             .hyps

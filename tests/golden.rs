@@ -43,3 +43,47 @@ fn every_choreography_matches_its_golden_file() {
         insta::assert_snapshot!(dump(path));
     });
 }
+
+/// `mochi project` prints local types that parse back to the same type: for every
+/// bundled choreography that projects, print each local type, parse it, lower it for
+/// its role and compare it with the projection.
+#[test]
+fn printed_projections_parse_back_to_the_same_type() {
+    use mochi::hir::print;
+    use mochi::syntax::{parse_with_imports, parser::parse_local};
+    let mut checked = 0;
+    for entry in std::fs::read_dir("choreographies").expect("choreographies/") {
+        let path = entry.expect("entry").path();
+        if path.extension().is_none_or(|e| e != "chor") {
+            continue;
+        }
+        let mut db = SourceDb::new();
+        let root = mochi::syntax::load_root(&mut db, &path).expect("readable");
+        let (parsed, d) = parse_with_imports(&mut db, root, &mut |p| std::fs::read_to_string(p));
+        assert!(d.is_empty(), "{}: {d:?}", path.display());
+        let (prog, d) = mochi::lower::lower(&parsed);
+        if !d.is_empty() {
+            continue;
+        }
+        let (locals, d) = mochi::project::project_all(&prog);
+        if !d.is_empty() {
+            continue;
+        }
+        for (role, t) in &locals {
+            let text = print::local(&prog, t);
+            let file = db.add("printed", text.clone());
+            let (ast, d) = parse_local(file, &text);
+            assert!(d.is_empty(), "{}: printed type of {} does not parse: {d:?}\n{text}", path.display(), prog.role_name(*role));
+            let (back, d) = mochi::lower::lower_local(&prog, *role, &ast.expect("parsed"));
+            assert!(d.is_empty(), "{}: printed type of {} does not lower: {d:?}\n{text}", path.display(), prog.role_name(*role));
+            assert!(
+                mochi::project::equal(&back, t),
+                "{}: the printed type of {} reads back differently\n{text}",
+                path.display(),
+                prog.role_name(*role)
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked >= 8, "only {checked} projections were round-tripped");
+}

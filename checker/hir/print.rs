@@ -324,14 +324,22 @@ impl Printer<'_> {
             }
             ExprKind::Binary(op, a, b) => {
                 let prec = op.precedence();
-                let paren = prec < ctx || (op.is_comparison() && ctx == prec);
+                let paren = prec < ctx;
                 if paren {
                     self.out.push('(');
                 }
-                let right_assoc = matches!(op, BinOp::Implies | BinOp::Pow);
-                self.expr(a, if right_assoc { prec + 1 } else { prec });
+                // Comparisons do not associate (`a < b < c` is a chain), so both operands
+                // of one bind tighter; `=>` and `^` associate to the right.
+                let (left, right) = if op.is_comparison() {
+                    (prec + 1, prec + 1)
+                } else if matches!(op, BinOp::Implies | BinOp::Pow) {
+                    (prec + 1, prec)
+                } else {
+                    (prec, prec + 1)
+                };
+                self.expr(a, left);
                 let _ = write!(self.out, " {} ", op.symbol());
-                self.expr(b, if right_assoc { prec } else { prec + 1 });
+                self.expr(b, right);
                 if paren {
                     self.out.push(')');
                 }

@@ -256,7 +256,7 @@ impl<'a> Scope<'a> {
                     .with_help("add a side `dt<P: idle>` for them"),
                 );
             }
-            self.coupling(sides, &pts, &owner);
+            self.coupling(sides, &owner);
             if sides.len() > 1 {
                 self.obligations.push(Obligation {
                     rule: Rule::FullSeparation,
@@ -280,7 +280,7 @@ impl<'a> Scope<'a> {
 
     /// Full separation, coupling half (Sec 4.1): the assumption of a primitive in side i
     /// reads only inputs fed by participants of side i.
-    fn coupling(&mut self, sides: &[Global], pts: &[Vec<RoleId>], owner: &HashMap<RoleId, usize>) {
+    fn coupling(&mut self, sides: &[Global], owner: &HashMap<RoleId, usize>) {
         for (i, side) in sides.iter().enumerate() {
             let mut motions = Vec::new();
             collect_motions(side, &mut motions);
