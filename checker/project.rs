@@ -25,6 +25,7 @@ use crate::diag::{Code, Diagnostic};
 use crate::hir::print;
 use crate::hir::*;
 use std::collections::{BTreeMap, HashMap, HashSet};
+use fixedbitset::FixedBitSet;
 use std::rc::Rc;
 
 /// Projects the choreography onto every participant of the system. A participant whose
@@ -36,8 +37,11 @@ pub fn project_all(prog: &Program) -> (BTreeMap<RoleId, LocalRc>, Vec<Diagnostic
         return (out, diags);
     };
     let tail: LocalRc = Rc::new(Local::End(Loc(chor.span)));
+    // Who occurs where, computed once for all roles: projecting n roles must not walk
+    // the whole type n times to find each role's side of every `*`.
+    let occurs = Occurs::new(prog, &chor.body);
     for role in prog.role_ids() {
-        match project(prog, &chor.body, role, tail.clone()) {
+        match (Projector { prog, role, occurs: &occurs }).project(&chor.body, tail.clone()) {
             Ok(t) => {
                 out.insert(role, t);
             }
@@ -83,7 +87,62 @@ pub fn project(
     role: RoleId,
     tail: LocalRc,
 ) -> Result<LocalRc, Diagnostic> {
-    Projector { prog, role }.project(g, tail)
+    let occurs = Occurs::new(prog, g);
+    Projector { prog, role, occurs: &occurs }.project(g, tail)
+}
+
+/// The participants of every node of a global type, keyed by the node's address, and
+/// for each `*` the side each participant is on.
+struct Occurs {
+    pt: HashMap<*const Global, FixedBitSet>,
+    sides: HashMap<*const Global, HashMap<RoleId, Vec<usize>>>,
+}
+
+impl Occurs {
+    fn new(prog: &Program, g: &Global) -> Occurs {
+        let mut o = Occurs { pt: HashMap::new(), sides: HashMap::new() };
+        o.fill(g, prog.roles.len());
+        o
+    }
+
+    fn fill(&mut self, g: &Global, n: usize) -> FixedBitSet {
+        let mut set = FixedBitSet::with_capacity(n);
+        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || match g {
+            Global::Msg(m) => {
+                set.insert(m.from.idx());
+                set.insert(m.to.idx());
+            }
+            Global::Motion(m) => m.parts.iter().for_each(|(r, _)| set.insert(r.idx())),
+            Global::Seq(gs, _) | Global::Choice(gs, _) => gs.iter().for_each(|c| set.union_with(&self.fill(c, n))),
+            Global::Par(gs, _) => {
+                let mut side_of: HashMap<RoleId, Vec<usize>> = HashMap::new();
+                for (i, c) in gs.iter().enumerate() {
+                    let sub = self.fill(c, n);
+                    for r in sub.ones() {
+                        side_of.entry(RoleId(r as u32)).or_default().push(i);
+                    }
+                    set.union_with(&sub);
+                }
+                self.sides.insert(g as *const Global, side_of);
+            }
+            Global::Rec { body, .. } => set = self.fill(body, n),
+            Global::Var(_) | Global::End(_) => {}
+        });
+        self.pt.insert(g as *const Global, set.clone());
+        set
+    }
+
+    fn contains(&self, g: &Global, r: RoleId) -> bool {
+        match self.pt.get(&(g as *const Global)) {
+            Some(set) => set.contains(r.idx()),
+            None => {
+                // Not a node of the type `Occurs` was built for: compute directly.
+                let mut pt = Vec::new();
+                g.participants(&mut pt);
+                pt.contains(&r)
+            }
+        }
+    }
 }
 
 /// Whether two local types are equal up to locations, value-variable ids and the order
@@ -204,6 +263,7 @@ pub(crate) const NOTE_NODES: usize = 400;
 struct Projector<'a> {
     prog: &'a Program,
     role: RoleId,
+    occurs: &'a Occurs,
 }
 
 /// Why two branch projections could not be merged: the two nodes that differ.
@@ -240,7 +300,10 @@ impl Projector<'_> {
                 Ok(t)
             }
             Global::Par(sides, loc) => {
-                let mine: Vec<&Global> = sides.iter().filter(|s| self.occurs_in(s)).collect();
+                let mine: Vec<&Global> = match self.occurs.sides.get(&(g as *const Global)) {
+                    Some(side_of) => side_of.get(&self.role).into_iter().flatten().filter_map(|&i| sides.get(i)).collect(),
+                    None => sides.iter().filter(|s| self.occurs_in(s)).collect(),
+                };
                 match mine.as_slice() {
                     [] => Ok(tail),
                     [side] => self.project(side, tail),
@@ -289,9 +352,7 @@ impl Projector<'_> {
     }
 
     fn occurs_in(&self, g: &Global) -> bool {
-        let mut pt = Vec::new();
-        g.participants(&mut pt);
-        pt.contains(&self.role)
+        self.occurs.contains(g, self.role)
     }
 
     /// Projects the items of a sequence, right to left, in front of `tail`.
