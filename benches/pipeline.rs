@@ -133,21 +133,12 @@ fn print_table(rows: &[Row]) {
             }
         }
     }
-    let mut header = format!(
-        "\n{:>6} {:>9} {:>5} {:>10} {:>10} {:>10}",
-        "n", "src KiB", "runs", "mean ms", "median ms", "min ms"
-    );
+    let mut header =
+        format!("\n{:>6} {:>9} {:>5} {:>10} {:>10} {:>10}", "n", "src KiB", "runs", "mean ms", "median ms", "min ms");
     for s in &names {
-        header.push_str(&format!(
-            " {:>w$}",
-            format!("{s} ms"),
-            w = s.len().max(6) + 3
-        ));
+        header.push_str(&format!(" {:>w$}", format!("{s} ms"), w = s.len().max(6) + 3));
     }
-    header.push_str(&format!(
-        " {:>11} {:>12} {:>8} {:>9}  verdict",
-        "ms/cart", "t(n)/t(n/10)", "gen ms", "errors"
-    ));
+    header.push_str(&format!(" {:>11} {:>12} {:>8} {:>9}  verdict", "ms/cart", "t(n)/t(n/10)", "gen ms", "errors"));
     println!("{header}");
     for r in rows {
         let mut line = format!(

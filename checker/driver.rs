@@ -6,9 +6,9 @@
 //! passed; any undecided obligation makes it `Unknown`, any error `Rejected`.
 
 use crate::diag::{self, Code, Diagnostic};
+use crate::hir::print;
 use crate::obligation::Obligation;
 use crate::source::{FileId, SourceDb};
-use crate::hir::print;
 use crate::{lower, project, syntax, typeck, wf};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -107,7 +107,7 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, _cfg: &Config) -> Report {
         }
     }
     if !run.checks.iter().any(|c| c.status == Status::Fail) {
-        run.obligations(&mut obligations);
+        run.obligations(&obligations);
     }
     run.finish()
 }
@@ -146,7 +146,7 @@ impl Run {
 
     /// Settles what needs no solver and reports the rest as undecided, one check per
     /// rule family (total choice, compatibility, separation, typing obligations).
-    fn obligations(&mut self, obligations: &mut Vec<Obligation>) {
+    fn obligations(&mut self, obligations: &[Obligation]) {
         let t = Instant::now();
         let mut groups: BTreeMap<&'static str, (usize, Vec<&Obligation>)> = BTreeMap::new();
         for ob in obligations.iter() {
@@ -159,7 +159,12 @@ impl Run {
         let millis = t.elapsed().as_secs_f64() * 1000.0 / groups.len().max(1) as f64;
         for (name, (total, open)) in groups {
             if open.is_empty() {
-                self.checks.push(CheckResult { name, status: Status::Pass, millis, detail: format!("{total} trivial") });
+                self.checks.push(CheckResult {
+                    name,
+                    status: Status::Pass,
+                    millis,
+                    detail: format!("{total} trivial"),
+                });
                 continue;
             }
             let n = open.len();
@@ -198,7 +203,9 @@ impl Run {
 
     fn finish(mut self) -> Report {
         diag::sort(&mut self.diagnostics);
-        let verdict = if self.checks.iter().any(|c| c.status == Status::Fail) || self.diagnostics.iter().any(Diagnostic::is_error) {
+        let verdict = if self.checks.iter().any(|c| c.status == Status::Fail)
+            || self.diagnostics.iter().any(Diagnostic::is_error)
+        {
             Verdict::Rejected
         } else if self.checks.iter().any(|c| c.status == Status::Unknown) {
             Verdict::Unknown

@@ -111,18 +111,12 @@ pub fn parallel_lanes(n: usize) -> String {
     let _ = write!(s, "choreography Lanes{n} =\n  mu t. (\n");
     for i in 1..=n {
         let sep = if i == 1 { "    " } else { "  * " };
-        let _ = writeln!(
-            s,
-            "{sep}(dt<C{i}: forward({TRAVEL:?})> . dt<C{i}: back({TRAVEL:?})>)"
-        );
+        let _ = writeln!(s, "{sep}(dt<C{i}: forward({TRAVEL:?})> . dt<C{i}: back({TRAVEL:?})>)");
     }
     s.push_str("  ) . t;\n\n");
 
     for i in 1..=n {
-        let _ = writeln!(
-            s,
-            "process C{i} = mu x. dt<forward({TRAVEL:?})>. dt<back({TRAVEL:?})>. x;"
-        );
+        let _ = writeln!(s, "process C{i} = mu x. dt<forward({TRAVEL:?})>. dt<back({TRAVEL:?})>. x;");
     }
     s
 }
@@ -139,16 +133,9 @@ mod tests {
         let src = parallel_lanes(2);
         let (file, diags) = parse(FileId(0), &src);
         assert!(diags.is_empty(), "{diags:?}\n{src}");
-        let processes = file
-            .items
-            .iter()
-            .filter(|i| matches!(i, Item::Process(_)))
-            .count();
+        let processes = file.items.iter().filter(|i| matches!(i, Item::Process(_))).count();
         assert_eq!(processes, 2);
-        assert!(
-            !src.contains("import"),
-            "the benchmark must be self-contained"
-        );
+        assert!(!src.contains("import"), "the benchmark must be self-contained");
     }
 
     #[test]
@@ -165,18 +152,11 @@ mod tests {
                 _ => None,
             })
             .expect("a system");
-        let names: Vec<_> = system
-            .participants
-            .iter()
-            .map(|p| p.name.name.clone())
-            .collect();
+        let names: Vec<_> = system.participants.iter().map(|p| p.name.name.clone()).collect();
         let expected: Vec<_> = (1..=n).map(|i| format!("C{i}")).collect();
         assert_eq!(names, expected);
         for i in 1..=n {
-            assert!(src.contains(&format!(
-                "participant C{i}: LaneCart {{ init: x == 0 && y == lane_dy * {}.0;",
-                i - 1
-            )));
+            assert!(src.contains(&format!("participant C{i}: LaneCart {{ init: x == 0 && y == lane_dy * {}.0;", i - 1)));
             assert!(src.contains(&format!("(dt<C{i}: forward(0.5)> . dt<C{i}: back(0.5)>)")));
             assert!(src.contains(&format!("process C{i} = mu x.")));
         }

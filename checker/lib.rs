@@ -9,15 +9,15 @@
 //! [`render`] turns diagnostics and reports into text or JSON.
 
 pub mod diag;
-pub mod source;
-pub mod syntax;
+pub mod driver;
 pub mod hir;
+pub mod lanes;
 pub mod lower;
-pub mod wf;
 pub mod obligation;
 pub mod project;
-pub mod subtype;
-pub mod typeck;
-pub mod driver;
 pub mod render;
-pub mod lanes;
+pub mod source;
+pub mod subtype;
+pub mod syntax;
+pub mod typeck;
+pub mod wf;

@@ -201,7 +201,12 @@ impl Lowerer {
         }
     }
 
-    fn var_decls(&mut self, decls: &[ast::VarDecl], what: &str, seen: &mut HashMap<String, Span>) -> Vec<(String, Sort)> {
+    fn var_decls(
+        &mut self,
+        decls: &[ast::VarDecl],
+        what: &str,
+        seen: &mut HashMap<String, Span>,
+    ) -> Vec<(String, Sort)> {
         let mut out = Vec::new();
         for d in decls {
             if let Some(&first) = seen.get(&d.name.name) {
@@ -442,9 +447,17 @@ impl Lowerer {
                     format!("input `{w}` of `{name}` is not connected: no other participant has a state variable `{w}`")
                 } else {
                     let names: Vec<_> = sources.iter().map(|q| format!("`{}`", self.prog.role_name(*q))).collect();
-                    format!("input `{w}` of `{name}` is ambiguous: {} all have a state variable `{w}`", names.join(", "))
+                    format!(
+                        "input `{w}` of `{name}` is ambiguous: {} all have a state variable `{w}`",
+                        names.join(", ")
+                    )
                 };
-                self.err(Code::UnconnectedInput, span, msg, "make exactly one other participant's kind declare the state variable");
+                self.err(
+                    Code::UnconnectedInput,
+                    span,
+                    msg,
+                    "make exactly one other participant's kind declare the state variable",
+                );
             }
         }
     }
@@ -472,9 +485,13 @@ impl Lowerer {
         let args: Vec<Expr> = call.args.iter().map(|a| self.expr(a, &Env::role(role, values))).collect();
         let Some(&prim) = self.prims.get(&(kind, call.name.name.clone())) else {
             let kname = self.prog.kind(kind).name.clone();
-            let avail: Vec<_> = self.prog.prims.iter().filter(|p| p.kind == kind).map(|p| format!("`{}`", p.name)).collect();
+            let avail: Vec<_> =
+                self.prog.prims.iter().filter(|p| p.kind == kind).map(|p| format!("`{}`", p.name)).collect();
             let help = if avail.is_empty() {
-                format!("robot kind `{kname}` has no motion primitives; declare `motion {kname}.{}(...) {{ ... }}`", call.name.name)
+                format!(
+                    "robot kind `{kname}` has no motion primitives; declare `motion {kname}.{}(...) {{ ... }}`",
+                    call.name.name
+                )
             } else {
                 format!("`{kname}` has {}", avail.join(", "))
             };
@@ -551,7 +568,9 @@ impl Lowerer {
                 }
                 Global::Motion(Motion { parts: out, loc: Loc(*span) })
             }
-            ast::Global::Seq(items, span) => Global::Seq(items.iter().map(|g| self.global(g, cx)).collect(), Loc(*span)),
+            ast::Global::Seq(items, span) => {
+                Global::Seq(items.iter().map(|g| self.global(g, cx)).collect(), Loc(*span))
+            }
             ast::Global::Choice(items, span) | ast::Global::Par(items, span) => {
                 let mark = cx.values.len();
                 let lowered = items
@@ -578,7 +597,8 @@ impl Lowerer {
                 Global::Rec { var: var.name.clone(), params, body: Box::new(body), loc: Loc(*span) }
             }
             ast::Global::Var { var, args, span } => {
-                let args = self.rec_var(var, args, *span, &cx.recs, Env { values: &cx.values.clone(), ..Env::consts_only() });
+                let args =
+                    self.rec_var(var, args, *span, &cx.recs, Env { values: &cx.values.clone(), ..Env::consts_only() });
                 Global::Var(RecVar { var: var.name.clone(), args, loc: Loc(*span) })
             }
             ast::Global::End(span) => Global::End(Loc(*span)),
@@ -587,7 +607,13 @@ impl Lowerer {
 
     /// Lowers payload fields, pushing their value variables onto `values` (each field's
     /// refinement sees the fields before it and itself).
-    fn fields(&mut self, fields: &[ast::Field], viewer: RoleId, origin: ValueOrigin, values: &mut Vec<ValueId>) -> Vec<Field> {
+    fn fields(
+        &mut self,
+        fields: &[ast::Field],
+        viewer: RoleId,
+        origin: ValueOrigin,
+        values: &mut Vec<ValueId>,
+    ) -> Vec<Field> {
         let mut out = Vec::new();
         for f in fields {
             let sort = self.sort(&f.sort);
@@ -608,12 +634,19 @@ impl Lowerer {
         id
     }
 
-    fn rec_params(&mut self, params: &[ast::RecParam], origin: ValueOrigin, who: Who, values: &mut Vec<ValueId>) -> Vec<RecParam> {
+    fn rec_params(
+        &mut self,
+        params: &[ast::RecParam],
+        origin: ValueOrigin,
+        who: Who,
+        values: &mut Vec<ValueId>,
+    ) -> Vec<RecParam> {
         let mut out = Vec::new();
         for p in params {
             let sort = self.sort(&p.sort);
             let outer = values.clone();
-            let env = Env { who, state: who != Who::Nobody, input: who != Who::Nobody, values: &outer, ..Env::consts_only() };
+            let env =
+                Env { who, state: who != Who::Nobody, input: who != Who::Nobody, values: &outer, ..Env::consts_only() };
             let init = self.expr(&p.init, &env);
             self.expect_sort(&init, &sort, &format!("initial value of `{}`", p.name.name));
             let v = self.new_value(&p.name, sort.clone(), origin.clone());
@@ -627,7 +660,14 @@ impl Lowerer {
         out
     }
 
-    fn rec_var(&mut self, var: &ast::Ident, args: &[ast::Expr], span: Span, recs: &[(String, usize)], env: Env) -> Vec<Expr> {
+    fn rec_var(
+        &mut self,
+        var: &ast::Ident,
+        args: &[ast::Expr],
+        span: Span,
+        recs: &[(String, usize)],
+        env: Env,
+    ) -> Vec<Expr> {
         let args: Vec<Expr> = args.iter().map(|a| self.expr(a, &env)).collect();
         match recs.iter().rev().find(|(n, _)| *n == var.name) {
             None => self.err(
@@ -670,7 +710,8 @@ impl Lowerer {
         let mark = cx.values.len();
         let out = match t {
             ast::Local::Motion { prims, cont, span } => {
-                let prims: Vec<PrimApp> = prims.iter().filter_map(|c| self.prim_app(me, c, &cx.values.clone())).collect();
+                let prims: Vec<PrimApp> =
+                    prims.iter().filter_map(|c| self.prim_app(me, c, &cx.values.clone())).collect();
                 let cont = self.local(cont, me, cx);
                 Local::Motion { prims, cont, loc: Loc(*span) }
             }
@@ -700,7 +741,8 @@ impl Lowerer {
                 }
                 cx.values.truncate(mark);
                 let default = default.as_ref().map(|(prims, cont)| {
-                    let prims: Vec<PrimApp> = prims.iter().filter_map(|c| self.prim_app(me, c, &cx.values.clone())).collect();
+                    let prims: Vec<PrimApp> =
+                        prims.iter().filter_map(|c| self.prim_app(me, c, &cx.values.clone())).collect();
                     (prims, self.local(cont, me, cx))
                 });
                 Local::Recv { branches: out, default, loc: Loc(*span) }
@@ -1222,7 +1264,9 @@ impl Lowerer {
             let owners: Vec<_> = self
                 .prog
                 .role_ids()
-                .filter(|q| self.prog.kind_of(*q).state.iter().chain(&self.prog.kind_of(*q).inputs).any(|(n, _)| n == name))
+                .filter(|q| {
+                    self.prog.kind_of(*q).state.iter().chain(&self.prog.kind_of(*q).inputs).any(|(n, _)| n == name)
+                })
                 .map(|q| format!("`{}.{name}`", self.prog.role_name(q)))
                 .collect();
             if !owners.is_empty() {
@@ -1262,7 +1306,11 @@ impl Lowerer {
             self.err(
                 Code::UnknownVariable,
                 span,
-                format!("`{}.{}` names a participant's variable, which is not visible here", self.prog.role_name(r), field.name),
+                format!(
+                    "`{}.{}` names a participant's variable, which is not visible here",
+                    self.prog.role_name(r),
+                    field.name
+                ),
                 "contracts and initial states read their own robot's variables unqualified",
             );
             return Expr { kind: ExprKind::Bool(true), sort: Sort::Any, loc };
@@ -1289,7 +1337,11 @@ impl Lowerer {
                     Code::UnknownVariable,
                     field.span,
                     format!("`{}` (a `{kname}`) has no variable `{}`", self.prog.role_name(r), field.name),
-                    if vars.is_empty() { format!("`{kname}` declares no variables") } else { format!("its variables are {}", vars.join(", ")) },
+                    if vars.is_empty() {
+                        format!("`{kname}` declares no variables")
+                    } else {
+                        format!("its variables are {}", vars.join(", "))
+                    },
                 );
                 Expr { kind: ExprKind::Bool(true), sort: Sort::Any, loc }
             }
@@ -1306,7 +1358,12 @@ impl Lowerer {
         let name = match args {
             [ast::Expr { kind: ast::ExprKind::Var(n), .. }] => n,
             _ => {
-                self.err(Code::ArityMismatch, span, "`old` takes one state variable", "write `old(x)` for a state variable `x`");
+                self.err(
+                    Code::ArityMismatch,
+                    span,
+                    "`old` takes one state variable",
+                    "write `old(x)` for a state variable `x`",
+                );
                 return bad;
             }
         };
@@ -1433,7 +1490,8 @@ pub(crate) mod tests {
 
     #[test]
     fn missing_interruptible_and_duplicates() {
-        let src = format!("{HEADER} motion Cart.idle {{ interruptible: true; }} motion Arm.j {{ pre: true; pre: true; }}");
+        let src =
+            format!("{HEADER} motion Cart.idle {{ interruptible: true; }} motion Arm.j {{ pre: true; pre: true; }}");
         let (_, d) = lower_src(&src);
         let c = codes(&d);
         assert!(c.contains(&Code::Duplicate) && c.contains(&Code::MissingField), "{d:?}");

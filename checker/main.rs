@@ -29,11 +29,7 @@ const STACK_SIZE: usize = 256 << 20;
 const USAGE: u8 = 2;
 
 #[derive(Parser)]
-#[command(
-    name = "mochi",
-    version,
-    about = "Type checker and verifier for motion choreographies"
-)]
+#[command(name = "mochi", version, about = "Type checker and verifier for motion choreographies")]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -124,10 +120,7 @@ impl Outcome {
 fn main() -> ExitCode {
     // Usage errors exit with 2, `--help` and `--version` with 0 (clap's defaults).
     let cli = Cli::parse();
-    let worker = std::thread::Builder::new()
-        .name("mochi".into())
-        .stack_size(STACK_SIZE)
-        .spawn(move || run(cli));
+    let worker = std::thread::Builder::new().name("mochi".into()).stack_size(STACK_SIZE).spawn(move || run(cli));
     match worker.map(|w| w.join()) {
         Ok(Ok(code)) => ExitCode::from(code),
         Ok(Err(_)) => ExitCode::from(Outcome::Crashed.exit_code()),
@@ -160,24 +153,15 @@ fn check(args: &CheckArgs, color: ColorChoice) -> Outcome {
         let out = match args.format {
             Format::Text => {
                 let sep = if i > 0 { "\n" } else { "" };
-                format!(
-                    "{sep}{}",
-                    render::report_text(&db, &name, &report, color, args.verbose)
-                )
+                format!("{sep}{}", render::report_text(&db, &name, &report, color, args.verbose))
             }
             Format::Json => {
                 let value = render::report_json(&db, &name, &report);
-                let res = if json_lines {
-                    serde_json::to_string(&value)
-                } else {
-                    serde_json::to_string_pretty(&value)
-                };
+                let res = if json_lines { serde_json::to_string(&value) } else { serde_json::to_string_pretty(&value) };
                 match res {
                     Ok(s) => s + "\n",
                     Err(e) => {
-                        eprintln_safe(&format!(
-                            "error: cannot write the report of {name} as JSON: {e}"
-                        ));
+                        eprintln_safe(&format!("error: cannot write the report of {name} as JSON: {e}"));
                         worst = worst.max(Outcome::Crashed);
                         continue;
                     }
@@ -203,12 +187,8 @@ fn project(args: &ProjectArgs, color: ColorChoice) -> Outcome {
     let Some(local) = report.projections.get(&args.role) else {
         // The errors say why projection did not run; without any, the role is wrong.
         let color = use_color(color, std::io::stderr().is_terminal());
-        let errors: String = report
-            .diagnostics
-            .iter()
-            .filter(|d| d.is_error())
-            .map(|d| render::text(&db, d, color))
-            .collect();
+        let errors: String =
+            report.diagnostics.iter().filter(|d| d.is_error()).map(|d| render::text(&db, d, color)).collect();
         if !errors.is_empty() {
             eprint_safe(&errors);
         } else if report.projections.is_empty() {
@@ -247,9 +227,7 @@ fn project(args: &ProjectArgs, color: ColorChoice) -> Outcome {
 /// when a stage panicked (reported as a bug, after the panic message).
 fn check_path(db: &mut SourceDb, path: &Path) -> Option<Report> {
     // The panic hook has already printed the message and location when this returns.
-    let res = panic::catch_unwind(AssertUnwindSafe(|| {
-        driver::check_file(db, path, &Config::default())
-    }));
+    let res = panic::catch_unwind(AssertUnwindSafe(|| driver::check_file(db, path, &Config::default())));
     match res {
         Ok(Ok(report)) => Some(report),
         Ok(Err(e)) => {
@@ -268,10 +246,7 @@ fn check_path(db: &mut SourceDb, path: &Path) -> Option<Report> {
 
 fn explain(args: &ExplainArgs) -> u8 {
     if args.list {
-        let list: String = Code::ALL
-            .iter()
-            .map(|c| format!("{c}  {}\n", c.title()))
-            .collect();
+        let list: String = Code::ALL.iter().map(|c| format!("{c}  {}\n", c.title())).collect();
         print_safe(&list);
         return 0;
     }
@@ -284,11 +259,7 @@ fn explain(args: &ExplainArgs) -> u8 {
         ));
         return USAGE;
     };
-    print_safe(&format!(
-        "{code}: {}\n\n{}\n",
-        code.title(),
-        wrap(code.explain(), 90)
-    ));
+    print_safe(&format!("{code}: {}\n\n{}\n", code.title(), wrap(code.explain(), 90)));
     0
 }
 
@@ -316,9 +287,7 @@ fn use_color(choice: ColorChoice, is_terminal: bool) -> bool {
     match choice {
         ColorChoice::Always => true,
         ColorChoice::Never => false,
-        ColorChoice::Auto => {
-            is_terminal && std::env::var_os("NO_COLOR").is_none_or(|v| v.is_empty())
-        }
+        ColorChoice::Auto => is_terminal && std::env::var_os("NO_COLOR").is_none_or(|v| v.is_empty()),
     }
 }
 
@@ -351,31 +320,17 @@ mod tests {
     fn wrap_keeps_lines_short_and_words_whole() {
         let text = Code::NotTotallySynchronised.explain();
         let wrapped = wrap(text, 90);
-        assert!(
-            wrapped.lines().all(|l| l.chars().count() <= 90),
-            "{wrapped}"
-        );
-        assert_eq!(
-            wrapped.split_whitespace().collect::<Vec<_>>(),
-            text.split_whitespace().collect::<Vec<_>>()
-        );
+        assert!(wrapped.lines().all(|l| l.chars().count() <= 90), "{wrapped}");
+        assert_eq!(wrapped.split_whitespace().collect::<Vec<_>>(), text.split_whitespace().collect::<Vec<_>>());
         assert_eq!(wrap("a-very-long-word b", 4), "a-very-long-word\nb");
     }
 
     #[test]
     fn the_worst_outcome_decides_the_exit_code() {
-        let all = |o: &[Outcome]| {
-            o.iter()
-                .copied()
-                .fold(Outcome::Verified, Outcome::max)
-                .exit_code()
-        };
+        let all = |o: &[Outcome]| o.iter().copied().fold(Outcome::Verified, Outcome::max).exit_code();
         assert_eq!(all(&[]), 0);
         assert_eq!(all(&[Outcome::Verified, Outcome::Unknown]), 3);
-        assert_eq!(
-            all(&[Outcome::Unknown, Outcome::Rejected, Outcome::Verified]),
-            1
-        );
+        assert_eq!(all(&[Outcome::Unknown, Outcome::Rejected, Outcome::Verified]), 1);
         assert_eq!(all(&[Outcome::Invalid, Outcome::Unknown]), 1);
     }
 }

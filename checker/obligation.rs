@@ -52,7 +52,9 @@ impl Rule {
             Rule::TotalChoice => "total-choice",
             Rule::AgComp => "compatibility",
             Rule::FullSeparation => "separation",
-            Rule::Refinement | Rule::TMotion | Rule::TOut | Rule::TCond | Rule::Subtype | Rule::TSess => "typing-obligations",
+            Rule::Refinement | Rule::TMotion | Rule::TOut | Rule::TCond | Rule::Subtype | Rule::TSess => {
+                "typing-obligations"
+            }
         }
     }
 }
@@ -89,7 +91,9 @@ impl Obligation {
     pub fn trivially_holds(&self) -> bool {
         match &self.goal {
             Goal::Valid(e) => {
-                e.is_true() || self.hyps.iter().any(|h| h == e) || matches!(&e.kind, ExprKind::Binary(crate::hir::expr::BinOp::Or, a, b) if a.is_true() || b.is_true())
+                e.is_true()
+                    || self.hyps.iter().any(|h| h == e)
+                    || matches!(&e.kind, ExprKind::Binary(crate::hir::expr::BinOp::Or, a, b) if a.is_true() || b.is_true())
             }
             _ => false,
         }

@@ -24,8 +24,8 @@
 use crate::diag::{Code, Diagnostic};
 use crate::hir::print;
 use crate::hir::*;
-use std::collections::{BTreeMap, HashMap, HashSet};
 use fixedbitset::FixedBitSet;
+use std::collections::{BTreeMap, HashMap, HashSet};
 use std::rc::Rc;
 
 /// Projects the choreography onto every participant of the system. A participant whose
@@ -81,12 +81,7 @@ pub fn check_declared(prog: &Program, projections: &BTreeMap<RoleId, LocalRc>) -
 }
 
 /// The projection of `g` onto `role`, followed by `tail` (Def 4.8).
-pub fn project(
-    prog: &Program,
-    g: &Global,
-    role: RoleId,
-    tail: LocalRc,
-) -> Result<LocalRc, Diagnostic> {
+pub fn project(prog: &Program, g: &Global, role: RoleId, tail: LocalRc) -> Result<LocalRc, Diagnostic> {
     let occurs = Occurs::new(prog, g);
     Projector { prog, role, occurs: &occurs }.project(g, tail)
 }
@@ -153,10 +148,7 @@ pub fn equal(a: &LocalRc, b: &LocalRc) -> bool {
 
 /// The locations of the first pair of nodes where `a` and `b` differ, if any.
 pub fn first_difference(a: &LocalRc, b: &LocalRc) -> Option<(Loc, Loc)> {
-    Differ {
-        same: HashSet::new(),
-    }
-    .diff(a, b)
+    Differ { same: HashSet::new() }.diff(a, b)
 }
 
 /// A short description of the first action of a local type, for messages:
@@ -165,23 +157,16 @@ pub fn describe(prog: &Program, t: &Local) -> String {
     match t {
         Local::Motion { prims, .. } => motion_text(prog, prims),
         Local::Send { branches, .. } => {
-            let items: Vec<String> = branches
-                .iter()
-                .map(|b| format!("{}!{}", prog.role_name(b.to), b.label))
-                .collect();
+            let items: Vec<String> = branches.iter().map(|b| format!("{}!{}", prog.role_name(b.to), b.label)).collect();
             if items.len() == 1 {
                 items.join("")
             } else {
                 format!("+{{{}}}", items.join(", "))
             }
         }
-        Local::Recv {
-            branches, default, ..
-        } => {
-            let items: Vec<String> = branches
-                .iter()
-                .map(|b| format!("{}?{}", prog.role_name(b.from), b.label))
-                .collect();
+        Local::Recv { branches, default, .. } => {
+            let items: Vec<String> =
+                branches.iter().map(|b| format!("{}?{}", prog.role_name(b.from), b.label)).collect();
             let mut s = if items.len() == 1 && default.is_none() {
                 items.join("")
             } else {
@@ -213,10 +198,7 @@ pub fn print_bounded(prog: &Program, t: &LocalRc, max_nodes: usize) -> String {
     if tree_size(t, max_nodes + 1, &mut HashMap::new()) <= max_nodes {
         print::local(prog, t)
     } else {
-        format!(
-            "{}. ... (too large to print here; use `mochi project`)",
-            describe(prog, t)
-        )
+        format!("{}. ... (too large to print here; use `mochi project`)", describe(prog, t))
     }
 }
 
@@ -234,9 +216,7 @@ fn tree_size(t: &LocalRc, cap: usize, memo: &mut HashMap<usize, usize>) -> usize
         match &**t {
             Local::Motion { cont, .. } => add(cont, memo),
             Local::Send { branches, .. } => branches.iter().for_each(|b| add(&b.cont, memo)),
-            Local::Recv {
-                branches, default, ..
-            } => {
+            Local::Recv { branches, default, .. } => {
                 branches.iter().for_each(|b| add(&b.cont, memo));
                 if let Some((_, c)) = default {
                     add(c, memo);
@@ -285,11 +265,7 @@ impl Projector<'_> {
             Global::Msg(m) => self.choice(std::slice::from_ref(g), m.loc, tail),
             Global::Choice(branches, loc) => self.choice(branches, *loc, tail),
             Global::Motion(m) => Ok(match m.parts.iter().find(|(r, _)| *r == self.role) {
-                Some((_, a)) => Rc::new(Local::Motion {
-                    prims: vec![a.clone()],
-                    cont: tail,
-                    loc: a.loc,
-                }),
+                Some((_, a)) => Rc::new(Local::Motion { prims: vec![a.clone()], cont: tail, loc: a.loc }),
                 None => tail,
             }),
             Global::Seq(items, _) => {
@@ -301,7 +277,9 @@ impl Projector<'_> {
             }
             Global::Par(sides, loc) => {
                 let mine: Vec<&Global> = match self.occurs.sides.get(&(g as *const Global)) {
-                    Some(side_of) => side_of.get(&self.role).into_iter().flatten().filter_map(|&i| sides.get(i)).collect(),
+                    Some(side_of) => {
+                        side_of.get(&self.role).into_iter().flatten().filter_map(|&i| sides.get(i)).collect()
+                    }
                     None => sides.iter().filter(|s| self.occurs_in(s)).collect(),
                 };
                 match mine.as_slice() {
@@ -316,12 +294,7 @@ impl Projector<'_> {
                     .with_help("move the participant's actions out of all sides but one")),
                 }
             }
-            Global::Rec {
-                var,
-                params,
-                body,
-                loc,
-            } => {
+            Global::Rec { var, params, body, loc } => {
                 if !self.occurs_in(body) {
                     // Def 4.8 (4) is undefined here; the role has left the protocol.
                     return Ok(Rc::new(Local::End(*loc)));
@@ -331,18 +304,9 @@ impl Projector<'_> {
                     // `mu t. t` would be unguarded: the role never acts in the loop.
                     return Ok(Rc::new(Local::End(*loc)));
                 }
-                Ok(Rc::new(Local::Rec {
-                    var: var.clone(),
-                    params: params.clone(),
-                    body,
-                    loc: *loc,
-                }))
+                Ok(Rc::new(Local::Rec { var: var.clone(), params: params.clone(), body, loc: *loc }))
             }
-            Global::Var(v) => Ok(Rc::new(Local::Var {
-                var: v.var.clone(),
-                args: v.args.clone(),
-                loc: v.loc,
-            })),
+            Global::Var(v) => Ok(Rc::new(Local::Var { var: v.var.clone(), args: v.args.clone(), loc: v.loc })),
             Global::End(loc) => Ok(Rc::new(Local::End(*loc))),
         }
     }
@@ -373,10 +337,7 @@ impl Projector<'_> {
         let Some(&(first, _)) = split.first() else {
             return Err(not_a_choice(loc));
         };
-        if let Some((m, _)) = split
-            .iter()
-            .find(|(m, _)| m.from != first.from || m.to != first.to)
-        {
+        if let Some((m, _)) = split.iter().find(|(m, _)| m.from != first.from || m.to != first.to) {
             return Err(not_a_choice(m.loc));
         }
         if self.role == first.from {
@@ -391,10 +352,7 @@ impl Projector<'_> {
                     loc: m.loc,
                 });
             }
-            return Ok(Rc::new(Local::Send {
-                branches: out,
-                loc: first.loc,
-            }));
+            return Ok(Rc::new(Local::Send { branches: out, loc: first.loc }));
         }
         if self.role == first.to {
             let mut out = Vec::new();
@@ -407,11 +365,7 @@ impl Projector<'_> {
                     loc: m.loc,
                 });
             }
-            return Ok(Rc::new(Local::Recv {
-                branches: out,
-                default: None,
-                loc: first.loc,
-            }));
+            return Ok(Rc::new(Local::Recv { branches: out, default: None, loc: first.loc }));
         }
         // Def 4.8 (3) with the merge of Def 4.7.
         let mut acc: Option<(LocalRc, Vec<&str>)> = None;
@@ -436,32 +390,17 @@ impl Projector<'_> {
     }
 
     /// E0601. `left` and `right` are the labels of the branches with their projections.
-    fn unmergeable(
-        &self,
-        choice: &Msg,
-        left: (&str, &LocalRc),
-        right: (&str, &LocalRc),
-        c: Clash,
-    ) -> Diagnostic {
+    fn unmergeable(&self, choice: &Msg, left: (&str, &LocalRc), right: (&str, &LocalRc), c: Clash) -> Diagnostic {
         let r = self.name();
-        let (p, q) = (
-            self.prog.role_name(choice.from),
-            self.prog.role_name(choice.to),
-        );
+        let (p, q) = (self.prog.role_name(choice.from), self.prog.role_name(choice.to));
         let ((left, lt), (right, rt)) = (left, right);
         let mut d = Diagnostic::error(
             Code::Unmergeable,
             choice.loc.0,
             format!("cannot merge the projections onto `{r}` of two branches"),
         )
-        .with_label(
-            c.left.0,
-            format!("after {left}, `{r}` does `{}`", c.left_text),
-        )
-        .with_label(
-            c.right.0,
-            format!("after {right}, `{r}` does `{}`", c.right_text),
-        );
+        .with_label(c.left.0, format!("after {left}, `{r}` does `{}`", c.left_text))
+        .with_label(c.right.0, format!("after {right}, `{r}` does `{}`", c.right_text));
         if let Some(why) = c.why {
             d = d.with_note(why);
         }
@@ -485,65 +424,28 @@ impl Projector<'_> {
             return Ok(a.clone());
         }
         match (&**a, &**b) {
-            (
-                Local::Recv {
-                    branches: b1,
-                    default: d1,
-                    loc,
-                },
-                Local::Recv {
-                    branches: b2,
-                    default: d2,
-                    ..
-                },
-            ) => {
+            (Local::Recv { branches: b1, default: d1, loc }, Local::Recv { branches: b2, default: d2, .. }) => {
                 let branches = self.union(b1, b2)?;
                 let default = match (d1, d2) {
                     (None, None) => None,
                     (Some(d), None) | (None, Some(d)) => Some(d.clone()),
                     (Some((p1, c1)), Some((p2, c2))) => Some(self.merge_default(p1, c1, p2, c2)?),
                 };
-                Ok(Rc::new(Local::Recv {
-                    branches,
-                    default,
-                    loc: *loc,
-                }))
+                Ok(Rc::new(Local::Recv { branches, default, loc: *loc }))
             }
-            (
-                Local::Motion { prims, cont, .. },
-                Local::Recv {
-                    branches,
-                    default,
-                    loc,
-                },
-            ) => {
+            (Local::Motion { prims, cont, .. }, Local::Recv { branches, default, loc }) => {
                 let default = match default {
                     None => (prims.clone(), cont.clone()),
                     Some((p2, c2)) => self.merge_default(prims, cont, p2, c2)?,
                 };
-                Ok(Rc::new(Local::Recv {
-                    branches: branches.clone(),
-                    default: Some(default),
-                    loc: *loc,
-                }))
+                Ok(Rc::new(Local::Recv { branches: branches.clone(), default: Some(default), loc: *loc }))
             }
-            (
-                Local::Recv {
-                    branches,
-                    default,
-                    loc,
-                },
-                Local::Motion { prims, cont, .. },
-            ) => {
+            (Local::Recv { branches, default, loc }, Local::Motion { prims, cont, .. }) => {
                 let default = match default {
                     None => (prims.clone(), cont.clone()),
                     Some((p1, c1)) => self.merge_default(p1, c1, prims, cont)?,
                 };
-                Ok(Rc::new(Local::Recv {
-                    branches: branches.clone(),
-                    default: Some(default),
-                    loc: *loc,
-                }))
+                Ok(Rc::new(Local::Recv { branches: branches.clone(), default: Some(default), loc: *loc }))
             }
             _ => Err(self.clash(a, b, None)),
         }
@@ -572,17 +474,9 @@ impl Projector<'_> {
             let (l, r) = first_difference(c1, c2).unwrap_or((c1.loc(), c2.loc()));
             return Err(Clash {
                 left: l,
-                left_text: format!(
-                    "{}. {}",
-                    motion_text(self.prog, p1),
-                    describe(self.prog, c1)
-                ),
+                left_text: format!("{}. {}", motion_text(self.prog, p1), describe(self.prog, c1)),
                 right: r,
-                right_text: format!(
-                    "{}. {}",
-                    motion_text(self.prog, p2),
-                    describe(self.prog, c2)
-                ),
+                right_text: format!("{}. {}", motion_text(self.prog, p2), describe(self.prog, c2)),
                 why: Some(why),
             });
         }
@@ -644,10 +538,7 @@ impl Projector<'_> {
                             left_text: recv_text(self.prog, x),
                             right: b.loc,
                             right_text: recv_text(self.prog, b),
-                            why: Some(format!(
-                                "the two branches receive `{}` with different payloads",
-                                b.label
-                            )),
+                            why: Some(format!("the two branches receive `{}` with different payloads", b.label)),
                         });
                     }
                     x.cont = self.merge(&x.cont, &b.cont)?;
@@ -659,20 +550,11 @@ impl Projector<'_> {
 }
 
 fn recv_text(prog: &Program, b: &RecvBranch) -> String {
-    let fields: Vec<String> = b
-        .payload
-        .iter()
-        .map(|f| format!("{}: {}", f.name, f.sort))
-        .collect();
+    let fields: Vec<String> = b.payload.iter().map(|f| format!("{}: {}", f.name, f.sort)).collect();
     if fields.is_empty() {
         format!("{}?{}", prog.role_name(b.from), b.label)
     } else {
-        format!(
-            "{}?{}({})",
-            prog.role_name(b.from),
-            b.label,
-            fields.join(", ")
-        )
+        format!("{}?{}({})", prog.role_name(b.from), b.label, fields.join(", "))
     }
 }
 
@@ -686,11 +568,7 @@ fn not_a_choice(loc: Loc) -> Diagnostic {
 /// what follows it. A nested choice at the front is distributed over the rest,
 /// `(g1 + g2).g = g1.g + g2.g`, as Sec 4.1 writes choices. Fails with the location of
 /// a branch that does not start with a message.
-fn split_branch<'g>(
-    b: &'g Global,
-    rest: &[&'g Global],
-    out: &mut Vec<(&'g Msg, Vec<&'g Global>)>,
-) -> Result<(), Loc> {
+fn split_branch<'g>(b: &'g Global, rest: &[&'g Global], out: &mut Vec<(&'g Msg, Vec<&'g Global>)>) -> Result<(), Loc> {
     stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || {
         let mut items = Vec::new();
         flatten_seq(b, &mut items);
@@ -700,9 +578,7 @@ fn split_branch<'g>(
                 out.push((m, tail.to_vec()));
                 Ok(())
             }
-            Some((Global::Choice(inner, _), tail)) => {
-                inner.iter().try_for_each(|i| split_branch(i, tail, out))
-            }
+            Some((Global::Choice(inner, _), tail)) => inner.iter().try_for_each(|i| split_branch(i, tail, out)),
             _ => Err(b.loc()),
         }
     })
@@ -719,16 +595,14 @@ fn flatten_seq<'g>(g: &'g Global, out: &mut Vec<&'g Global>) {
 /// Payload fields compared by name, sort and refinement (not by value id).
 pub(crate) fn fields_equal(a: &[Field], b: &[Field]) -> bool {
     a.len() == b.len()
-        && a.iter()
-            .zip(b)
-            .all(|(x, y)| x.name == y.name && x.sort == y.sort && x.refinement == y.refinement)
+        && a.iter().zip(b).all(|(x, y)| x.name == y.name && x.sort == y.sort && x.refinement == y.refinement)
 }
 
 fn params_equal(a: &[RecParam], b: &[RecParam]) -> bool {
     a.len() == b.len()
-        && a.iter().zip(b).all(|(x, y)| {
-            x.name == y.name && x.sort == y.sort && x.refinement == y.refinement && x.init == y.init
-        })
+        && a.iter()
+            .zip(b)
+            .all(|(x, y)| x.name == y.name && x.sort == y.sort && x.refinement == y.refinement && x.init == y.init)
 }
 
 fn same_prims(a: &[PrimApp], b: &[PrimApp]) -> bool {
@@ -743,11 +617,7 @@ struct Differ {
 
 impl Differ {
     fn diff(&mut self, a: &LocalRc, b: &LocalRc) -> Option<(Loc, Loc)> {
-        if Rc::ptr_eq(a, b)
-            || !self
-                .same
-                .insert((Rc::as_ptr(a) as usize, Rc::as_ptr(b) as usize))
-        {
+        if Rc::ptr_eq(a, b) || !self.same.insert((Rc::as_ptr(a) as usize, Rc::as_ptr(b) as usize)) {
             return None;
         }
         stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.diff_inner(a, b))
@@ -756,18 +626,7 @@ impl Differ {
     fn diff_inner(&mut self, a: &LocalRc, b: &LocalRc) -> Option<(Loc, Loc)> {
         let here = Some((a.loc(), b.loc()));
         match (&**a, &**b) {
-            (
-                Local::Motion {
-                    prims: p1,
-                    cont: c1,
-                    ..
-                },
-                Local::Motion {
-                    prims: p2,
-                    cont: c2,
-                    ..
-                },
-            ) => {
+            (Local::Motion { prims: p1, cont: c1, .. }, Local::Motion { prims: p2, cont: c2, .. }) => {
                 if !same_prims(p1, p2) {
                     return here;
                 }
@@ -790,18 +649,7 @@ impl Differ {
                 }
                 None
             }
-            (
-                Local::Recv {
-                    branches: b1,
-                    default: d1,
-                    ..
-                },
-                Local::Recv {
-                    branches: b2,
-                    default: d2,
-                    ..
-                },
-            ) => {
+            (Local::Recv { branches: b1, default: d1, .. }, Local::Recv { branches: b2, default: d2, .. }) => {
                 if b1.len() != b2.len() {
                     return here;
                 }
@@ -829,33 +677,13 @@ impl Differ {
                     _ => here,
                 }
             }
-            (
-                Local::Rec {
-                    var: v1,
-                    params: p1,
-                    body: c1,
-                    ..
-                },
-                Local::Rec {
-                    var: v2,
-                    params: p2,
-                    body: c2,
-                    ..
-                },
-            ) => {
+            (Local::Rec { var: v1, params: p1, body: c1, .. }, Local::Rec { var: v2, params: p2, body: c2, .. }) => {
                 if v1 != v2 || !params_equal(p1, p2) {
                     return here;
                 }
                 self.diff(c1, c2)
             }
-            (
-                Local::Var {
-                    var: v1, args: a1, ..
-                },
-                Local::Var {
-                    var: v2, args: a2, ..
-                },
-            ) => {
+            (Local::Var { var: v1, args: a1, .. }, Local::Var { var: v2, args: a2, .. }) => {
                 if v1 != v2 || a1 != a2 {
                     return here;
                 }
@@ -948,25 +776,12 @@ pub(crate) mod tests {
 
     #[test]
     fn tails_are_shared_not_copied() {
-        let src =
-            format!("{ABC} choreography G = (A -> B : x. B -> A : y + A -> B : z). dt<A: m>. end;");
+        let src = format!("{ABC} choreography G = (A -> B : x. B -> A : y + A -> B : z). dt<A: m>. end;");
         let (prog, map, _) = projections(&src);
-        let Some(a) = map.get(&RoleId(0)) else {
-            panic!()
-        };
-        assert_eq!(
-            print::local(&prog, a),
-            "+{\n  B!x.B?y.dt<m>.end,\n  B!z.dt<m>.end\n}"
-        );
-        let Local::Send { branches, .. } = &**a else {
-            panic!()
-        };
-        let Local::Recv {
-            branches: inner, ..
-        } = &*branches[0].cont
-        else {
-            panic!()
-        };
+        let Some(a) = map.get(&RoleId(0)) else { panic!() };
+        assert_eq!(print::local(&prog, a), "+{\n  B!x.B?y.dt<m>.end,\n  B!z.dt<m>.end\n}");
+        let Local::Send { branches, .. } = &**a else { panic!() };
+        let Local::Recv { branches: inner, .. } = &*branches[0].cont else { panic!() };
         assert!(Rc::ptr_eq(&inner[0].cont, &branches[1].cont));
     }
 
@@ -979,10 +794,7 @@ pub(crate) mod tests {
         );
         let (prog, map, diags) = projections(&src);
         assert!(diags.is_empty(), "{diags:?}");
-        assert_eq!(
-            printed(&prog, &map, "C"),
-            "&{\n  A?go.end\n} & dt<w>.A?stop.end"
-        );
+        assert_eq!(printed(&prog, &map, "C"), "&{\n  A?go.end\n} & dt<w>.A?stop.end");
     }
 
     #[test]
@@ -995,10 +807,7 @@ pub(crate) mod tests {
         );
         let (prog, map, diags) = projections(&src);
         assert!(diags.is_empty(), "{diags:?}");
-        assert_eq!(
-            printed(&prog, &map, "C"),
-            "&{\n  A?go.end\n} & dt<w /\\ n>.A?stop.end"
-        );
+        assert_eq!(printed(&prog, &map, "C"), "&{\n  A?go.end\n} & dt<w /\\ n>.A?stop.end");
     }
 
     #[test]
@@ -1012,11 +821,7 @@ pub(crate) mod tests {
         let (_, _, diags) = projections(&src);
         assert_eq!(diags.len(), 1, "{diags:?}");
         assert_eq!(diags[0].code, Code::Unmergeable);
-        assert!(
-            diags[0].notes[0].contains("interruptibility"),
-            "{:?}",
-            diags[0].notes
-        );
+        assert!(diags[0].notes[0].contains("interruptibility"), "{:?}", diags[0].notes);
     }
 
     #[test]
@@ -1054,16 +859,12 @@ pub(crate) mod tests {
         );
         let (prog, map, diags) = projections(&src);
         assert!(diags.is_empty(), "{diags:?}");
-        assert_eq!(
-            printed(&prog, &map, "C"),
-            "A?go.&{\n  A?more.end\n} & dt<m>.A!a.end"
-        );
+        assert_eq!(printed(&prog, &map, "C"), "A?go.&{\n  A?more.end\n} & dt<m>.A!a.end");
     }
 
     #[test]
     fn a_role_outside_a_recursion_gets_end() {
-        let src =
-            format!("{ABC} choreography G = A -> C : hi. mu t. A -> B : ping. B -> A : pong. t;");
+        let src = format!("{ABC} choreography G = A -> C : hi. mu t. A -> B : ping. B -> A : pong. t;");
         let (prog, map, diags) = projections(&src);
         assert!(diags.is_empty(), "{diags:?}");
         assert_eq!(printed(&prog, &map, "C"), "A?hi.end");
@@ -1072,9 +873,7 @@ pub(crate) mod tests {
 
     #[test]
     fn separation_projects_the_side_of_the_role() {
-        let src = format!(
-            "{ABC} choreography G = (dt<A: m> * dt<B: n>). A -> B : x. (dt<A: m> * dt<C: w>). end;"
-        );
+        let src = format!("{ABC} choreography G = (dt<A: m> * dt<B: n>). A -> B : x. (dt<A: m> * dt<C: w>). end;");
         let (prog, map, diags) = projections(&src);
         assert!(diags.is_empty(), "{diags:?}");
         assert_eq!(printed(&prog, &map, "A"), "dt<m>.B!x.dt<m>.end");
@@ -1084,13 +883,9 @@ pub(crate) mod tests {
 
     #[test]
     fn guards_and_refined_payloads_are_kept() {
-        let src =
-            format!("{ABC} choreography G = A -> B : [x > 0] go(v: real {{ v > A.x }}). end;");
+        let src = format!("{ABC} choreography G = A -> B : [x > 0] go(v: real {{ v > A.x }}). end;");
         let (prog, map, _) = projections(&src);
-        assert_eq!(
-            printed(&prog, &map, "A"),
-            "[A.x > 0] B!go(v: real { v > A.x }).end"
-        );
+        assert_eq!(printed(&prog, &map, "A"), "[A.x > 0] B!go(v: real { v > A.x }).end");
         assert_eq!(printed(&prog, &map, "B"), "A?go(v: real { v > A.x }).end");
     }
 
@@ -1115,16 +910,10 @@ pub(crate) mod tests {
     fn ill_formed_choreographies_get_diagnostics_not_panics() {
         let src = format!("{ABC} choreography G = dt<A: m> + A -> B : x;");
         let (_, _, diags) = projections(&src);
-        assert!(
-            diags.iter().all(|d| d.code == Code::ChoiceMismatch) && !diags.is_empty(),
-            "{diags:?}"
-        );
+        assert!(diags.iter().all(|d| d.code == Code::ChoiceMismatch) && !diags.is_empty(), "{diags:?}");
         let src = format!("{ABC} choreography G = A -> B : x + A -> C : y;");
         let (_, _, diags) = projections(&src);
-        assert!(
-            diags.iter().all(|d| d.code == Code::ChoiceMismatch) && !diags.is_empty(),
-            "{diags:?}"
-        );
+        assert!(diags.iter().all(|d| d.code == Code::ChoiceMismatch) && !diags.is_empty(), "{diags:?}");
         let src = format!("{ABC} choreography G = A -> B : x * A -> C : y;");
         let (_, map, diags) = projections(&src);
         assert_eq!(diags.len(), 1, "{diags:?}");
@@ -1134,28 +923,19 @@ pub(crate) mod tests {
 
     #[test]
     fn nested_choices_are_distributed() {
-        let src = format!(
-            "{ABC} choreography G = (A -> B : x + A -> B : y). B -> C : z. end + A -> B : w. B -> C : v. end;"
-        );
+        let src =
+            format!("{ABC} choreography G = (A -> B : x + A -> B : y). B -> C : z. end + A -> B : w. B -> C : v. end;");
         let (prog, map, diags) = projections(&src);
         assert!(diags.is_empty(), "{diags:?}");
-        assert_eq!(
-            printed(&prog, &map, "A"),
-            "+{\n  B!x.end,\n  B!y.end,\n  B!w.end\n}"
-        );
-        assert_eq!(
-            printed(&prog, &map, "B"),
-            "&{\n  A?x.C!z.end,\n  A?y.C!z.end,\n  A?w.C!v.end\n}"
-        );
+        assert_eq!(printed(&prog, &map, "A"), "+{\n  B!x.end,\n  B!y.end,\n  B!w.end\n}");
+        assert_eq!(printed(&prog, &map, "B"), "&{\n  A?x.C!z.end,\n  A?y.C!z.end,\n  A?w.C!v.end\n}");
         assert_eq!(printed(&prog, &map, "C"), "&{\n  B?z.end,\n  B?v.end\n}");
     }
 
     #[test]
     fn large_shared_types_are_summarised_in_notes() {
         // Each choice doubles the printed size of A's projection, not its size in memory.
-        let choices: Vec<String> = (0..40)
-            .map(|i| format!("(A -> B : a{i} + A -> B : b{i})"))
-            .collect();
+        let choices: Vec<String> = (0..40).map(|i| format!("(A -> B : a{i} + A -> B : b{i})")).collect();
         let src = format!("{ABC} choreography G = {}. end;", choices.join(". "));
         let (prog, map, diags) = projections(&src);
         assert!(diags.is_empty(), "{diags:?}");
@@ -1180,16 +960,8 @@ pub(crate) mod tests {
         assert!(diags.is_empty(), "{diags:?}");
         assert_eq!(map.len(), 3);
         let b = map.get(&RoleId(1)).cloned().expect("B is projected");
-        let Some(chor) = &prog.choreography else {
-            panic!()
-        };
-        let again = project(
-            &prog,
-            &chor.body,
-            RoleId(1),
-            Rc::new(Local::End(Loc::default())),
-        )
-        .expect("projects");
+        let Some(chor) = &prog.choreography else { panic!() };
+        let again = project(&prog, &chor.body, RoleId(1), Rc::new(Local::End(Loc::default()))).expect("projects");
         assert!(!Rc::ptr_eq(&b, &again) && equal(&b, &again));
     }
 }

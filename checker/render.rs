@@ -29,13 +29,7 @@ pub fn text(db: &SourceDb, d: &Diagnostic, color: bool) -> String {
 /// Renders every diagnostic of `report`, then a summary: one line per check (status,
 /// name, time, detail) and the verdict for `file_name`. `verbose` adds the files that
 /// were read and the local type of each role, when projection ran.
-pub fn report_text(
-    db: &SourceDb,
-    file_name: &str,
-    report: &Report,
-    color: bool,
-    verbose: bool,
-) -> String {
+pub fn report_text(db: &SourceDb, file_name: &str, report: &Report, color: bool, verbose: bool) -> String {
     let files = Files::new(db);
     let mut out = buffer(color);
     for d in &report.diagnostics {
@@ -184,20 +178,13 @@ impl<'a> Files<'a> {
             files.add(f.name.as_str(), f.text.as_str());
         }
         // ASCII art (`-->`, `|`, `^`) as rustc prints it, and safe in any terminal.
-        let config = term::Config {
-            chars: Chars::ascii(),
-            ..term::Config::default()
-        };
+        let config = term::Config { chars: Chars::ascii(), ..term::Config::default() };
         Files { db, files, config }
     }
 
     /// Writes `d` to `out`, or a plain one-line form if codespan refuses it.
     fn emit(&self, out: &mut Buffer, d: &Diagnostic) {
-        let mut rich = if out.supports_color() {
-            Buffer::ansi()
-        } else {
-            Buffer::no_color()
-        };
+        let mut rich = if out.supports_color() { Buffer::ansi() } else { Buffer::no_color() };
         match term::emit(&mut rich, &self.config, &self.files, &self.to_codespan(d)) {
             Ok(()) => {
                 let _ = out.write_all(rich.as_slice());
@@ -232,10 +219,7 @@ impl<'a> Files<'a> {
             Severity::Note => cs::Severity::Note,
         };
         let primary = self.label(LabelStyle::Primary, d.span, "");
-        let secondary = d
-            .labels
-            .iter()
-            .filter_map(|l| self.label(LabelStyle::Secondary, l.span, &l.message));
+        let secondary = d.labels.iter().filter_map(|l| self.label(LabelStyle::Secondary, l.span, &l.message));
         let mut notes: Vec<String> = d.notes.iter().map(|n| format!("note: {n}")).collect();
         notes.extend(d.help.iter().map(|h| format!("help: {h}")));
         cs::Diagnostic::new(severity)
@@ -325,25 +309,15 @@ mod tests {
     #[test]
     fn text_looks_like_rustc() {
         let (db, f) = db_with("system {\n  a -> a : go;\n}\n");
-        let d = Diagnostic::error(
-            Code::SelfMessage,
-            Span::new(f, 16, 17),
-            "`a` sends a message to itself",
-        )
-        .with_label(Span::new(f, 11, 12), "sender")
-        .with_note("Def 4.1")
-        .with_help("send to another participant");
+        let d = Diagnostic::error(Code::SelfMessage, Span::new(f, 16, 17), "`a` sends a message to itself")
+            .with_label(Span::new(f, 11, 12), "sender")
+            .with_note("Def 4.1")
+            .with_help("send to another participant");
         let out = text(&db, &d, false);
-        assert!(
-            out.starts_with("error[E0301]: `a` sends a message to itself\n"),
-            "{out}"
-        );
+        assert!(out.starts_with("error[E0301]: `a` sends a message to itself\n"), "{out}");
         assert!(out.contains("--> a.chor:2:8"), "{out}");
         assert!(out.contains("2 |   a -> a : go;"), "{out}");
-        assert!(
-            out.contains("|   -    ^\n"),
-            "carets under both spans: {out}"
-        );
+        assert!(out.contains("|   -    ^\n"), "carets under both spans: {out}");
         assert!(out.contains("sender"), "{out}");
         assert!(out.contains("= note: Def 4.1"), "{out}");
         assert!(out.contains("= help: send to another participant"), "{out}");
@@ -367,15 +341,7 @@ mod tests {
     fn spans_at_or_past_the_end_of_the_file_are_clamped() {
         let (db, f) = db_with("const a = 1");
         for (start, end) in [(11, 11), (11, 40), (50, 60), (u32::MAX, u32::MAX)] {
-            let d = Diagnostic::error(
-                Code::UnexpectedToken,
-                Span {
-                    file: f,
-                    start,
-                    end,
-                },
-                "expected `;`",
-            );
+            let d = Diagnostic::error(Code::UnexpectedToken, Span { file: f, start, end }, "expected `;`");
             let out = text(&db, &d, false);
             assert!(out.contains("--> a.chor:1:12"), "{start}..{end}: {out}");
         }
@@ -388,23 +354,8 @@ mod tests {
         let n = db.file(f).text.len() as u32 + 2;
         for start in 0..n {
             for end in 0..n {
-                let d = Diagnostic::error(
-                    Code::UnexpectedChar,
-                    Span {
-                        file: f,
-                        start,
-                        end,
-                    },
-                    "m",
-                )
-                .with_label(
-                    Span {
-                        file: f,
-                        start: end,
-                        end: start,
-                    },
-                    "l",
-                );
+                let d = Diagnostic::error(Code::UnexpectedChar, Span { file: f, start, end }, "m")
+                    .with_label(Span { file: f, start: end, end: start }, "l");
                 assert!(text(&db, &d, false).starts_with("error[E0101]: m"));
                 assert_eq!(diagnostic_json(&db, &d)["code"], "E0101");
             }
@@ -417,25 +368,16 @@ mod tests {
         let d = Diagnostic::error(Code::UnexpectedChar, Span::new(FileId(7), 0, 1), "lost");
         assert!(text(&db, &d, false).starts_with("error[E0101]: lost"));
         let v = diagnostic_json(&db, &d);
-        assert!(
-            v["file"].is_null() && v["line"].is_null() && v["column"].is_null(),
-            "{v}"
-        );
+        assert!(v["file"].is_null() && v["line"].is_null() && v["column"].is_null(), "{v}");
     }
 
     #[test]
     fn report_text_ends_with_checks_and_verdict() {
         let (db, f) = db_with("const a = ;\n");
-        let r = report(vec![Diagnostic::error(
-            Code::UnexpectedToken,
-            Span::new(f, 10, 11),
-            "expected an expression",
-        )]);
+        let r = report(vec![Diagnostic::error(Code::UnexpectedToken, Span::new(f, 10, 11), "expected an expression")]);
         let out = report_text(&db, "a.chor", &r, false, false);
         let diag_at = out.find("error[E0103]").expect("diagnostic rendered");
-        let check_at = out
-            .find("  FAIL     parse                 0.2 ms  1 error(s)\n")
-            .expect(&out);
+        let check_at = out.find("  FAIL     parse                 0.2 ms  1 error(s)\n").expect(&out);
         assert!(diag_at < check_at, "{out}");
         assert!(out.ends_with("verdict: rejected (a.chor)\n"), "{out}");
         assert!(!out.contains("files read"), "{out}");
@@ -445,13 +387,9 @@ mod tests {
     #[test]
     fn report_json_has_every_field() {
         let (db, f) = db_with("// header\nconst a = ;\n");
-        let d = Diagnostic::error(
-            Code::UnexpectedToken,
-            Span::new(f, 20, 21),
-            "expected an expression",
-        )
-        .with_label(Span::new(f, 0, 2), "here")
-        .with_note("n");
+        let d = Diagnostic::error(Code::UnexpectedToken, Span::new(f, 20, 21), "expected an expression")
+            .with_label(Span::new(f, 0, 2), "here")
+            .with_note("n");
         let v = report_json(&db, "a.chor", &report(vec![d]));
         assert_eq!(v["file"], "a.chor");
         assert_eq!(v["verdict"], "rejected");
@@ -459,24 +397,12 @@ mod tests {
         assert_eq!(d["code"], "E0103");
         assert_eq!(d["severity"], "error");
         assert_eq!(d["message"], "expected an expression");
-        assert_eq!(
-            (d["file"].as_str(), d["line"].as_u64(), d["column"].as_u64()),
-            (Some("a.chor"), Some(2), Some(11))
-        );
+        assert_eq!((d["file"].as_str(), d["line"].as_u64(), d["column"].as_u64()), (Some("a.chor"), Some(2), Some(11)));
         assert!(d["help"].is_null(), "help is present even when absent: {d}");
         assert_eq!(d["notes"], json!(["n"]));
-        assert_eq!(
-            d["labels"],
-            json!([{ "message": "here", "file": "a.chor", "line": 1, "column": 1 }])
-        );
-        assert_eq!(
-            v["checks"],
-            json!([{ "name": "parse", "status": "fail", "millis": 0.25 }])
-        );
-        let mut keys: Vec<&String> = v
-            .as_object()
-            .map(|o| o.keys().collect())
-            .unwrap_or_default();
+        assert_eq!(d["labels"], json!([{ "message": "here", "file": "a.chor", "line": 1, "column": 1 }]));
+        assert_eq!(v["checks"], json!([{ "name": "parse", "status": "fail", "millis": 0.25 }]));
+        let mut keys: Vec<&String> = v.as_object().map(|o| o.keys().collect()).unwrap_or_default();
         keys.sort();
         assert_eq!(keys, ["checks", "diagnostics", "file", "verdict"]);
     }

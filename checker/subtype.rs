@@ -30,18 +30,8 @@ use std::rc::Rc;
 
 /// Checks `sub <= sup` for local types of `role` (the role instantiates the refinement
 /// obligations). Returns the predicate obligations, or the first structural failure.
-pub fn subtype(
-    prog: &Program,
-    role: RoleId,
-    sub: &LocalRc,
-    sup: &LocalRc,
-) -> Result<Vec<Obligation>, Diagnostic> {
-    let mut s = Sub {
-        prog,
-        role,
-        assumed: HashSet::new(),
-        obligations: Vec::new(),
-    };
+pub fn subtype(prog: &Program, role: RoleId, sub: &LocalRc, sup: &LocalRc) -> Result<Vec<Obligation>, Diagnostic> {
+    let mut s = Sub { prog, role, assumed: HashSet::new(), obligations: Vec::new() };
     s.check(sub, &mut Vec::new(), sup, &mut Vec::new(), &HashMap::new())?;
     Ok(s.obligations)
 }
@@ -56,10 +46,7 @@ const UNFOLD_LIMIT: usize = 256;
 /// Unfolds `mu t. T` (binding `t`) and `t` (jumping back to the body of its `mu`) until
 /// an action or `end` comes first. Returns that node and, when the last step was a
 /// jump back, the variable it went through and where it is written.
-pub(crate) fn unfold(
-    t: &LocalRc,
-    env: &mut RecEnv,
-) -> Result<(LocalRc, Option<(String, Loc)>), Diagnostic> {
+pub(crate) fn unfold(t: &LocalRc, env: &mut RecEnv) -> Result<(LocalRc, Option<(String, Loc)>), Diagnostic> {
     let mut t = t.clone();
     let mut looped = None;
     for _ in 0..UNFOLD_LIMIT {
@@ -89,12 +76,8 @@ pub(crate) fn unfold(
         };
         t = next;
     }
-    Err(Diagnostic::error(
-        Code::RecursionMismatch,
-        t.loc().0,
-        "unguarded recursion in a local type",
-    )
-    .with_help("put a message or a motion between `mu t.` and `t`"))
+    Err(Diagnostic::error(Code::RecursionMismatch, t.loc().0, "unguarded recursion in a local type")
+        .with_help("put a message or a motion between `mu t.` and `t`"))
 }
 
 /// Renaming of the super type's value variables (by name) to expressions of the sub
@@ -117,9 +100,7 @@ impl Sub<'_> {
         tenv: &mut RecEnv,
         ren: &Renaming,
     ) -> Result<(), Diagnostic> {
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || {
-            self.check_inner(s, senv, t, tenv, ren)
-        })
+        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.check_inner(s, senv, t, tenv, ren))
     }
 
     fn check_inner(
@@ -134,42 +115,20 @@ impl Sub<'_> {
         let (t, _) = unfold(t, tenv)?;
         // Coinduction: a pair met again is assumed related. Which `mu` binds a variable
         // is lexical, so the node pointers determine the environments.
-        if !self
-            .assumed
-            .insert((Rc::as_ptr(&s) as usize, Rc::as_ptr(&t) as usize))
-        {
+        if !self.assumed.insert((Rc::as_ptr(&s) as usize, Rc::as_ptr(&t) as usize)) {
             return Ok(());
         }
         match (&*s, &*t) {
             (Local::End(_), Local::End(_)) => Ok(()),
-            (
-                Local::Motion {
-                    prims: sp,
-                    cont: sc,
-                    loc: sl,
-                },
-                Local::Motion {
-                    prims: tp,
-                    cont: tc,
-                    loc: tl,
-                },
-            ) => {
+            (Local::Motion { prims: sp, cont: sc, loc: sl }, Local::Motion { prims: tp, cont: tc, loc: tl }) => {
                 self.motion(sp, *sl, tp, *tl, ren)?;
                 self.check(sc, senv, tc, tenv, ren)
             }
-            (
-                Local::Send { branches: sb, .. },
-                Local::Send {
-                    branches: tb,
-                    loc: tloc,
-                },
-            ) => {
+            (Local::Send { branches: sb, .. }, Local::Send { branches: tb, loc: tloc }) => {
                 for x in sb {
                     let Some(y) = tb.iter().find(|y| y.to == x.to && y.label == x.label) else {
-                        let allowed: Vec<String> = tb
-                            .iter()
-                            .map(|y| format!("`{}!{}`", self.prog.role_name(y.to), y.label))
-                            .collect();
+                        let allowed: Vec<String> =
+                            tb.iter().map(|y| format!("`{}!{}`", self.prog.role_name(y.to), y.label)).collect();
                         return Err(Diagnostic::error(
                             Code::UnexpectedSend,
                             x.loc.0,
@@ -188,48 +147,21 @@ impl Sub<'_> {
                     if let Some(g) = &y.guard {
                         let sup_guard = subst_values(g, ren);
                         let sub_guard = x.guard.clone().unwrap_or_else(|| Expr::bool(true, x.loc));
-                        self.implication(
-                            sub_guard,
-                            sup_guard,
-                            x.loc.0,
-                            format!("the guard of `{}`", x.label),
-                        );
+                        self.implication(sub_guard, sup_guard, x.loc.0, format!("the guard of `{}`", x.label));
                     }
-                    let sub_ref =
-                        and_all(x.payload.iter().filter_map(|f| f.refinement.clone()), x.loc);
+                    let sub_ref = and_all(x.payload.iter().filter_map(|f| f.refinement.clone()), x.loc);
                     let sup_ref = and_all(
-                        y.payload
-                            .iter()
-                            .filter_map(|f| f.refinement.as_ref().map(|r| subst_values(r, &inner))),
+                        y.payload.iter().filter_map(|f| f.refinement.as_ref().map(|r| subst_values(r, &inner))),
                         y.loc,
                     );
-                    self.implication(
-                        sub_ref,
-                        sup_ref,
-                        x.loc.0,
-                        format!("the payload refinement of `{}`", x.label),
-                    );
-                    self.check(
-                        &x.cont,
-                        &mut senv.clone(),
-                        &y.cont,
-                        &mut tenv.clone(),
-                        &inner,
-                    )?;
+                    self.implication(sub_ref, sup_ref, x.loc.0, format!("the payload refinement of `{}`", x.label));
+                    self.check(&x.cont, &mut senv.clone(), &y.cont, &mut tenv.clone(), &inner)?;
                 }
                 Ok(())
             }
             (
-                Local::Recv {
-                    branches: sb,
-                    default: sd,
-                    loc: sloc,
-                },
-                Local::Recv {
-                    branches: tb,
-                    default: td,
-                    loc: tloc,
-                },
+                Local::Recv { branches: sb, default: sd, loc: sloc },
+                Local::Recv { branches: tb, default: td, loc: tloc },
             ) => {
                 if let (Some(x), Some(y)) = (sb.first(), tb.first()) {
                     if x.from != y.from {
@@ -254,26 +186,12 @@ impl Sub<'_> {
                     let mut inner = ren.clone();
                     rename_fields(&mut inner, &y.payload, &x.payload);
                     let sup_ref = and_all(
-                        y.payload
-                            .iter()
-                            .filter_map(|f| f.refinement.as_ref().map(|r| subst_values(r, &inner))),
+                        y.payload.iter().filter_map(|f| f.refinement.as_ref().map(|r| subst_values(r, &inner))),
                         y.loc,
                     );
-                    let sub_ref =
-                        and_all(x.payload.iter().filter_map(|f| f.refinement.clone()), x.loc);
-                    self.implication(
-                        sup_ref,
-                        sub_ref,
-                        x.loc.0,
-                        format!("the payload refinement of `{}`", x.label),
-                    );
-                    self.check(
-                        &x.cont,
-                        &mut senv.clone(),
-                        &y.cont,
-                        &mut tenv.clone(),
-                        &inner,
-                    )?;
+                    let sub_ref = and_all(x.payload.iter().filter_map(|f| f.refinement.clone()), x.loc);
+                    self.implication(sup_ref, sub_ref, x.loc.0, format!("the payload refinement of `{}`", x.label));
+                    self.check(&x.cont, &mut senv.clone(), &y.cont, &mut tenv.clone(), &inner)?;
                 }
                 match (sd, td) {
                     // [SUB-IN1]
@@ -288,7 +206,10 @@ impl Sub<'_> {
                     (None, Some((tp, _))) => Err(Diagnostic::error(
                         Code::ActionMismatch,
                         sloc.0,
-                        format!("the super type may move with `{}` here, the sub type only waits", motion_text(self.prog, tp)),
+                        format!(
+                            "the super type may move with `{}` here, the sub type only waits",
+                            motion_text(self.prog, tp)
+                        ),
                     )
                     .with_label(t.loc().0, "the default motion comes from here")
                     .with_note("[SUB-IN1,2]: a default motion of the super type must be one of the sub type")),
@@ -296,16 +217,8 @@ impl Sub<'_> {
             }
             // [SUB-IN3]
             (
-                Local::Recv {
-                    default: Some((sp, sc)),
-                    loc: sloc,
-                    ..
-                },
-                Local::Motion {
-                    prims: tp,
-                    cont: tc,
-                    loc: tl,
-                },
+                Local::Recv { default: Some((sp, sc)), loc: sloc, .. },
+                Local::Motion { prims: tp, cont: tc, loc: tl },
             ) => {
                 let sl = sp.first().map(|a| a.loc).unwrap_or(*sloc);
                 self.motion(sp, sl, tp, *tl, ren)?;
@@ -319,16 +232,10 @@ impl Sub<'_> {
         Diagnostic::error(
             Code::ActionMismatch,
             s.loc().0,
-            format!(
-                "`{}` is not a subtype of `{}`",
-                describe(self.prog, s),
-                describe(self.prog, t)
-            ),
+            format!("`{}` is not a subtype of `{}`", describe(self.prog, s), describe(self.prog, t)),
         )
         .with_label(t.loc().0, "the super type expects this")
-        .with_note(
-            "Fig 5: a subtype performs the same kind of action (motion, send, receive or end)",
-        )
+        .with_note("Fig 5: a subtype performs the same kind of action (motion, send, receive or end)")
     }
 
     /// [SUB-MOTION]: the sub type's motion refines the super type's.
@@ -348,22 +255,12 @@ impl Sub<'_> {
     }
 
     /// Same number of payload values with compatible sorts.
-    fn payload(
-        &self,
-        sub: &[Field],
-        sloc: Loc,
-        sup: &[Field],
-        tloc: Loc,
-    ) -> Result<(), Diagnostic> {
+    fn payload(&self, sub: &[Field], sloc: Loc, sup: &[Field], tloc: Loc) -> Result<(), Diagnostic> {
         if sub.len() != sup.len() {
             return Err(Diagnostic::error(
                 Code::PayloadArity,
                 sloc.0,
-                format!(
-                    "this message carries {} value(s), the super type's carries {}",
-                    sub.len(),
-                    sup.len()
-                ),
+                format!("this message carries {} value(s), the super type's carries {}", sub.len(), sup.len()),
             )
             .with_label(tloc.0, "the super type's message"));
         }
@@ -416,11 +313,7 @@ pub(crate) fn refinement(
         return Ok(None);
     }
     let Some(concrete) = sub.first() else {
-        return Err(Diagnostic::error(
-            Code::PrimitiveMismatch,
-            sloc.0,
-            "this motion names no primitive",
-        ));
+        return Err(Diagnostic::error(Code::PrimitiveMismatch, sloc.0, "this motion names no primitive"));
     };
     let c = prog.prim(concrete.prim);
     for a in sub.iter().chain(sup) {
@@ -442,31 +335,18 @@ pub(crate) fn refinement(
                     prog.kind(p.kind).name
                 )
             } else {
-                format!(
-                    "`{}` is {}, `{}` is {}",
-                    c.name,
-                    word(c.interruptible),
-                    p.name,
-                    word(p.interruptible)
-                )
+                format!("`{}` is {}, `{}` is {}", c.name, word(c.interruptible), p.name, word(p.interruptible))
             };
             return Err(Diagnostic::error(
                 Code::PrimitiveMismatch,
                 sloc.0,
-                format!(
-                    "`{}` cannot refine `{}`: {why}",
-                    motion_text(prog, sub),
-                    motion_text(prog, sup)
-                ),
+                format!("`{}` cannot refine `{}`: {why}", motion_text(prog, sub), motion_text(prog, sup)),
             )
             .with_label(tloc.0, "the motion the type expects")
             .with_note("Def 3.4 (6): a refinement has the same interruptibility (and robot kind)")
             .with_help(format!(
                 "use a primitive that is {} here",
-                word(
-                    prog.prim(sup.first().map(|a| a.prim).unwrap_or(concrete.prim))
-                        .interruptible
-                )
+                word(prog.prim(sup.first().map(|a| a.prim).unwrap_or(concrete.prim)).interruptible)
             )));
         }
     }
@@ -480,11 +360,7 @@ pub(crate) fn refinement(
             motion_text(prog, sup)
         ),
         hyps: Vec::new(),
-        goal: Goal::Refines {
-            role,
-            concrete: concrete.clone(),
-            abstract_: sup.to_vec(),
-        },
+        goal: Goal::Refines { role, concrete: concrete.clone(), abstract_: sup.to_vec() },
     }))
 }
 
@@ -500,22 +376,14 @@ fn rename_fields(ren: &mut Renaming, sup: &[Field], sub: &[Field]) {
 }
 
 fn rename_app(a: &PrimApp, ren: &Renaming) -> PrimApp {
-    PrimApp {
-        prim: a.prim,
-        args: a.args.iter().map(|e| subst_values(e, ren)).collect(),
-        loc: a.loc,
-    }
+    PrimApp { prim: a.prim, args: a.args.iter().map(|e| subst_values(e, ren)).collect(), loc: a.loc }
 }
 
 // ---- predicate helpers (shared with process typing) ------------------------------
 
 /// A value variable as an expression.
 pub(crate) fn value_expr(id: ValueId, name: &str, sort: &Sort) -> Expr {
-    Expr {
-        kind: ExprKind::Var(Var::Value(id, name.to_string())),
-        sort: sort.clone(),
-        loc: Loc::default(),
-    }
+    Expr { kind: ExprKind::Var(Var::Value(id, name.to_string())), sort: sort.clone(), loc: Loc::default() }
 }
 
 /// Rebuilds `e`, replacing each variable occurrence (given with its sort) for which
@@ -530,24 +398,14 @@ pub(crate) fn map_vars(e: &Expr, f: &mut dyn FnMut(&Var, &Sort) -> Option<Expr>)
             ExprKind::Int(_) | ExprKind::Real(_) | ExprKind::Bool(_) => e.kind.clone(),
             ExprKind::Unary(op, a) => ExprKind::Unary(*op, Box::new(map_vars(a, f))),
             ExprKind::Component(a, i) => ExprKind::Component(Box::new(map_vars(a, f)), *i),
-            ExprKind::Binary(op, a, b) => {
-                ExprKind::Binary(*op, Box::new(map_vars(a, f)), Box::new(map_vars(b, f)))
+            ExprKind::Binary(op, a, b) => ExprKind::Binary(*op, Box::new(map_vars(a, f)), Box::new(map_vars(b, f))),
+            ExprKind::If(a, b, c) => {
+                ExprKind::If(Box::new(map_vars(a, f)), Box::new(map_vars(b, f)), Box::new(map_vars(c, f)))
             }
-            ExprKind::If(a, b, c) => ExprKind::If(
-                Box::new(map_vars(a, f)),
-                Box::new(map_vars(b, f)),
-                Box::new(map_vars(c, f)),
-            ),
-            ExprKind::Call(b, args) => {
-                ExprKind::Call(*b, args.iter().map(|a| map_vars(a, f)).collect())
-            }
+            ExprKind::Call(b, args) => ExprKind::Call(*b, args.iter().map(|a| map_vars(a, f)).collect()),
             ExprKind::Tuple(args) => ExprKind::Tuple(args.iter().map(|a| map_vars(a, f)).collect()),
         };
-        Expr {
-            kind,
-            sort: e.sort.clone(),
-            loc: e.loc,
-        }
+        Expr { kind, sort: e.sort.clone(), loc: e.loc }
     })
 }
 
@@ -596,21 +454,13 @@ pub(crate) fn implies(a: Expr, b: Expr) -> Expr {
         return b;
     }
     let loc = b.loc;
-    Expr {
-        kind: ExprKind::Binary(BinOp::Implies, Box::new(a), Box::new(b)),
-        sort: Sort::Bool,
-        loc,
-    }
+    Expr { kind: ExprKind::Binary(BinOp::Implies, Box::new(a), Box::new(b)), sort: Sort::Bool, loc }
 }
 
 /// `!a`.
 pub(crate) fn not(a: Expr) -> Expr {
     let loc = a.loc;
-    Expr {
-        kind: ExprKind::Unary(UnOp::Not, Box::new(a)),
-        sort: Sort::Bool,
-        loc,
-    }
+    Expr { kind: ExprKind::Unary(UnOp::Not, Box::new(a)), sort: Sort::Bool, loc }
 }
 
 #[cfg(test)]
@@ -633,9 +483,7 @@ mod tests {
         let src = format!("{PAIR} local P = {sub}; local Q = {sup};");
         let (prog, d) = lower_src(&src);
         assert!(d.is_empty(), "{d:?}");
-        let (Some(s), Some(t)) = (prog.locals.first(), prog.locals.get(1)) else {
-            panic!("two local types")
-        };
+        let (Some(s), Some(t)) = (prog.locals.first(), prog.locals.get(1)) else { panic!("two local types") };
         let r = subtype(&prog, RoleId(0), &s.body, &t.body);
         (prog, r)
     }
@@ -672,18 +520,8 @@ mod tests {
         let obs = obligations("dt<creep>.end", "dt<idle /\\ creep>.end");
         assert_eq!(obs.len(), 1);
         assert_eq!(obs[0].rule, Rule::Refinement);
-        let Goal::Refines {
-            role,
-            concrete,
-            abstract_,
-        } = &obs[0].goal
-        else {
-            panic!()
-        };
-        assert_eq!(
-            (*role, concrete.prim, abstract_.len()),
-            (RoleId(0), PrimId(1), 2)
-        );
+        let Goal::Refines { role, concrete, abstract_ } = &obs[0].goal else { panic!() };
+        assert_eq!((*role, concrete.prim, abstract_.len()), (RoleId(0), PrimId(1), 2));
     }
 
     #[test]
@@ -695,10 +533,8 @@ mod tests {
 
     #[test]
     fn sub_out_fewer_sends_with_implied_predicates() {
-        let obs = obligations(
-            "[x > 1] O!a(v: real { v > 2 }).end",
-            "+{ [P.x > 0] O!a(w: real { w > 0 }).end, O!b.end }",
-        );
+        let obs =
+            obligations("[x > 1] O!a(v: real { v > 2 }).end", "+{ [P.x > 0] O!a(w: real { w > 0 }).end, O!b.end }");
         assert_eq!(obs.len(), 2, "{obs:?}");
         assert!(obs.iter().all(|o| o.rule == Rule::Subtype));
         let prog = run("end", "end").0;
@@ -718,59 +554,36 @@ mod tests {
         let d = fails("+{ O!a.end, O!c.end }", "+{ O!a.end, O!b.end }");
         assert_eq!(d.code, Code::UnexpectedSend);
         assert!(d.message.contains("O!c"));
-        assert_eq!(
-            fails("O!a(v: real).end", "O!a.end").code,
-            Code::PayloadArity
-        );
+        assert_eq!(fails("O!a(v: real).end", "O!a.end").code, Code::PayloadArity);
     }
 
     #[test]
     fn sub_in_more_receptions_with_reversed_implication() {
-        let obs = obligations(
-            "&{ O?a(v: real { v > 0 }).end, O?b.end }",
-            "O?a(w: real { w > 1 }).end",
-        );
+        let obs = obligations("&{ O?a(v: real { v > 0 }).end, O?b.end }", "O?a(w: real { w > 1 }).end");
         assert_eq!(obs.len(), 1);
-        let Goal::Valid(e) = &obs[0].goal else {
-            panic!()
-        };
+        let Goal::Valid(e) = &obs[0].goal else { panic!() };
         let prog = run("end", "end").0;
         assert_eq!(print::expr(&prog, None, e), "v > 1 => v > 0");
     }
 
     #[test]
     fn sub_in_fails_on_a_missing_label_or_sender() {
-        assert_eq!(
-            fails("O?a.end", "&{ O?a.end, O?b.end }").code,
-            Code::MissingBranch
-        );
+        assert_eq!(fails("O?a.end", "&{ O?a.end, O?b.end }").code, Code::MissingBranch);
         assert_eq!(fails("Q?a.end", "O?a.end").code, Code::ActionMismatch);
     }
 
     #[test]
     fn sub_in_defaults() {
         // [SUB-IN1]: both have defaults, the motions are compared.
-        assert!(
-            obligations("&{ O?a.end } & dt<idle>.end", "&{ O?a.end } & dt<idle>.end").is_empty()
-        );
+        assert!(obligations("&{ O?a.end } & dt<idle>.end", "&{ O?a.end } & dt<idle>.end").is_empty());
         // [SUB-IN2]: the sub type's default may be dropped.
         assert!(obligations("&{ O?a.end } & dt<idle>.end", "O?a.end").is_empty());
         // [SUB-IN3]: receptions with a default may stand for the motion alone.
-        assert_eq!(
-            obligations("&{ O?a.end } & dt<creep>.end", "dt<idle>.end").len(),
-            1
-        );
+        assert_eq!(obligations("&{ O?a.end } & dt<creep>.end", "dt<idle>.end").len(), 1);
         // A default of the super type the sub type lacks fails.
+        assert_eq!(fails("O?a.end", "&{ O?a.end } & dt<idle>.end").code, Code::ActionMismatch);
         assert_eq!(
-            fails("O?a.end", "&{ O?a.end } & dt<idle>.end").code,
-            Code::ActionMismatch
-        );
-        assert_eq!(
-            fails(
-                "&{ O?a.end } & dt<rush(1.0)>.end",
-                "&{ O?a.end } & dt<idle>.end"
-            )
-            .code,
+            fails("&{ O?a.end } & dt<rush(1.0)>.end", "&{ O?a.end } & dt<idle>.end").code,
             Code::PrimitiveMismatch
         );
     }
@@ -779,9 +592,6 @@ mod tests {
     fn recursion_is_coinductive_and_may_unfold_at_different_points() {
         assert!(obligations("mu t. O!a.O?b.t", "O!a.mu s. O?b.O!a.s").is_empty());
         assert!(obligations("mu t. O!a.O?b.O!a.O?b.t", "mu s. O!a.O?b.s").is_empty());
-        assert_eq!(
-            fails("mu t. O!a.O?b.t", "mu s. O!a.O?b.end").code,
-            Code::ActionMismatch
-        );
+        assert_eq!(fails("mu t. O!a.O?b.t", "mu s. O!a.O?b.end").code, Code::ActionMismatch);
     }
 }

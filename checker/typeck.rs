@@ -30,8 +30,7 @@ use crate::hir::*;
 use crate::obligation::{Goal, Obligation, Rule};
 use crate::project::{describe, motion_text, print_bounded, NOTE_NODES};
 use crate::subtype::{
-    and_all, conjuncts, map_vars, mentions, not, refinement, subst_values, unfold, value_expr,
-    RecEnv,
+    and_all, conjuncts, map_vars, mentions, not, refinement, subst_values, unfold, value_expr, RecEnv,
 };
 use std::collections::hash_map::DefaultHasher;
 use std::collections::{BTreeMap, HashMap, HashSet};
@@ -40,10 +39,7 @@ use std::rc::Rc;
 
 /// Checks every participant's process against its projection. Participants whose
 /// projection failed are skipped (the projection error is reported already).
-pub fn check_processes(
-    prog: &Program,
-    projections: &BTreeMap<RoleId, LocalRc>,
-) -> (Vec<Diagnostic>, Vec<Obligation>) {
+pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalRc>) -> (Vec<Diagnostic>, Vec<Obligation>) {
     let mut diags = Vec::new();
     let mut obligations = Vec::new();
     for role in prog.role_ids() {
@@ -54,14 +50,9 @@ pub fn check_processes(
                 prog.role(role).span,
                 format!("participant `{name}` has no process"),
             )
-            .with_help(format!(
-                "add `process {name} = ...;` implementing its local type"
-            ));
+            .with_help(format!("add `process {name} = ...;` implementing its local type"));
             if let Some(t) = projections.get(&role) {
-                d = d.with_note(format!(
-                    "its local type is:\n{}",
-                    print_bounded(prog, t, NOTE_NODES)
-                ));
+                d = d.with_note(format!("its local type is:\n{}", print_bounded(prog, t, NOTE_NODES)));
             }
             diags.push(d);
             continue;
@@ -70,13 +61,7 @@ pub fn check_processes(
             continue;
         };
         let mut c = Checker::new(prog, role);
-        let mut st = State {
-            sigma: Vec::new(),
-            vals: HashMap::new(),
-            penv: Vec::new(),
-            tenv: Vec::new(),
-            actions: 0,
-        };
+        let mut st = State { sigma: Vec::new(), vals: HashMap::new(), penv: Vec::new(), tenv: Vec::new(), actions: 0 };
         for e in c.initial() {
             st.assume(e);
         }
@@ -85,11 +70,7 @@ pub fn check_processes(
         obligations.extend(c.obligations);
     }
     // [T-SESS]: the initial states are collision free.
-    let span = prog
-        .system
-        .as_ref()
-        .map(|(_, s)| *s)
-        .or_else(|| prog.roles.first().map(|r| r.span));
+    let span = prog.system.as_ref().map(|(_, s)| *s).or_else(|| prog.roles.first().map(|r| r.span));
     if let Some(span) = span {
         let mut hyps = Vec::new();
         for role in prog.role_ids() {
@@ -108,14 +89,7 @@ pub fn check_processes(
     // A loop checked under several contexts may meet the same goal under the same
     // hypotheses again.
     let mut seen = HashSet::new();
-    obligations.retain(|o| {
-        seen.insert((
-            o.rule,
-            o.span,
-            format!("{:?}", o.hyps),
-            format!("{:?}", o.goal),
-        ))
-    });
+    obligations.retain(|o| seen.insert((o.rule, o.span, format!("{:?}", o.hyps), format!("{:?}", o.goal))));
     (diags, obligations)
 }
 
@@ -179,10 +153,7 @@ impl State<'_> {
 
 /// Variables whose value changes when time passes.
 fn is_physical(v: &Var) -> bool {
-    matches!(
-        v,
-        Var::Role(..) | Var::Own(_) | Var::Old(_) | Var::Clock | Var::Point(_)
-    )
+    matches!(v, Var::Role(..) | Var::Own(_) | Var::Old(_) | Var::Clock | Var::Point(_))
 }
 
 impl<'a> Checker<'a> {
@@ -228,21 +199,14 @@ impl<'a> Checker<'a> {
             };
             if let Some((var, _)) = &looped {
                 // A new iteration of the type's loop: its parameters have new values.
-                let rec = st
-                    .tenv
-                    .iter()
-                    .rev()
-                    .find(|(v, _)| v == var)
-                    .map(|(_, r)| r.clone());
+                let rec = st.tenv.iter().rev().find(|(v, _)| v == var).map(|(_, r)| r.clone());
                 if let Some(Local::Rec { params, .. }) = rec.as_deref() {
                     let names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
                     st.forget(&names);
                 }
             }
             match p {
-                Process::Rec {
-                    var, params, body, ..
-                } => {
+                Process::Rec { var, params, body, .. } => {
                     let names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
                     st.forget(&names);
                     st.penv.push((var, p, st.actions));
@@ -266,13 +230,7 @@ impl<'a> Checker<'a> {
                     let Some(&(_, rec, mark)) = st.penv.get(i) else {
                         return;
                     };
-                    let Process::Rec {
-                        params,
-                        body,
-                        loc: rec_loc,
-                        ..
-                    } = rec
-                    else {
+                    let Process::Rec { params, body, loc: rec_loc, .. } = rec else {
                         return;
                     };
                     if mark == st.actions {
@@ -301,9 +259,7 @@ impl<'a> Checker<'a> {
                     p = body;
                     continue;
                 }
-                Process::If {
-                    cond, then, els, ..
-                } => {
+                Process::If { cond, then, els, .. } => {
                     let mut yes = st.clone();
                     yes.assume(cond.clone());
                     self.check(then, t.clone(), yes);
@@ -321,19 +277,7 @@ impl<'a> Checker<'a> {
             }
             match (p, &*t) {
                 (Process::End(_), Local::End(_)) => return,
-                (
-                    Process::Send {
-                        to,
-                        label,
-                        args,
-                        cont,
-                        loc,
-                    },
-                    Local::Send {
-                        branches,
-                        loc: tloc,
-                    },
-                ) => {
+                (Process::Send { to, label, args, cont, loc }, Local::Send { branches, loc: tloc }) => {
                     let Some(b) = branches.iter().find(|b| b.to == *to && b.label == *label) else {
                         return self.unexpected_send(*to, label, *loc, branches, *tloc);
                     };
@@ -344,17 +288,8 @@ impl<'a> Checker<'a> {
                     t = b.cont.clone();
                 }
                 (
-                    Process::Recv {
-                        from,
-                        branches,
-                        default,
-                        loc,
-                    },
-                    Local::Recv {
-                        branches: tb,
-                        default: td,
-                        loc: tloc,
-                    },
+                    Process::Recv { from, branches, default, loc },
+                    Local::Recv { branches: tb, default: td, loc: tloc },
                 ) => {
                     if let Some(b) = tb.first().filter(|b| b.from != *from) {
                         return self.diags.push(
@@ -367,46 +302,24 @@ impl<'a> Checker<'a> {
                                     self.prog.role_name(*from)
                                 ),
                             )
-                            .with_label(tloc.0, format!("the local type comes from here: `{}`", describe(self.prog, &t)))
+                            .with_label(
+                                tloc.0,
+                                format!("the local type comes from here: `{}`", describe(self.prog, &t)),
+                            )
                             .with_help(format!("receive from `{}` at this point", self.prog.role_name(b.from))),
                         );
                     }
-                    return self.receive(
-                        branches,
-                        default.as_ref(),
-                        *loc,
-                        tb,
-                        td.as_ref(),
-                        &t,
-                        &st,
-                    );
+                    return self.receive(branches, default.as_ref(), *loc, tb, td.as_ref(), &t, &st);
                 }
                 // [SUB-IN3]: receptions with a default motion where the type only moves.
-                (
-                    Process::Recv {
-                        default: Some((a, q)),
-                        ..
-                    },
-                    Local::Motion {
-                        prims,
-                        cont,
-                        loc: tloc,
-                    },
-                ) => {
+                (Process::Recv { default: Some((a, q)), .. }, Local::Motion { prims, cont, loc: tloc }) => {
                     if !self.motion(a, a.loc, prims, *tloc, &mut st) {
                         return;
                     }
                     p = q;
                     t = cont.clone();
                 }
-                (
-                    Process::Motion { prim, cont, loc },
-                    Local::Motion {
-                        prims,
-                        cont: tc,
-                        loc: tloc,
-                    },
-                ) => {
+                (Process::Motion { prim, cont, loc }, Local::Motion { prims, cont: tc, loc: tloc }) => {
                     if !self.motion(prim, *loc, prims, *tloc, &mut st) {
                         return;
                     }
@@ -429,11 +342,7 @@ impl<'a> Checker<'a> {
         }
         let mut sigma = st.sigma.clone();
         sigma.sort_by_key(hash_of);
-        let mut vals: Vec<(String, Expr)> = st
-            .vals
-            .iter()
-            .map(|(k, v)| (k.clone(), v.clone()))
-            .collect();
+        let mut vals: Vec<(String, Expr)> = st.vals.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
         vals.sort_by(|a, b| a.0.cmp(&b.0));
         if !self.assumed.insert((pair.0, pair.1, sigma, vals)) {
             return false;
@@ -457,13 +366,7 @@ impl<'a> Checker<'a> {
                         b.payload.len()
                     ),
                 )
-                .with_label(
-                    b.loc.0,
-                    format!(
-                        "the message is declared here with {}",
-                        fields_text(&b.payload)
-                    ),
-                )
+                .with_label(b.loc.0, format!("the message is declared here with {}", fields_text(&b.payload)))
                 .with_help("pass one value per payload field"),
             );
             return false;
@@ -474,10 +377,7 @@ impl<'a> Checker<'a> {
                     Diagnostic::error(
                         Code::SortMismatch,
                         a.loc.0,
-                        format!(
-                            "the value for field `{}` must be of sort `{}`, this is `{}`",
-                            f.name, f.sort, a.sort
-                        ),
+                        format!("the value for field `{}` must be of sort `{}`, this is `{}`", f.name, f.sort, a.sort),
                     )
                     .with_label(b.loc.0, "the field is declared here"),
                 );
@@ -500,11 +400,7 @@ impl<'a> Checker<'a> {
             self.obligations.push(Obligation {
                 rule: Rule::TOut,
                 span: loc.0,
-                what: format!(
-                    "`{}` may send `{to}!{}`: the guard and payload refinement hold",
-                    self.name(),
-                    b.label
-                ),
+                what: format!("`{}` may send `{to}!{}`: the guard and payload refinement hold", self.name(), b.label),
                 hyps: st.sigma.clone(),
                 goal: Goal::Valid(and_all(goal, loc)),
             });
@@ -527,22 +423,14 @@ impl<'a> Checker<'a> {
         t: &LocalRc,
         st: &State<'p>,
     ) {
-        let missing: Vec<&RecvBranch> = tb
-            .iter()
-            .filter(|b| !arms.iter().any(|a| a.label == b.label))
-            .collect();
+        let missing: Vec<&RecvBranch> = tb.iter().filter(|b| !arms.iter().any(|a| a.label == b.label)).collect();
         if !missing.is_empty() {
-            let names: Vec<String> = missing
-                .iter()
-                .map(|b| format!("`{}?{}`", self.prog.role_name(b.from), b.label))
-                .collect();
+            let names: Vec<String> =
+                missing.iter().map(|b| format!("`{}?{}`", self.prog.role_name(b.from), b.label)).collect();
             let mut d = Diagnostic::error(
                 Code::MissingBranch,
                 loc.0,
-                format!(
-                    "the process does not handle {}, which the local type may deliver here",
-                    names.join(", ")
-                ),
+                format!("the process does not handle {}, which the local type may deliver here", names.join(", ")),
             );
             for b in &missing {
                 d = d.with_label(b.loc.0, "the choreography may send this");
@@ -569,30 +457,17 @@ impl<'a> Checker<'a> {
                             b.payload.len()
                         ),
                     )
-                    .with_label(
-                        b.loc.0,
-                        format!(
-                            "the message is declared here with {}",
-                            fields_text(&b.payload)
-                        ),
-                    )
+                    .with_label(b.loc.0, format!("the message is declared here with {}", fields_text(&b.payload)))
                     .with_help("bind one variable per payload field"),
                 );
                 continue;
             }
             let mut s = st.clone();
-            let names: Vec<&str> = arm
-                .binders
-                .iter()
-                .map(|v| self.prog.value(*v).name.as_str())
-                .collect();
+            let names: Vec<&str> = arm.binders.iter().map(|v| self.prog.value(*v).name.as_str()).collect();
             s.forget(&names);
             for (v, f) in arm.binders.iter().zip(&b.payload) {
                 // The binder takes the field's sort.
-                s.vals.insert(
-                    f.name.clone(),
-                    value_expr(*v, &self.prog.value(*v).name, &f.sort),
-                );
+                s.vals.insert(f.name.clone(), value_expr(*v, &self.prog.value(*v).name, &f.sort));
             }
             for f in &b.payload {
                 if let Some(r) = &f.refinement {
@@ -630,14 +505,7 @@ impl<'a> Checker<'a> {
     }
 
     /// [T-MOTION] with [SUB-MOTION]: refinement, `Σ ⇒ Pre`, then Σ := Post.
-    fn motion(
-        &mut self,
-        a: &PrimApp,
-        loc: Loc,
-        prims: &[PrimApp],
-        tloc: Loc,
-        st: &mut State,
-    ) -> bool {
+    fn motion(&mut self, a: &PrimApp, loc: Loc, prims: &[PrimApp], tloc: Loc, st: &mut State) -> bool {
         let abstract_: Vec<PrimApp> = prims
             .iter()
             .map(|b| PrimApp {
@@ -646,14 +514,7 @@ impl<'a> Checker<'a> {
                 loc: b.loc,
             })
             .collect();
-        match refinement(
-            self.prog,
-            self.role,
-            std::slice::from_ref(a),
-            loc,
-            &abstract_,
-            tloc,
-        ) {
+        match refinement(self.prog, self.role, std::slice::from_ref(a), loc, &abstract_, tloc) {
             Err(d) => {
                 self.diags.push(d);
                 return false;
@@ -681,10 +542,7 @@ impl<'a> Checker<'a> {
         }
         let mut post = Vec::new();
         conjuncts(&prim.post, &mut post);
-        let post: Vec<Expr> = post
-            .iter()
-            .filter_map(|c| post_fact(c, self.role, &a.args))
-            .collect();
+        let post: Vec<Expr> = post.iter().filter_map(|c| post_fact(c, self.role, &a.args)).collect();
         st.sigma.retain(|e| !mentions(e, &is_physical));
         st.vals.retain(|_, e| !mentions(e, &is_physical));
         for e in self.invariant.iter().cloned().chain(post) {
@@ -698,18 +556,9 @@ impl<'a> Checker<'a> {
         self.prog.role_name(self.role)
     }
 
-    fn unexpected_send(
-        &mut self,
-        to: RoleId,
-        label: &str,
-        loc: Loc,
-        branches: &[SendBranch],
-        tloc: Loc,
-    ) {
-        let allowed: Vec<String> = branches
-            .iter()
-            .map(|b| format!("`{}!{}`", self.prog.role_name(b.to), b.label))
-            .collect();
+    fn unexpected_send(&mut self, to: RoleId, label: &str, loc: Loc, branches: &[SendBranch], tloc: Loc) {
+        let allowed: Vec<String> =
+            branches.iter().map(|b| format!("`{}!{}`", self.prog.role_name(b.to), b.label)).collect();
         let allowed = allowed.join(", ");
         self.diags.push(
             Diagnostic::error(
@@ -735,7 +584,9 @@ impl<'a> Checker<'a> {
                 )
                 .with_label(var_loc.0, "the local type loops back here")
                 .with_label(t.loc().0, format!("and continues with `{expected}`"))
-                .with_help(format!("loop back with a process variable instead of `end` (the choreography repeats with `{var}`)")),
+                .with_help(format!(
+                    "loop back with a process variable instead of `end` (the choreography repeats with `{var}`)"
+                )),
             );
         }
         let performs = describe_process(self.prog, p);
@@ -747,9 +598,7 @@ impl<'a> Checker<'a> {
             Diagnostic::error(
                 Code::ActionMismatch,
                 p.loc().0,
-                format!(
-                    "the local type expects `{expected}` here, the process performs `{performs}`"
-                ),
+                format!("the local type expects `{expected}` here, the process performs `{performs}`"),
             )
             .with_label(t.loc().0, format!("`{expected}` comes from here"))
             .with_note(format!(
@@ -789,18 +638,9 @@ fn shape_clash(p: &Process, t: &Local) -> bool {
     !matches!(
         (p, t),
         (Process::Var { .. } | Process::If { .. }, _)
-            | (
-                Process::Send { .. } | Process::Choose { .. },
-                Local::Send { .. }
-            )
+            | (Process::Send { .. } | Process::Choose { .. }, Local::Send { .. })
             | (Process::Recv { .. }, Local::Recv { .. })
-            | (
-                Process::Recv {
-                    default: Some(_),
-                    ..
-                },
-                Local::Motion { .. }
-            )
+            | (Process::Recv { default: Some(_), .. }, Local::Motion { .. })
             | (Process::Motion { .. }, Local::Motion { .. })
             | (Process::End(_), Local::End(_))
     )
@@ -810,11 +650,7 @@ fn shape_clash(p: &Process, t: &Local) -> bool {
 /// `role.slot`, `Var::Param(i)` the i-th argument.
 fn instantiate(e: &Expr, role: RoleId, args: &[Expr]) -> Expr {
     map_vars(e, &mut |v, sort| match v {
-        Var::Own(slot) => Some(Expr {
-            kind: ExprKind::Var(Var::Role(role, *slot)),
-            sort: sort.clone(),
-            loc: e.loc,
-        }),
+        Var::Own(slot) => Some(Expr { kind: ExprKind::Var(Var::Role(role, *slot)), sort: sort.clone(), loc: e.loc }),
         Var::Param(i) => args.get(*i).cloned(),
         _ => None,
     })
@@ -845,10 +681,7 @@ fn fields_text(fields: &[Field]) -> String {
     if fields.is_empty() {
         return "no payload".to_string();
     }
-    let items: Vec<String> = fields
-        .iter()
-        .map(|f| format!("{}: {}", f.name, f.sort))
-        .collect();
+    let items: Vec<String> = fields.iter().map(|f| format!("{}: {}", f.name, f.sort)).collect();
     format!("payload ({})", items.join(", "))
 }
 
@@ -863,19 +696,10 @@ fn describe_process(prog: &Program, p: &Process) -> String {
         }
     };
     match p {
-        Process::Send {
-            to, label, args, ..
-        } => format!("{}!{label}{}", prog.role_name(*to), args_text(args)),
-        Process::Recv {
-            from,
-            branches,
-            default,
-            ..
-        } => {
-            let mut items: Vec<String> = branches
-                .iter()
-                .map(|b| format!("{}?{}", prog.role_name(*from), b.label))
-                .collect();
+        Process::Send { to, label, args, .. } => format!("{}!{label}{}", prog.role_name(*to), args_text(args)),
+        Process::Recv { from, branches, default, .. } => {
+            let mut items: Vec<String> =
+                branches.iter().map(|b| format!("{}?{}", prog.role_name(*from), b.label)).collect();
             if let Some((a, _)) = default {
                 items.push(format!("dt<{}>", print::prim_app(prog, a)));
             }
@@ -947,16 +771,8 @@ mod tests {
             .filter(|o| o.rule == rule)
             .map(|o| match &o.goal {
                 Goal::Valid(e) => print::expr(prog, None, e),
-                Goal::Refines {
-                    concrete,
-                    abstract_,
-                    ..
-                } => {
-                    format!(
-                        "{} <= {}",
-                        print::prim_app(prog, concrete),
-                        motion_text(prog, abstract_)
-                    )
+                Goal::Refines { concrete, abstract_, .. } => {
+                    format!("{} <= {}", print::prim_app(prog, concrete), motion_text(prog, abstract_))
                 }
                 other => format!("{other:?}"),
             })
@@ -967,27 +783,19 @@ mod tests {
 
     #[test]
     fn a_well_typed_system_has_only_obligations() {
-        let (prog, d, obs) = check(&format!(
-            "process C = mu k. A!go(x + 1).dt<move(x + 1)>.A?done.k; {GOOD_A}"
-        ));
+        let (prog, d, obs) = check(&format!("process C = mu k. A!go(x + 1).dt<move(x + 1)>.A?done.k; {GOOD_A}"));
         assert!(d.is_empty(), "{d:?}");
         // Two iterations: the first knows the initial state, the second only the
         // invariant, because `move`'s postcondition `x == xf` speaks of the `x + 1`
         // computed before the motion. The third meets the second's context again.
         assert_eq!(goals(&prog, &obs, Rule::TOut), vec!["C.x + 1 > C.x"; 2]);
-        assert_eq!(
-            goals(&prog, &obs, Rule::TMotion),
-            vec!["C.x + 1 > C.x && C.v == 0"; 2]
-        );
+        assert_eq!(goals(&prog, &obs, Rule::TMotion), vec!["C.x + 1 > C.x && C.v == 0"; 2]);
         let hyps: Vec<Vec<String>> = obs
             .iter()
             .filter(|o| o.rule == Rule::TMotion)
             .map(|o| o.hyps.iter().map(|h| print::expr(&prog, None, h)).collect())
             .collect();
-        assert_eq!(
-            hyps,
-            vec![vec!["C.x == 0", "C.v == 0", "C.v >= 0"], vec!["C.v >= 0"]]
-        );
+        assert_eq!(hyps, vec![vec!["C.x == 0", "C.v == 0", "C.v >= 0"], vec!["C.v >= 0"]]);
         assert_eq!(obs.iter().filter(|o| o.rule == Rule::TSess).count(), 1);
         assert!(goals(&prog, &obs, Rule::Refinement).is_empty());
         let _ = prog;
@@ -1013,22 +821,16 @@ mod tests {
         );
         let (_, d, _) = check_src(&bad);
         assert_eq!(codes(&d), vec![Code::ActionMismatch]);
-        assert_eq!(
-            d[0].message,
-            "the local type expects `Cart!ok` here, the process performs `dt<work>`"
-        );
+        assert_eq!(d[0].message, "the local type expects `Cart!ok` here, the process performs `dt<work>`");
     }
 
     #[test]
     fn a_process_may_unfold_its_loop_later_or_twice() {
-        let later =
-            "process C = A!go(x + 1).dt<move(x + 1)>.mu k. A?done.A!go(x + 1).dt<move(x + 1)>.k;";
+        let later = "process C = A!go(x + 1).dt<move(x + 1)>.mu k. A?done.A!go(x + 1).dt<move(x + 1)>.k;";
         let (_, d, _) = check(&format!("{later} {GOOD_A}"));
         assert!(d.is_empty(), "{d:?}");
         let twice = "process A = mu k. C?go(y).dt<work>.C!done.C?go(z).dt<work>.C!done.k;";
-        let (_, d, _) = check(&format!(
-            "process C = mu k. A!go(x + 1).dt<move(x + 1)>.A?done.k; {twice}"
-        ));
+        let (_, d, _) = check(&format!("process C = mu k. A!go(x + 1).dt<move(x + 1)>.A?done.k; {twice}"));
         assert!(d.is_empty(), "{d:?}");
     }
 
@@ -1044,9 +846,7 @@ mod tests {
             assert!(d.is_empty(), "{c}: {d:?}");
         }
         // Jumping to an outer loop from an inner one at the wrong point.
-        let (_, d, _) = check(&format!(
-            "process C = mu k. A!go(x + 1).mu j. dt<move(x + 1)>.A?done.j; {GOOD_A}"
-        ));
+        let (_, d, _) = check(&format!("process C = mu k. A!go(x + 1).mu j. dt<move(x + 1)>.A?done.j; {GOOD_A}"));
         assert_eq!(codes(&d), vec![Code::RecursionMismatch], "{d:?}");
     }
 
@@ -1057,32 +857,20 @@ mod tests {
         let sends: Vec<String> = (0..n).map(|i| format!("A!m{i}")).collect();
         let recvs: Vec<String> = (0..n).map(|i| format!("C?m{i}")).collect();
         let chor = format!("choreography G = {}. end;", msgs.join(". "));
-        let procs = format!(
-            "process C = {}.end; process A = {}.end;",
-            sends.join("."),
-            recvs.join(".")
-        );
+        let procs = format!("process C = {}.end; process A = {}.end;", sends.join("."), recvs.join("."));
         let (_, d, _) = check_with(&chor, &procs);
         assert!(d.is_empty(), "{d:?}");
     }
 
     #[test]
     fn received_refinements_enter_the_context() {
-        let chor = "choreography G = C -> A : go(tf: real { tf > 0 }). A -> C : [tf > 0] ack(u: real { u == tf }). end;";
-        let (prog, d, obs) = check_with(
-            chor,
-            "process C = A!go(1.0).A?ack(w).end; process A = C?go(y).C!ack(y).end;",
-        );
+        let chor =
+            "choreography G = C -> A : go(tf: real { tf > 0 }). A -> C : [tf > 0] ack(u: real { u == tf }). end;";
+        let (prog, d, obs) = check_with(chor, "process C = A!go(1.0).A?ack(w).end; process A = C?go(y).C!ack(y).end;");
         assert!(d.is_empty(), "{d:?}");
         let outs: Vec<&Obligation> = obs.iter().filter(|o| o.rule == Rule::TOut).collect();
-        assert_eq!(
-            goals(&prog, &obs, Rule::TOut),
-            vec!["1.0 > 0", "y > 0 && y == y"]
-        );
-        assert!(outs[1]
-            .hyps
-            .iter()
-            .any(|h| print::expr(&prog, None, h) == "y > 0"));
+        assert_eq!(goals(&prog, &obs, Rule::TOut), vec!["1.0 > 0", "y > 0 && y == y"]);
+        assert!(outs[1].hyps.iter().any(|h| print::expr(&prog, None, h) == "y > 0"));
     }
 
     #[test]
@@ -1095,10 +883,7 @@ mod tests {
         assert!(d.is_empty(), "{d:?}");
         let out: Vec<&Obligation> = obs.iter().filter(|o| o.rule == Rule::TOut).collect();
         assert_eq!(out.len(), 1);
-        assert!(out[0]
-            .hyps
-            .iter()
-            .any(|h| print::expr(&prog, None, h) == "C.x > 1"));
+        assert!(out[0].hyps.iter().any(|h| print::expr(&prog, None, h) == "C.x > 1"));
     }
 
     #[test]
@@ -1112,10 +897,7 @@ mod tests {
     fn e0702_wrong_kind_of_action() {
         let (prog, d, _) = check(&format!("process C = mu k. dt<idle>.A?done.k; {GOOD_A}"));
         assert_eq!(codes(&d), vec![Code::ActionMismatch]);
-        assert_eq!(
-            d[0].message,
-            "the local type expects `A!go` here, the process performs `dt<idle>`"
-        );
+        assert_eq!(d[0].message, "the local type expects `A!go` here, the process performs `dt<idle>`");
         let _ = prog;
         // The process ends where the type continues.
         let (_, d, _) = check(&format!("process C = mu k. A!go(x + 1).end; {GOOD_A}"));
@@ -1129,18 +911,11 @@ mod tests {
         assert!(d.is_empty(), "{d:?}");
         let w = prog.role_by_name("W").expect("W");
         let (map, _) = project_all(&prog);
-        assert_eq!(
-            print::local(&prog, &map[&w]),
-            "&{\n  P?go.end\n} & dt<w>.P?stop.end"
-        );
+        assert_eq!(print::local(&prog, &map[&w]), "&{\n  P?go.end\n} & dt<w>.P?stop.end");
         // The type may move by default; a process that only waits lacks that branch.
         let (_, d, _) = check_src(&format!("{WATCH} process W = P?go.end;"));
         assert_eq!(codes(&d), vec![Code::ActionMismatch]);
-        assert!(
-            d[0].message.contains("default motion `dt<w>`"),
-            "{}",
-            d[0].message
-        );
+        assert!(d[0].message.contains("default motion `dt<w>`"), "{}", d[0].message);
         // The default continues like the type's.
         let (_, d, _) = check_src(&format!("{WATCH} process W = P?go.end + dt<w>.P?go.end;"));
         assert_eq!(codes(&d), vec![Code::MissingBranch], "{d:?}");
@@ -1149,19 +924,9 @@ mod tests {
     #[test]
     fn all_errors_are_collected() {
         let chor = "choreography G = C -> A : a. A -> C : x. end + C -> A : b. A -> C : y. end;";
-        let (_, d, _) = check_with(
-            chor,
-            "process C = A!a.A?x.end + A!b.end; process A = C?a.C!z.end + C?b.dt<work>.end;",
-        );
-        assert_eq!(
-            codes(&d),
-            vec![
-                Code::ActionMismatch,
-                Code::UnexpectedSend,
-                Code::ActionMismatch
-            ],
-            "{d:?}"
-        );
+        let (_, d, _) =
+            check_with(chor, "process C = A!a.A?x.end + A!b.end; process A = C?a.C!z.end + C?b.dt<work>.end;");
+        assert_eq!(codes(&d), vec![Code::ActionMismatch, Code::UnexpectedSend, Code::ActionMismatch], "{d:?}");
     }
 
     #[test]
@@ -1181,18 +946,12 @@ mod tests {
 
     #[test]
     fn e0705_interruptibility_and_refinement_obligations() {
-        let (_, d, _) = check(&format!(
-            "process C = mu k. A!go(x + 1).dt<idle>.A?done.k; {GOOD_A}"
-        ));
+        let (_, d, _) = check(&format!("process C = mu k. A!go(x + 1).dt<idle>.A?done.k; {GOOD_A}"));
         assert_eq!(codes(&d), vec![Code::PrimitiveMismatch]);
         let (_, d, _) = check(
             "process C = mu k. A!go(x + 1).dt<move(x + 1)>.A?done.k; process A = mu k. C?go(y).dt<grab>.C!done.k;",
         );
-        assert_eq!(
-            codes(&d),
-            vec![Code::PrimitiveMismatch],
-            "work is interruptible, grab is not"
-        );
+        assert_eq!(codes(&d), vec![Code::PrimitiveMismatch], "work is interruptible, grab is not");
         // Same interruptibility: a refinement obligation instead.
         let (prog, d, obs) = check_with(
             "motion Cart.creep { interruptible: true; }
@@ -1200,33 +959,20 @@ mod tests {
             "process C = mu k. A!go.dt<creep>.A?done.k; process A = mu k. C?go.dt<work>.C!done.k;",
         );
         assert!(d.is_empty(), "{d:?}");
-        assert_eq!(
-            goals(&prog, &obs, Rule::Refinement),
-            vec!["creep <= dt<idle>"]
-        );
+        assert_eq!(goals(&prog, &obs, Rule::Refinement), vec!["creep <= dt<idle>"]);
     }
 
     #[test]
     fn e0706_loops_that_do_not_match() {
         // The process stops where the type loops.
-        let (_, d, _) = check(&format!(
-            "process C = A!go(x + 1).dt<move(x + 1)>.A?done.end; {GOOD_A}"
-        ));
+        let (_, d, _) = check(&format!("process C = A!go(x + 1).dt<move(x + 1)>.A?done.end; {GOOD_A}"));
         assert_eq!(codes(&d), vec![Code::RecursionMismatch]);
-        assert!(
-            d[0].message.contains("loops back to `t`"),
-            "{}",
-            d[0].message
-        );
+        assert!(d[0].message.contains("loops back to `t`"), "{}", d[0].message);
         // The process loops where the type ends.
         let chor = "choreography G = C -> A : go. end;";
         let (_, d, _) = check_with(chor, "process C = mu k. A!go.k; process A = C?go.end;");
         assert_eq!(codes(&d), vec![Code::RecursionMismatch]);
-        assert!(
-            d[0].message.contains("the local type ends"),
-            "{}",
-            d[0].message
-        );
+        assert!(d[0].message.contains("the local type ends"), "{}", d[0].message);
         // An unguarded process loop.
         let (_, d, _) = check_with(chor, "process C = mu k. k; process A = C?go.end;");
         assert_eq!(codes(&d), vec![Code::RecursionMismatch]);
@@ -1234,19 +980,16 @@ mod tests {
 
     #[test]
     fn e0707_payload_arity() {
-        let (_, d, _) = check(&format!(
-            "process C = mu k. A!go.dt<move(x + 1)>.A?done.k; {GOOD_A}"
-        ));
+        let (_, d, _) = check(&format!("process C = mu k. A!go.dt<move(x + 1)>.A?done.k; {GOOD_A}"));
         assert_eq!(codes(&d), vec![Code::PayloadArity]);
-        let (_, d, _) = check("process C = mu k. A!go(x + 1).dt<move(x + 1)>.A?done.k; process A = mu k. C?go.dt<work>.C!done.k;");
+        let (_, d, _) =
+            check("process C = mu k. A!go(x + 1).dt<move(x + 1)>.A?done.k; process A = mu k. C?go.dt<work>.C!done.k;");
         assert_eq!(codes(&d), vec![Code::PayloadArity]);
     }
 
     #[test]
     fn e0208_argument_sorts() {
-        let (_, d, _) = check(&format!(
-            "process C = mu k. A!go(true).dt<move(1.0)>.A?done.k; {GOOD_A}"
-        ));
+        let (_, d, _) = check(&format!("process C = mu k. A!go(true).dt<move(1.0)>.A?done.k; {GOOD_A}"));
         assert!(codes(&d).contains(&Code::SortMismatch), "{d:?}");
     }
 

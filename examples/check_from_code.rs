@@ -45,9 +45,7 @@ motion Cart.hold {
     src.push_str(motions);
     src.push_str("system Pair {\n");
     for (name, lane) in [("A", 0.0), ("B", 1.0)] {
-        src.push_str(&format!(
-            "  participant {name}: Cart {{ init: x == 0 && y == {lane:?}; at: pose(0, 0, 0); }}\n"
-        ));
+        src.push_str(&format!("  participant {name}: Cart {{ init: x == 0 && y == {lane:?}; at: pose(0, 0, 0); }}\n"));
     }
     src.push_str("}\n");
     src.push_str(
@@ -62,10 +60,7 @@ fn print_report(db: &SourceDb, title: &str, report: &Report) {
     println!("== {title}: verdict {:?}", report.verdict);
     for check in &report.checks {
         let status = format!("{:?}", check.status).to_lowercase();
-        println!(
-            "   check {:<12} {status:<7} {:>8.3} ms  {}",
-            check.name, check.millis, check.detail
-        );
+        println!("   check {:<12} {status:<7} {:>8.3} ms  {}", check.name, check.millis, check.detail);
     }
     if report.diagnostics.is_empty() {
         println!("   no diagnostics");
@@ -75,10 +70,7 @@ fn print_report(db: &SourceDb, title: &str, report: &Report) {
     for d in &report.diagnostics {
         let (file, line, col) = db.location(d.span);
         let severity = format!("{:?}", d.severity).to_lowercase();
-        println!(
-            "   {severity}[{}]: {} at {file}:{line}:{col}",
-            d.code, d.message
-        );
+        println!("   {severity}[{}]: {} at {file}:{line}:{col}", d.code, d.message);
         if let Some(help) = &d.help {
             println!("      help: {help}");
         }

@@ -33,11 +33,7 @@ impl Drop for TempDir {
 }
 
 fn mochi(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_mochi"))
-        .args(args)
-        .env_remove("NO_COLOR")
-        .output()
-        .expect("run mochi")
+    Command::new(env!("CARGO_BIN_EXE_mochi")).args(args).env_remove("NO_COLOR").output().expect("run mochi")
 }
 
 fn path_arg(p: &Path) -> &str {
@@ -61,10 +57,7 @@ fn explain_prints_the_title_and_the_paragraph() {
     let out = stdout(&o);
     assert!(out.starts_with("E0301: message to oneself\n"), "{out}");
     assert!(out.contains("Def 4.1 requires"), "{out}");
-    assert!(
-        out.lines().all(|l| l.chars().count() <= 90),
-        "wrapped at 90 columns: {out}"
-    );
+    assert!(out.lines().all(|l| l.chars().count() <= 90), "wrapped at 90 columns: {out}");
 }
 
 #[test]
@@ -80,11 +73,7 @@ fn explain_list_names_every_code() {
     let o = mochi(&["explain", "--list"]);
     assert_eq!(o.status.code(), Some(0));
     let out = stdout(&o);
-    assert!(
-        out.lines()
-            .any(|l| l.starts_with("E0103") && l.contains("unexpected token")),
-        "{out}"
-    );
+    assert!(out.lines().any(|l| l.starts_with("E0103") && l.contains("unexpected token")), "{out}");
     assert!(out.lines().any(|l| l.starts_with("U0001")), "{out}");
 }
 
@@ -93,17 +82,8 @@ fn a_bad_flag_is_a_usage_error() {
     let o = mochi(&["check", "--no-such-flag", "x.chor"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("--no-such-flag"), "{}", stderr(&o));
-    assert_eq!(
-        mochi(&["check", "--format", "yaml", "x.chor"])
-            .status
-            .code(),
-        Some(2)
-    );
-    assert_eq!(
-        mochi(&[]).status.code(),
-        Some(2),
-        "a subcommand is required"
-    );
+    assert_eq!(mochi(&["check", "--format", "yaml", "x.chor"]).status.code(), Some(2));
+    assert_eq!(mochi(&[]).status.code(), Some(2), "a subcommand is required");
 }
 
 #[test]
@@ -113,11 +93,7 @@ fn help_and_version_succeed() {
     assert!(stdout(&help).contains("check"));
     let version = mochi(&["--version"]);
     assert_eq!(version.status.code(), Some(0));
-    assert!(
-        stdout(&version).starts_with("mochi "),
-        "{}",
-        stdout(&version)
-    );
+    assert!(stdout(&version).starts_with("mochi "), "{}", stdout(&version));
 }
 
 #[test]
@@ -131,10 +107,7 @@ fn a_syntax_error_is_reported_in_text() {
     assert!(out.contains(&format!("{}:1:11", file.display())), "{out}");
     assert!(out.contains("1 | const a = ;"), "{out}");
     assert!(out.contains("verdict: rejected"), "{out}");
-    assert!(
-        !out.contains('\x1b'),
-        "no colour when stdout is a pipe: {out}"
-    );
+    assert!(!out.contains('\x1b'), "no colour when stdout is a pipe: {out}");
 }
 
 #[test]
@@ -161,12 +134,7 @@ fn a_syntax_error_is_reported_in_json() {
     assert_eq!(d["file"], path_arg(&file));
     assert_eq!(d["line"], 1);
     assert_eq!(d["column"], 11);
-    assert!(
-        d["message"]
-            .as_str()
-            .is_some_and(|m| m.contains("expected")),
-        "{d}"
-    );
+    assert!(d["message"].as_str().is_some_and(|m| m.contains("expected")), "{d}");
     assert!(d["notes"].is_array() && d["labels"].is_array(), "{d}");
     assert_eq!(v["checks"][0]["name"], "parse");
     assert_eq!(v["checks"][0]["status"], "fail");
@@ -181,10 +149,7 @@ fn a_missing_file_is_invalid_input() {
     assert_eq!(o.status.code(), Some(1));
     assert!(stdout(&o).is_empty(), "{}", stdout(&o));
     let err = stderr(&o);
-    assert!(
-        err.starts_with(&format!("error: cannot read {}: ", file.display())),
-        "{err}"
-    );
+    assert!(err.starts_with(&format!("error: cannot read {}: ", file.display())), "{err}");
 }
 
 #[test]
@@ -192,21 +157,12 @@ fn several_files_in_json_give_one_line_each() {
     let dir = TempDir::new("json-lines");
     let first = dir.write("first.chor", SYNTAX_ERROR);
     let second = dir.write("second.chor", "const b = 1;\nconst c = ;\n");
-    let o = mochi(&[
-        "check",
-        "--format",
-        "json",
-        path_arg(&first),
-        path_arg(&second),
-    ]);
+    let o = mochi(&["check", "--format", "json", path_arg(&first), path_arg(&second)]);
     assert_eq!(o.status.code(), Some(1));
     let out = stdout(&o);
     let lines: Vec<&str> = out.lines().collect();
     assert_eq!(lines.len(), 2, "{out}");
-    let parsed: Vec<Value> = lines
-        .iter()
-        .map(|l| serde_json::from_str(l).expect("each line is JSON"))
-        .collect();
+    let parsed: Vec<Value> = lines.iter().map(|l| serde_json::from_str(l).expect("each line is JSON")).collect();
     assert_eq!(parsed[0]["file"], path_arg(&first));
     assert_eq!(parsed[1]["file"], path_arg(&second));
     assert_eq!(parsed[1]["diagnostics"][0]["line"], 2);
@@ -218,19 +174,9 @@ fn an_unreadable_file_among_others_fails_the_run() {
     let dir = TempDir::new("mixed");
     let bad = dir.write("bad.chor", SYNTAX_ERROR);
     let missing = dir.0.join("missing.chor");
-    let o = mochi(&[
-        "check",
-        "--format",
-        "json",
-        path_arg(&bad),
-        path_arg(&missing),
-    ]);
+    let o = mochi(&["check", "--format", "json", path_arg(&bad), path_arg(&missing)]);
     assert_eq!(o.status.code(), Some(1));
-    assert_eq!(
-        stdout(&o).lines().count(),
-        1,
-        "only readable files produce a report"
-    );
+    assert_eq!(stdout(&o).lines().count(), 1, "only readable files produce a report");
     assert!(stderr(&o).contains("cannot read"), "{}", stderr(&o));
 }
 

@@ -73,9 +73,19 @@ fn printed_projections_parse_back_to_the_same_type() {
             let text = print::local(&prog, t);
             let file = db.add("printed", text.clone());
             let (ast, d) = parse_local(file, &text);
-            assert!(d.is_empty(), "{}: printed type of {} does not parse: {d:?}\n{text}", path.display(), prog.role_name(*role));
+            assert!(
+                d.is_empty(),
+                "{}: printed type of {} does not parse: {d:?}\n{text}",
+                path.display(),
+                prog.role_name(*role)
+            );
             let (back, d) = mochi::lower::lower_local(&prog, *role, &ast.expect("parsed"));
-            assert!(d.is_empty(), "{}: printed type of {} does not lower: {d:?}\n{text}", path.display(), prog.role_name(*role));
+            assert!(
+                d.is_empty(),
+                "{}: printed type of {} does not lower: {d:?}\n{text}",
+                path.display(),
+                prog.role_name(*role)
+            );
             assert!(
                 mochi::project::equal(&back, t),
                 "{}: the printed type of {} reads back differently\n{text}",

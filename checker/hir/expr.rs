@@ -68,7 +68,7 @@ pub enum Slot {
 }
 
 /// What a variable occurrence refers to.
-#[derive(Clone, Debug, Eq, Hash)]
+#[derive(Clone, Debug, Eq)]
 pub enum Var {
     Const(ConstId),
     /// This robot's variable, inside a primitive's contract or a kind's invariant.
@@ -99,6 +99,24 @@ impl PartialEq for Var {
             (Var::Clock, Var::Clock) => true,
             (Var::Role(a, s), Var::Role(b, t)) => a == b && s == t,
             _ => false,
+        }
+    }
+}
+
+/// Hashes what equality compares: a value variable by its name only.
+impl std::hash::Hash for Var {
+    fn hash<H: std::hash::Hasher>(&self, h: &mut H) {
+        std::mem::discriminant(self).hash(h);
+        match self {
+            Var::Const(c) => c.hash(h),
+            Var::Own(s) => s.hash(h),
+            Var::Old(i) | Var::Param(i) | Var::Point(i) => i.hash(h),
+            Var::Clock => {}
+            Var::Role(r, s) => {
+                r.hash(h);
+                s.hash(h);
+            }
+            Var::Value(_, name) => name.hash(h),
         }
     }
 }

@@ -13,7 +13,12 @@ pub enum Global {
     Choice(Vec<Global>, Loc),
     /// The separating conjunction `*`.
     Par(Vec<Global>, Loc),
-    Rec { var: String, params: Vec<RecParam>, body: Box<Global>, loc: Loc },
+    Rec {
+        var: String,
+        params: Vec<RecParam>,
+        body: Box<Global>,
+        loc: Loc,
+    },
     Var(RecVar),
     End(Loc),
 }
@@ -42,7 +47,9 @@ impl Global {
                 add(m.to, out);
             }
             Global::Motion(m) => m.parts.iter().for_each(|(r, _)| add(*r, out)),
-            Global::Seq(gs, _) | Global::Choice(gs, _) | Global::Par(gs, _) => gs.iter().for_each(|g| g.participants(out)),
+            Global::Seq(gs, _) | Global::Choice(gs, _) | Global::Par(gs, _) => {
+                gs.iter().for_each(|g| g.participants(out))
+            }
             Global::Rec { body, .. } => body.participants(out),
             Global::Var(_) | Global::End(_) => {}
         }

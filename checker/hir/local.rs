@@ -11,11 +11,31 @@ pub type LocalRc = Rc<Local>;
 #[derive(Clone, Debug, PartialEq)]
 pub enum Local {
     /// `dt<a>.T`; more than one primitive is the merge `a ⊓ a'` of Def 4.7.
-    Motion { prims: Vec<PrimApp>, cont: LocalRc, loc: Loc },
-    Send { branches: Vec<SendBranch>, loc: Loc },
-    Recv { branches: Vec<RecvBranch>, default: Option<(Vec<PrimApp>, LocalRc)>, loc: Loc },
-    Rec { var: String, params: Vec<RecParam>, body: LocalRc, loc: Loc },
-    Var { var: String, args: Vec<Expr>, loc: Loc },
+    Motion {
+        prims: Vec<PrimApp>,
+        cont: LocalRc,
+        loc: Loc,
+    },
+    Send {
+        branches: Vec<SendBranch>,
+        loc: Loc,
+    },
+    Recv {
+        branches: Vec<RecvBranch>,
+        default: Option<(Vec<PrimApp>, LocalRc)>,
+        loc: Loc,
+    },
+    Rec {
+        var: String,
+        params: Vec<RecParam>,
+        body: LocalRc,
+        loc: Loc,
+    },
+    Var {
+        var: String,
+        args: Vec<Expr>,
+        loc: Loc,
+    },
     End(Loc),
 }
 

@@ -6,15 +6,47 @@ use super::{Expr, Loc, PrimApp, RecParam, RoleId, ValueId};
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Process {
-    Send { to: RoleId, label: String, args: Vec<Expr>, cont: Box<Process>, loc: Loc },
+    Send {
+        to: RoleId,
+        label: String,
+        args: Vec<Expr>,
+        cont: Box<Process>,
+        loc: Loc,
+    },
     /// External choice on messages from `from`, with an optional default motion.
-    Recv { from: RoleId, branches: Vec<RecvArm>, default: Option<(PrimApp, Box<Process>)>, loc: Loc },
+    Recv {
+        from: RoleId,
+        branches: Vec<RecvArm>,
+        default: Option<(PrimApp, Box<Process>)>,
+        loc: Loc,
+    },
     /// Internal choice among outputs (`Cart!green.P + Cart!red.Q`).
-    Choose { branches: Vec<Process>, loc: Loc },
-    If { cond: Expr, then: Box<Process>, els: Box<Process>, loc: Loc },
-    Motion { prim: PrimApp, cont: Box<Process>, loc: Loc },
-    Rec { var: String, params: Vec<RecParam>, body: Box<Process>, loc: Loc },
-    Var { var: String, args: Vec<Expr>, loc: Loc },
+    Choose {
+        branches: Vec<Process>,
+        loc: Loc,
+    },
+    If {
+        cond: Expr,
+        then: Box<Process>,
+        els: Box<Process>,
+        loc: Loc,
+    },
+    Motion {
+        prim: PrimApp,
+        cont: Box<Process>,
+        loc: Loc,
+    },
+    Rec {
+        var: String,
+        params: Vec<RecParam>,
+        body: Box<Process>,
+        loc: Loc,
+    },
+    Var {
+        var: String,
+        args: Vec<Expr>,
+        loc: Loc,
+    },
     End(Loc),
 }
 

@@ -201,7 +201,10 @@ pub enum Global {
     /// `p -> q : [guard] label(fields)`
     Msg(Msg),
     /// `dt<p: a(args), q: b>`
-    Motion { parts: Vec<(Ident, PrimCall)>, span: Span },
+    Motion {
+        parts: Vec<(Ident, PrimCall)>,
+        span: Span,
+    },
     /// `g1 . g2 . ...`
     Seq(Vec<Global>, Span),
     /// `g1 + g2 + ...`
@@ -209,9 +212,18 @@ pub enum Global {
     /// `g1 * g2 * ...`
     Par(Vec<Global>, Span),
     /// `mu t. G` or `mu t(params). G`
-    Rec { var: Ident, params: Vec<RecParam>, body: Box<Global>, span: Span },
+    Rec {
+        var: Ident,
+        params: Vec<RecParam>,
+        body: Box<Global>,
+        span: Span,
+    },
     /// `t` or `t(args)`
-    Var { var: Ident, args: Vec<Expr>, span: Span },
+    Var {
+        var: Ident,
+        args: Vec<Expr>,
+        span: Span,
+    },
     End(Span),
 }
 
@@ -244,13 +256,33 @@ impl Global {
 #[derive(Clone, Debug)]
 pub enum Local {
     /// `dt<a>.T`, or `dt<a /\ b>.T` for a merged motion (Def 4.7).
-    Motion { prims: Vec<PrimCall>, cont: Box<Local>, span: Span },
+    Motion {
+        prims: Vec<PrimCall>,
+        cont: Box<Local>,
+        span: Span,
+    },
     /// `+{ [g] q!l(fields).T, ... }` or a single `[g] q!l(fields).T`.
-    Send { branches: Vec<LocalSend>, span: Span },
+    Send {
+        branches: Vec<LocalSend>,
+        span: Span,
+    },
     /// `&{ p?l(fields).T, ... }` optionally `& dt<a>.T`.
-    Recv { branches: Vec<LocalRecv>, default: Option<(Vec<PrimCall>, Box<Local>)>, span: Span },
-    Rec { var: Ident, params: Vec<RecParam>, body: Box<Local>, span: Span },
-    Var { var: Ident, args: Vec<Expr>, span: Span },
+    Recv {
+        branches: Vec<LocalRecv>,
+        default: Option<(Vec<PrimCall>, Box<Local>)>,
+        span: Span,
+    },
+    Rec {
+        var: Ident,
+        params: Vec<RecParam>,
+        body: Box<Local>,
+        span: Span,
+    },
+    Var {
+        var: Ident,
+        args: Vec<Expr>,
+        span: Span,
+    },
     End(Span),
 }
 
@@ -277,19 +309,49 @@ pub struct LocalRecv {
 #[derive(Clone, Debug)]
 pub enum Process {
     /// `q!l(e, ...).P`
-    Send { to: Ident, label: Ident, args: Vec<Expr>, cont: Box<Process>, span: Span },
+    Send {
+        to: Ident,
+        label: Ident,
+        args: Vec<Expr>,
+        cont: Box<Process>,
+        span: Span,
+    },
     /// `p?l(x, ...).P`
-    Recv { from: Ident, label: Ident, binders: Vec<Ident>, cont: Box<Process>, span: Span },
+    Recv {
+        from: Ident,
+        label: Ident,
+        binders: Vec<Ident>,
+        cont: Box<Process>,
+        span: Span,
+    },
     /// `dt<a(e)>.P`
-    Motion { prim: PrimCall, cont: Box<Process>, span: Span },
+    Motion {
+        prim: PrimCall,
+        cont: Box<Process>,
+        span: Span,
+    },
     /// `P + Q + ...`: inputs (with at most one default motion) or outputs (Example 3.1).
     Sum(Vec<Process>, Span),
     /// `if e then P else Q`
-    If { cond: Expr, then: Box<Process>, els: Box<Process>, span: Span },
+    If {
+        cond: Expr,
+        then: Box<Process>,
+        els: Box<Process>,
+        span: Span,
+    },
     /// `mu x. P` or `mu x(params). P`
-    Rec { var: Ident, params: Vec<RecParam>, body: Box<Process>, span: Span },
+    Rec {
+        var: Ident,
+        params: Vec<RecParam>,
+        body: Box<Process>,
+        span: Span,
+    },
     /// `x` or `x(args)`
-    Var { var: Ident, args: Vec<Expr>, span: Span },
+    Var {
+        var: Ident,
+        args: Vec<Expr>,
+        span: Span,
+    },
     End(Span),
 }
 

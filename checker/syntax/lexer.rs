@@ -24,8 +24,8 @@ pub struct Token {
 
 /// Multi-character operators first, so the longest match wins.
 const PUNCTS: &[&str] = &[
-    "->", "=>", "==", "!=", "<=", ">=", "&&", "||", "/\\", "(", ")", "{", "}", "[", "]", "<", ">",
-    ",", ";", ":", ".", "+", "-", "*", "/", "^", "!", "?", "=", "&",
+    "->", "=>", "==", "!=", "<=", ">=", "&&", "||", "/\\", "(", ")", "{", "}", "[", "]", "<", ">", ",", ";", ":", ".",
+    "+", "-", "*", "/", "^", "!", "?", "=", "&",
 ];
 
 pub fn lex(file: FileId, text: &str) -> (Vec<Token>, Vec<Diagnostic>) {
@@ -51,8 +51,12 @@ pub fn lex(file: FileId, text: &str) -> (Vec<Token>, Vec<Diagnostic>) {
                 Some(end) => i += 2 + end + 2,
                 None => {
                     diags.push(
-                        Diagnostic::error(Code::Unterminated, Span::new(file, start, start + 2), "unterminated block comment")
-                            .with_help("close the comment with `*/`"),
+                        Diagnostic::error(
+                            Code::Unterminated,
+                            Span::new(file, start, start + 2),
+                            "unterminated block comment",
+                        )
+                        .with_help("close the comment with `*/`"),
                     );
                     i = bytes.len();
                 }

@@ -21,8 +21,23 @@ pub const STACK_GROWTH: usize = 4 * 1024 * 1024;
 
 const ITEM_KEYWORDS: &[&str] = &["import", "const", "robot", "motion", "system", "choreography", "process", "local"];
 const RESERVED: &[&str] = &[
-    "import", "const", "robot", "motion", "system", "participant", "choreography", "process", "local", "mu", "dt",
-    "end", "if", "then", "else", "true", "false",
+    "import",
+    "const",
+    "robot",
+    "motion",
+    "system",
+    "participant",
+    "choreography",
+    "process",
+    "local",
+    "mu",
+    "dt",
+    "end",
+    "if",
+    "then",
+    "else",
+    "true",
+    "false",
 ];
 
 /// Parses one file.
@@ -261,10 +276,13 @@ impl Parser {
 
     fn item(&mut self) -> PResult<Item> {
         let start = self.span();
-        let kw = match self.peek() {
-            Tok::Ident(k) if ITEM_KEYWORDS.contains(&k.as_str()) => k.clone(),
-            _ => return self.error_expected("an item (`import`, `const`, `robot`, `motion`, `system`, `choreography`, `process` or `local`)"),
-        };
+        let kw =
+            match self.peek() {
+                Tok::Ident(k) if ITEM_KEYWORDS.contains(&k.as_str()) => k.clone(),
+                _ => return self.error_expected(
+                    "an item (`import`, `const`, `robot`, `motion`, `system`, `choreography`, `process` or `local`)",
+                ),
+            };
         self.bump();
         let item = match kw.as_str() {
             "import" => {
@@ -411,7 +429,9 @@ impl Parser {
         }
         let mut fields = Vec::new();
         self.block(|p| {
-            let key = p.ident("a contract field (`pre`, `assume`, `guarantee`, `post`, `footprint`, `duration`, `interruptible`)")?;
+            let key = p.ident(
+                "a contract field (`pre`, `assume`, `guarantee`, `post`, `footprint`, `duration`, `interruptible`)",
+            )?;
             let value = match key.name.as_str() {
                 "footprint" => {
                     p.expect_punct("(")?;
@@ -769,7 +789,8 @@ impl Parser {
         if self.eat_kw("end") {
             return Ok(Local::End(start));
         }
-        let var = self.ident("a local type (`dt<a>.T`, `q!l.T`, `p?l.T`, `+{...}`, `&{...}`, `mu t.T`, `t` or `end`)")?;
+        let var =
+            self.ident("a local type (`dt<a>.T`, `q!l.T`, `p?l.T`, `+{...}`, `&{...}`, `mu t.T`, `t` or `end`)")?;
         let args = self.opt_args()?;
         Ok(Local::Var { var, args, span: start.to(self.prev_span()) })
     }
@@ -976,7 +997,10 @@ impl Parser {
                 if let ExprKind::Binary(prev, _, mid) = &lhs.kind {
                     if prev.is_comparison() {
                         let mid = (**mid).clone();
-                        let right = Expr { span: mid.span.to(rhs.span), kind: ExprKind::Binary(op, Box::new(mid), Box::new(rhs)) };
+                        let right = Expr {
+                            span: mid.span.to(rhs.span),
+                            kind: ExprKind::Binary(op, Box::new(mid), Box::new(rhs)),
+                        };
                         Expr { kind: ExprKind::Binary(BinOp::And, Box::new(lhs), Box::new(right)), span }
                     } else {
                         Expr { kind: ExprKind::Binary(op, Box::new(lhs), Box::new(rhs)), span }
@@ -1003,7 +1027,8 @@ impl Parser {
         if let Some(op) = op {
             self.bump();
             // `-x^2` is `-(x^2)`; `!a && b` is `(!a) && b`.
-            let inner = self.nested(|p| if op == UnOp::Neg { p.expr_bp(BinOp::Pow.precedence()) } else { p.expr_unary() })?;
+            let inner =
+                self.nested(|p| if op == UnOp::Neg { p.expr_bp(BinOp::Pow.precedence()) } else { p.expr_unary() })?;
             return Ok(Expr { span: start.to(inner.span), kind: ExprKind::Unary(op, Box::new(inner)) });
         }
         let mut e = self.expr_atom()?;

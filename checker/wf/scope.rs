@@ -71,7 +71,11 @@ impl<'a> Scope<'a> {
             Diagnostic::error(
                 Code::OutOfScope,
                 loc.0,
-                format!("{what} involves {}, outside its scope {{{}}}", names(self.prog, &outside), names(self.prog, scope)),
+                format!(
+                    "{what} involves {}, outside its scope {{{}}}",
+                    names(self.prog, &outside),
+                    names(self.prog, scope)
+                ),
             )
             .with_note("Sec 4.1, well-scopedness: a `*` splits the participants in scope between its sides")
             .with_help("move this action out of the `*`, or move the participant into this side"),
@@ -150,7 +154,8 @@ impl<'a> Scope<'a> {
                 .with_help("add a primitive for them (an idle one if they stay put), or separate them with `*`"),
             );
         }
-        let non: Vec<&(RoleId, PrimApp)> = m.parts.iter().filter(|(_, a)| !self.prog.prim(a.prim).interruptible).collect();
+        let non: Vec<&(RoleId, PrimApp)> =
+            m.parts.iter().filter(|(_, a)| !self.prog.prim(a.prim).interruptible).collect();
         if non.len() > 1 {
             let mut d = Diagnostic::error(
                 Code::TwoNonInterruptible,
@@ -158,7 +163,10 @@ impl<'a> Scope<'a> {
                 format!("{} primitives of this joint motion are non-interruptible", non.len()),
             );
             for (r, a) in &non {
-                d = d.with_label(a.loc.0, format!("`{}` cannot be interrupted ({})", self.prog.prim(a.prim).name, self.prog.role_name(*r)));
+                d = d.with_label(
+                    a.loc.0,
+                    format!("`{}` cannot be interrupted ({})", self.prog.prim(a.prim).name, self.prog.role_name(*r)),
+                );
             }
             self.diags.push(
                 d.with_note("[AGCOMP]: ‡1 = ↯ ∨ ‡2 = ↯ — at most one primitive of a joint motion is non-interruptible")
@@ -252,7 +260,9 @@ impl<'a> Scope<'a> {
                         loc.0,
                         format!("{} in scope but on no side of this `*`", names(self.prog, &dropped)),
                     )
-                    .with_note("Def 4.4 (3), total motion: while the sides run, every participant in scope must be moving")
+                    .with_note(
+                        "Def 4.4 (3), total motion: while the sides run, every participant in scope must be moving",
+                    )
                     .with_help("add a side `dt<P: idle>` for them"),
                 );
             }
@@ -324,7 +334,9 @@ impl<'a> Scope<'a> {
 fn collect_motions<'g>(g: &'g Global, out: &mut Vec<&'g Motion>) {
     match g {
         Global::Motion(m) => out.push(m),
-        Global::Seq(gs, _) | Global::Choice(gs, _) | Global::Par(gs, _) => gs.iter().for_each(|g| collect_motions(g, out)),
+        Global::Seq(gs, _) | Global::Choice(gs, _) | Global::Par(gs, _) => {
+            gs.iter().for_each(|g| collect_motions(g, out))
+        }
         Global::Rec { body, .. } => collect_motions(body, out),
         Global::Msg(_) | Global::Var(_) | Global::End(_) => {}
     }
@@ -364,13 +376,24 @@ mod tests {
 
     #[test]
     fn scoping_errors_have_their_codes() {
-        assert_eq!(run("(dt<P: go> * dt<P: wait, Q: wait> * dt<V: wait>). dt<V: wait, P: wait, Q: wait>. end").0, vec![Code::SeparationOverlap]);
+        assert_eq!(
+            run("(dt<P: go> * dt<P: wait, Q: wait> * dt<V: wait>). dt<V: wait, P: wait, Q: wait>. end").0,
+            vec![Code::SeparationOverlap]
+        );
         // V is unused: reported once (E0313), not again at every motion it misses.
         assert_eq!(run("dt<P: go, Q: wait>. end").0, vec![Code::ParticipantUnused]);
-        assert_eq!(run("(dt<P: go> * dt<Q: wait>). dt<P: wait, Q: wait, V: wait>. end").0, vec![Code::IncompleteMotion]);
+        assert_eq!(
+            run("(dt<P: go> * dt<Q: wait>). dt<P: wait, Q: wait, V: wait>. end").0,
+            vec![Code::IncompleteMotion]
+        );
         assert_eq!(run("dt<P: go, Q: go, V: wait>. end").0, vec![Code::TwoNonInterruptible]);
         assert_eq!(
-            run("mu t. (P -> Q : a. dt<P: go, Q: wait>. t) * dt<V: wait>").0.last().copied().into_iter().collect::<Vec<_>>(),
+            run("mu t. (P -> Q : a. dt<P: go, Q: wait>. t) * dt<V: wait>")
+                .0
+                .last()
+                .copied()
+                .into_iter()
+                .collect::<Vec<_>>(),
             vec![Code::OutOfScope],
             "(besides E0314) the unfolded `t` needs V inside the left side"
         );
@@ -392,7 +415,9 @@ mod tests {
     fn guarded_choices_need_total_choice() {
         let (_, o) = run("P -> Q : [x > 0] a. dt<P: wait, Q: wait, V: wait>. end + P -> Q : [x <= 0] b. dt<P: wait, Q: wait, V: wait>. end");
         assert!(o.contains(&Rule::TotalChoice));
-        let (_, o) = run("P -> Q : [x > 0] a. dt<P: wait, Q: wait, V: wait>. end + P -> Q : b. dt<P: wait, Q: wait, V: wait>. end");
+        let (_, o) = run(
+            "P -> Q : [x > 0] a. dt<P: wait, Q: wait, V: wait>. end + P -> Q : b. dt<P: wait, Q: wait, V: wait>. end",
+        );
         assert!(!o.contains(&Rule::TotalChoice), "an unguarded branch makes it trivial");
     }
 }

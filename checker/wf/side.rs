@@ -64,9 +64,15 @@ impl Side<'_> {
                 }
                 if unguarded(body).contains(var.as_str()) {
                     self.diags.push(
-                        Diagnostic::error(Code::UnguardedRecursion, loc.0, format!("recursion `mu {var}` is not guarded"))
-                            .with_note("Def 4.1: a recursion variable must be preceded by a message or a motion in its body")
-                            .with_help(format!("put a message or a motion between `mu {var}.` and `{var}`")),
+                        Diagnostic::error(
+                            Code::UnguardedRecursion,
+                            loc.0,
+                            format!("recursion `mu {var}` is not guarded"),
+                        )
+                        .with_note(
+                            "Def 4.1: a recursion variable must be preceded by a message or a motion in its body",
+                        )
+                        .with_help(format!("put a message or a motion between `mu {var}.` and `{var}`")),
                     );
                 }
                 self.walk(body, true, false);
@@ -92,9 +98,13 @@ impl Side<'_> {
     fn msg(&mut self, m: &Msg) {
         if m.from == m.to {
             self.diags.push(
-                Diagnostic::error(Code::SelfMessage, m.loc.0, format!("`{}` sends a message to itself", self.prog.role_name(m.from)))
-                    .with_note("Def 4.1 requires p != q in p -> q")
-                    .with_help("send to another participant, or drop the message"),
+                Diagnostic::error(
+                    Code::SelfMessage,
+                    m.loc.0,
+                    format!("`{}` sends a message to itself", self.prog.role_name(m.from)),
+                )
+                .with_note("Def 4.1 requires p != q in p -> q")
+                .with_help("send to another participant, or drop the message"),
             );
         }
         if let Some(g) = &m.guard {
@@ -134,7 +144,9 @@ impl Side<'_> {
         let Some(head) = firsts.iter().flatten().next().copied() else {
             self.diags.push(
                 Diagnostic::error(Code::ChoiceMismatch, loc.0, "no branch of this choice starts with a message")
-                    .with_note("Def 4.1: every branch of `+` starts with a message p -> q that tells q which branch was taken")
+                    .with_note(
+                        "Def 4.1: every branch of `+` starts with a message p -> q that tells q which branch was taken",
+                    )
                     .with_help("start each branch with a message from the deciding participant"),
             );
             return;
@@ -143,14 +155,20 @@ impl Side<'_> {
         for (b, first) in branches.iter().zip(&firsts) {
             let Some(m) = first else {
                 self.diags.push(
-                    Diagnostic::error(Code::ChoiceMismatch, b.loc().0, "this branch of a choice does not start with a message")
-                        .with_label(head.loc.0, "the first branch starts here")
-                        .with_note("Def 4.1: every branch of `+` starts with a message from the same sender to the same receiver")
-                        .with_help(format!(
-                            "start it with `{} -> {} : label`",
-                            self.prog.role_name(head.from),
-                            self.prog.role_name(head.to)
-                        )),
+                    Diagnostic::error(
+                        Code::ChoiceMismatch,
+                        b.loc().0,
+                        "this branch of a choice does not start with a message",
+                    )
+                    .with_label(head.loc.0, "the first branch starts here")
+                    .with_note(
+                        "Def 4.1: every branch of `+` starts with a message from the same sender to the same receiver",
+                    )
+                    .with_help(format!(
+                        "start it with `{} -> {} : label`",
+                        self.prog.role_name(head.from),
+                        self.prog.role_name(head.to)
+                    )),
                 );
                 continue;
             };
@@ -181,10 +199,14 @@ impl Side<'_> {
             }
             if let Some((_, first)) = labels.iter().find(|(l, _)| *l == m.label) {
                 self.diags.push(
-                    Diagnostic::error(Code::DuplicateLabel, m.label_loc.0, format!("label `{}` is used by two branches", m.label))
-                        .with_label(first.0, "first used here")
-                        .with_note("Def 4.1: labels of a choice are distinct so the receiver can tell the branches apart")
-                        .with_help("rename one of the labels"),
+                    Diagnostic::error(
+                        Code::DuplicateLabel,
+                        m.label_loc.0,
+                        format!("label `{}` is used by two branches", m.label),
+                    )
+                    .with_label(first.0, "first used here")
+                    .with_note("Def 4.1: labels of a choice are distinct so the receiver can tell the branches apart")
+                    .with_help("rename one of the labels"),
                 );
             } else {
                 labels.push((&m.label, m.label_loc));
@@ -217,9 +239,13 @@ impl Side<'_> {
         for (name, loc, why) in bad {
             let who = viewer.map(|w| format!("`{}`", prog.role_name(w))).unwrap_or_else(|| "every participant".into());
             self.diags.push(
-                Diagnostic::error(Code::GuardNotLocal, loc.0, format!("{what} reads `{name}`, which {who} does not know"))
-                    .with_note(format!("{why}; Def 4.1: fv(P) ⊆ p.X ∪ p.W for the sender p"))
-                    .with_help("send the value to this participant first, or test it where it is known"),
+                Diagnostic::error(
+                    Code::GuardNotLocal,
+                    loc.0,
+                    format!("{what} reads `{name}`, which {who} does not know"),
+                )
+                .with_note(format!("{why}; Def 4.1: fv(P) ⊆ p.X ∪ p.W for the sender p"))
+                .with_help("send the value to this participant first, or test it where it is known"),
             );
         }
     }

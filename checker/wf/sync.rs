@@ -29,7 +29,8 @@ use petgraph::visit::IntoNeighbors;
 use std::collections::{HashMap, HashSet};
 
 pub fn check(prog: &Program, g: &Global) -> Vec<Diagnostic> {
-    let mut b = Builder { events: Vec::new(), edges: Vec::new(), recs: HashMap::new(), unfolding: Vec::new(), next_node: 0 };
+    let mut b =
+        Builder { events: Vec::new(), edges: Vec::new(), recs: HashMap::new(), unfolding: Vec::new(), next_node: 0 };
     let mut path = Vec::new();
     b.walk(g, &mut path);
     let hb = HappensBefore::new(&b.events, &b.edges);
@@ -224,7 +225,9 @@ impl Checker<'_, '_> {
 
     fn describe(&self, e: usize) -> String {
         match self.ev[e].kind {
-            EventKind::Msg(m) => format!("`{} -> {} : {}`", self.prog.role_name(m.from), self.prog.role_name(m.to), m.label),
+            EventKind::Msg(m) => {
+                format!("`{} -> {} : {}`", self.prog.role_name(m.from), self.prog.role_name(m.to), m.label)
+            }
             EventKind::Motion(m) => {
                 let parts: Vec<String> = m
                     .parts
@@ -271,9 +274,17 @@ impl Checker<'_, '_> {
                 let sender = self.prog.role_name(msg.from);
                 let in_motion = motion.parts.iter().any(|(q, _)| *q == msg.from);
                 let why = if in_motion {
-                    format!("`{sender}` sends the message that ends it, but `{}` runs `{}`, which cannot be interrupted", self.prog.role_name(*r), self.prog.prim(a.prim).name)
+                    format!(
+                        "`{sender}` sends the message that ends it, but `{}` runs `{}`, which cannot be interrupted",
+                        self.prog.role_name(*r),
+                        self.prog.prim(a.prim).name
+                    )
                 } else {
-                    format!("`{sender}` is not in this motion, so all its primitives must be interruptible; `{}` runs `{}`", self.prog.role_name(*r), self.prog.prim(a.prim).name)
+                    format!(
+                        "`{sender}` is not in this motion, so all its primitives must be interruptible; `{}` runs `{}`",
+                        self.prog.role_name(*r),
+                        self.prog.prim(a.prim).name
+                    )
                 };
                 let d = Diagnostic::error(Code::SenderNotReady, self.ev[m].loc().0, format!("this message may be sent while the motion before it cannot be interrupted: {why}"))
                     .with_label(self.ev[n].loc().0, "the motion this message ends")
@@ -302,13 +313,14 @@ impl Checker<'_, '_> {
                 }
             }
             for (p, a) in &motion.parts {
-                let told = self.hb.after[n].ones().any(|m| {
-                    !self.ev[m].is_motion() && self.ev[m].participants().contains(p) && self.hb.before(m, n2)
-                });
+                let told = self.hb.after[n]
+                    .ones()
+                    .any(|m| !self.ev[m].is_motion() && self.ev[m].participants().contains(p) && self.hb.before(m, n2));
                 if told {
                     continue;
                 }
-                let next_prim = next.parts.iter().find(|(q, _)| q == p).map(|(_, b)| self.prog.prim(b.prim).name.clone());
+                let next_prim =
+                    next.parts.iter().find(|(q, _)| q == p).map(|(_, b)| self.prog.prim(b.prim).name.clone());
                 let what = match next_prim {
                     Some(b) => format!("from `{}` to `{b}`", self.prog.prim(a.prim).name),
                     None => format!("out of `{}`", self.prog.prim(a.prim).name),
@@ -350,7 +362,10 @@ mod tests {
 
     #[test]
     fn example_4_2_first_type_has_two_minimal_messages() {
-        assert_eq!(codes("mu t. dt<P: wait, Q: wait, V: wait>. P -> Q : l. V -> Q : m. t"), vec![Code::NotUniqueMinimal]);
+        assert_eq!(
+            codes("mu t. dt<P: wait, Q: wait, V: wait>. P -> Q : l. V -> Q : m. t"),
+            vec![Code::NotUniqueMinimal]
+        );
     }
 
     #[test]
@@ -381,12 +396,18 @@ mod tests {
 
     #[test]
     fn exclusive_branches_are_not_two_minimal_messages() {
-        assert_eq!(codes("mu t. dt<P: go, Q: wait, V: wait>. (P -> Q : a. P -> V : c. t + P -> Q : b. P -> V : d. t)"), vec![]);
+        assert_eq!(
+            codes("mu t. dt<P: go, Q: wait, V: wait>. (P -> Q : a. P -> V : c. t + P -> Q : b. P -> V : d. t)"),
+            vec![]
+        );
     }
 
     #[test]
     fn a_lone_non_interruptible_motion_may_chain() {
-        assert_eq!(codes("mu t. ((dt<P: go>. dt<P: go>) * (dt<Q: go>. dt<Q: go>) * (dt<V: go>. dt<V: go>)). t"), vec![]);
+        assert_eq!(
+            codes("mu t. ((dt<P: go>. dt<P: go>) * (dt<Q: go>. dt<Q: go>) * (dt<V: go>. dt<V: go>)). t"),
+            vec![]
+        );
         // Not when the first motion is interruptible: only a message could end it.
         assert_eq!(
             codes("mu t. ((dt<P: wait>. dt<P: go>) * (dt<Q: go>. dt<Q: go>) * (dt<V: go>. dt<V: go>)). t"),
