@@ -65,15 +65,8 @@ fn print_report(db: &SourceDb, title: &str, report: &Report) {
     if report.diagnostics.is_empty() {
         println!("   no diagnostics");
     }
-    // Printed by hand: `mochi::render` is not on this branch yet. Once it is,
-    // `mochi::render::text(db, d, false)` gives the full rustc-style rendering.
     for d in &report.diagnostics {
-        let (file, line, col) = db.location(d.span);
-        let severity = format!("{:?}", d.severity).to_lowercase();
-        println!("   {severity}[{}]: {} at {file}:{line}:{col}", d.code, d.message);
-        if let Some(help) = &d.help {
-            println!("      help: {help}");
-        }
+        print!("{}", mochi::render::text(db, d, false));
     }
 }
 
