@@ -189,3 +189,51 @@ fn project_explains_why_there_is_no_local_type() {
     assert!(stdout(&o).is_empty(), "{}", stdout(&o));
     assert!(stderr(&o).contains("error[E0103]"), "{}", stderr(&o));
 }
+
+// ---- the bundled examples, end to end -----------------------------------------------
+
+#[test]
+fn the_quick_start_example_is_undecided_until_predicates_are_decided() {
+    let o = mochi(&["check", "choreographies/cart-and-arms.chor", "--format", "json"]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
+    assert_eq!(v["verdict"], "unknown");
+    let checks = v["checks"].as_array().expect("checks");
+    let status = |name: &str| checks.iter().find(|c| c["name"] == name).map(|c| c["status"].clone());
+    for structural in ["parse", "names", "well-scoped", "synchronisable", "projection", "typing"] {
+        assert_eq!(status(structural), Some("pass".into()), "{structural}");
+    }
+    assert_eq!(status("compatibility"), Some("unknown".into()));
+    assert!(v["diagnostics"].as_array().expect("diagnostics").iter().all(|d| d["severity"] != "error"));
+}
+
+#[test]
+fn example_4_2_is_judged_as_in_the_paper() {
+    for (file, code) in [("1", Some("E0310")), ("2", Some("E0312")), ("3", Some("E0312")), ("4", None)] {
+        let path = format!("choreographies/example-4-2-{file}.chor");
+        let o = mochi(&["check", &path, "--format", "json"]);
+        let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
+        match code {
+            Some(code) => {
+                assert_eq!(o.status.code(), Some(1), "{path}");
+                assert_eq!(v["verdict"], "rejected", "{path}");
+                assert!(v["diagnostics"].as_array().expect("diags").iter().all(|d| d["code"] == code), "{path}: {v}");
+            }
+            // Well-formed; only its predicates remain undecided.
+            None => assert_eq!(o.status.code(), Some(3), "{path}: {v}"),
+        }
+    }
+}
+
+#[test]
+fn project_prints_example_4_9s_local_type_of_the_cart() {
+    let o = mochi(&["project", "choreographies/cart-and-arms.chor", "--role", "Cart"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(out.starts_with("mu t. +{"), "{out}");
+    assert!(
+        out.contains("GRobot!arrive(") && out.contains("RRobot!free.dt<m_move(g_x)>.GRobot!ready.dt<m_idle>.GRobot?ok")
+    );
+    let o = mochi(&["project", "choreographies/cart-and-arms.chor", "--role", "Nobody"]);
+    assert_eq!(o.status.code(), Some(1));
+}

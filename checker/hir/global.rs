@@ -69,8 +69,9 @@ pub struct Msg {
     pub label_loc: Loc,
 }
 
-/// A refined payload field `{v : S | P}`.
-#[derive(Clone, Debug, PartialEq)]
+/// A refined payload field `{v : S | P}`. Equality ignores the value's id, as
+/// [`Var::Value`](super::Var) does: binders are compared by name.
+#[derive(Clone, Debug)]
 pub struct Field {
     pub value: ValueId,
     pub name: String,
@@ -94,7 +95,8 @@ pub struct PrimApp {
 }
 
 /// A parameter of a parameterised recursion (DATUM's `mu T(curr : Z {P}) <curr = 0>`).
-#[derive(Clone, Debug, PartialEq)]
+/// Equality ignores the value's id.
+#[derive(Clone, Debug)]
 pub struct RecParam {
     pub value: ValueId,
     pub name: String,
@@ -109,4 +111,16 @@ pub struct RecVar {
     pub var: String,
     pub args: Vec<Expr>,
     pub loc: Loc,
+}
+
+impl PartialEq for Field {
+    fn eq(&self, o: &Field) -> bool {
+        self.name == o.name && self.sort == o.sort && self.refinement == o.refinement
+    }
+}
+
+impl PartialEq for RecParam {
+    fn eq(&self, o: &RecParam) -> bool {
+        self.name == o.name && self.sort == o.sort && self.refinement == o.refinement && self.init == o.init
+    }
 }
