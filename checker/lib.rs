@@ -7,6 +7,15 @@
 //! [`driver`] (the verdict). Predicates met on the way become [`obligation`]s for the
 //! SMT stage of a later part; until it lands they are reported as undecided.
 //! [`render`] turns diagnostics and reports into text or JSON.
+//!
+//! ```
+//! use mochi::driver::{check_source, Config, Verdict};
+//! let mut db = mochi::source::SourceDb::new();
+//! // A file with no system and no choreography has nothing to verify: E0210.
+//! let report = check_source(&mut db, "empty.chor", "const k = 1;", &Config::default());
+//! assert_eq!(report.verdict, Verdict::Rejected);
+//! assert_eq!(report.diagnostics[0].code.as_str(), "E0210");
+//! ```
 
 pub mod diag;
 pub mod driver;
