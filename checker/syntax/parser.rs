@@ -629,42 +629,34 @@ impl Parser {
     }
 
     fn global_choice(&mut self) -> PResult<Global> {
-        let first = self.global_par()?;
-        if !self.is_punct("+") {
-            return Ok(first);
-        }
-        let mut parts = vec![first];
-        while self.eat_punct("+") {
-            parts.push(self.global_par()?);
-        }
-        let span = parts[0].span().to(self.prev_span());
-        Ok(Global::Choice(parts, span))
+        self.global_nary("+", Parser::global_par, Global::Choice)
     }
 
     fn global_par(&mut self) -> PResult<Global> {
-        let first = self.global_seq()?;
-        if !self.is_punct("*") {
-            return Ok(first);
-        }
-        let mut parts = vec![first];
-        while self.eat_punct("*") {
-            parts.push(self.global_seq()?);
-        }
-        let span = parts[0].span().to(self.prev_span());
-        Ok(Global::Par(parts, span))
+        self.global_nary("*", Parser::global_seq, Global::Par)
     }
 
     fn global_seq(&mut self) -> PResult<Global> {
-        let first = self.global_atom()?;
-        if !self.is_punct(".") {
+        self.global_nary(".", Parser::global_atom, Global::Seq)
+    }
+
+    /// `operand (op operand)*`, flattened into one n-ary node when `op` occurs.
+    fn global_nary(
+        &mut self,
+        op: &str,
+        operand: fn(&mut Parser) -> PResult<Global>,
+        node: fn(Vec<Global>, Span) -> Global,
+    ) -> PResult<Global> {
+        let first = operand(self)?;
+        if !self.is_punct(op) {
             return Ok(first);
         }
         let mut parts = vec![first];
-        while self.eat_punct(".") {
-            parts.push(self.global_atom()?);
+        while self.eat_punct(op) {
+            parts.push(operand(self)?);
         }
         let span = parts[0].span().to(self.prev_span());
-        Ok(Global::Seq(parts, span))
+        Ok(node(parts, span))
     }
 
     fn global_atom(&mut self) -> PResult<Global> {
