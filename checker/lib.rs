@@ -25,6 +25,7 @@ pub mod lower;
 pub mod obligation;
 pub mod project;
 pub mod render;
+pub mod smt;
 pub mod source;
 pub mod subtype;
 pub mod syntax;
