@@ -525,8 +525,10 @@ impl<'a> Checker<'a> {
             Ok(None) => {}
         }
         let prim = self.prog.prim(a.prim);
+        // Received values in the arguments take the sorts of their payload fields.
+        let args: Vec<Expr> = a.args.iter().map(|e| subst_values(e, &st.vals)).collect();
         let mut pre = Vec::new();
-        conjuncts(&instantiate(&prim.pre, self.role, &a.args), &mut pre);
+        conjuncts(&instantiate(&prim.pre, self.role, &args), &mut pre);
         if !pre.is_empty() {
             self.obligations.push(Obligation {
                 rule: Rule::TMotion,
@@ -542,7 +544,7 @@ impl<'a> Checker<'a> {
         }
         let mut post = Vec::new();
         conjuncts(&prim.post, &mut post);
-        let post: Vec<Expr> = post.iter().filter_map(|c| post_fact(c, self.role, &a.args)).collect();
+        let post: Vec<Expr> = post.iter().filter_map(|c| post_fact(c, self.role, &args)).collect();
         st.sigma.retain(|e| !mentions(e, &is_physical));
         st.vals.retain(|_, e| !mentions(e, &is_physical));
         for e in self.invariant.iter().cloned().chain(post) {

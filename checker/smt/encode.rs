@@ -69,7 +69,7 @@ impl<'p> Encoder<'p> {
             ExprKind::Bool(b) => Term::B(Bool::from_bool(*b)),
             ExprKind::Int(i) => Term::I(Int::from_i64(*i)),
             ExprKind::Real(r) => Term::R(rational(r).ok_or_else(|| Unsupported(format!("the number `{r}`")))?),
-            ExprKind::Var(v) => self.var(v)?,
+            ExprKind::Var(v) => self.var(v, &e.sort)?,
             ExprKind::Unary(UnOp::Not, a) => Term::B(self.boolean(a)?.not()),
             ExprKind::Unary(UnOp::Neg, a) => match self.term(a)? {
                 Term::I(i) => Term::I(i.unary_minus()),
@@ -194,7 +194,9 @@ impl<'p> Encoder<'p> {
         })
     }
 
-    fn var(&mut self, v: &Var) -> Result<Term, Unsupported> {
+    /// `sort` is the occurrence's sort, used when the variable was declared without one
+    /// (a process binder takes its sort from the payload field it receives).
+    fn var(&mut self, v: &Var, sort: &crate::hir::Sort) -> Result<Term, Unsupported> {
         let (name, sort) = match v {
             Var::Const(c) => {
                 // Constants are closed terms: encode their definition.
@@ -209,7 +211,10 @@ impl<'p> Encoder<'p> {
                 };
                 (format!("{}.{n}", self.prog.role_name(*r)), s.clone())
             }
-            Var::Value(id, name) => (format!("{name}#{}", id.0), self.prog.value(*id).sort.clone()),
+            Var::Value(id, name) => {
+                let declared = self.prog.value(*id).sort.clone();
+                (format!("{name}#{}", id.0), if declared == crate::hir::Sort::Any { sort.clone() } else { declared })
+            }
             Var::Own(_) | Var::Old(_) | Var::Param(_) | Var::Point(_) | Var::Clock => {
                 return Err(Unsupported("a motion primitive's variables outside its contract".into()));
             }
