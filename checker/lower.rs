@@ -1191,10 +1191,7 @@ impl Lowerer {
         if self.is_local_name(name, env) || self.consts.contains_key(name) || (name == "clock" && env.part.is_some()) {
             return true;
         }
-        self.own_kind(env).is_some_and(|k| {
-            let k = self.prog.kind(k);
-            k.state.iter().chain(&k.inputs).any(|(n, _)| n == name)
-        })
+        self.own_kind(env).is_some_and(|k| self.prog.kind(k).slot(name).is_some())
     }
 
     fn own_kind(&self, env: &Env) -> Option<KindId> {
@@ -1225,18 +1222,8 @@ impl Lowerer {
             return mk(Var::Clock, Sort::Real);
         }
         if let Some(kind) = self.own_kind(env) {
-            let k = self.prog.kind(kind);
-            let slot = k
-                .state
-                .iter()
-                .position(|(n, _)| n == name)
-                .map(Slot::State)
-                .or_else(|| k.inputs.iter().position(|(n, _)| n == name).map(Slot::Input));
-            if let Some(slot) = slot {
-                let sort = match slot {
-                    Slot::State(i) => k.state[i].1.clone(),
-                    Slot::Input(i) => k.inputs[i].1.clone(),
-                };
+            if let Some((slot, sort)) = self.prog.kind(kind).slot(name) {
+                let sort = sort.clone();
                 let allowed = match slot {
                     Slot::State(_) => env.state,
                     Slot::Input(_) => env.input,
@@ -1316,20 +1303,8 @@ impl Lowerer {
             return Expr { kind: ExprKind::Bool(true), sort: Sort::Any, loc };
         }
         let k = self.prog.kind_of(r);
-        let slot = k
-            .state
-            .iter()
-            .position(|(n, _)| *n == field.name)
-            .map(Slot::State)
-            .or_else(|| k.inputs.iter().position(|(n, _)| *n == field.name).map(Slot::Input));
-        match slot {
-            Some(slot) => {
-                let sort = match slot {
-                    Slot::State(i) => k.state[i].1.clone(),
-                    Slot::Input(i) => k.inputs[i].1.clone(),
-                };
-                Expr { kind: ExprKind::Var(Var::Role(r, slot)), sort, loc }
-            }
+        match k.slot(&field.name) {
+            Some((slot, sort)) => Expr { kind: ExprKind::Var(Var::Role(r, slot)), sort: sort.clone(), loc },
             None => {
                 let vars: Vec<_> = k.state.iter().chain(&k.inputs).map(|(n, _)| format!("`{n}`")).collect();
                 let kname = k.name.clone();

@@ -83,6 +83,25 @@ pub struct RobotKind {
     pub span: Span,
 }
 
+impl RobotKind {
+    /// The state or input variable called `name`, with its sort.
+    pub fn slot(&self, name: &str) -> Option<(Slot, &Sort)> {
+        let find = |vars: &[(String, Sort)]| vars.iter().position(|(n, _)| n == name);
+        find(&self.state)
+            .map(Slot::State)
+            .or_else(|| find(&self.inputs).map(Slot::Input))
+            .map(|slot| (slot, &self.var(slot).1))
+    }
+
+    /// The name and sort of a variable.
+    pub fn var(&self, slot: Slot) -> &(String, Sort) {
+        match slot {
+            Slot::State(i) => &self.state[i],
+            Slot::Input(i) => &self.inputs[i],
+        }
+    }
+}
+
 /// The footprint of a primitive: a predicate over the point `(x, y, z)` named by the
 /// user, the state and `clock` (Def 3.4). `None` fills all space.
 #[derive(Clone, Debug)]
@@ -211,10 +230,6 @@ impl Program {
     }
     /// The name of a participant's variable, qualified: `Cart.x`.
     pub fn slot_name(&self, kind: KindId, slot: Slot) -> &str {
-        let k = self.kind(kind);
-        match slot {
-            Slot::State(i) => &k.state[i].0,
-            Slot::Input(i) => &k.inputs[i].0,
-        }
+        &self.kind(kind).var(slot).0
     }
 }

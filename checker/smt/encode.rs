@@ -6,7 +6,7 @@
 //! variables) are refused with [`Unsupported`], which the caller reports as unknown.
 
 use crate::hir::expr::{BinOp, UnOp};
-use crate::hir::{Builtin, Expr, ExprKind, Program, Slot, Var};
+use crate::hir::{Builtin, Expr, ExprKind, Program, Var};
 use std::collections::BTreeMap;
 use z3::ast::{Bool, Int, Real};
 
@@ -204,11 +204,7 @@ impl<'p> Encoder<'p> {
                 return self.term(&value);
             }
             Var::Role(r, slot) => {
-                let kind = self.prog.kind_of(*r);
-                let (n, s) = match slot {
-                    Slot::State(i) => &kind.state[*i],
-                    Slot::Input(i) => &kind.inputs[*i],
-                };
+                let (n, s) = self.prog.kind_of(*r).var(*slot);
                 (format!("{}.{n}", self.prog.role_name(*r)), s.clone())
             }
             Var::Value(id, name) => {
