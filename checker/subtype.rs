@@ -139,7 +139,8 @@ impl Sub<'_> {
                             ),
                         )
                         .with_label(tloc.0, format!("allowed here: {}", allowed.join(", ")))
-                        .with_note("[SUB-OUT]: every send of the sub type must be a send of the super type"));
+                        .with_note("[SUB-OUT]: every send of the sub type must be a send of the super type")
+                        .with_help("send one of the allowed labels to that receiver, or drop this branch"));
                     };
                     self.payload(&x.payload, x.loc, &y.payload, y.loc)?;
                     let mut inner = ren.clone();
@@ -180,7 +181,8 @@ impl Sub<'_> {
                             ),
                         )
                         .with_label(y.loc.0, "the super type receives it here")
-                        .with_note("[SUB-IN]: the sub type handles every label of the super type"));
+                        .with_note("[SUB-IN]: the sub type handles every label of the super type")
+                        .with_help("add a branch receiving this label"));
                     };
                     self.payload(&x.payload, x.loc, &y.payload, y.loc)?;
                     let mut inner = ren.clone();
@@ -212,7 +214,8 @@ impl Sub<'_> {
                         ),
                     )
                     .with_label(t.loc().0, "the default motion comes from here")
-                    .with_note("[SUB-IN1,2]: a default motion of the super type must be one of the sub type")),
+                    .with_note("[SUB-IN1,2]: a default motion of the super type must be one of the sub type")
+                    .with_help("add the default motion `& dt<...>.T` to the sub type's external choice")),
                 }
             }
             // [SUB-IN3]
@@ -236,6 +239,7 @@ impl Sub<'_> {
         )
         .with_label(t.loc().0, "the super type expects this")
         .with_note("Fig 5: a subtype performs the same kind of action (motion, send, receive or end)")
+        .with_help("make the sub type perform the action the super type expects at this point")
     }
 
     /// [SUB-MOTION]: the sub type's motion refines the super type's.
@@ -262,7 +266,8 @@ impl Sub<'_> {
                 sloc.0,
                 format!("this message carries {} value(s), the super type's carries {}", sub.len(), sup.len()),
             )
-            .with_label(tloc.0, "the super type's message"));
+            .with_label(tloc.0, "the super type's message")
+            .with_help("carry one value per field of the super type's message"));
         }
         for (x, y) in sub.iter().zip(sup) {
             if !x.sort.fits(&y.sort) && !y.sort.fits(&x.sort) {
@@ -274,7 +279,8 @@ impl Sub<'_> {
                         x.name, x.sort, y.name, y.sort
                     ),
                 )
-                .with_label(tloc.0, "the super type's message"));
+                .with_label(tloc.0, "the super type's message")
+                .with_help("give the field the super type's sort"));
             }
         }
         Ok(())
@@ -313,7 +319,8 @@ pub(crate) fn refinement(
         return Ok(None);
     }
     let Some(concrete) = sub.first() else {
-        return Err(Diagnostic::error(Code::PrimitiveMismatch, sloc.0, "this motion names no primitive"));
+        return Err(Diagnostic::error(Code::PrimitiveMismatch, sloc.0, "this motion names no primitive")
+            .with_help("write `dt<a>` with a primitive of the robot's kind"));
     };
     let c = prog.prim(concrete.prim);
     for a in sub.iter().chain(sup) {

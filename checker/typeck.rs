@@ -379,7 +379,8 @@ impl<'a> Checker<'a> {
                         a.loc.0,
                         format!("the value for field `{}` must be of sort `{}`, this is `{}`", f.name, f.sort, a.sort),
                     )
-                    .with_label(b.loc.0, "the field is declared here"),
+                    .with_label(b.loc.0, "the field is declared here")
+                    .with_help(format!("send a `{}` value", f.sort)),
                 );
             }
         }

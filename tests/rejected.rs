@@ -1,7 +1,7 @@
 //! The rejected-variants corpus: each file under `choreographies/rejected/` breaks
 //! exactly one rule. Its first line says which, as `// expect: E0301 at 5:3`: the check
-//! must reject the file, every error must carry that code, and one of them must start
-//! at that line and column. The file name starts with the code, and every error code
+//! must reject the file, every error must carry that code and a hint, and one of them
+//! must start at that line and column. The file name starts with the code, and every error code
 //! mochi has is exercised by at least one file.
 
 use mochi::diag::{Code, Severity};
@@ -53,6 +53,11 @@ fn each_rejected_file_fails_with_exactly_its_code_at_its_position() {
                 format!("{} at {f}:{l}:{c}: {}", d.code, d.message)
             })
             .collect();
+        for d in &errors {
+            if d.help.is_none() {
+                failures.push(format!("{name}: {} has no hint: {}", d.code, d.message));
+            }
+        }
         if report.verdict != Verdict::Rejected {
             failures.push(format!("{name}: verdict {:?}, expected Rejected", report.verdict));
             continue;

@@ -507,7 +507,8 @@ impl Parser {
                                 Code::UnexpectedToken,
                                 key.span,
                                 format!("expected `init` or `at`, found `{other}`"),
-                            );
+                            )
+                            .with_help("a participant block holds `init: PREDICATE;` and `at: pose(x, y, z);`");
                             p.diags.push(d);
                             return Err(());
                         }
