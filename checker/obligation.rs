@@ -68,11 +68,28 @@ pub enum Goal {
     Compatible { parts: Vec<(RoleId, PrimApp)> },
     /// `concrete <= meet(abstract)`, in the corrected direction of the seeds README.
     Refines { role: RoleId, concrete: PrimApp, abstract_: Vec<PrimApp> },
-    /// The groups of `g1 * ... * gn` (their participants) have pairwise disjoint
-    /// footprints, each containing the footprints of its own motions.
-    Separated { sides: Vec<Vec<RoleId>> },
+    /// The groups of `g1 * ... * gn` have pairwise disjoint footprints, each containing
+    /// the footprints of its own motions. `sides[i]` lists every primitive side `i` may
+    /// run (each part of a joint motion separately), with the context it starts in.
+    Separated { sides: Vec<Side> },
     /// The participants' initial geometries are pairwise disjoint.
     InitiallyDisjoint,
+}
+
+/// One side of a `*`: its participants and the primitives they may run on it.
+#[derive(Clone, Debug, Default)]
+pub struct Side {
+    pub roles: Vec<RoleId>,
+    pub runs: Vec<Run>,
+}
+
+/// A primitive run by one participant, with the logical context (conjuncts over the
+/// participants' variables, `Var::Role`/`Var::Snap`, and values) when it starts.
+#[derive(Clone, Debug)]
+pub struct Run {
+    pub role: RoleId,
+    pub app: PrimApp,
+    pub hyps: Vec<Expr>,
 }
 
 #[derive(Clone, Debug)]

@@ -85,6 +85,10 @@ pub enum Var {
     Role(RoleId, Slot),
     /// A value variable; compared by name so alpha-equal types are equal.
     Value(ValueId, String),
+    /// A participant's state variable as it was when its latest motion started: what
+    /// `old(x)` of that motion refers to, kept in the logical context Σ after the
+    /// motion so that a post such as `x == old(x)` still links to earlier facts.
+    Snap(RoleId, Slot),
 }
 
 impl PartialEq for Var {
@@ -97,7 +101,7 @@ impl PartialEq for Var {
             (Var::Param(a), Var::Param(b)) => a == b,
             (Var::Point(a), Var::Point(b)) => a == b,
             (Var::Clock, Var::Clock) => true,
-            (Var::Role(a, s), Var::Role(b, t)) => a == b && s == t,
+            (Var::Role(a, s), Var::Role(b, t)) | (Var::Snap(a, s), Var::Snap(b, t)) => a == b && s == t,
             _ => false,
         }
     }
@@ -112,7 +116,7 @@ impl std::hash::Hash for Var {
             Var::Own(s) => s.hash(h),
             Var::Old(i) | Var::Param(i) | Var::Point(i) => i.hash(h),
             Var::Clock => {}
-            Var::Role(r, s) => {
+            Var::Role(r, s) | Var::Snap(r, s) => {
                 r.hash(h);
                 s.hash(h);
             }

@@ -288,6 +288,10 @@ impl Printer<'_> {
                 format!("{}.{}", self.prog.role_name(*r), self.prog.slot_name(kind, *slot))
             }
             Var::Value(_, name) => name.clone(),
+            Var::Snap(r, slot) => {
+                let kind = self.prog.role(*r).kind;
+                format!("old({}.{})", self.prog.role_name(*r), self.prog.slot_name(kind, *slot))
+            }
         }
     }
 

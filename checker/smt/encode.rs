@@ -207,6 +207,10 @@ impl<'p> Encoder<'p> {
                 let (n, s) = self.prog.kind_of(*r).var(*slot);
                 (format!("{}.{n}", self.prog.role_name(*r)), s.clone())
             }
+            Var::Snap(r, slot) => {
+                let (n, s) = self.prog.kind_of(*r).var(*slot);
+                (format!("old({}.{n})", self.prog.role_name(*r)), s.clone())
+            }
             Var::Value(id, name) => {
                 let declared = self.prog.value(*id).sort.clone();
                 (format!("{name}#{}", id.0), if declared == crate::hir::Sort::Any { sort.clone() } else { declared })

@@ -273,7 +273,12 @@ impl<'a> Scope<'a> {
                     span: loc.0,
                     what: format!("footprints of the {} sides of `*`", sides.len()),
                     hyps: Vec::new(),
-                    goal: Goal::Separated { sides: pts.clone() },
+                    goal: Goal::Separated {
+                        sides: pts
+                            .iter()
+                            .map(|roles| crate::obligation::Side { roles: roles.clone(), runs: Vec::new() })
+                            .collect(),
+                    },
                 });
             }
         }
