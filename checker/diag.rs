@@ -196,6 +196,66 @@ codes! {
     PayloadArity = "E0707", "wrong number of values in a message",
         "A send or receive in a process carries a different number of values than the message of \
          the local type declares.";
+    ChoiceNotTotal = "E0316", "the guards of a choice do not cover every state",
+        "Def 4.4 (1), total choice: in every state that can reach a choice, at least one branch's \
+         guard must hold, or the choreography could get stuck there. Z3 found a state (shown as the \
+         counterexample: the values of the variables the guards read, under what is known at that \
+         point) where every guard is false. Add a branch for that case, or weaken a guard.";
+    PreconditionAtMotion = "E0402", "a primitive's precondition may not hold when the joint motion starts",
+        "[AGCOMP] composes primitives from their preconditions (Sec 3.4, \"compatible from Pre\"): \
+         at the `dt<...>` each participant's precondition must follow from what is known there \
+         (initial states, the postconditions of earlier motions, guards and refinements of \
+         messages received). The counterexample is a state allowed by that context in which the \
+         precondition is false. Establish it with an earlier motion or message, or weaken it.";
+    AssumptionNotDischarged = "E0403", "an assumption is not discharged by the other guarantees",
+        "[AGCOMP] (Sec 3.4): the assumption A of each primitive of a joint motion must follow from \
+         the guarantees G of the others, at every time of the motion, with no leftover assumption. \
+         The counterexample gives a time and states in which every other guarantee holds and the \
+         assumption is false. Strengthen a partner's guarantee or weaken the assumption.";
+    FootprintsOverlap = "E0404", "the footprints of a joint motion may overlap",
+        "[AGCOMP] (Sec 3.4): the footprints of the primitives of a joint motion must be disjoint at \
+         every time of the motion, given their guarantees. The counterexample is a point of the world \
+         (x, y, z, in metres) and a time (seconds since the motion started) at which both footprints \
+         contain the point, with the states that put them there. Move a participant (its pose or the \
+         target of its motion), shrink a footprint, or strengthen a guarantee (for example, make an \
+         arm stay up while a cart approaches, as Sec 3.5 does).";
+    DurationsIncompatible = "E0405", "the durations of a joint motion do not fit together",
+        "[AGCOMP] (Sec 3.4): a non-interruptible primitive's duration D must lie within the \
+         duration of every interruptible partner (D1 ⊆ D2), so that the partners are ready whenever \
+         it ends; with only interruptible primitives, their durations must share a time. Adjust \
+         the `duration:` bounds, or make the long primitive interruptible.";
+    SidesOverlap = "E0406", "the two sides of `*` may occupy the same space",
+        "Full separation (Sec 4.1): the sides of `g1 * g2` run without synchronising, so all the \
+         footprints one side may use must be disjoint from all those of the other side, at any \
+         times. mochi first tries boxes around each side's footprints (the inferred partition); \
+         when they meet it asks Z3 about each pair of motions. The counterexample shows a point and \
+         the two motions' times. Keep the sides apart, or put the motions that meet in one joint \
+         motion so that [AGCOMP] checks them together.";
+    RefinementFails = "E0407", "a primitive does not refine the one the type expects",
+        "Def 3.4 in the corrected direction (seeds README, error 1): a concrete primitive c \
+         implements an abstract s when Pre_s => Pre_c, A_s => A_c, G_c => G_s, Post_c => Post_s, \
+         FP_c ⊆ FP_s at every state and time, both are (non-)interruptible alike, and for \
+         durations D_s ⊆ D_c (interruptible) or D_c ⊆ D_s (non-interruptible). The message names \
+         the item that fails and the counterexample the states where it does.";
+    MotionPrecondition = "E0708", "a motion's precondition may not hold in the process",
+        "[T-MOTION] (Table 1): when a process starts a motion, what it knows (Σ: its initial state, \
+         the postconditions of its earlier motions, the refinements of values it received, the \
+         conditions of enclosing `if`s) must imply the primitive's precondition. The counterexample \
+         is a state allowed by Σ in which the precondition is false.";
+    SendPredicate = "E0709", "a send may violate its guard or refinement",
+        "[T-OUT] (Table 1): a process may send `q!l(e)` only when what it knows implies the \
+         message's guard and the refinement of each payload field, with the values sent. The \
+         counterexample shows a state allowed by what it knows in which they are false. Send other \
+         values, or establish the condition first.";
+    InitialCollision = "E0710", "participants may collide in their initial states",
+        "[T-SESS] (Table 1) requires the initial states to be collision free. mochi places each \
+         participant by the footprint of its first motion at time 0 (a footprint contains the robot, \
+         Fig 3 [TRAJ-STEP]) in its initial state, and checks those are pairwise disjoint. The \
+         counterexample is a point in both. Move a participant's pose or change its `init`.";
+    SubtypePredicate = "E0711", "a predicate of the process is weaker than the type's",
+        "[SUB-OUT], [SUB-IN] (Fig 5) and [T-COND]: where a process or a local type is checked \
+         against another, their predicates must imply each other in the direction the rule states. \
+         The counterexample is a state where the implication fails.";
     Undecided = "U0001", "proof obligations undecided",
         "Some checks reduce to predicate validity (total choice, [AGCOMP] compatibility, full \
          separation of footprints, refinement and typing side conditions). When a query could not \
@@ -225,6 +285,28 @@ pub enum Severity {
     Note,
 }
 
+/// The value of one variable in a counterexample, printed as the user writes it.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Assignment {
+    pub name: String,
+    pub value: String,
+}
+
+/// Where two footprints meet: a point of the world, and the time(s) of the motions.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Overlap {
+    pub point: [f64; 3],
+    /// One time for a joint motion; one per motion for the sides of `*`.
+    pub times: Vec<f64>,
+}
+
+/// What Z3 found when a predicate check fails, in the user's terms.
+#[derive(Clone, Debug, PartialEq, Serialize, Default)]
+pub struct Counterexample {
+    pub values: Vec<Assignment>,
+    pub overlap: Option<Overlap>,
+}
+
 /// A secondary location with a short message ("the other branch is here").
 #[derive(Clone, Debug, PartialEq)]
 pub struct Label {
@@ -242,6 +324,8 @@ pub struct Diagnostic {
     pub labels: Vec<Label>,
     pub notes: Vec<String>,
     pub help: Option<String>,
+    /// For a failed predicate check: the model Z3 found.
+    pub counterexample: Option<Counterexample>,
 }
 
 impl Diagnostic {
@@ -254,6 +338,7 @@ impl Diagnostic {
             labels: Vec::new(),
             notes: Vec::new(),
             help: None,
+            counterexample: None,
         }
     }
 
@@ -273,6 +358,11 @@ impl Diagnostic {
 
     pub fn with_help(mut self, help: impl Into<String>) -> Diagnostic {
         self.help = Some(help.into());
+        self
+    }
+
+    pub fn with_counterexample(mut self, c: Counterexample) -> Diagnostic {
+        self.counterexample = Some(c);
         self
     }
 

@@ -5,9 +5,10 @@
 //! **Architecture invariant:** the verdict is `Verified` only when every check ran and
 //! passed; any undecided obligation makes it `Unknown`, any error `Rejected`.
 
-use crate::diag::{self, Code, Diagnostic};
+use crate::diag::{self, Code, Counterexample, Diagnostic};
 use crate::hir::print;
-use crate::obligation::Obligation;
+use crate::obligation::{Obligation, Rule};
+use crate::smt::{self, goals::Part, Decision, SmtConfig};
 use crate::source::{FileId, SourceDb};
 use crate::{lower, project, syntax, typeck, wf};
 use serde::Serialize;
@@ -15,9 +16,15 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
-/// What the user asked for. Grows with later parts (SMT timeout, dump directory).
+/// What the user asked for.
 #[derive(Clone, Debug, Default)]
-pub struct Config {}
+pub struct Config {
+    /// How the SMT stage runs (timeout, threads, dump directory, progress bar).
+    pub smt: SmtConfig,
+    /// Stop after the structural checks (for `mochi project`): obligations are then
+    /// reported as undecided.
+    pub structural_only: bool,
+}
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -44,6 +51,8 @@ pub struct CheckResult {
     /// A short human summary ("3 obligations undecided").
     #[serde(skip)]
     pub detail: String,
+    /// SMT queries this check made (0 for the structural checks).
+    pub queries: usize,
 }
 
 /// Everything `mochi check` learns about one file.
@@ -54,6 +63,8 @@ pub struct Report {
     pub checks: Vec<CheckResult>,
     /// Role name → its local type printed in mochi's notation (when projection ran).
     pub projections: BTreeMap<String, String>,
+    /// How each `*` was found separated (the inferred partitions), for `--verbose`.
+    pub partitions: Vec<String>,
 }
 
 /// Checks the file at `path` (and its imports, read from disk).
@@ -70,7 +81,7 @@ pub fn check_source(db: &mut SourceDb, name: &str, text: &str, cfg: &Config) -> 
 }
 
 /// Runs the pipeline on a file already in `db`.
-pub fn check_loaded(db: &mut SourceDb, root: FileId, _cfg: &Config) -> Report {
+pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config) -> Report {
     let mut run = Run::default();
     let mut read = |p: &Path| std::fs::read_to_string(p);
     let (parsed, diags) = run.stage(|| syntax::parse_with_imports(db, root, &mut read));
@@ -110,8 +121,16 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, _cfg: &Config) -> Report {
             obligations.extend(obs);
         }
     }
-    if !run.checks.iter().any(|c| c.status == Status::Fail) {
-        run.obligations(&obligations);
+    if !run.checks.iter().any(|c| c.status == Status::Fail) && !cfg.structural_only {
+        run.obligations(db, &prog, &obligations, &cfg.smt);
+    } else if !obligations.is_empty() && !run.checks.iter().any(|c| c.status == Status::Fail) {
+        run.checks.push(CheckResult {
+            name: "obligations",
+            status: Status::Unknown,
+            millis: 0.0,
+            detail: format!("{} not decided (structural checks only)", obligations.len()),
+            queries: 0,
+        });
     }
     run.finish()
 }
@@ -122,6 +141,7 @@ struct Run {
     diagnostics: Vec<Diagnostic>,
     checks: Vec<CheckResult>,
     projections: BTreeMap<String, String>,
+    partitions: Vec<String>,
     last_millis: f64,
 }
 
@@ -143,65 +163,91 @@ impl Run {
             status: if ok { Status::Pass } else { Status::Fail },
             millis: self.last_millis,
             detail: if ok { String::new() } else { format!("{n} error(s)") },
+            queries: 0,
         });
         self.diagnostics.extend(diags);
         ok
     }
 
-    /// Settles what needs no solver and reports the rest as undecided, one check per
-    /// rule family (total choice, compatibility, separation, typing obligations).
-    fn obligations(&mut self, obligations: &[Obligation]) {
-        let t = Instant::now();
-        let mut groups: BTreeMap<&'static str, (usize, Vec<&Obligation>)> = BTreeMap::new();
-        for ob in obligations.iter() {
-            let g = groups.entry(ob.rule.check()).or_default();
-            g.0 += 1;
-            if !ob.trivially_holds() {
-                g.1.push(ob);
-            }
+    /// Decides the obligations with the SMT stage, one check per rule family (total
+    /// choice, compatibility, separation, typing obligations), each timed on its own.
+    fn obligations(&mut self, db: &SourceDb, prog: &crate::hir::Program, obligations: &[Obligation], cfg: &SmtConfig) {
+        let mut groups: BTreeMap<&'static str, Vec<&Obligation>> = BTreeMap::new();
+        for ob in obligations {
+            groups.entry(ob.rule.check()).or_default().push(ob);
         }
-        let millis = t.elapsed().as_secs_f64() * 1000.0 / groups.len().max(1) as f64;
-        for (name, (total, open)) in groups {
-            if open.is_empty() {
-                self.checks.push(CheckResult {
-                    name,
-                    status: Status::Pass,
-                    millis,
-                    detail: format!("{total} trivial"),
-                });
-                continue;
-            }
-            let n = open.len();
-            self.checks.push(CheckResult {
-                name,
-                status: Status::Unknown,
-                millis,
-                detail: format!("{n} of {total} obligation(s) undecided"),
-            });
-            let mut rules: Vec<&str> = open.iter().map(|o| o.rule.name()).collect();
-            rules.sort_unstable();
-            rules.dedup();
-            let mut d = Diagnostic::note_at(
-                Code::Undecided,
-                open[0].span,
-                format!("{n} proof obligation(s) of {} left undecided", rules.join(", ")),
-            )
-            .with_help("this version decides no predicates; the SMT stage (Z3) will, so the verdict is `unknown`, not `verified`");
-            d = d.with_note(format!("first: {}", open[0].what));
-            let mut shown = vec![open[0].span];
-            for ob in open.iter().skip(1) {
-                if shown.len() == 5 {
-                    break;
-                }
-                if !shown.contains(&ob.span) {
-                    shown.push(ob.span);
-                    d = d.with_label(ob.span, ob.what.clone());
+        for (name, obs) in groups {
+            let t = Instant::now();
+            let owned: Vec<Obligation> = obs.iter().map(|o| (*o).clone()).collect();
+            let labels: Vec<String> = owned.iter().map(|o| label(db, o)).collect();
+            let (decisions, stats) = smt::discharge(prog, &owned, &labels, cfg);
+            let millis = t.elapsed().as_secs_f64() * 1000.0;
+            let (mut failed, mut unknown) = (0, 0);
+            let mut undecided = Vec::new();
+            for (ob, d) in owned.iter().zip(decisions) {
+                match d {
+                    Decision::Holds(note) => self.partitions.extend(note.map(|n| format!("{}: {n}", where_(db, ob)))),
+                    Decision::Fails(f) => {
+                        failed += 1;
+                        self.diagnostics.push(failure(ob, f));
+                    }
+                    Decision::Unknown { part, why } => {
+                        unknown += 1;
+                        undecided.push((ob, part, why));
+                    }
                 }
             }
-            if n > 5 {
-                d = d.with_note(format!("and {} more", n - 5));
+            const SHOWN: usize = 20;
+            for (ob, part, why) in undecided.iter().take(SHOWN) {
+                let mut d = Diagnostic::note_at(Code::Undecided, ob.span, format!("could not decide {}", ob.what))
+                    .with_note(format!("{}: {why}", if part.is_empty() { ob.rule.name() } else { part }))
+                    .with_help(match why {
+                        smt::Why::Timeout(_) => "raise the per-query limit with `--timeout SECONDS`, or simplify the predicates (keep them polynomial and local); the verdict stays `unknown`, never `verified`",
+                        smt::Why::Unsupported(_) => "rewrite the predicate with the supported constructs (LANGUAGE.md, \"Expressions\"); the verdict stays `unknown`, never `verified`",
+                        smt::Why::Incomplete(_) => "simplify the predicate (nonlinear and trigonometric facts are decided only partially); the verdict stays `unknown`, never `verified`",
+                    });
+                if ob.rule == Rule::AgComp || ob.rule == Rule::FullSeparation {
+                    d = d.with_note(format!("rule: {}", ob.rule.name()));
+                }
+                self.diagnostics.push(d);
             }
-            self.diagnostics.push(d);
+            if undecided.len() > SHOWN {
+                let first = undecided[SHOWN].0;
+                self.diagnostics.push(
+                    Diagnostic::note_at(
+                        Code::Undecided,
+                        first.span,
+                        format!("and {} more undecided obligation(s)", undecided.len() - SHOWN),
+                    )
+                    .with_help("fix the ones above first; `--format json` lists every diagnostic"),
+                );
+            }
+            let status = if failed > 0 {
+                Status::Fail
+            } else if unknown > 0 {
+                Status::Unknown
+            } else {
+                Status::Pass
+            };
+            let mut detail = format!(
+                "{} obligation(s), {} quer{}",
+                owned.len(),
+                stats.queries,
+                if stats.queries == 1 { "y" } else { "ies" }
+            );
+            if stats.cached > 0 {
+                detail.push_str(&format!(" ({} cached)", stats.cached));
+            }
+            if stats.folded > 0 {
+                detail.push_str(&format!(", {} without Z3", stats.folded));
+            }
+            if failed > 0 {
+                detail.push_str(&format!(", {failed} failed"));
+            }
+            if unknown > 0 {
+                detail.push_str(&format!(", {unknown} undecided"));
+            }
+            self.checks.push(CheckResult { name, status, millis, detail, queries: stats.queries });
         }
     }
 
@@ -216,6 +262,100 @@ impl Run {
         } else {
             Verdict::Verified
         };
-        Report { verdict, diagnostics: self.diagnostics, checks: self.checks, projections: self.projections }
+        Report {
+            verdict,
+            diagnostics: self.diagnostics,
+            checks: self.checks,
+            projections: self.projections,
+            partitions: self.partitions,
+        }
+    }
+}
+
+/// `file:line:col` of an obligation.
+fn where_(db: &SourceDb, ob: &Obligation) -> String {
+    if db.files().nth(ob.span.file.0 as usize).is_none() {
+        return "?".into();
+    }
+    let (file, line, col) = db.location(ob.span);
+    format!("{file}:{line}:{col}")
+}
+
+/// A file-name-safe label for dumped queries: `agcomp-cart-and-arms-37-9`.
+fn label(db: &SourceDb, ob: &Obligation) -> String {
+    let rule = format!("{:?}", ob.rule).to_lowercase();
+    let at = where_(db, ob);
+    let file = at.rsplit('/').next().unwrap_or(&at);
+    let clean: String = file.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '-' }).collect();
+    format!("{rule}-{clean}")
+}
+
+/// The error for a failed obligation: the code of the rule and part that failed, what
+/// was required, and the counterexample in the user's terms.
+fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
+    let code = match (ob.rule, &f.which) {
+        (Rule::TotalChoice, _) => Code::ChoiceNotTotal,
+        (Rule::AgComp, Some(Part::Pre(_))) => Code::PreconditionAtMotion,
+        (Rule::AgComp, Some(Part::Assume(_))) => Code::AssumptionNotDischarged,
+        (Rule::AgComp, Some(Part::Within(..) | Part::Meet)) => Code::DurationsIncompatible,
+        (Rule::AgComp, _) => Code::FootprintsOverlap,
+        (Rule::FullSeparation, _) => Code::SidesOverlap,
+        (Rule::Refinement, _) => Code::RefinementFails,
+        (Rule::TMotion, _) => Code::MotionPrecondition,
+        (Rule::TOut, _) => Code::SendPredicate,
+        (Rule::TSess, _) => Code::InitialCollision,
+        (Rule::TCond | Rule::Subtype, _) => Code::SubtypePredicate,
+    };
+    let help = match code {
+        Code::ChoiceNotTotal => "add a branch whose guard covers the counterexample's state, or weaken a guard",
+        Code::PreconditionAtMotion => "establish the precondition before the motion (an earlier motion's postcondition, a message's refinement), or weaken it",
+        Code::AssumptionNotDischarged => "strengthen the partners' guarantees so that they imply the assumption, or weaken the assumption",
+        Code::FootprintsOverlap => "keep the participants apart: change a pose or a motion's target, shrink a footprint, or strengthen a guarantee so the footprints stay clear of each other",
+        Code::DurationsIncompatible => "make the non-interruptible primitive's duration fit within its partners' (or let it be interrupted)",
+        Code::SidesOverlap => "keep the sides of `*` in disjoint regions, or merge the motions that meet into one joint motion",
+        Code::RefinementFails => "use a primitive whose contract refines the one the choreography names (Def 3.4, corrected direction)",
+        Code::MotionPrecondition => "establish the precondition before the motion in the process, or choose another primitive",
+        Code::SendPredicate => "send values that satisfy the refinement, or establish the guard before sending",
+        Code::InitialCollision => "move the participants apart (`at: pose(...)` or `init:`)",
+        _ => "make the process's predicate imply the type's",
+    };
+    let mut d = Diagnostic::error(code, ob.span, format!("{} ({})", code.title(), ob.what))
+        .with_note(format!("required: {}", f.part))
+        .with_note(format!("rule: {}", ob.rule.name()));
+    let cx = Counterexample { values: f.values, overlap: f.overlap };
+    if let Some(text) = counterexample_text(&cx) {
+        d = d.with_note(text);
+    }
+    d.with_help(help).with_counterexample(cx)
+}
+
+/// `counterexample: at time 2.1 s, the point (1.02, 0.2, 0.05) is in both footprints;
+/// Cart.x = 0, tr = 2`.
+fn counterexample_text(cx: &Counterexample) -> Option<String> {
+    let mut parts = Vec::new();
+    if let Some(o) = &cx.overlap {
+        let p = o.point.map(short);
+        let at = match o.times.as_slice() {
+            [] => String::new(),
+            [t] => format!("at time {} s, ", short(*t)),
+            ts => format!("at times {} s, ", ts.iter().map(|t| short(*t)).collect::<Vec<_>>().join(" and ")),
+        };
+        parts.push(format!("{at}the point (x, y, z) = ({}, {}, {}) m is in both footprints", p[0], p[1], p[2]));
+    }
+    let hidden = |n: &str| n.starts_with("point.") || n.starts_with("time");
+    let values: Vec<String> =
+        cx.values.iter().filter(|a| !hidden(&a.name)).take(16).map(|a| format!("{} = {}", a.name, a.value)).collect();
+    if !values.is_empty() {
+        parts.push(values.join(", "));
+    }
+    (!parts.is_empty()).then(|| format!("counterexample: {}", parts.join("; ")))
+}
+
+fn short(v: f64) -> String {
+    let r = (v * 1e4).round() / 1e4;
+    if r == 0.0 && v != 0.0 {
+        format!("{v:.2e}")
+    } else {
+        format!("{r}")
     }
 }

@@ -17,6 +17,7 @@
 //! assert_eq!(report.diagnostics[0].code.as_str(), "E0210");
 //! ```
 
+pub mod bounds;
 pub mod diag;
 pub mod driver;
 pub mod hir;

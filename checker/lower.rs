@@ -15,7 +15,7 @@ use crate::source::Span;
 use crate::syntax::ast::{self, BinOp, UnOp};
 use crate::syntax::Parsed;
 use std::collections::HashMap;
-use std::rc::Rc;
+use std::sync::Arc;
 
 /// Lowers every file of `parsed` (imports first) into one program.
 pub fn lower(parsed: &Parsed) -> (Program, Vec<Diagnostic>) {
@@ -703,7 +703,7 @@ impl Lowerer {
     }
 
     fn local(&mut self, t: &ast::Local, me: RoleId, cx: &mut Scopes) -> LocalRc {
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || Rc::new(self.local_inner(t, me, cx)))
+        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || Arc::new(self.local_inner(t, me, cx)))
     }
 
     fn local_inner(&mut self, t: &ast::Local, me: RoleId, cx: &mut Scopes) -> Local {

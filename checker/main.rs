@@ -55,9 +55,18 @@ struct CheckArgs {
     files: Vec<PathBuf>,
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
-    /// Also list the files read and the local type of each participant
+    /// Also list the files read, the inferred partitions and the local types
     #[arg(long, short)]
     verbose: bool,
+    /// Seconds Z3 may spend on one query before it counts as unknown
+    #[arg(long, value_name = "SECONDS", default_value_t = mochi::smt::DEFAULT_TIMEOUT.as_secs_f64())]
+    timeout: f64,
+    /// Worker threads for the SMT queries (default: all cores)
+    #[arg(long, short, value_name = "N")]
+    jobs: Option<usize>,
+    /// Write every SMT query as an SMT-LIB file into DIR
+    #[arg(long, value_name = "DIR")]
+    dump_smt: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -143,9 +152,20 @@ fn check(args: &CheckArgs, color: ColorChoice) -> Outcome {
     let color = use_color(color, std::io::stdout().is_terminal());
     let json_lines = args.files.len() > 1;
     let mut worst = Outcome::Verified;
+    if !(args.timeout.is_finite() && args.timeout > 0.0) {
+        eprintln_safe("error: --timeout takes a positive number of seconds");
+        return Outcome::Invalid;
+    }
+    let mut config = Config::default();
+    config.smt.timeout = std::time::Duration::from_secs_f64(args.timeout.min(1e6));
+    if let Some(j) = args.jobs {
+        config.smt.jobs = j.max(1);
+    }
+    config.smt.dump_dir = args.dump_smt.clone();
+    config.smt.progress = std::io::stderr().is_terminal();
     for (i, path) in args.files.iter().enumerate() {
         let mut db = SourceDb::new();
-        let Some(report) = check_path(&mut db, path) else {
+        let Some(report) = check_path(&mut db, path, &config) else {
             worst = worst.max(Outcome::Invalid);
             continue;
         };
@@ -180,7 +200,9 @@ fn check(args: &CheckArgs, color: ColorChoice) -> Outcome {
 
 fn project(args: &ProjectArgs, color: ColorChoice) -> Outcome {
     let mut db = SourceDb::new();
-    let Some(report) = check_path(&mut db, &args.file) else {
+    // Projection needs the structural checks only, not the SMT stage.
+    let config = Config { structural_only: true, ..Config::default() };
+    let Some(report) = check_path(&mut db, &args.file, &config) else {
         return Outcome::Invalid;
     };
     let name = args.file.display().to_string();
@@ -225,9 +247,9 @@ fn project(args: &ProjectArgs, color: ColorChoice) -> Outcome {
 
 /// Runs the driver on one file. `None` when the file cannot be read (reported here) or
 /// when a stage panicked (reported as a bug, after the panic message).
-fn check_path(db: &mut SourceDb, path: &Path) -> Option<Report> {
+fn check_path(db: &mut SourceDb, path: &Path, config: &Config) -> Option<Report> {
     // The panic hook has already printed the message and location when this returns.
-    let res = panic::catch_unwind(AssertUnwindSafe(|| driver::check_file(db, path, &Config::default())));
+    let res = panic::catch_unwind(AssertUnwindSafe(|| driver::check_file(db, path, config)));
     match res {
         Ok(Ok(report)) => Some(report),
         Ok(Err(e)) => {

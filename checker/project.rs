@@ -26,7 +26,7 @@ use crate::hir::print;
 use crate::hir::*;
 use fixedbitset::FixedBitSet;
 use std::collections::{BTreeMap, HashMap, HashSet};
-use std::rc::Rc;
+use std::sync::Arc;
 
 /// Projects the choreography onto every participant of the system. A participant whose
 /// projection fails is missing from the map and has a diagnostic (E0601) instead.
@@ -36,7 +36,7 @@ pub fn project_all(prog: &Program) -> (BTreeMap<RoleId, LocalRc>, Vec<Diagnostic
     let Some(chor) = &prog.choreography else {
         return (out, diags);
     };
-    let tail: LocalRc = Rc::new(Local::End(Loc(chor.span)));
+    let tail: LocalRc = Arc::new(Local::End(Loc(chor.span)));
     // Who occurs where, computed once for all roles: projecting n roles must not walk
     // the whole type n times to find each role's side of every `*`.
     let occurs = Occurs::new(prog, &chor.body);
@@ -204,7 +204,7 @@ pub fn print_bounded(prog: &Program, t: &LocalRc, max_nodes: usize) -> String {
 
 /// The number of nodes of `t` printed as a tree, saturating at `cap`.
 fn tree_size(t: &LocalRc, cap: usize, memo: &mut HashMap<usize, usize>) -> usize {
-    let key = Rc::as_ptr(t) as usize;
+    let key = Arc::as_ptr(t) as usize;
     if let Some(&n) = memo.get(&key) {
         return n;
     }
@@ -265,7 +265,7 @@ impl Projector<'_> {
             Global::Msg(m) => self.choice(std::slice::from_ref(g), m.loc, tail),
             Global::Choice(branches, loc) => self.choice(branches, *loc, tail),
             Global::Motion(m) => Ok(match m.parts.iter().find(|(r, _)| *r == self.role) {
-                Some((_, a)) => Rc::new(Local::Motion { prims: vec![a.clone()], cont: tail, loc: a.loc }),
+                Some((_, a)) => Arc::new(Local::Motion { prims: vec![a.clone()], cont: tail, loc: a.loc }),
                 None => tail,
             }),
             Global::Seq(items, _) => {
@@ -297,17 +297,17 @@ impl Projector<'_> {
             Global::Rec { var, params, body, loc } => {
                 if !self.occurs_in(body) {
                     // Def 4.8 (4) is undefined here; the role has left the protocol.
-                    return Ok(Rc::new(Local::End(*loc)));
+                    return Ok(Arc::new(Local::End(*loc)));
                 }
                 let body = self.project(body, tail)?;
                 if matches!(&*body, Local::Var { var: v, .. } if v == var) {
                     // `mu t. t` would be unguarded: the role never acts in the loop.
-                    return Ok(Rc::new(Local::End(*loc)));
+                    return Ok(Arc::new(Local::End(*loc)));
                 }
-                Ok(Rc::new(Local::Rec { var: var.clone(), params: params.clone(), body, loc: *loc }))
+                Ok(Arc::new(Local::Rec { var: var.clone(), params: params.clone(), body, loc: *loc }))
             }
-            Global::Var(v) => Ok(Rc::new(Local::Var { var: v.var.clone(), args: v.args.clone(), loc: v.loc })),
-            Global::End(loc) => Ok(Rc::new(Local::End(*loc))),
+            Global::Var(v) => Ok(Arc::new(Local::Var { var: v.var.clone(), args: v.args.clone(), loc: v.loc })),
+            Global::End(loc) => Ok(Arc::new(Local::End(*loc))),
         }
     }
 
@@ -352,7 +352,7 @@ impl Projector<'_> {
                     loc: m.loc,
                 });
             }
-            return Ok(Rc::new(Local::Send { branches: out, loc: first.loc }));
+            return Ok(Arc::new(Local::Send { branches: out, loc: first.loc }));
         }
         if self.role == first.to {
             let mut out = Vec::new();
@@ -365,7 +365,7 @@ impl Projector<'_> {
                     loc: m.loc,
                 });
             }
-            return Ok(Rc::new(Local::Recv { branches: out, default: None, loc: first.loc }));
+            return Ok(Arc::new(Local::Recv { branches: out, default: None, loc: first.loc }));
         }
         // Def 4.8 (3) with the merge of Def 4.7.
         let mut acc: Option<(LocalRc, Vec<&str>)> = None;
@@ -431,21 +431,21 @@ impl Projector<'_> {
                     (Some(d), None) | (None, Some(d)) => Some(d.clone()),
                     (Some((p1, c1)), Some((p2, c2))) => Some(self.merge_default(p1, c1, p2, c2)?),
                 };
-                Ok(Rc::new(Local::Recv { branches, default, loc: *loc }))
+                Ok(Arc::new(Local::Recv { branches, default, loc: *loc }))
             }
             (Local::Motion { prims, cont, .. }, Local::Recv { branches, default, loc }) => {
                 let default = match default {
                     None => (prims.clone(), cont.clone()),
                     Some((p2, c2)) => self.merge_default(prims, cont, p2, c2)?,
                 };
-                Ok(Rc::new(Local::Recv { branches: branches.clone(), default: Some(default), loc: *loc }))
+                Ok(Arc::new(Local::Recv { branches: branches.clone(), default: Some(default), loc: *loc }))
             }
             (Local::Recv { branches, default, loc }, Local::Motion { prims, cont, .. }) => {
                 let default = match default {
                     None => (prims.clone(), cont.clone()),
                     Some((p1, c1)) => self.merge_default(p1, c1, prims, cont)?,
                 };
-                Ok(Rc::new(Local::Recv { branches: branches.clone(), default: Some(default), loc: *loc }))
+                Ok(Arc::new(Local::Recv { branches: branches.clone(), default: Some(default), loc: *loc }))
             }
             _ => Err(self.clash(a, b, None)),
         }
@@ -617,7 +617,7 @@ struct Differ {
 
 impl Differ {
     fn diff(&mut self, a: &LocalRc, b: &LocalRc) -> Option<(Loc, Loc)> {
-        if Rc::ptr_eq(a, b) || !self.same.insert((Rc::as_ptr(a) as usize, Rc::as_ptr(b) as usize)) {
+        if Arc::ptr_eq(a, b) || !self.same.insert((Arc::as_ptr(a) as usize, Arc::as_ptr(b) as usize)) {
             return None;
         }
         stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.diff_inner(a, b))
@@ -782,7 +782,7 @@ pub(crate) mod tests {
         assert_eq!(print::local(&prog, a), "+{\n  B!x.B?y.dt<m>.end,\n  B!z.dt<m>.end\n}");
         let Local::Send { branches, .. } = &**a else { panic!() };
         let Local::Recv { branches: inner, .. } = &*branches[0].cont else { panic!() };
-        assert!(Rc::ptr_eq(&inner[0].cont, &branches[1].cont));
+        assert!(Arc::ptr_eq(&inner[0].cont, &branches[1].cont));
     }
 
     #[test]
@@ -961,7 +961,7 @@ pub(crate) mod tests {
         assert_eq!(map.len(), 3);
         let b = map.get(&RoleId(1)).cloned().expect("B is projected");
         let Some(chor) = &prog.choreography else { panic!() };
-        let again = project(&prog, &chor.body, RoleId(1), Rc::new(Local::End(Loc::default()))).expect("projects");
-        assert!(!Rc::ptr_eq(&b, &again) && equal(&b, &again));
+        let again = project(&prog, &chor.body, RoleId(1), Arc::new(Local::End(Loc::default()))).expect("projects");
+        assert!(!Arc::ptr_eq(&b, &again) && equal(&b, &again));
     }
 }

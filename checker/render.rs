@@ -63,6 +63,9 @@ fn write_summary(
         writeln!(out)?;
     }
     if verbose {
+        for p in &report.partitions {
+            writeln!(out, "  separation {p}")?;
+        }
         let names: Vec<&str> = db.files().map(|(_, f)| f.name.as_str()).collect();
         writeln!(out, "  files read: {}", names.join(", "))?;
         for (role, local) in &report.projections {
@@ -88,8 +91,11 @@ fn write_summary(
 /// ```text
 /// { "file", "verdict": "verified" | "rejected" | "unknown",
 ///   "diagnostics": [{ "code", "severity", "message", "file", "line", "column",
-///                     "help", "notes", "labels": [{ "message", "file", "line", "column" }] }],
-///   "checks": [{ "name", "status": "pass" | "fail" | "unknown", "millis" }] }
+///                     "help", "notes", "labels": [{ "message", "file", "line", "column" }],
+///                     "counterexample": null | { "values": [{ "name", "value" }],
+///                                                "overlap": null | { "point": [x, y, z], "times": [t] } } }],
+///   "checks": [{ "name", "status": "pass" | "fail" | "unknown", "millis", "queries" }],
+///   "partitions": ["file:line:col: partition inferred: ..."] }
 /// ```
 ///
 /// Lines and columns are 1-based (columns count characters). A location in a file the
@@ -111,7 +117,7 @@ pub fn report_json(db: &SourceDb, file_name: &str, report: &Report) -> Value {
             };
             // Microseconds are the last meaningful digit; more is noise in the output.
             let millis = (c.millis * 1000.0).round() / 1000.0;
-            json!({ "name": c.name, "status": status, "millis": millis })
+            json!({ "name": c.name, "status": status, "millis": millis, "queries": c.queries })
         })
         .collect();
     json!({
@@ -119,6 +125,7 @@ pub fn report_json(db: &SourceDb, file_name: &str, report: &Report) -> Value {
         "verdict": verdict,
         "diagnostics": report.diagnostics.iter().map(|d| diagnostic_json(db, d)).collect::<Vec<_>>(),
         "checks": checks,
+        "partitions": report.partitions,
     })
 }
 
@@ -148,6 +155,7 @@ pub fn diagnostic_json(db: &SourceDb, d: &Diagnostic) -> Value {
         "help": d.help,
         "notes": d.notes,
         "labels": labels,
+        "counterexample": d.counterexample.as_ref().map(|c| serde_json::to_value(c).unwrap_or(Value::Null)),
     })
 }
 
@@ -301,8 +309,10 @@ mod tests {
                 status: Status::Fail,
                 millis: 0.25,
                 detail: "1 error(s)".into(),
+                queries: 0,
             }],
             projections: BTreeMap::new(),
+            partitions: Vec::new(),
         }
     }
 
@@ -385,6 +395,22 @@ mod tests {
     }
 
     #[test]
+    fn a_counterexample_is_in_the_json() {
+        use crate::diag::{Assignment, Counterexample, Overlap};
+        let (db, f) = db_with("system {}\n");
+        let cx = Counterexample {
+            values: vec![Assignment { name: "Cart.x".into(), value: "0.5".into() }],
+            overlap: Some(Overlap { point: [1.0, 0.25, 0.0], times: vec![2.5] }),
+        };
+        let d = Diagnostic::error(Code::FootprintsOverlap, Span::new(f, 0, 6), "overlap").with_counterexample(cx);
+        let v = diagnostic_json(&db, &d);
+        assert_eq!(
+            v["counterexample"],
+            json!({ "values": [{ "name": "Cart.x", "value": "0.5" }], "overlap": { "point": [1.0, 0.25, 0.0], "times": [2.5] } })
+        );
+    }
+
+    #[test]
     fn report_json_has_every_field() {
         let (db, f) = db_with("// header\nconst a = ;\n");
         let d = Diagnostic::error(Code::UnexpectedToken, Span::new(f, 20, 21), "expected an expression")
@@ -401,9 +427,10 @@ mod tests {
         assert!(d["help"].is_null(), "help is present even when absent: {d}");
         assert_eq!(d["notes"], json!(["n"]));
         assert_eq!(d["labels"], json!([{ "message": "here", "file": "a.chor", "line": 1, "column": 1 }]));
-        assert_eq!(v["checks"], json!([{ "name": "parse", "status": "fail", "millis": 0.25 }]));
+        assert!(d["counterexample"].is_null(), "a parse error has no counterexample: {d}");
+        assert_eq!(v["checks"], json!([{ "name": "parse", "status": "fail", "millis": 0.25, "queries": 0 }]));
         let mut keys: Vec<&String> = v.as_object().map(|o| o.keys().collect()).unwrap_or_default();
         keys.sort();
-        assert_eq!(keys, ["checks", "diagnostics", "file", "verdict"]);
+        assert_eq!(keys, ["checks", "diagnostics", "file", "partitions", "verdict"]);
     }
 }

@@ -26,7 +26,7 @@ use crate::obligation::{Goal, Obligation, Rule};
 use crate::project::{describe, motion_text};
 use crate::source::Span;
 use std::collections::{HashMap, HashSet};
-use std::rc::Rc;
+use std::sync::Arc;
 
 /// Checks `sub <= sup` for local types of `role` (the role instantiates the refinement
 /// obligations). Returns the predicate obligations, or the first structural failure.
@@ -115,7 +115,7 @@ impl Sub<'_> {
         let (t, _) = unfold(t, tenv)?;
         // Coinduction: a pair met again is assumed related. Which `mu` binds a variable
         // is lexical, so the node pointers determine the environments.
-        if !self.assumed.insert((Rc::as_ptr(&s) as usize, Rc::as_ptr(&t) as usize)) {
+        if !self.assumed.insert((Arc::as_ptr(&s) as usize, Arc::as_ptr(&t) as usize)) {
             return Ok(());
         }
         match (&*s, &*t) {

@@ -35,7 +35,7 @@ use crate::subtype::{
 use std::collections::hash_map::DefaultHasher;
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::hash::{Hash, Hasher};
-use std::rc::Rc;
+use std::sync::Arc;
 
 /// Checks every participant's process against its projection. Participants whose
 /// projection failed are skipped (the projection error is reported already).
@@ -334,7 +334,7 @@ impl<'a> Checker<'a> {
     /// Coinduction for process loops: whether `body` still needs checking against `t`
     /// under the current context. Widens the context after [`WIDEN_AFTER`] variants.
     fn enter(&mut self, body: &Process, t: &LocalRc, st: &mut State) -> bool {
-        let pair = (body as *const Process as usize, Rc::as_ptr(t) as usize);
+        let pair = (body as *const Process as usize, Arc::as_ptr(t) as usize);
         let n = self.contexts.get(&pair).copied().unwrap_or(0);
         if n >= WIDEN_AFTER {
             st.sigma = self.invariant.clone();

@@ -4,9 +4,9 @@
 //! into every branch of a choice is stored once.
 
 use super::{Expr, Field, Loc, PrimApp, RecParam, RoleId};
-use std::rc::Rc;
+use std::sync::Arc;
 
-pub type LocalRc = Rc<Local>;
+pub type LocalRc = Arc<Local>;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Local {
@@ -72,6 +72,6 @@ impl Local {
 
     /// Structural equality with a pointer shortcut for shared tails.
     pub fn same(a: &LocalRc, b: &LocalRc) -> bool {
-        Rc::ptr_eq(a, b) || a == b
+        Arc::ptr_eq(a, b) || a == b
     }
 }

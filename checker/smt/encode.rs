@@ -1,13 +1,27 @@
-//! Encoding of HIR expressions into Z3 terms. Integers and reals mix by promotion;
-//! `sqrt(e)` becomes a fresh variable `s` with the side condition
-//! `e >= 0 => (s >= 0 && s * s == e)`, which every model of the query satisfies, so the
-//! encoding proves nothing about a square root that is false of the real one.
-//! Constructs not encoded yet (trigonometry, points and vectors, tuples, contract-only
-//! variables) are refused with [`Unsupported`], which the caller reports as unknown.
+//! Encoding of HIR expressions into Z3 terms.
+//!
+//! - Integers and reals mix by promotion; booleans stay booleans.
+//! - Points and vectors are triples of reals: `+`, `-`, scaling, components, `dot`,
+//!   `norm2` and `==` work componentwise.
+//! - `sqrt(e)` is a fresh `s` with the side condition `e >= 0 => (s >= 0 && s * s == e)`:
+//!   exact wherever the square root is defined.
+//! - `sin(e)`, `cos(e)` are fresh `s`, `c` (one pair per argument) with side conditions
+//!   that hold of the real functions for every real argument: `s^2 + c^2 == 1`,
+//!   `1 - e^2/2 <= c <= 1 - e^2/2 + e^4/24`, and `e - e^3/6 <= s <= e` for `e >= 0`
+//!   (mirrored for `e <= 0`); for a constant argument, its enclosure from
+//!   [`crate::bounds::trig`]. These over-approximate: a proof with them is a proof, but
+//!   a counterexample may not be real, so [`Encoder::spurious_trig`] checks a model's
+//!   trigonometric values against `f64::sin`/`cos` before it is reported as one.
+//! - A motion primitive's contract is encoded under a [`Frame`] that says what its own
+//!   variables, `old(x)`, parameters, `clock` and footprint point stand for.
+//!
+//! Constructs that cannot be encoded are refused with [`Unsupported`], which the caller
+//! reports as unknown, never as a pass.
 
+use crate::bounds;
 use crate::hir::expr::{BinOp, UnOp};
-use crate::hir::{Builtin, Expr, ExprKind, Program, Var};
-use std::collections::BTreeMap;
+use crate::hir::{Builtin, Expr, ExprKind, Program, RoleId, Slot, Sort, Var};
+use std::collections::{BTreeMap, HashMap};
 use z3::ast::{Bool, Int, Real};
 
 /// A construct the encoding does not handle; the message names it.
@@ -15,10 +29,32 @@ use z3::ast::{Bool, Int, Real};
 pub struct Unsupported(pub String);
 
 #[derive(Clone)]
-enum Term {
+pub enum Term {
     B(Bool),
     I(Int),
     R(Real),
+    /// A point or a vector.
+    V([Real; 3]),
+}
+
+/// What a primitive's own variables mean while its contract is encoded.
+#[derive(Clone, Default)]
+pub struct Frame {
+    /// `Var::Own(slot)`: the participant's variable at the time considered.
+    pub own: BTreeMap<Slot, Term>,
+    /// `Var::Old(i)`: state variable `i` when the motion started.
+    pub old: Vec<Term>,
+    /// `Var::Param(i)`: the i-th argument, already encoded.
+    pub params: Vec<Term>,
+    pub clock: Option<Real>,
+    /// The footprint's point in the participant's frame.
+    pub point: Option<[Real; 3]>,
+}
+
+struct TrigPair {
+    arg: Real,
+    sin: Real,
+    cos: Real,
 }
 
 pub struct Encoder<'p> {
@@ -26,16 +62,44 @@ pub struct Encoder<'p> {
     /// Free variables by their user-facing name, for the counterexample.
     vars: BTreeMap<String, Term>,
     side: Vec<Bool>,
+    frame: Option<Frame>,
+    trig: Vec<TrigPair>,
+    trig_by_arg: HashMap<String, usize>,
 }
 
 impl<'p> Encoder<'p> {
     pub fn new(prog: &'p Program) -> Encoder<'p> {
-        Encoder { prog, vars: BTreeMap::new(), side: Vec::new() }
+        Encoder {
+            prog,
+            vars: BTreeMap::new(),
+            side: Vec::new(),
+            frame: None,
+            trig: Vec::new(),
+            trig_by_arg: HashMap::new(),
+        }
     }
 
-    /// Constraints introduced by the encoding (square roots), to assert with the query.
+    pub fn prog(&self) -> &'p Program {
+        self.prog
+    }
+
+    /// Constraints introduced by the encoding (roots, trigonometry), to assert with
+    /// the query.
     pub fn side_conditions(&self) -> impl Iterator<Item = &Bool> {
         self.side.iter()
+    }
+
+    /// Adds a constraint that every model must satisfy (for example `t >= 0`).
+    pub fn require(&mut self, b: Bool) {
+        self.side.push(b);
+    }
+
+    /// Encodes `e` with the primitive variables read through `frame`.
+    pub fn in_frame<T>(&mut self, frame: &Frame, f: impl FnOnce(&mut Self) -> T) -> T {
+        let saved = self.frame.replace(frame.clone());
+        let r = f(self);
+        self.frame = saved;
+        r
     }
 
     pub fn boolean(&mut self, e: &Expr) -> Result<Bool, Unsupported> {
@@ -45,19 +109,106 @@ impl<'p> Encoder<'p> {
         }
     }
 
-    /// The values of the query's variables in `model`, by name.
+    /// Encodes a term of any sort (an argument of a primitive).
+    pub fn any(&mut self, e: &Expr) -> Result<Term, Unsupported> {
+        self.term(e)
+    }
+
+    pub fn real(&mut self, e: &Expr) -> Result<Real, Unsupported> {
+        as_real(self.term(e)?)
+    }
+
+    /// A named real variable, shown in counterexamples under `name`.
+    pub fn named_real(&mut self, name: &str) -> Real {
+        match self.vars.get(name) {
+            Some(Term::R(r)) => r.clone(),
+            _ => {
+                let r = Real::new_const(name);
+                self.vars.insert(name.to_string(), Term::R(r.clone()));
+                r
+            }
+        }
+    }
+
+    /// A fresh variable of `sort` named `name` (shown in counterexamples).
+    pub fn named(&mut self, name: &str, sort: &Sort) -> Result<Term, Unsupported> {
+        if let Some(t) = self.vars.get(name) {
+            return Ok(t.clone());
+        }
+        let t = match sort {
+            Sort::Bool => Term::B(Bool::new_const(name)),
+            Sort::Int => Term::I(Int::new_const(name)),
+            Sort::Real | Sort::Any => Term::R(Real::new_const(name)),
+            Sort::Point | Sort::Vector => Term::V([
+                Real::new_const(format!("{name}.x")),
+                Real::new_const(format!("{name}.y")),
+                Real::new_const(format!("{name}.z")),
+            ]),
+            other => return Err(Unsupported(format!("variables of sort `{other}`"))),
+        };
+        self.vars.insert(name.to_string(), t.clone());
+        Ok(t)
+    }
+
+    /// The term of participant `r`'s variable in the shared vocabulary (`Cart.x`).
+    pub fn role_var(&mut self, r: RoleId, slot: Slot) -> Result<Term, Unsupported> {
+        let (n, s) = self.prog.kind_of(r).var(slot);
+        let name = format!("{}.{n}", self.prog.role_name(r));
+        self.named(&name, &s.clone())
+    }
+
+    /// The values of the query's variables in `model`, by name. Variables the query
+    /// does not constrain (absent from the model) are left out.
     pub fn assignments(&self, model: &z3::Model) -> Vec<super::Assignment> {
+        let real = |r: &Real| model.eval(r, true).map(|v| decimal(&v));
         self.vars
             .iter()
             .filter_map(|(name, t)| {
                 let value = match t {
-                    Term::B(b) => model.eval(b, true).map(|v| v.to_string()),
-                    Term::I(i) => model.eval(i, true).map(|v| v.to_string()),
-                    Term::R(r) => model.eval(r, true).map(|v| decimal(&v)),
+                    Term::B(b) => {
+                        model.get_const_interp(b)?;
+                        model.eval(b, true).map(|v| v.to_string())
+                    }
+                    Term::I(i) => {
+                        model.get_const_interp(i)?;
+                        model.eval(i, true).map(|v| v.to_string())
+                    }
+                    Term::R(r) => {
+                        model.get_const_interp(r)?;
+                        real(r)
+                    }
+                    Term::V([x, y, z]) => {
+                        if [x, y, z].iter().all(|c| model.get_const_interp(*c).is_none()) {
+                            return None;
+                        }
+                        Some(format!("({}, {}, {})", real(x)?, real(y)?, real(z)?))
+                    }
                 }?;
                 Some(super::Assignment { name: name.clone(), value })
             })
             .collect()
+    }
+
+    /// The value of a real term in `model`, as a float (algebraic numbers approximated).
+    pub fn value_of(model: &z3::Model, r: &Real) -> Option<f64> {
+        let v = model.eval(r, true)?;
+        match v.as_rational() {
+            Some((n, d)) if d != 0 => Some(n as f64 / d as f64),
+            _ => v.approx(17).parse().ok(),
+        }
+    }
+
+    /// Whether `model` gives some `sin`/`cos` a value the real function does not take
+    /// (beyond 1e-6): the counterexample is then an artefact of the enclosure.
+    pub fn spurious_trig(&self, model: &z3::Model) -> bool {
+        self.trig.iter().any(|t| {
+            let (Some(a), Some(s), Some(c)) =
+                (Self::value_of(model, &t.arg), Self::value_of(model, &t.sin), Self::value_of(model, &t.cos))
+            else {
+                return true;
+            };
+            (a.sin() - s).abs() > 1e-6 || (a.cos() - c).abs() > 1e-6
+        })
     }
 
     fn term(&mut self, e: &Expr) -> Result<Term, Unsupported> {
@@ -74,6 +225,7 @@ impl<'p> Encoder<'p> {
             ExprKind::Unary(UnOp::Neg, a) => match self.term(a)? {
                 Term::I(i) => Term::I(i.unary_minus()),
                 Term::R(r) => Term::R(r.unary_minus()),
+                Term::V(v) => Term::V(v.map(|c| c.unary_minus())),
                 Term::B(_) => return Err(Unsupported("negation of a boolean".into())),
             },
             ExprKind::Binary(op, a, b) => self.binary(*op, a, b)?,
@@ -82,13 +234,18 @@ impl<'p> Encoder<'p> {
                 match (self.term(a)?, self.term(b)?) {
                     (Term::B(x), Term::B(y)) => Term::B(c.ite(&x, &y)),
                     (Term::I(x), Term::I(y)) => Term::I(c.ite(&x, &y)),
+                    (Term::V(x), Term::V(y)) => {
+                        Term::V([c.ite(&x[0], &y[0]), c.ite(&x[1], &y[1]), c.ite(&x[2], &y[2])])
+                    }
                     (x, y) => Term::R(c.ite(&as_real(x)?, &as_real(y)?)),
                 }
             }
             ExprKind::Call(f, args) => self.call(*f, args)?,
-            ExprKind::Tuple(_) | ExprKind::Component(..) => {
-                return Err(Unsupported("points, vectors and tuples".into()));
-            }
+            ExprKind::Component(a, i) => match self.term(a)? {
+                Term::V(v) => Term::R(v[(*i).min(2)].clone()),
+                _ => return Err(Unsupported("a component of something that is not a point".into())),
+            },
+            ExprKind::Tuple(_) => return Err(Unsupported("tuples".into())),
         })
     }
 
@@ -102,16 +259,14 @@ impl<'p> Encoder<'p> {
                 let ExprKind::Int(n) = b.kind else {
                     return Err(Unsupported("a power whose exponent is not an integer literal".into()));
                 };
-                let base = self.term(a)?;
-                match base {
+                if n < 0 {
+                    return Err(Unsupported("a negative power".into()));
+                }
+                match self.term(a)? {
                     Term::I(i) => Term::I(if n == 0 { Int::from_i64(1) } else { Int::mul(&vec![i; n as usize]) }),
                     other => {
                         let r = as_real(other)?;
-                        Term::R(if n == 0 {
-                            rational("1").ok_or_else(|| Unsupported("1".into()))?
-                        } else {
-                            Real::mul(&vec![r; n as usize])
-                        })
+                        Term::R(if n == 0 { one() } else { Real::mul(&vec![r; n as usize]) })
                     }
                 }
             }
@@ -119,137 +274,267 @@ impl<'p> Encoder<'p> {
                 let eq = match (self.term(a)?, self.term(b)?) {
                     (Term::B(x), Term::B(y)) => x.eq(&y),
                     (Term::I(x), Term::I(y)) => x.eq(&y),
+                    (Term::V(x), Term::V(y)) => Bool::and(&[x[0].eq(&y[0]), x[1].eq(&y[1]), x[2].eq(&y[2])]),
                     (x, y) => as_real(x)?.eq(&as_real(y)?),
                 };
                 Term::B(if op == Eq { eq } else { eq.not() })
             }
             Lt | Le | Gt | Ge | Add | Sub | Mul | Div => {
                 let (x, y) = (self.term(a)?, self.term(b)?);
-                if let (Term::I(x), Term::I(y), false) = (&x, &y, op == Div) {
-                    return Ok(match op {
-                        Lt => Term::B(x.lt(y)),
-                        Le => Term::B(x.le(y)),
-                        Gt => Term::B(x.gt(y)),
-                        Ge => Term::B(x.ge(y)),
-                        Add => Term::I(Int::add(&[x.clone(), y.clone()])),
-                        Sub => Term::I(Int::sub(&[x.clone(), y.clone()])),
-                        _ => Term::I(Int::mul(&[x.clone(), y.clone()])),
-                    });
-                }
-                let (x, y) = (as_real(x)?, as_real(y)?);
-                match op {
-                    Lt => Term::B(x.lt(&y)),
-                    Le => Term::B(x.le(&y)),
-                    Gt => Term::B(x.gt(&y)),
-                    Ge => Term::B(x.ge(&y)),
-                    Add => Term::R(Real::add(&[x, y])),
-                    Sub => Term::R(Real::sub(&[x, y])),
-                    Mul => Term::R(Real::mul(&[x, y])),
-                    _ => Term::R(x.div(&y)),
+                match (x, y) {
+                    (Term::V(u), Term::V(v)) if matches!(op, Add | Sub) => Term::V(std::array::from_fn(|k| {
+                        if op == Add {
+                            Real::add(&[u[k].clone(), v[k].clone()])
+                        } else {
+                            Real::sub(&[u[k].clone(), v[k].clone()])
+                        }
+                    })),
+                    (Term::V(v), s) | (s, Term::V(v)) if op == Mul => {
+                        let s = as_real(s)?;
+                        Term::V(v.map(|c| Real::mul(&[s.clone(), c])))
+                    }
+                    (Term::V(v), s) if op == Div => {
+                        let s = as_real(s)?;
+                        Term::V(v.map(|c| c.div(&s)))
+                    }
+                    (Term::V(_), _) | (_, Term::V(_)) => {
+                        return Err(Unsupported(format!("`{}` on points or vectors", op_text(op))));
+                    }
+                    (Term::I(x), Term::I(y)) if op != Div => match op {
+                        Lt => Term::B(x.lt(&y)),
+                        Le => Term::B(x.le(&y)),
+                        Gt => Term::B(x.gt(&y)),
+                        Ge => Term::B(x.ge(&y)),
+                        Add => Term::I(Int::add(&[x, y])),
+                        Sub => Term::I(Int::sub(&[x, y])),
+                        _ => Term::I(Int::mul(&[x, y])),
+                    },
+                    (x, y) => {
+                        let (x, y) = (as_real(x)?, as_real(y)?);
+                        match op {
+                            Lt => Term::B(x.lt(&y)),
+                            Le => Term::B(x.le(&y)),
+                            Gt => Term::B(x.gt(&y)),
+                            Ge => Term::B(x.ge(&y)),
+                            Add => Term::R(Real::add(&[x, y])),
+                            Sub => Term::R(Real::sub(&[x, y])),
+                            Mul => Term::R(Real::mul(&[x, y])),
+                            _ => Term::R(x.div(&y)),
+                        }
+                    }
                 }
             }
         })
     }
 
     fn call(&mut self, f: Builtin, args: &[Expr]) -> Result<Term, Unsupported> {
-        let num = |enc: &mut Self, i: usize| -> Result<Term, Unsupported> {
+        let arg = |enc: &mut Self, i: usize| -> Result<Term, Unsupported> {
             args.get(i)
                 .ok_or_else(|| Unsupported(format!("`{}` without arguments", f.name())))
                 .and_then(|a| enc.term(a))
         };
+        let zero = || Int::from_i64(0).to_real();
         Ok(match f {
             Builtin::Sqrt => {
-                let a = as_real(num(self, 0)?)?;
+                let a = as_real(arg(self, 0)?)?;
                 let s = Real::fresh_const("sqrt");
-                let zero = Int::from_i64(0).to_real();
-                let def = Bool::and(&[s.ge(&zero), Real::mul(&[s.clone(), s.clone()]).eq(&a)]);
-                self.side.push(a.ge(&zero).implies(&def));
+                let def = Bool::and(&[s.ge(zero()), Real::mul(&[s.clone(), s.clone()]).eq(&a)]);
+                self.side.push(a.ge(zero()).implies(&def));
                 Term::R(s)
             }
-            Builtin::Abs => match num(self, 0)? {
+            Builtin::Abs => match arg(self, 0)? {
                 Term::I(i) => Term::I(i.ge(Int::from_i64(0)).ite(&i, &i.unary_minus())),
                 other => {
                     let r = as_real(other)?;
-                    Term::R(r.ge(Int::from_i64(0).to_real()).ite(&r, &r.unary_minus()))
+                    Term::R(r.ge(zero()).ite(&r, &r.unary_minus()))
                 }
             },
             Builtin::Min | Builtin::Max => {
-                let (a, b) = (num(self, 0)?, num(self, 1)?);
-                let pick_a = |x: &Real, y: &Real| if f == Builtin::Min { x.le(y) } else { x.ge(y) };
-                match (a, b) {
-                    (Term::I(x), Term::I(y)) => {
-                        let c = if f == Builtin::Min { x.le(&y) } else { x.ge(&y) };
-                        Term::I(c.ite(&x, &y))
-                    }
+                let min = f == Builtin::Min;
+                match (arg(self, 0)?, arg(self, 1)?) {
+                    (Term::I(x), Term::I(y)) => Term::I(if min { x.le(&y) } else { x.ge(&y) }.ite(&x, &y)),
                     (a, b) => {
                         let (x, y) = (as_real(a)?, as_real(b)?);
-                        Term::R(pick_a(&x, &y).ite(&x, &y))
+                        Term::R(if min { x.le(&y) } else { x.ge(&y) }.ite(&x, &y))
                     }
                 }
             }
-            Builtin::Sin | Builtin::Cos => return Err(Unsupported("trigonometry (sin, cos)".into())),
-            Builtin::Point | Builtin::Vector | Builtin::Dot | Builtin::Norm2 => {
-                return Err(Unsupported("points and vectors".into()));
+            Builtin::Sin | Builtin::Cos => {
+                let e = args.first().ok_or_else(|| Unsupported(format!("`{}` without arguments", f.name())))?;
+                let (s, c) = self.trig_pair(e)?;
+                Term::R(if f == Builtin::Sin { s } else { c })
             }
+            Builtin::Point | Builtin::Vector => {
+                let (x, y, z) = (as_real(arg(self, 0)?)?, as_real(arg(self, 1)?)?, as_real(arg(self, 2)?)?);
+                Term::V([x, y, z])
+            }
+            Builtin::Dot => match (arg(self, 0)?, arg(self, 1)?) {
+                (Term::V(u), Term::V(v)) => Term::R(dot(&u, &v)),
+                _ => return Err(Unsupported("`dot` of something that is not a vector".into())),
+            },
+            Builtin::Norm2 => match arg(self, 0)? {
+                Term::V(v) => Term::R(dot(&v, &v)),
+                _ => return Err(Unsupported("`norm2` of something that is not a vector".into())),
+            },
         })
+    }
+
+    /// The fresh `(sin e, cos e)` pair for `e`, with its enclosing side conditions.
+    fn trig_pair(&mut self, e: &Expr) -> Result<(Real, Real), Unsupported> {
+        let a = as_real(self.term(e)?)?;
+        let key = a.to_string();
+        if let Some(&i) = self.trig_by_arg.get(&key) {
+            return Ok((self.trig[i].sin.clone(), self.trig[i].cos.clone()));
+        }
+        let (s, c) = (Real::fresh_const("sin"), Real::fresh_const("cos"));
+        let num = |v: f64| real_of_f64(v);
+        let unit = Real::add(&[Real::mul(&[s.clone(), s.clone()]), Real::mul(&[c.clone(), c.clone()])]).eq(one());
+        self.side.push(unit);
+        let closed = !mentions_free(e);
+        let bound = closed.then(|| bounds::eval(self.prog, e, &bounds::closed)).flatten().filter(|i| i.is_finite());
+        if let Some(iv) = bound {
+            for (f, t) in [(Builtin::Sin, &s), (Builtin::Cos, &c)] {
+                let b = bounds::trig(f, Some(iv));
+                if let (Some(lo), Some(hi)) = (num(b.lo), num(b.hi)) {
+                    self.side.push(Bool::and(&[t.ge(&lo), t.le(&hi)]));
+                }
+            }
+        } else {
+            // Taylor enclosures valid for every real argument.
+            let a2 = Real::mul(&[a.clone(), a.clone()]);
+            let a3 = Real::mul(&[a2.clone(), a.clone()]);
+            let a4 = Real::mul(&[a2.clone(), a2.clone()]);
+            let half = rational("0.5").expect("literal");
+            let sixth = Real::from_rational_str("1", "6").expect("literal");
+            let inv24 = Real::from_rational_str("1", "24").expect("literal");
+            let c_lo = Real::sub(&[one(), Real::mul(&[half, a2])]);
+            let c_hi = Real::add(&[c_lo.clone(), Real::mul(&[inv24, a4])]);
+            let s_cubic = Real::sub(&[a.clone(), Real::mul(&[sixth, a3])]);
+            let zero = Int::from_i64(0).to_real();
+            let m1 = Int::from_i64(-1).to_real();
+            self.side.push(Bool::and(&[
+                c.ge(&c_lo),
+                c.le(&c_hi),
+                a.ge(&zero).implies(Bool::and(&[s.ge(&s_cubic), s.le(&a)])),
+                a.le(&zero).implies(Bool::and(&[s.le(&s_cubic), s.ge(&a)])),
+                s.ge(&m1),
+                s.le(one()),
+                c.ge(&m1),
+                c.le(one()),
+            ]));
+        }
+        self.trig_by_arg.insert(key, self.trig.len());
+        self.trig.push(TrigPair { arg: a, sin: s.clone(), cos: c.clone() });
+        Ok((s, c))
     }
 
     /// `sort` is the occurrence's sort, used when the variable was declared without one
     /// (a process binder takes its sort from the payload field it receives).
-    fn var(&mut self, v: &Var, sort: &crate::hir::Sort) -> Result<Term, Unsupported> {
-        let (name, sort) = match v {
+    fn var(&mut self, v: &Var, sort: &Sort) -> Result<Term, Unsupported> {
+        let frame_var = |_: &Self, what: &str, t: Option<Term>| {
+            t.ok_or_else(|| Unsupported(format!("{what} outside a motion primitive's contract")))
+        };
+        match v {
             Var::Const(c) => {
                 // Constants are closed terms: encode their definition.
                 let value = self.prog.consts[c.idx()].value.clone();
-                return self.term(&value);
+                self.term(&value)
             }
-            Var::Role(r, slot) => {
-                let (n, s) = self.prog.kind_of(*r).var(*slot);
-                (format!("{}.{n}", self.prog.role_name(*r)), s.clone())
-            }
+            Var::Role(r, slot) => self.role_var(*r, *slot),
             Var::Snap(r, slot) => {
                 let (n, s) = self.prog.kind_of(*r).var(*slot);
-                (format!("old({}.{n})", self.prog.role_name(*r)), s.clone())
+                let name = format!("old({}.{n})", self.prog.role_name(*r));
+                self.named(&name, &s.clone())
             }
             Var::Value(id, name) => {
                 let declared = self.prog.value(*id).sort.clone();
-                (format!("{name}#{}", id.0), if declared == crate::hir::Sort::Any { sort.clone() } else { declared })
+                let sort = if declared == Sort::Any { sort.clone() } else { declared };
+                // Distinct values may share a source name; keep them apart, show the name.
+                let key = format!("{name}#{}", id.0);
+                if let Some(t) = self.vars.get(&key).or_else(|| self.vars.get(name)) {
+                    return Ok(t.clone());
+                }
+                let t = self.named(name, &sort)?;
+                Ok(t)
             }
-            Var::Own(_) | Var::Old(_) | Var::Param(_) | Var::Point(_) | Var::Clock => {
-                return Err(Unsupported("a motion primitive's variables outside its contract".into()));
+            Var::Own(slot) => {
+                let t = self.frame.as_ref().and_then(|f| f.own.get(slot).cloned());
+                frame_var(self, "a primitive's own variable", t)
             }
-        };
-        if let Some(t) = self.vars.get(&name) {
-            return Ok(t.clone());
+            Var::Old(i) => {
+                let t = self.frame.as_ref().and_then(|f| f.old.get(*i).cloned());
+                frame_var(self, "`old(..)`", t)
+            }
+            Var::Param(i) => {
+                let t = self.frame.as_ref().and_then(|f| f.params.get(*i).cloned());
+                frame_var(self, "a primitive's parameter", t)
+            }
+            Var::Clock => {
+                let t = self.frame.as_ref().and_then(|f| f.clock.clone()).map(Term::R);
+                frame_var(self, "`clock`", t)
+            }
+            Var::Point(i) => {
+                let t = self.frame.as_ref().and_then(|f| f.point.as_ref()).map(|p| Term::R(p[(*i).min(2)].clone()));
+                frame_var(self, "a footprint's point", t)
+            }
         }
-        let t = match sort {
-            crate::hir::Sort::Bool => Term::B(Bool::new_const(name.as_str())),
-            crate::hir::Sort::Int => Term::I(Int::new_const(name.as_str())),
-            crate::hir::Sort::Real => Term::R(Real::new_const(name.as_str())),
-            other => return Err(Unsupported(format!("variables of sort `{other}`"))),
-        };
-        // Value variables are shown under their source name.
-        let shown = name.split('#').next().unwrap_or(&name).to_string();
-        self.vars.insert(shown, t.clone());
-        Ok(t)
     }
 }
 
-fn as_real(t: Term) -> Result<Real, Unsupported> {
+/// Whether `e` mentions any variable other than constants.
+fn mentions_free(e: &Expr) -> bool {
+    let mut free = false;
+    e.visit_vars(&mut |v, _| free |= !matches!(v, Var::Const(_)));
+    free
+}
+
+fn dot(u: &[Real; 3], v: &[Real; 3]) -> Real {
+    Real::add(&[
+        Real::mul(&[u[0].clone(), v[0].clone()]),
+        Real::mul(&[u[1].clone(), v[1].clone()]),
+        Real::mul(&[u[2].clone(), v[2].clone()]),
+    ])
+}
+
+fn op_text(op: BinOp) -> &'static str {
+    match op {
+        BinOp::Lt => "<",
+        BinOp::Le => "<=",
+        BinOp::Gt => ">",
+        BinOp::Ge => ">=",
+        BinOp::Mul => "*",
+        BinOp::Div => "/",
+        _ => "this operator",
+    }
+}
+
+pub fn as_real(t: Term) -> Result<Real, Unsupported> {
     match t {
         Term::R(r) => Ok(r),
         Term::I(i) => Ok(i.to_real()),
         Term::B(_) => Err(Unsupported("a boolean used as a number".into())),
+        Term::V(_) => Err(Unsupported("a point or vector used as a number".into())),
     }
 }
 
+pub fn one() -> Real {
+    Int::from_i64(1).to_real()
+}
+
 /// A decimal literal (`0.65`, `1e-3`, `12`) as an exact Z3 rational.
-fn rational(lit: &str) -> Option<Real> {
+pub fn rational(lit: &str) -> Option<Real> {
     let (mant, exp) = match lit.split_once(['e', 'E']) {
         Some((m, e)) => (m, e.parse::<i32>().ok()?),
         None => (lit, 0),
     };
+    let (neg, mant) = match mant.strip_prefix('-') {
+        Some(m) => (true, m),
+        None => (false, mant),
+    };
     let (int, frac) = mant.split_once('.').unwrap_or((mant, ""));
+    if !int.chars().chain(frac.chars()).all(|c| c.is_ascii_digit()) || exp.abs() > 400 {
+        return None;
+    }
     let mut num = format!("{int}{frac}").trim_start_matches('0').to_string();
     if num.is_empty() {
         num = "0".into();
@@ -260,20 +545,33 @@ fn rational(lit: &str) -> Option<Real> {
     } else {
         (num, format!("1{}", "0".repeat((-scale) as usize)))
     };
+    let num = if neg { format!("-{num}") } else { num };
     Real::from_rational_str(&num, &den)
 }
 
-/// Z3 prints rationals as `(/ 13.0 20.0)`; users read `0.65`.
+/// An f64 as an exact rational (its shortest round-trip decimal).
+pub fn real_of_f64(v: f64) -> Option<Real> {
+    if !v.is_finite() {
+        return None;
+    }
+    rational(&format!("{v:e}"))
+}
+
+/// Z3 prints rationals as `(/ 13.0 20.0)`; users read `0.65` (rounded to 1e-6 m or s,
+/// far below any tolerance of the robots modelled).
 fn decimal(r: &Real) -> String {
-    match r.as_rational() {
-        Some((n, d)) if d != 0 => {
-            let v = n as f64 / d as f64;
-            if d == 1 {
-                n.to_string()
-            } else {
-                format!("{v} (= {n}/{d})")
-            }
-        }
-        _ => r.to_string(),
+    let v = match r.as_rational() {
+        Some((n, 1)) => return n.to_string(),
+        Some((n, d)) if d != 0 => n as f64 / d as f64,
+        _ => match r.approx(17).parse::<f64>() {
+            Ok(v) => v,
+            Err(_) => return r.to_string(),
+        },
+    };
+    let rounded = (v * 1e6).round() / 1e6;
+    if rounded == 0.0 && v != 0.0 {
+        format!("{v:e}")
+    } else {
+        format!("{rounded}")
     }
 }

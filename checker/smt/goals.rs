@@ -1,0 +1,788 @@
+//! From obligations to satisfiability queries. Each [`Goal`] splits into [`Part`]s, one
+//! query each, so that a failure names exactly what failed (an assumption, two
+//! footprints, a duration). A part holds iff its query is unsatisfiable.
+//!
+//! How a primitive run by participant `p` is read (Def 3.4, Sec 3.4):
+//! - its state when it starts is `p.x` — the same variables the context Σ speaks of;
+//! - its state at time `t` of the motion is `p.x(t)`, at its end `p.x(end)`;
+//! - `old(x)` is the start state, parameters are the arguments, `clock` is `t`;
+//! - an input `w` is the connected participant's `w(t)` when that participant is part
+//!   of the same joint motion, and unconstrained otherwise;
+//! - the kind's invariant holds of every state (assumed, as in typing);
+//! - footprints are in the participant's frame: the world point `(x, y, z)` is moved
+//!   into it by the inverse of the participant's `pose`.
+
+use super::encode::{Encoder, Frame, Term, Unsupported};
+use crate::bounds::{self, Interval};
+use crate::hir::{Builtin, Expr, ExprKind, Global, PrimApp, Primitive, Program, RoleId, Slot, Sort, Var};
+use crate::obligation::{Goal, Obligation, Run, Side};
+use z3::ast::{Bool, Real};
+
+/// One question about an obligation.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Part {
+    /// `hyps ⇒ goal`.
+    Valid,
+    /// [AGCOMP] "compatible from Pre": part `i`'s precondition holds at the `dt`.
+    Pre(usize),
+    /// [AGCOMP]: the others' guarantees discharge part `i`'s assumption.
+    Assume(usize),
+    /// [AGCOMP]: the footprints of parts `i` and `j` are disjoint at every time.
+    Disjoint(usize, usize),
+    /// [AGCOMP]: the non-interruptible part `i`'s duration lies within part `j`'s.
+    Within(usize, usize),
+    /// [AGCOMP] with no non-interruptible part: the durations share a time.
+    Meet,
+    /// Separation: run `ra` of side `a` and run `rb` of side `b` never overlap.
+    Apart { a: usize, ra: usize, b: usize, rb: usize },
+    /// Def 3.4 (corrected direction), one item.
+    Refine(RefineItem),
+    /// [T-SESS]: the first motions of `r` and `s` start with disjoint footprints.
+    InitiallyApart { r: usize, s: usize },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RefineItem {
+    Pre,
+    Assume,
+    Guarantee,
+    Post,
+    Footprint,
+    Duration,
+}
+
+impl RefineItem {
+    pub fn text(self) -> &'static str {
+        match self {
+            RefineItem::Pre => "the abstract precondition implies the concrete one",
+            RefineItem::Assume => "the abstract assumption implies the concrete one",
+            RefineItem::Guarantee => "the concrete guarantee implies the abstract one",
+            RefineItem::Post => "the concrete postcondition implies the abstract one",
+            RefineItem::Footprint => "the concrete footprint lies within the abstract one",
+            RefineItem::Duration => "the durations nest (Def 3.4, corrected)",
+        }
+    }
+}
+
+/// A query: the part holds iff `assertions` (with the encoder's side conditions) are
+/// unsatisfiable. `point` and `times` name the variables of an overlap, if any.
+pub struct Query<'p> {
+    pub enc: Encoder<'p>,
+    pub assertions: Vec<Bool>,
+    pub point: Option<[Real; 3]>,
+    pub times: Vec<Real>,
+}
+
+/// What an obligation splits into; an `Err` settles it without a solver.
+pub enum Plan {
+    Parts(Vec<Part>),
+    /// Decided without a query (for example separation by boxes), with a note.
+    Holds(Option<String>),
+    /// Fails without a query, with the reason.
+    Fails(String),
+    Unknown(Unsupported),
+}
+
+pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
+    match &ob.goal {
+        Goal::Valid(_) => Plan::Parts(vec![Part::Valid]),
+        Goal::Compatible { parts } => {
+            let mut out = Vec::new();
+            for (i, (_, app)) in parts.iter().enumerate() {
+                let p = prog.prim(app.prim);
+                if !p.pre.is_true() {
+                    out.push(Part::Pre(i));
+                }
+                if !p.assume.is_true() {
+                    out.push(Part::Assume(i));
+                }
+            }
+            for i in 0..parts.len() {
+                for j in i + 1..parts.len() {
+                    let (a, b) = (prog.prim(parts[i].1.prim), prog.prim(parts[j].1.prim));
+                    if a.footprint.is_none() || b.footprint.is_none() {
+                        let who = if a.footprint.is_none() { &parts[i] } else { &parts[j] };
+                        return Plan::Fails(format!(
+                            "`{}` of `{}` declares no footprint, so it may occupy all space and meets every other footprint",
+                            prog.prim(who.1.prim).name,
+                            prog.role_name(who.0)
+                        ));
+                    }
+                    out.push(Part::Disjoint(i, j));
+                }
+            }
+            let non: Vec<usize> = (0..parts.len()).filter(|&i| !prog.prim(parts[i].1.prim).interruptible).collect();
+            match non.first() {
+                Some(&n) => out.extend((0..parts.len()).filter(|&j| j != n).map(|j| Part::Within(n, j))),
+                None if parts.len() > 1 => out.push(Part::Meet),
+                None => {}
+            }
+            Plan::Parts(out)
+        }
+        Goal::Separated { sides } => separation_plan(prog, sides),
+        Goal::Refines { concrete, abstract_, .. } => {
+            if abstract_.len() == 1 && abstract_[0] == *concrete {
+                return Plan::Holds(None); // a primitive refines itself
+            }
+            let c = prog.prim(concrete.prim);
+            if let Some(s) = abstract_.iter().map(|a| prog.prim(a.prim)).find(|s| s.interruptible != c.interruptible) {
+                return Plan::Fails(format!(
+                    "`{}` is {} but `{}` is {} (Def 3.4: refinement keeps interruptibility)",
+                    c.name,
+                    interruptibility(c),
+                    s.name,
+                    interruptibility(s)
+                ));
+            }
+            use RefineItem::*;
+            Plan::Parts([Pre, Assume, Guarantee, Post, Footprint, Duration].into_iter().map(Part::Refine).collect())
+        }
+        Goal::InitiallyDisjoint => {
+            let firsts = first_runs(prog);
+            let mut out = Vec::new();
+            for r in 0..firsts.len() {
+                for s in r + 1..firsts.len() {
+                    out.push(Part::InitiallyApart { r, s });
+                }
+            }
+            Plan::Parts(out)
+        }
+    }
+}
+
+fn interruptibility(p: &Primitive) -> &'static str {
+    if p.interruptible {
+        "interruptible"
+    } else {
+        "non-interruptible"
+    }
+}
+
+/// Builds the query of one part.
+pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Query<'p>, Unsupported> {
+    let mut q = Query { enc: Encoder::new(prog), assertions: Vec::new(), point: None, times: Vec::new() };
+    match (&ob.goal, part) {
+        (Goal::Valid(goal), Part::Valid) => {
+            hyps(&mut q, &ob.hyps)?;
+            let g = q.enc.boolean(goal)?;
+            q.assertions.push(g.not());
+        }
+        (Goal::Compatible { parts }, _) => compat(&mut q, &ob.hyps, parts, part)?,
+        (Goal::Separated { sides }, Part::Apart { a, ra, b, rb }) => {
+            let (x, y) = (&sides[*a].runs[*ra], &sides[*b].runs[*rb]);
+            let p = world_point(&mut q);
+            let mut times = Vec::new();
+            for (run, tag) in [(x, "t1"), (y, "t2")] {
+                hyps(&mut q, &run.hyps)?;
+                let t = q.enc.named_real(if tag == "t1" { "time 1" } else { "time 2" });
+                let inst = Inst::new(&mut q.enc, run.role, &run.app, t.clone(), tag)?;
+                inst.started(&mut q)?;
+                inst.running(&mut q)?;
+                inst.occupies(&mut q, &p)?;
+                times.push(t);
+            }
+            q.point = Some(p);
+            q.times = times;
+        }
+        (Goal::Refines { role, concrete, abstract_ }, Part::Refine(item)) => {
+            refine(&mut q, *role, concrete, abstract_, *item)?
+        }
+        (Goal::InitiallyDisjoint, Part::InitiallyApart { r, s }) => {
+            let firsts = first_runs(prog);
+            hyps(&mut q, &ob.hyps)?;
+            let p = world_point(&mut q);
+            let zero = Int0::real();
+            let mut any = Vec::new();
+            for (role, apps) in [&firsts[*r], &firsts[*s]] {
+                // Whichever first motion the participant takes, it starts inside it.
+                let mut inside = Vec::new();
+                for app in apps {
+                    let inst = Inst::new(&mut q.enc, *role, app, zero.clone(), "0")?;
+                    let fp = inst.footprint(&mut q.enc, &p)?;
+                    let start_is_now = inst.at_start(&mut q.enc)?;
+                    inside.push(Bool::and(&[fp, start_is_now]));
+                }
+                any.push(Bool::or(&inside));
+            }
+            q.assertions.extend(any);
+            q.point = Some(p);
+        }
+        _ => return Err(Unsupported("an obligation split into a part of another kind".into())),
+    }
+    Ok(q)
+}
+
+struct Int0;
+impl Int0 {
+    fn real() -> Real {
+        z3::ast::Int::from_i64(0).to_real()
+    }
+}
+
+fn hyps(q: &mut Query, hs: &[Expr]) -> Result<(), Unsupported> {
+    for h in hs {
+        let b = q.enc.boolean(h)?;
+        q.assertions.push(b);
+    }
+    Ok(())
+}
+
+fn world_point(q: &mut Query) -> [Real; 3] {
+    [q.enc.named_real("point.x"), q.enc.named_real("point.y"), q.enc.named_real("point.z")]
+}
+
+/// A participant running a primitive, encoded.
+struct Inst<'a> {
+    role: RoleId,
+    prim: &'a Primitive,
+    frame: Frame,
+    /// The state at the start (`role.x`), for the frame of durations and `Pre`.
+    start: std::collections::BTreeMap<Slot, Term>,
+}
+
+impl<'a> Inst<'a> {
+    fn new(
+        enc: &mut Encoder<'a>,
+        role: RoleId,
+        app: &PrimApp,
+        clock: Real,
+        tag: &str,
+    ) -> Result<Inst<'a>, Unsupported> {
+        let prog = enc.prog();
+        let prim = prog.prim(app.prim);
+        let kind = prog.kind_of(role);
+        let mut frame = Frame::default();
+        let mut start = std::collections::BTreeMap::new();
+        for i in 0..kind.state.len() {
+            let slot = Slot::State(i);
+            let s = enc.role_var(role, slot)?;
+            frame.old.push(s.clone());
+            start.insert(slot, s);
+            let (n, sort) = kind.var(slot).clone();
+            let now = enc.named(&format!("{}.{n}({tag})", prog.role_name(role)), &sort)?;
+            frame.own.insert(slot, now);
+        }
+        for i in 0..kind.inputs.len() {
+            let slot = Slot::Input(i);
+            let (n, sort) = kind.var(slot).clone();
+            // Connected later by `connect` when the source moves in the same motion.
+            let now = enc.named(&format!("{}.{n}({tag})", prog.role_name(role)), &sort)?;
+            frame.own.insert(slot, now.clone());
+            let s = enc.named(&format!("{}.{n}", prog.role_name(role)), &sort)?;
+            start.insert(slot, s);
+        }
+        frame.params = app.args.iter().map(|a| enc.any(a)).collect::<Result<_, _>>()?;
+        frame.clock = Some(clock);
+        Ok(Inst { role, prim, frame, start })
+    }
+
+    fn start_frame(&self) -> Frame {
+        Frame { own: self.start.clone(), ..self.frame.clone() }
+    }
+
+    fn pred(&self, enc: &mut Encoder, e: &Expr, frame: &Frame) -> Result<Bool, Unsupported> {
+        enc.in_frame(frame, |enc| enc.boolean(e))
+    }
+
+    /// `now` equals the start state (for time 0).
+    fn at_start(&self, enc: &mut Encoder) -> Result<Bool, Unsupported> {
+        let mut eqs = Vec::new();
+        for (slot, now) in &self.frame.own {
+            if let (Term::R(a), Some(Term::R(b))) = (now, self.start.get(slot)) {
+                eqs.push(a.eq(b));
+            }
+        }
+        let _ = enc;
+        Ok(Bool::and(&eqs))
+    }
+
+    /// The motion started: its precondition and the invariant held at the start.
+    fn started(&self, q: &mut Query) -> Result<(), Unsupported> {
+        let sf = self.start_frame();
+        let pre = self.pred(&mut q.enc, &self.prim.pre, &sf)?;
+        q.assertions.push(pre);
+        if let Some(inv) = &q.enc.prog().kind(self.prim.kind).invariant.clone() {
+            let b = self.pred(&mut q.enc, inv, &sf)?;
+            q.assertions.push(b);
+        }
+        Ok(())
+    }
+
+    /// The motion is running at its clock: `0 <= t <= hi`, its guarantee and the
+    /// invariant hold of the state now.
+    fn running(&self, q: &mut Query) -> Result<(), Unsupported> {
+        let t = self.frame.clock.clone().unwrap_or_else(Int0::real);
+        q.assertions.push(t.ge(Int0::real()));
+        if let Some(hi) = &self.prim.duration.hi {
+            let hi = q.enc.in_frame(&self.start_frame(), |enc| enc.real(hi))?;
+            q.assertions.push(t.le(&hi));
+        }
+        let g = self.pred(&mut q.enc, &self.prim.guarantee, &self.frame)?;
+        q.assertions.push(g);
+        if let Some(inv) = &q.enc.prog().kind(self.prim.kind).invariant.clone() {
+            let b = self.pred(&mut q.enc, inv, &self.frame)?;
+            q.assertions.push(b);
+        }
+        Ok(())
+    }
+
+    /// The world point `p` is in the footprint now.
+    fn occupies(&self, q: &mut Query, p: &[Real; 3]) -> Result<(), Unsupported> {
+        let fp = self.footprint(&mut q.enc, p)?;
+        q.assertions.push(fp);
+        Ok(())
+    }
+
+    fn footprint(&self, enc: &mut Encoder, p: &[Real; 3]) -> Result<Bool, Unsupported> {
+        let Some(fp) = &self.prim.footprint else { return Ok(Bool::from_bool(true)) };
+        let local = to_local(enc, self.role, p)?;
+        let frame = Frame { point: Some(local), ..self.frame.clone() };
+        self.pred(enc, &fp.pred, &frame)
+    }
+
+    /// `(lo, hi)` of the duration, in the start frame; `hi = None` for infinity.
+    fn duration(&self, enc: &mut Encoder) -> Result<(Real, Option<Real>), Unsupported> {
+        let sf = self.start_frame();
+        let lo = enc.in_frame(&sf, |enc| enc.real(&self.prim.duration.lo))?;
+        let hi = match &self.prim.duration.hi {
+            Some(h) => Some(enc.in_frame(&sf, |enc| enc.real(h))?),
+            None => None,
+        };
+        Ok((lo, hi))
+    }
+}
+
+/// The world point moved into `role`'s frame: `R^T (p - o)` for `pose(o, roll, pitch,
+/// yaw)`, `R = Rz(yaw) Ry(pitch) Rx(roll)`. Angles that are literally zero are skipped;
+/// others go through the encoder's sound trigonometry.
+fn to_local(enc: &mut Encoder, role: RoleId, p: &[Real; 3]) -> Result<[Real; 3], Unsupported> {
+    let pose = enc.prog().role(role).pose.clone();
+    let mut v = p.clone();
+    for (k, c) in v.iter_mut().enumerate() {
+        if let Some(o) = pose.get(k) {
+            if !is_zero(enc.prog(), o) {
+                *c = Real::sub(&[c.clone(), enc.real(o)?]);
+            }
+        }
+    }
+    // Undo yaw (about z), then pitch (about y), then roll (about x).
+    for (idx, axes) in [(5usize, (0usize, 1usize)), (4, (2, 0)), (3, (1, 2))] {
+        let Some(angle) = pose.get(idx) else { continue };
+        if is_zero(enc.prog(), angle) {
+            continue;
+        }
+        let call = |f: Builtin| Expr { kind: ExprKind::Call(f, vec![angle.clone()]), sort: Sort::Real, loc: angle.loc };
+        let (c, s) = (enc.real(&call(Builtin::Cos))?, enc.real(&call(Builtin::Sin))?);
+        let (a, b) = (v[axes.0].clone(), v[axes.1].clone());
+        // Rotation by -angle in the (a, b) plane.
+        v[axes.0] = Real::add(&[Real::mul(&[c.clone(), a.clone()]), Real::mul(&[s.clone(), b.clone()])]);
+        v[axes.1] = Real::sub(&[Real::mul(&[c, b]), Real::mul(&[s, a])]);
+    }
+    Ok(v)
+}
+
+fn is_zero(prog: &Program, e: &Expr) -> bool {
+    bounds::eval(prog, e, &bounds::closed).is_some_and(|i| i.is_exactly(0.0))
+}
+
+fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], part: &Part) -> Result<(), Unsupported> {
+    hyps(q, hs)?;
+    let t = q.enc.named_real("time");
+    let mut insts = Vec::new();
+    for (r, app) in parts {
+        insts.push(Inst::new(&mut q.enc, *r, app, t.clone(), "t")?);
+    }
+    connect(q, &mut insts);
+    match part {
+        Part::Pre(i) => {
+            let inst = &insts[*i];
+            if let Some(inv) = q.enc.prog().kind(inst.prim.kind).invariant.clone() {
+                let b = inst.pred(&mut q.enc, &inv, &inst.start_frame())?;
+                q.assertions.push(b);
+            }
+            let pre = inst.pred(&mut q.enc, &inst.prim.pre, &inst.start_frame())?;
+            q.assertions.push(pre.not());
+        }
+        Part::Assume(i) => {
+            for (j, inst) in insts.iter().enumerate() {
+                inst.started(q)?;
+                if j == *i {
+                    // Its own guarantee is not assumed: that would be circular.
+                    q.assertions.push(t.ge(Int0::real()));
+                } else {
+                    inst.running(q)?;
+                }
+            }
+            let a = insts[*i].pred(&mut q.enc, &insts[*i].prim.assume, &insts[*i].frame)?;
+            q.assertions.push(a.not());
+        }
+        Part::Disjoint(i, j) => {
+            for inst in &insts {
+                inst.started(q)?;
+                inst.running(q)?;
+            }
+            let p = world_point(q);
+            insts[*i].occupies(q, &p)?;
+            insts[*j].occupies(q, &p)?;
+            q.point = Some(p);
+            q.times = vec![t];
+        }
+        Part::Within(n, j) => {
+            for inst in &insts {
+                inst.started(q)?;
+            }
+            let (nlo, nhi) = insts[*n].duration(&mut q.enc)?;
+            let (jlo, jhi) = insts[*j].duration(&mut q.enc)?;
+            let inside = match (nhi, jhi) {
+                (_, None) => jlo.le(&nlo),
+                (Some(nhi), Some(jhi)) => Bool::and(&[jlo.le(&nlo), nhi.le(&jhi)]),
+                // An unbounded non-interruptible duration never fits a bounded one.
+                (None, Some(_)) => Bool::from_bool(false),
+            };
+            q.assertions.push(inside.not());
+        }
+        Part::Meet => {
+            for inst in &insts {
+                inst.started(q)?;
+            }
+            let mut ds = Vec::new();
+            for inst in &insts {
+                ds.push(inst.duration(&mut q.enc)?);
+            }
+            let mut ok = Vec::new();
+            for (lo, _) in &ds {
+                for (_, hi) in &ds {
+                    if let Some(hi) = hi {
+                        ok.push(lo.le(hi));
+                    }
+                }
+            }
+            q.assertions.push(Bool::and(&ok).not());
+        }
+        _ => return Err(Unsupported("an [AGCOMP] obligation split into a part of another kind".into())),
+    }
+    Ok(())
+}
+
+/// Inputs read the state of the participant they are connected to, when it moves in
+/// the same joint motion.
+fn connect(q: &mut Query, insts: &mut [Inst]) {
+    let prog = q.enc.prog();
+    let mut eqs = Vec::new();
+    for a in insts.iter() {
+        for (i, src) in prog.role(a.role).input_sources.iter().enumerate() {
+            let Some(src) = src else { continue };
+            let Some(b) = insts.iter().find(|b| b.role == *src) else { continue };
+            let name = &prog.kind_of(a.role).inputs[i].0;
+            let Some((slot, _)) = prog.kind_of(*src).slot(name) else { continue };
+            match (a.frame.own.get(&Slot::Input(i)), b.frame.own.get(&slot)) {
+                (Some(Term::R(x)), Some(Term::R(y))) => eqs.push(x.eq(y)),
+                (Some(Term::I(x)), Some(Term::I(y))) => eqs.push(x.eq(y)),
+                (Some(Term::B(x)), Some(Term::B(y))) => eqs.push(x.eq(y)),
+                _ => {}
+            }
+        }
+    }
+    q.assertions.extend(eqs);
+}
+
+fn refine(q: &mut Query, role: RoleId, c: &PrimApp, ss: &[PrimApp], item: RefineItem) -> Result<(), Unsupported> {
+    let t = q.enc.named_real("time");
+    let ci = Inst::new(&mut q.enc, role, c, t.clone(), "t")?;
+    let mut sis = Vec::new();
+    for s in ss {
+        let mut si = Inst::new(&mut q.enc, role, s, t.clone(), "t")?;
+        // The same participant: the abstract primitive reads the same state.
+        si.frame.own = ci.frame.own.clone();
+        sis.push(si);
+    }
+    let sf = ci.start_frame();
+    // Pre_S of the meet is the disjunction of the abstract preconditions.
+    let mut pres = Vec::new();
+    for si in &sis {
+        pres.push(si.pred(&mut q.enc, &si.prim.pre, &sf)?);
+    }
+    let pre_s = Bool::or(&pres);
+    let all =
+        |q: &mut Query, f: &dyn Fn(&Primitive) -> &Expr, frame: &Frame, conj: bool| -> Result<Bool, Unsupported> {
+            let mut bs = Vec::new();
+            for si in &sis {
+                let fr = Frame { params: si.frame.params.clone(), ..frame.clone() };
+                bs.push(si.pred(&mut q.enc, f(si.prim), &fr)?);
+            }
+            Ok(if conj { Bool::and(&bs) } else { Bool::or(&bs) })
+        };
+    if let Some(inv) = q.enc.prog().kind(ci.prim.kind).invariant.clone() {
+        let b = ci.pred(&mut q.enc, &inv, &sf)?;
+        q.assertions.push(b);
+    }
+    match item {
+        RefineItem::Pre => {
+            let pc = ci.pred(&mut q.enc, &ci.prim.pre, &sf)?;
+            q.assertions.extend([pre_s, pc.not()]);
+        }
+        RefineItem::Assume => {
+            let a_s = all(q, &|p| &p.assume, &ci.frame, false)?;
+            let a_c = ci.pred(&mut q.enc, &ci.prim.assume, &ci.frame)?;
+            q.assertions.extend([pre_s, t.ge(Int0::real()), a_s, a_c.not()]);
+        }
+        RefineItem::Guarantee | RefineItem::Footprint => {
+            q.assertions.push(pre_s);
+            ci.running(q)?;
+            if item == RefineItem::Guarantee {
+                let g_s = all(q, &|p| &p.guarantee, &ci.frame, true)?;
+                q.assertions.push(g_s.not());
+            } else {
+                let p = world_point(q);
+                let fc = ci.footprint(&mut q.enc, &p)?;
+                let mut fs = Vec::new();
+                for si in &sis {
+                    let si_now =
+                        Inst { frame: Frame { own: ci.frame.own.clone(), ..si.frame.clone() }, ..clone_inst(si) };
+                    fs.push(si_now.footprint(&mut q.enc, &p)?);
+                }
+                q.assertions.extend([fc, Bool::and(&fs).not()]);
+                q.point = Some(p);
+                q.times = vec![t];
+            }
+        }
+        RefineItem::Post => {
+            let end = end_frame(&mut q.enc, &ci)?;
+            let pc = ci.pred(&mut q.enc, &ci.prim.post, &end)?;
+            let p_s = all(q, &|p| &p.post, &end, true)?;
+            if let Some(inv) = q.enc.prog().kind(ci.prim.kind).invariant.clone() {
+                let b = ci.pred(&mut q.enc, &inv, &end)?;
+                q.assertions.push(b);
+            }
+            q.assertions.extend([pre_s, pc, p_s.not()]);
+        }
+        RefineItem::Duration => {
+            q.assertions.push(pre_s);
+            let (clo, chi) = ci.duration(&mut q.enc)?;
+            // The meet's duration is the intersection of the abstract ones.
+            let mut nested = Vec::new();
+            for si in &sis {
+                let si_start = Inst { frame: Frame { own: ci.start.clone(), ..si.frame.clone() }, ..clone_inst(si) };
+                let (slo, shi) = si_start.duration(&mut q.enc)?;
+                let (outer_lo, outer_hi, inner_lo, inner_hi) = if ci.prim.interruptible {
+                    (clo.clone(), chi.clone(), slo, shi) // D_s ⊆ D_c
+                } else {
+                    (slo, shi, clo.clone(), chi.clone()) // D_c ⊆ D_s
+                };
+                let hi_ok = match (inner_hi, outer_hi) {
+                    (_, None) => Bool::from_bool(true),
+                    (Some(i), Some(o)) => i.le(&o),
+                    (None, Some(_)) => Bool::from_bool(false),
+                };
+                nested.push(Bool::and(&[outer_lo.le(&inner_lo), hi_ok]));
+            }
+            q.assertions.push(Bool::and(&nested).not());
+        }
+    }
+    Ok(())
+}
+
+fn clone_inst<'a>(i: &Inst<'a>) -> Inst<'a> {
+    Inst { role: i.role, prim: i.prim, frame: i.frame.clone(), start: i.start.clone() }
+}
+
+/// The frame at the end of the motion: own variables are fresh `role.x(end)`.
+fn end_frame(enc: &mut Encoder, inst: &Inst) -> Result<Frame, Unsupported> {
+    let prog = enc.prog();
+    let kind = prog.kind_of(inst.role);
+    let mut own = inst.frame.own.clone();
+    for i in 0..kind.state.len() {
+        let (n, sort) = kind.var(Slot::State(i)).clone();
+        own.insert(Slot::State(i), enc.named(&format!("{}.{n}(end)", prog.role_name(inst.role)), &sort)?);
+    }
+    Ok(Frame { own, clock: None, ..inst.frame.clone() })
+}
+
+/// For [T-SESS]: each participant's possible first primitives, in role order; roles
+/// that never move are left out (they have no footprint to place).
+pub fn first_runs(prog: &Program) -> Vec<(RoleId, Vec<PrimApp>)> {
+    let Some(chor) = &prog.choreography else { return Vec::new() };
+    let mut out = Vec::new();
+    for r in prog.role_ids() {
+        let mut apps = Vec::new();
+        firsts(&chor.body, r, &mut apps);
+        if !apps.is_empty() {
+            out.push((r, apps));
+        }
+    }
+    out
+}
+
+/// Collects `r`'s first primitives in `g`; returns whether every path through `g`
+/// has one (so that what follows `g` cannot be first).
+fn firsts(g: &Global, r: RoleId, out: &mut Vec<PrimApp>) -> bool {
+    match g {
+        Global::Motion(m) => match m.parts.iter().find(|(p, _)| *p == r) {
+            Some((_, app)) => {
+                if !out.contains(app) {
+                    out.push(app.clone());
+                }
+                true
+            }
+            None => false,
+        },
+        Global::Msg(_) | Global::Var(_) | Global::End(_) => false,
+        Global::Seq(items, _) => items.iter().any(|i| firsts(i, r, out)),
+        Global::Choice(bs, _) => {
+            let mut all = true;
+            for b in bs {
+                all &= firsts(b, r, out);
+            }
+            all
+        }
+        Global::Par(sides, _) => sides.iter().any(|s| firsts(s, r, out)),
+        Global::Rec { body, .. } => firsts(body, r, out),
+    }
+}
+
+/// Separation: first by boxes (a sound enclosure of each run's footprint in the world;
+/// disjoint boxes are the partition of [AGCOMP], inferred), then by queries for the
+/// pairs of runs whose boxes meet.
+fn separation_plan(prog: &Program, sides: &[Side]) -> Plan {
+    // Every side of `*` moves (Def 4.4 (3)); a side listing no run means the context
+    // stage recorded nothing, and "nothing to compare" must not read as "separated".
+    if let Some(i) = sides.iter().position(|s| s.runs.is_empty()) {
+        return Plan::Unknown(Unsupported(format!("a side of `*` (side {}) whose motions were not recorded", i + 1)));
+    }
+    let boxes: Vec<Option<[Interval; 3]>> = sides.iter().map(|s| side_box(prog, s)).collect();
+    let mut parts = Vec::new();
+    for a in 0..sides.len() {
+        for b in a + 1..sides.len() {
+            if let (Some(x), Some(y)) = (&boxes[a], &boxes[b]) {
+                if (0..3).any(|k| x[k].disjoint(y[k])) {
+                    continue;
+                }
+            }
+            for ra in 0..sides[a].runs.len() {
+                for rb in 0..sides[b].runs.len() {
+                    parts.push(Part::Apart { a, ra, b, rb });
+                }
+            }
+        }
+    }
+    if parts.is_empty() {
+        let described: Vec<String> = boxes
+            .iter()
+            .zip(sides)
+            .filter_map(|(b, s)| {
+                let b = b.as_ref()?;
+                let who: Vec<&str> = s.roles.iter().map(|r| prog.role_name(*r)).collect();
+                Some(format!(
+                    "{} within x ∈ [{:.3}, {:.3}], y ∈ [{:.3}, {:.3}], z ∈ [{:.3}, {:.3}]",
+                    who.join(", "),
+                    b[0].lo,
+                    b[0].hi,
+                    b[1].lo,
+                    b[1].hi,
+                    b[2].lo,
+                    b[2].hi
+                ))
+            })
+            .collect();
+        return Plan::Holds((!described.is_empty()).then(|| format!("partition inferred: {}", described.join("; "))));
+    }
+    Plan::Parts(parts)
+}
+
+/// A world box around every footprint of a side, if each can be bounded.
+fn side_box(prog: &Program, side: &Side) -> Option<[Interval; 3]> {
+    let mut acc: Option<[Interval; 3]> = None;
+    for run in &side.runs {
+        let b = run_box(prog, run)?;
+        acc = Some(match acc {
+            None => b,
+            Some(a) => [a[0].hull(b[0]), a[1].hull(b[1]), a[2].hull(b[2])],
+        });
+    }
+    acc
+}
+
+/// A world box around one run's footprint, from the ranges its context, precondition,
+/// guarantee and invariant give the variables.
+pub fn run_box(prog: &Program, run: &Run) -> Option<[Interval; 3]> {
+    let prim = prog.prim(run.app.prim);
+    let fp = prim.footprint.as_ref()?;
+    // Ranges of the shared vocabulary (start state, values) from the context.
+    let inv = prog.kind(prim.kind).invariant.as_ref();
+    let start: Vec<&Expr> = run.hyps.iter().collect();
+    let shared = bounds::ranges_from(prog, &start, &bounds::closed);
+    let shared_lookup = |v: &Var| shared.iter().find(|(k, _)| k == v).map(|(_, i)| *i);
+    // In the primitive's frame: old(x) and the start are the participant's `Role` vars.
+    let role = run.role;
+    let args = &run.app.args;
+    let lift = |v: &Var| -> Option<Interval> {
+        match v {
+            Var::Old(i) => shared_lookup(&Var::Role(role, Slot::State(*i))),
+            Var::Param(i) => args.get(*i).and_then(|a| bounds::eval(prog, a, &shared_lookup)),
+            Var::Clock => Some(Interval { lo: 0.0, hi: f64::INFINITY }),
+            _ => None,
+        }
+    };
+    let mut facts: Vec<&Expr> = vec![&prim.guarantee];
+    facts.extend(inv);
+    let own = bounds::ranges_from(prog, &facts, &lift);
+    // Old(x) gets its range from the start facts and from the invariant over Own.
+    let all = |v: &Var| -> Option<Interval> {
+        let o = own.iter().find(|(k, _)| k == v).map(|(_, i)| *i);
+        let l = lift(v);
+        match (o, l) {
+            (Some(a), Some(b)) => Some(a.meet(b)),
+            (a, b) => a.or(b),
+        }
+    };
+    let point = |v: &Var| match v {
+        Var::Point(k) => Some(*k),
+        _ => None,
+    };
+    let local = bounds::point_box(prog, &fp.pred, &point, &all);
+    if !local.iter().all(Interval::is_finite) {
+        return None;
+    }
+    to_world(prog, role, local)
+}
+
+/// Moves a box from `role`'s frame into the world (interval arithmetic on the pose).
+fn to_world(prog: &Program, role: RoleId, b: [Interval; 3]) -> Option<[Interval; 3]> {
+    let pose = &prog.role(role).pose;
+    let num = |i: usize| -> Option<Interval> {
+        match pose.get(i) {
+            Some(e) => bounds::eval(prog, e, &bounds::closed),
+            None => Some(Interval::point(0.0)),
+        }
+    };
+    let mut v = b;
+    // Apply roll (x), pitch (y), yaw (z): world = o + Rz Ry Rx local.
+    for (idx, (a, c)) in [(3usize, (1usize, 2usize)), (4, (2, 0)), (5, (0, 1))] {
+        let angle = num(idx)?;
+        if angle.is_exactly(0.0) {
+            continue;
+        }
+        let (cs, sn) = (bounds::trig(Builtin::Cos, Some(angle)), bounds::trig(Builtin::Sin, Some(angle)));
+        let (x, y) = (v[a], v[c]);
+        v[a] = add(mul(cs, x), neg(mul(sn, y)));
+        v[c] = add(mul(sn, x), mul(cs, y));
+    }
+    for (k, c) in v.iter_mut().enumerate() {
+        *c = add(*c, num(k)?);
+    }
+    Some(v)
+}
+
+fn add(a: Interval, b: Interval) -> Interval {
+    Interval::new(a.lo + b.lo, a.hi + b.hi)
+}
+fn neg(a: Interval) -> Interval {
+    Interval { lo: -a.hi, hi: -a.lo }
+}
+fn mul(a: Interval, b: Interval) -> Interval {
+    let ps = [a.lo * b.lo, a.lo * b.hi, a.hi * b.lo, a.hi * b.hi];
+    Interval::new(
+        ps.iter().copied().fold(f64::INFINITY, f64::min),
+        ps.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+    )
+}
