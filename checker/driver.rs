@@ -172,19 +172,21 @@ impl Run {
     /// Decides the obligations with the SMT stage, one check per rule family (total
     /// choice, compatibility, separation, typing obligations), each timed on its own.
     fn obligations(&mut self, db: &SourceDb, prog: &crate::hir::Program, obligations: &[Obligation], cfg: &SmtConfig) {
-        let mut groups: BTreeMap<&'static str, Vec<&Obligation>> = BTreeMap::new();
-        for ob in obligations {
-            groups.entry(ob.rule.check()).or_default().push(ob);
+        // One pool of workers for everything; the time of each check is the time its
+        // obligations took on the workers.
+        let labels: Vec<String> = obligations.iter().map(|o| label(db, o)).collect();
+        let results = smt::discharge(prog, obligations, &labels, cfg);
+        let mut groups: BTreeMap<&'static str, Vec<(&Obligation, Decision, smt::Stats)>> = BTreeMap::new();
+        for (ob, (d, st)) in obligations.iter().zip(results) {
+            groups.entry(ob.rule.check()).or_default().push((ob, d, st));
         }
         for (name, obs) in groups {
-            let t = Instant::now();
-            let owned: Vec<Obligation> = obs.iter().map(|o| (*o).clone()).collect();
-            let labels: Vec<String> = owned.iter().map(|o| label(db, o)).collect();
-            let (decisions, stats) = smt::discharge(prog, &owned, &labels, cfg);
-            let millis = t.elapsed().as_secs_f64() * 1000.0;
+            let total = obs.len();
+            let mut stats = smt::Stats::default();
             let (mut failed, mut unknown) = (0, 0);
             let mut undecided = Vec::new();
-            for (ob, d) in owned.iter().zip(decisions) {
+            for (ob, d, st) in obs {
+                stats.add(&st);
                 match d {
                     Decision::Holds(note) => self.partitions.extend(note.map(|n| format!("{}: {n}", where_(db, ob)))),
                     Decision::Fails(f) => {
@@ -197,6 +199,7 @@ impl Run {
                     }
                 }
             }
+            let millis = stats.millis;
             const SHOWN: usize = 20;
             for (ob, part, why) in undecided.iter().take(SHOWN) {
                 let mut d = Diagnostic::note_at(Code::Undecided, ob.span, format!("could not decide {}", ob.what))
@@ -231,7 +234,7 @@ impl Run {
             };
             let mut detail = format!(
                 "{} obligation(s), {} quer{}",
-                owned.len(),
+                total,
                 stats.queries,
                 if stats.queries == 1 { "y" } else { "ies" }
             );

@@ -16,6 +16,7 @@ use super::encode::{Encoder, Frame, Term, Unsupported};
 use crate::bounds::{self, Interval};
 use crate::hir::{Builtin, Expr, ExprKind, Global, PrimApp, Primitive, Program, RoleId, Slot, Sort, Var};
 use crate::obligation::{Goal, Obligation, Run, Side};
+use std::collections::HashSet;
 use z3::ast::{Bool, Real};
 
 /// One question about an obligation.
@@ -163,7 +164,8 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
     let mut q = Query { enc: Encoder::new(prog), assertions: Vec::new(), point: None, times: Vec::new() };
     match (&ob.goal, part) {
         (Goal::Valid(goal), Part::Valid) => {
-            hyps(&mut q, &ob.hyps)?;
+            let seeds = vars_of([goal]);
+            hyps(&mut q, &slice(&ob.hyps, seeds))?;
             let g = q.enc.boolean(goal)?;
             q.assertions.push(g.not());
         }
@@ -173,7 +175,7 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
             let p = world_point(&mut q);
             let mut times = Vec::new();
             for (run, tag) in [(x, "t1"), (y, "t2")] {
-                hyps(&mut q, &run.hyps)?;
+                hyps(&mut q, &slice(&run.hyps, seeds_of(prog, &[(run.role, run.app.clone())])))?;
                 let t = q.enc.named_real(if tag == "t1" { "time 1" } else { "time 2" });
                 let inst = Inst::new(&mut q.enc, run.role, &run.app, t.clone(), tag)?;
                 inst.started(&mut q)?;
@@ -189,7 +191,11 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
         }
         (Goal::InitiallyDisjoint, Part::InitiallyApart { r, s }) => {
             let firsts = first_runs(prog);
-            hyps(&mut q, &ob.hyps)?;
+            let mut involved = Vec::new();
+            for (role, apps) in [&firsts[*r], &firsts[*s]] {
+                involved.extend(apps.iter().map(|a| (*role, a.clone())));
+            }
+            hyps(&mut q, &slice(&ob.hyps, seeds_of(prog, &involved)))?;
             let p = world_point(&mut q);
             let zero = Int0::real();
             let mut any = Vec::new();
@@ -217,6 +223,64 @@ impl Int0 {
     fn real() -> Real {
         z3::ast::Int::from_i64(0).to_real()
     }
+}
+
+/// The variables of some expressions (constants excepted).
+fn vars_of<'e>(es: impl IntoIterator<Item = &'e Expr>) -> HashSet<Var> {
+    let mut out = HashSet::new();
+    for e in es {
+        e.visit_vars(&mut |v, _| {
+            if !matches!(v, Var::Const(_)) {
+                out.insert(v.clone());
+            }
+        });
+    }
+    out
+}
+
+/// What the hypotheses of a motion query may be about: the participants' variables
+/// (now and at their latest snapshot), their input sources', and the arguments'.
+fn seeds_of(prog: &Program, parts: &[(RoleId, PrimApp)]) -> HashSet<Var> {
+    let mut out = vars_of(parts.iter().flat_map(|(_, a)| a.args.iter()));
+    for (r, _) in parts {
+        let mut roles = vec![*r];
+        roles.extend(prog.role(*r).input_sources.iter().flatten().copied());
+        for role in roles {
+            let kind = prog.kind_of(role);
+            for i in 0..kind.state.len() {
+                out.insert(Var::Role(role, Slot::State(i)));
+                out.insert(Var::Snap(role, Slot::State(i)));
+            }
+            for i in 0..kind.inputs.len() {
+                out.insert(Var::Role(role, Slot::Input(i)));
+            }
+        }
+    }
+    out
+}
+
+/// The hypotheses connected to `seeds` through shared variables (the cone of
+/// influence). Dropping the others keeps queries small and lets identical questions
+/// about different participants share a cache entry. It is sound: fewer hypotheses
+/// can only turn "holds" into "fails" — and only when the dropped ones contradict each
+/// other, i.e. the point is unreachable, which is reported rather than hidden.
+fn slice(hs: &[Expr], mut seeds: HashSet<Var>) -> Vec<Expr> {
+    let vars: Vec<HashSet<Var>> = hs.iter().map(|h| vars_of([h])).collect();
+    let mut keep = vec![false; hs.len()];
+    loop {
+        let mut grew = false;
+        for (i, vs) in vars.iter().enumerate() {
+            if !keep[i] && (vs.is_empty() || vs.iter().any(|v| seeds.contains(v))) {
+                keep[i] = true;
+                grew = true;
+                seeds.extend(vs.iter().cloned());
+            }
+        }
+        if !grew {
+            break;
+        }
+    }
+    hs.iter().zip(keep).filter(|(_, k)| *k).map(|(h, _)| h.clone()).collect()
 }
 
 fn hyps(q: &mut Query, hs: &[Expr]) -> Result<(), Unsupported> {
@@ -386,7 +450,7 @@ fn is_zero(prog: &Program, e: &Expr) -> bool {
 }
 
 fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], part: &Part) -> Result<(), Unsupported> {
-    hyps(q, hs)?;
+    hyps(q, &slice(hs, seeds_of(q.enc.prog(), parts)))?;
     let t = q.enc.named_real("time");
     let mut insts = Vec::new();
     for (r, app) in parts {

@@ -12,7 +12,7 @@
 //! - **Parallelism.** Obligations are discharged on `jobs` worker threads, each with
 //!   its own Z3 context (the `z3` crate's thread-local context).
 //! - **Timeouts.** Each query has a deadline enforced by a watchdog that interrupts
-//!   the context (see [`check_with_deadline`] for why not Z3's own `timeout`).
+//!   the context (see [`Watchdog`] for why not Z3's own `timeout`).
 //! - **Dumping.** With a dump directory, every query is written as an `.smt2` file
 //!   named after its rule and source position.
 
@@ -120,6 +120,17 @@ pub struct Stats {
     pub cached: usize,
     /// Obligations settled without Z3 (trivial, or separated by boxes).
     pub folded: usize,
+    /// Time spent deciding (on the worker thread that did it).
+    pub millis: f64,
+}
+
+impl Stats {
+    pub fn add(&mut self, o: &Stats) {
+        self.queries += o.queries;
+        self.cached += o.cached;
+        self.folded += o.folded;
+        self.millis += o.millis;
+    }
 }
 
 /// Decides whether `hyps ⇒ goal` is valid (one query, no cache).
@@ -131,23 +142,21 @@ pub fn check_valid(prog: &Program, hyps: &[Expr], goal: &Expr, cfg: &SmtConfig) 
         hyps: hyps.to_vec(),
         goal: Goal::Valid(goal.clone()),
     };
-    let cache = Mutex::new(HashMap::new());
-    let ctx = Worker { prog, cfg, cache: &cache, labels: &[], dumped: &AtomicUsize::new(0) };
-    match ctx.decide(0, &ob).0 {
+    match discharge(prog, &[ob], &[], &SmtConfig { jobs: 1, ..cfg.clone() }).remove(0).0 {
         Decision::Holds(_) => Verdict::Holds,
         Decision::Fails(f) => Verdict::Fails(f.values),
         Decision::Unknown { why, .. } => Verdict::Unknown(why),
     }
 }
 
-/// Decides every obligation, in parallel. `labels[i]` names obligation `i` in dumped
-/// files (rule and position).
+/// Decides every obligation, in parallel, and says how each went. `labels[i]` names
+/// obligation `i` in dumped files (rule and position).
 pub fn discharge(
     prog: &Program,
     obligations: &[Obligation],
     labels: &[String],
     cfg: &SmtConfig,
-) -> (Vec<Decision>, Stats) {
+) -> Vec<(Decision, Stats)> {
     let cache = Mutex::new(HashMap::new());
     let dumped = AtomicUsize::new(0);
     if let Some(dir) = &cfg.dump_dir {
@@ -156,45 +165,135 @@ pub fn discharge(
     let next = AtomicUsize::new(0);
     let results: Mutex<Vec<Option<(Decision, Stats)>>> = Mutex::new(vec![None; obligations.len()]);
     let bar = progress_bar(cfg, obligations.len());
-    let jobs = cfg.jobs.clamp(1, obligations.len().max(1));
-    std::thread::scope(|s| {
-        for _ in 0..jobs {
-            s.spawn(|| {
-                let w = Worker { prog, cfg, cache: &cache, labels, dumped: &dumped };
-                loop {
-                    let i = next.fetch_add(1, Ordering::Relaxed);
-                    let Some(ob) = obligations.get(i) else { break };
-                    let r = w.decide(i, ob);
-                    if let Ok(mut rs) = results.lock() {
-                        rs[i] = Some(r);
-                    }
-                    if let Some(b) = &bar {
-                        b.inc(1);
-                    }
+    // A thread and its Z3 context cost milliseconds to start: no more workers than
+    // there is work for.
+    let jobs = cfg.jobs.clamp(1, obligations.len().div_ceil(4).max(1));
+    let work = || {
+        let watchdog = Watchdog::default();
+        let ctx = z3::Context::thread_local();
+        let handle = ctx.handle();
+        std::thread::scope(|s| {
+            s.spawn(|| watchdog.run(handle));
+            let w = Worker { prog, cfg, cache: &cache, labels, dumped: &dumped, watchdog: &watchdog };
+            loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                let Some(ob) = obligations.get(i) else { break };
+                let t = std::time::Instant::now();
+                let (d, mut st) = w.decide(i, ob);
+                st.millis = t.elapsed().as_secs_f64() * 1000.0;
+                if let Ok(mut rs) = results.lock() {
+                    rs[i] = Some((d, st));
                 }
-            });
-        }
-    });
+                if let Some(b) = &bar {
+                    b.inc(1);
+                }
+            }
+            watchdog.stop();
+        });
+    };
+    if jobs == 1 {
+        work();
+    } else {
+        std::thread::scope(|s| {
+            for _ in 0..jobs {
+                s.spawn(work);
+            }
+        });
+    }
     if let Some(b) = bar {
         b.finish_and_clear();
     }
-    let mut stats = Stats::default();
-    let decisions = results
+    results
         .into_inner()
         .unwrap_or_default()
         .into_iter()
         .map(|r| {
-            let (d, s) = r.unwrap_or((
+            r.unwrap_or((
                 Decision::Unknown { part: String::new(), why: Why::Incomplete("a worker thread stopped".into()) },
                 Stats::default(),
-            ));
-            stats.queries += s.queries;
-            stats.cached += s.cached;
-            stats.folded += s.folded;
-            d
+            ))
         })
-        .collect();
-    (decisions, stats)
+        .collect()
+}
+
+/// Interrupts the worker's Z3 context when a query runs past its deadline.
+///
+/// Z3's own `timeout` parameter is not used: in Z3 4.8.10-4.8.12 (Debian's libz3 is
+/// 4.8.12) its thread-pool `scoped_timer` can deadlock (Z3Prover/z3 PR #5371, fixed
+/// after 4.8.12); we saw `check()` hang forever with a 1 ms timeout. `Z3_interrupt` on
+/// the context needs no timer thread of Z3's. One watchdog thread serves all of a
+/// worker's queries (starting a thread per query cost more than most queries).
+#[derive(Default)]
+struct Watchdog {
+    state: std::sync::Mutex<WatchState>,
+    wake: std::sync::Condvar,
+}
+
+#[derive(Default)]
+struct WatchState {
+    /// The running query's number and deadline.
+    armed: Option<(u64, std::time::Instant)>,
+    /// Queries that were interrupted.
+    fired: Option<u64>,
+    seq: u64,
+    stop: bool,
+}
+
+impl Watchdog {
+    fn run(&self, handle: z3::ContextHandle) {
+        let Ok(mut st) = self.state.lock() else { return };
+        loop {
+            if st.stop {
+                return;
+            }
+            match st.armed {
+                None => {
+                    st = match self.wake.wait(st) {
+                        Ok(g) => g,
+                        Err(_) => return,
+                    };
+                }
+                Some((seq, deadline)) => {
+                    let now = std::time::Instant::now();
+                    if now >= deadline {
+                        // An interrupt that lands before Z3 has entered the check is
+                        // lost (Z3 clears the flag when a check starts), so keep
+                        // interrupting every 10 ms until the worker disarms.
+                        handle.interrupt();
+                        st.fired = Some(seq);
+                        st.armed = Some((seq, now + Duration::from_millis(10)));
+                        continue;
+                    }
+                    st = match self.wake.wait_timeout(st, deadline - now) {
+                        Ok((g, _)) => g,
+                        Err(_) => return,
+                    };
+                }
+            }
+        }
+    }
+
+    fn arm(&self, timeout: Duration) -> u64 {
+        let Ok(mut st) = self.state.lock() else { return 0 };
+        st.seq += 1;
+        st.armed = Some((st.seq, std::time::Instant::now() + timeout));
+        self.wake.notify_all();
+        st.seq
+    }
+
+    /// Disarms; whether the query `seq` was interrupted.
+    fn disarm(&self, seq: u64) -> bool {
+        let Ok(mut st) = self.state.lock() else { return false };
+        st.armed = None;
+        st.fired == Some(seq)
+    }
+
+    fn stop(&self) {
+        if let Ok(mut st) = self.state.lock() {
+            st.stop = true;
+        }
+        self.wake.notify_all();
+    }
 }
 
 fn progress_bar(cfg: &SmtConfig, n: usize) -> Option<indicatif::ProgressBar> {
@@ -225,6 +324,7 @@ struct Worker<'a> {
     cache: &'a Mutex<HashMap<String, Answer>>,
     labels: &'a [String],
     dumped: &'a AtomicUsize,
+    watchdog: &'a Watchdog,
 }
 
 impl Worker<'_> {
@@ -275,22 +375,43 @@ impl Worker<'_> {
     }
 
     fn solve(&self, q: Query, index: usize, k: usize, stats: &mut Stats) -> Answer {
-        let solver = z3::Solver::new();
-        for a in q.assertions.iter().chain(q.enc.side_conditions()) {
-            solver.assert(a);
-        }
+        let assert_all = |solver: &z3::Solver| {
+            for a in q.assertions.iter().chain(q.enc.side_conditions()) {
+                solver.assert(a);
+            }
+        };
+        // Z3's default solver spends ~5 ms per check choosing a strategy; naming the logic
+        // skips that (nlsat: complete for nonlinear real arithmetic). Queries with integer
+        // variables keep the default solver.
+        let mut solver = z3::Solver::new_for_logic("QF_NRA").unwrap_or_else(z3::Solver::new);
+        assert_all(&solver);
         let text = solver.to_string();
+        if text.contains(" () Int)") {
+            solver = z3::Solver::new();
+            assert_all(&solver);
+        }
         if let Some(dir) = &self.cfg.dump_dir {
             let label = self.labels.get(index).cloned().unwrap_or_else(|| format!("obligation-{index}"));
             let n = self.dumped.fetch_add(1, Ordering::Relaxed);
             let path = dir.join(format!("{n:05}-{label}-{k}.smt2"));
             let _ = std::fs::write(path, format!("; mochi: {label}, part {k}\n{text}(check-sat)\n"));
         }
+        // Exact text first (any answer); then the text up to renaming of its variables,
+        // which only answers without a model carry over (the model's names differ).
+        let canonical = canonical(&text);
         if let Some(a) = self.cache.lock().ok().and_then(|c| c.get(&text).cloned()) {
             stats.cached += 1;
             return a;
         }
-        let (result, timed_out) = check_with_deadline(&solver, self.cfg.timeout);
+        if let Some(a) = self.cache.lock().ok().and_then(|c| c.get(&canonical).cloned()) {
+            if !matches!(a, Answer::Sat { .. }) {
+                stats.cached += 1;
+                return a;
+            }
+        }
+        let seq = self.watchdog.arm(self.cfg.timeout);
+        let result = solver.check();
+        let timed_out = self.watchdog.disarm(seq);
         let answer = match result {
             z3::SatResult::Unsat => Answer::Unsat,
             z3::SatResult::Sat => match solver.get_model() {
@@ -315,11 +436,58 @@ impl Worker<'_> {
         // A timeout depends on the machine's load: do not cache it.
         if !matches!(answer, Answer::Unknown(Why::Timeout(_))) {
             if let Ok(mut c) = self.cache.lock() {
+                c.insert(canonical, answer.clone());
                 c.insert(text, answer.clone());
             }
         }
         answer
     }
+}
+
+/// The SMT-LIB text with its declared symbols renamed `v0`, `v1`, ... in order of first
+/// appearance: two queries with the same canonical text are equisatisfiable.
+fn canonical(text: &str) -> String {
+    // Tokens: `(`, `)`, `|quoted symbols|`, and runs of other non-space characters.
+    let mut tokens: Vec<&str> = Vec::new();
+    let bytes = text.as_bytes();
+    let mut i = 0;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'(' | b')' => {
+                tokens.push(&text[i..i + 1]);
+                i += 1;
+            }
+            b if b.is_ascii_whitespace() => i += 1,
+            b'|' => {
+                let end = text[i + 1..].find('|').map(|e| i + e + 2).unwrap_or(bytes.len());
+                tokens.push(&text[i..end]);
+                i = end;
+            }
+            _ => {
+                let start = i;
+                while i < bytes.len() && !matches!(bytes[i], b'(' | b')' | b'|') && !bytes[i].is_ascii_whitespace() {
+                    i += 1;
+                }
+                tokens.push(&text[start..i]);
+            }
+        }
+    }
+    let mut declared: HashMap<&str, usize> = HashMap::new();
+    for w in tokens.windows(2) {
+        if w[0] == "declare-fun" {
+            let n = declared.len();
+            declared.entry(w[1]).or_insert(n);
+        }
+    }
+    let mut out = String::with_capacity(text.len());
+    for t in tokens {
+        match declared.get(t) {
+            Some(n) => out.push_str(&format!("v{n}")),
+            None => out.push_str(t),
+        }
+        out.push(' ');
+    }
+    out
 }
 
 /// What a part checks, in the user's terms.
@@ -379,32 +547,6 @@ fn describe(prog: &Program, ob: &Obligation, part: &Part) -> String {
         }
         _ => ob.what.clone(),
     }
-}
-
-/// Runs `solver.check()` and interrupts it from a watchdog thread after `timeout`.
-///
-/// Z3's own `timeout` parameter is not used: in Z3 4.8.10-4.8.12 (Debian's libz3 is
-/// 4.8.12) its thread-pool `scoped_timer` can deadlock (Z3Prover/z3 PR #5371, fixed
-/// after 4.8.12); we saw `check()` hang forever with a 1 ms timeout. `Z3_interrupt` on
-/// the context needs no timer thread of Z3's. If the interrupt lands just after the
-/// check finished, the worst case is a later query on this thread reporting unknown.
-fn check_with_deadline(solver: &z3::Solver, timeout: Duration) -> (z3::SatResult, bool) {
-    let ctx = z3::Context::thread_local();
-    let handle = ctx.handle();
-    let (done, wait) = std::sync::mpsc::channel::<()>();
-    std::thread::scope(|scope| {
-        let watchdog = scope.spawn(move || {
-            if wait.recv_timeout(timeout) == Err(std::sync::mpsc::RecvTimeoutError::Timeout) {
-                handle.interrupt();
-                return true;
-            }
-            false
-        });
-        let result = solver.check();
-        let _ = done.send(());
-        let timed_out = watchdog.join().unwrap_or(false);
-        (result, timed_out)
-    })
 }
 
 #[cfg(test)]
@@ -480,6 +622,15 @@ mod tests {
         assert_eq!(valid("", "norm2(vector(x, 0, 0)) == x^2"), Verdict::Holds);
         assert_eq!(valid("", "dot(point(1, 2, 3), vector(x, x, x)) == 6 * x"), Verdict::Holds);
         assert_eq!(valid("", "(point(x, 1, 2) - point(0, 1, 2)).x == x"), Verdict::Holds);
+    }
+
+    #[test]
+    fn canonical_text_forgets_names_only() {
+        let a = "(declare-fun |C1.x| () Real)\n(assert (<= |C1.x| 10.0))\n";
+        let b = "(declare-fun |C2.x| () Real)\n(assert (<= |C2.x| 10.0))\n";
+        let c = "(declare-fun |C2.x| () Real)\n(assert (<= |C2.x| 11.0))\n";
+        assert_eq!(canonical(a), canonical(b));
+        assert_ne!(canonical(a), canonical(c));
     }
 
     #[test]
