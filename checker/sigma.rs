@@ -19,7 +19,8 @@
 //! 4. the kind's invariant is added for `r`;
 //! 5. snapshots are eliminated where an equality defines them (`old(r.x) == e` lets
 //!    every other fact read `e`), `min`/`max` are simplified where Σ orders their
-//!    arguments, and facts over constants only are dropped.
+//!    arguments, and facts over constants only, or over snapshots that no fact links
+//!    to the current state, are dropped.
 //!
 //! Every step is an equivalence (eliminating a snapshot is `∃ old(r.x)`), except the
 //! drops, which only weaken Σ. So Σ over-approximates the states reachable at its point.
@@ -243,6 +244,49 @@ impl Sigma {
                 break;
             }
         }
+        self.drop_unlinked_snapshots();
+    }
+
+    /// Drops the facts that speak only of snapshots (and constants) that no chain of
+    /// facts links to a current variable or a value: they constrain the past alone, so
+    /// they say nothing about the present (`∃ old(r.x). F` is implied by what remains,
+    /// up to satisfiability, and dropping facts only weakens Σ).
+    fn drop_unlinked_snapshots(&mut self) {
+        let snaps = |f: &Expr| {
+            let mut out: Vec<Var> = Vec::new();
+            let mut present = false;
+            f.visit_vars(&mut |v, _| match v {
+                Var::Snap(..) if !out.contains(v) => out.push(v.clone()),
+                Var::Role(..) | Var::Value(..) => present = true,
+                _ => {}
+            });
+            (out, present)
+        };
+        let info: Vec<(Vec<Var>, bool)> = self.facts.iter().map(snaps).collect();
+        if info.iter().all(|(s, present)| s.is_empty() || *present) {
+            return;
+        }
+        let mut linked: HashSet<Var> = HashSet::new();
+        let mut keep: Vec<bool> = info.iter().map(|(s, present)| s.is_empty() || *present).collect();
+        loop {
+            let mut grew = false;
+            for (i, (s, _)) in info.iter().enumerate() {
+                if keep[i] || s.iter().any(|v| linked.contains(v)) {
+                    keep[i] = true;
+                    for v in s {
+                        grew |= linked.insert(v.clone());
+                    }
+                }
+            }
+            if !grew {
+                break;
+            }
+        }
+        let mut i = 0;
+        self.retain(|_| {
+            i += 1;
+            keep[i - 1]
+        });
     }
 
     /// While some fact is `old(r.x) == e` with `e` free of `old(r.x)`, drops it and
