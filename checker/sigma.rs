@@ -115,6 +115,22 @@ impl Sigma {
         self.facts.push(c);
     }
 
+    /// What holds after the message `p -> q : [P] l(v: S {P'})`: its guard `P` (about
+    /// the values before it), then, a field's name now naming the new value, the
+    /// refinements `P'`.
+    pub fn assume_message(&mut self, m: &Msg) {
+        if let Some(g) = &m.guard {
+            self.assume(g);
+        }
+        let names: Vec<&str> = m.payload.iter().map(|f| f.name.as_str()).collect();
+        self.forget_values(&names);
+        for f in &m.payload {
+            if let Some(r) = &f.refinement {
+                self.assume(r);
+            }
+        }
+    }
+
     /// Keeps the facts for which `keep` answers true.
     pub fn retain(&mut self, mut keep: impl FnMut(&Expr) -> bool) {
         let set = &mut self.set;
