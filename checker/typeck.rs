@@ -87,9 +87,14 @@ pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalRc>) 
     let mut seen = HashSet::new();
     diags.retain(|d| seen.insert((d.code, d.span, d.message.clone())));
     // A loop checked under several contexts may meet the same goal under the same
-    // hypotheses again.
+    // hypotheses again (learnt at other places: hypotheses compare without locations,
+    // in any order).
     let mut seen = HashSet::new();
-    obligations.retain(|o| seen.insert((o.rule, o.span, format!("{:?}", o.hyps), format!("{:?}", o.goal))));
+    obligations.retain(|o| {
+        let mut hyps = o.hyps.clone();
+        hyps.sort_by_key(hash_of);
+        seen.insert((o.rule, o.span, hyps, format!("{:?}", o.goal)))
+    });
     (diags, obligations)
 }
 
