@@ -28,8 +28,9 @@
 //! Σ: they do not describe one state.
 //!
 //! Comparisons are stored in one orientation (`a >= b` as `b <= a`, `a > b` as `b < a`,
-//! a participant's variable on the left of `==`), so that the syntactic comparisons of
-//! the loop handling see equal facts as equal.
+//! a participant's variable on the left of `==`), and sums, differences and products of
+//! number literals are computed exactly (`0 + 0.5 - 0.5` is `0`), so that the syntactic
+//! comparisons of the loop handling see equal facts as equal.
 
 use crate::hir::expr::BinOp;
 use crate::hir::*;
@@ -477,6 +478,7 @@ fn admissible(e: &Expr) -> bool {
 /// One orientation per comparison: `a >= b` is `b <= a`, `a > b` is `b < a`, and `==`,
 /// `!=` put a participant's variable (else a value variable) on the left.
 fn normalize(e: Expr) -> Expr {
+    let e = fold(&e);
     let rank = |x: &Expr| match &x.kind {
         ExprKind::Var(Var::Role(..) | Var::Snap(..)) => 2,
         ExprKind::Var(Var::Value(..)) => 1,
@@ -489,6 +491,119 @@ fn normalize(e: Expr) -> Expr {
             Expr { kind: ExprKind::Binary(op, b, a), ..e }
         }
         kind => Expr { kind, ..e },
+    }
+}
+
+/// Computes `+`, `-` and `*` (and unary `-`) of number literals exactly, bottom-up.
+/// Results are written as the parser would read them: an integer as an `int` literal, a
+/// negative number as `-` applied to a literal. What would overflow is left as it is.
+fn fold(e: &Expr) -> Expr {
+    stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || {
+        let kind = match &e.kind {
+            ExprKind::Binary(op, a, b) => {
+                let (a, b) = (fold(a), fold(b));
+                let value = match (literal(&a), literal(&b), op) {
+                    (Some(x), Some(y), BinOp::Add) => x.add(y),
+                    (Some(x), Some(y), BinOp::Sub) => y.neg().and_then(|n| x.add(n)),
+                    (Some(x), Some(y), BinOp::Mul) => x.mul(y),
+                    _ => None,
+                };
+                if let Some(v) = value.and_then(|v| v.expr(e.loc)) {
+                    return v;
+                }
+                ExprKind::Binary(*op, Box::new(a), Box::new(b))
+            }
+            ExprKind::Unary(op, a) => ExprKind::Unary(*op, Box::new(fold(a))),
+            ExprKind::Component(a, i) => ExprKind::Component(Box::new(fold(a)), *i),
+            ExprKind::If(a, b, c) => ExprKind::If(Box::new(fold(a)), Box::new(fold(b)), Box::new(fold(c))),
+            ExprKind::Call(f, xs) => ExprKind::Call(*f, xs.iter().map(fold).collect()),
+            ExprKind::Tuple(xs) => ExprKind::Tuple(xs.iter().map(fold).collect()),
+            ExprKind::Int(_) | ExprKind::Real(_) | ExprKind::Bool(_) | ExprKind::Var(_) => return e.clone(),
+        };
+        Expr { kind, sort: e.sort.clone(), loc: e.loc }
+    })
+}
+
+/// A decimal number `num / 10^scale`, exactly.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Decimal {
+    num: i128,
+    scale: u32,
+}
+
+/// The most decimal places kept: enough for any literal a user writes, far from
+/// overflowing `i128`.
+const MAX_SCALE: u32 = 18;
+
+impl Decimal {
+    fn parse(lit: &str) -> Option<Decimal> {
+        let (mant, exp) = match lit.split_once(['e', 'E']) {
+            Some((m, e)) => (m, e.parse::<i32>().ok()?),
+            None => (lit, 0),
+        };
+        let (int, frac) = mant.split_once('.').unwrap_or((mant, ""));
+        let digits: i128 = format!("{int}{frac}").parse().ok()?;
+        let scale = frac.len() as i32 - exp;
+        if scale >= 0 {
+            Decimal { num: digits, scale: scale as u32 }.reduced()
+        } else {
+            Decimal { num: digits.checked_mul(10i128.checked_pow((-scale) as u32)?)?, scale: 0 }.reduced()
+        }
+    }
+
+    /// Without trailing zeros, within [`MAX_SCALE`].
+    fn reduced(mut self) -> Option<Decimal> {
+        while self.scale > 0 && self.num % 10 == 0 {
+            self.num /= 10;
+            self.scale -= 1;
+        }
+        (self.scale <= MAX_SCALE && self.num.unsigned_abs() < 1u128 << 100).then_some(self)
+    }
+
+    fn at_scale(self, scale: u32) -> Option<i128> {
+        self.num.checked_mul(10i128.checked_pow(scale - self.scale)?)
+    }
+
+    fn add(self, o: Decimal) -> Option<Decimal> {
+        let scale = self.scale.max(o.scale);
+        Decimal { num: self.at_scale(scale)?.checked_add(o.at_scale(scale)?)?, scale }.reduced()
+    }
+
+    fn neg(self) -> Option<Decimal> {
+        Some(Decimal { num: self.num.checked_neg()?, scale: self.scale })
+    }
+
+    fn mul(self, o: Decimal) -> Option<Decimal> {
+        Decimal { num: self.num.checked_mul(o.num)?, scale: self.scale + o.scale }.reduced()
+    }
+
+    /// As an expression: an `int` literal when whole, else a real literal; `-` in front
+    /// when negative.
+    fn expr(self, loc: Loc) -> Option<Expr> {
+        let abs = self.num.unsigned_abs();
+        let lit = if self.scale == 0 {
+            Expr { kind: ExprKind::Int(i64::try_from(abs).ok()?), sort: Sort::Int, loc }
+        } else {
+            let digits = format!("{abs:0>width$}", width = self.scale as usize + 1);
+            let (int, frac) = digits.split_at(digits.len() - self.scale as usize);
+            Expr { kind: ExprKind::Real(format!("{int}.{frac}")), sort: Sort::Real, loc }
+        };
+        Some(if self.num < 0 {
+            let sort = lit.sort.clone();
+            Expr { kind: ExprKind::Unary(crate::hir::expr::UnOp::Neg, Box::new(lit)), sort, loc }
+        } else {
+            lit
+        })
+    }
+}
+
+/// The value of a number literal, or of `-` applied to one.
+fn literal(e: &Expr) -> Option<Decimal> {
+    match &e.kind {
+        ExprKind::Int(n) => Some(Decimal { num: *n as i128, scale: 0 }),
+        ExprKind::Real(r) => Decimal::parse(r),
+        ExprKind::Unary(crate::hir::expr::UnOp::Neg, a) => literal(a)?.neg(),
+        _ => None,
     }
 }
 
@@ -666,7 +781,57 @@ mod tests {
         let x = var(Var::Role(c, Slot::State(0)), &Sort::Real);
         let mut s = Sigma::from_facts(&g);
         s.run(&prog, c, prim(&prog, "step"), &[x]);
-        assert_eq!(shown(&prog, &s), vec!["C.x == 2 + 2", "-10 <= C.x", "C.x <= 10"]);
+        assert_eq!(shown(&prog, &s), vec!["C.x == 4", "-10 <= C.x", "C.x <= 10"]);
+    }
+
+    #[test]
+    fn number_literals_are_computed_exactly() {
+        let (prog, g) = setup(&[
+            "C: x == 0 + 0.5 - 0.5",
+            "C: v == 0.1 + 0.2",
+            "C: x <= 1 - 2.5",
+            "C: n == 1.5 * 2 + 1e-3",
+            "C: x == n * (2 + 1)",
+            "C: v < 9223372036854775807 + 1",
+        ]);
+        let s = Sigma::from_facts(&g);
+        assert_eq!(
+            shown(&prog, &s),
+            vec![
+                "C.x == 0",
+                "C.v == 0.3",
+                "C.x <= -1.5",
+                "n == 3.001",
+                "C.x == n * 3",
+                "C.v < 9223372036854775807 + 1"
+            ]
+        );
+        // PGCD's lanes: forward half a metre and back again is where the cart started.
+        let c = role(&prog, "C");
+        let mut s = Sigma::from_facts(&g[..1]);
+        let half = |neg: bool| {
+            let lit = Expr { kind: ExprKind::Real("0.5".into()), sort: Sort::Real, loc: Loc::default() };
+            if neg {
+                Expr {
+                    kind: ExprKind::Unary(crate::hir::expr::UnOp::Neg, Box::new(lit)),
+                    sort: Sort::Real,
+                    loc: Loc::default(),
+                }
+            } else {
+                lit
+            }
+        };
+        let start = {
+            let mut t = s.clone();
+            t.run(&prog, c, prim(&prog, "step"), &[half(true)]);
+            t.run(&prog, c, prim(&prog, "step"), &[half(false)]);
+            t
+        };
+        s.run(&prog, c, prim(&prog, "step"), &[half(false)]);
+        assert_eq!(shown(&prog, &s), vec!["C.x == 0.5", "-10 <= C.x", "C.x <= 10"]);
+        s.run(&prog, c, prim(&prog, "step"), &[half(true)]);
+        assert_eq!(shown(&prog, &s), vec!["C.x == 0", "-10 <= C.x", "C.x <= 10"]);
+        assert_eq!(s, start);
     }
 
     #[test]

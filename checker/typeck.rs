@@ -791,15 +791,15 @@ mod tests {
         let (prog, d, obs) = check(&format!("process C = mu k. A!go(x + 1).dt<move(x + 1)>.A?done.k; {GOOD_A}"));
         assert!(d.is_empty(), "{d:?}");
         // `move`'s postcondition `x == xf` with `xf` the `x + 1` computed before the
-        // motion: each iteration knows the cart one further, `C.x == 0 + 1 + ...`, so
-        // the contexts never repeat. After WIDEN_AFTER of them the context is widened
+        // motion: each iteration knows the cart one further, `C.x == 1`, `C.x == 2`, ...,
+        // so the contexts never repeat. After WIDEN_AFTER of them the context is widened
         // to the invariant, and the iteration after that meets it again.
         assert_eq!(goals(&prog, &obs, Rule::TOut), vec!["C.x + 1 > C.x"; WIDEN_AFTER + 1]);
         assert_eq!(goals(&prog, &obs, Rule::TMotion), vec!["C.x + 1 > C.x && C.v == 0"; WIDEN_AFTER + 1]);
         let hyps = hyps_of(&prog, &obs, Rule::TMotion);
         assert_eq!(hyps[0], vec!["C.x == 0", "C.v == 0", "0 <= C.v"]);
-        assert_eq!(hyps[1], vec!["C.x == 0 + 1", "0 <= C.v"]);
-        assert_eq!(hyps[2], vec!["C.x == 0 + 1 + 1", "0 <= C.v"]);
+        assert_eq!(hyps[1], vec!["C.x == 1", "0 <= C.v"]);
+        assert_eq!(hyps[2], vec!["C.x == 2", "0 <= C.v"]);
         assert_eq!(hyps[WIDEN_AFTER], vec!["0 <= C.v"]);
         assert_eq!(obs.iter().filter(|o| o.rule == Rule::TSess).count(), 1);
         assert!(goals(&prog, &obs, Rule::Refinement).is_empty());
