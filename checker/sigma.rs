@@ -543,7 +543,7 @@ impl Decimal {
         };
         let (int, frac) = mant.split_once('.').unwrap_or((mant, ""));
         let digits: i128 = format!("{int}{frac}").parse().ok()?;
-        let scale = frac.len() as i32 - exp;
+        let scale = i32::try_from(frac.len()).ok()?.checked_sub(exp)?;
         if scale >= 0 {
             Decimal { num: digits, scale: scale as u32 }.reduced()
         } else {
@@ -793,6 +793,7 @@ mod tests {
             "C: n == 1.5 * 2 + 1e-3",
             "C: x == n * (2 + 1)",
             "C: v < 9223372036854775807 + 1",
+            "C: v <= 1e-2147483648 + 1",
         ]);
         let s = Sigma::from_facts(&g);
         assert_eq!(
@@ -803,7 +804,8 @@ mod tests {
                 "C.x <= -1.5",
                 "n == 3.001",
                 "C.x == n * 3",
-                "C.v < 9223372036854775807 + 1"
+                "C.v < 9223372036854775807 + 1",
+                "C.v <= 1e-2147483648 + 1"
             ]
         );
         // PGCD's lanes: forward half a metre and back again is where the cart started.
