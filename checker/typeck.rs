@@ -868,6 +868,20 @@ mod tests {
     }
 
     #[test]
+    fn facts_about_others_are_forgotten_when_the_participant_moves() {
+        // The arm learns `tf > C.x` with `go`; once it has moved, so has the cart.
+        let chor = "choreography G = C -> A : go(tf: real { tf > C.x }). dt<C: idle, A: work>.
+                                     A -> C : [tf > 0] ack(u: real { u == tf }). end;";
+        let (prog, d, obs) =
+            check_with(chor, "process C = A!go(1.0).dt<idle>.A?ack(w).end; process A = C?go(y).dt<work>.C!ack(y).end;");
+        assert!(d.is_empty(), "{d:?}");
+        assert_eq!(goals(&prog, &obs, Rule::TOut), vec!["1.0 > C.x", "y > 0 && y == y"]);
+        let hyps = hyps_of(&prog, &obs, Rule::TOut);
+        assert_eq!(hyps[0], vec!["C.x == 0", "C.v == 0", "0 <= C.v"]);
+        assert_eq!(hyps[1], Vec::<String>::new(), "`C.x < y` went stale when the arm moved");
+    }
+
+    #[test]
     fn received_refinements_enter_the_context() {
         let chor =
             "choreography G = C -> A : go(tf: real { tf > 0 }). A -> C : [tf > 0] ack(u: real { u == tf }). end;";
