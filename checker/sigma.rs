@@ -36,12 +36,13 @@ use crate::hir::expr::BinOp;
 use crate::hir::*;
 use crate::subtype::{conjuncts, map_vars, mentions};
 use std::collections::{HashMap, HashSet};
+use std::hash::{BuildHasherDefault, Hash, Hasher};
 
 /// The logical context: a set of conjuncts, kept in the order they were learnt.
 #[derive(Clone, Debug, Default)]
 pub struct Sigma {
     facts: Vec<Expr>,
-    set: HashSet<Expr>,
+    set: HashSet<Expr, BuildHasherDefault<FxHasher>>,
 }
 
 /// Two contexts are equal when they hold the same facts, in whatever order.
@@ -232,10 +233,15 @@ impl Sigma {
                 _ => None,
             })
         };
+        let moved = |v: &Var| matches!(v, Var::Role(r, _) if movers.contains(r));
         let before = std::mem::take(&mut self.facts);
         self.set.clear();
-        for f in &before {
-            self.insert(normalize(snap(f)));
+        for f in before {
+            if mentions(&f, &moved) {
+                self.insert(normalize(snap(&f)));
+            } else {
+                self.insert(f);
+            }
         }
         // 3. The postconditions, 4. the invariants.
         for (r, prim, args) in parts {
@@ -352,6 +358,9 @@ impl Sigma {
             visit(e, &mut |x| found |= matches!(x.kind, ExprKind::Call(Builtin::Min | Builtin::Max, _)));
             found
         };
+        if !self.facts.iter().any(has_min_max) {
+            return false;
+        }
         let mut changed = false;
         let mut out = Vec::with_capacity(self.facts.len());
         for f in &self.facts {
@@ -478,7 +487,7 @@ fn admissible(e: &Expr) -> bool {
 /// One orientation per comparison: `a >= b` is `b <= a`, `a > b` is `b < a`, and `==`,
 /// `!=` put a participant's variable (else a value variable) on the left.
 fn normalize(e: Expr) -> Expr {
-    let e = fold(&e);
+    let e = if needs_fold(&e) { fold(&e) } else { e };
     let rank = |x: &Expr| match &x.kind {
         ExprKind::Var(Var::Role(..) | Var::Snap(..)) => 2,
         ExprKind::Var(Var::Value(..)) => 1,
@@ -522,6 +531,22 @@ fn fold(e: &Expr) -> Expr {
         };
         Expr { kind, sort: e.sort.clone(), loc: e.loc }
     })
+}
+
+/// Whether [`fold`] would change `e`: some `+`, `-` or `*` has number literals (or
+/// arithmetic on them) on both sides.
+fn needs_fold(e: &Expr) -> bool {
+    fn constant(e: &Expr) -> bool {
+        match &e.kind {
+            ExprKind::Binary(BinOp::Add | BinOp::Sub | BinOp::Mul, a, b) => constant(a) && constant(b),
+            _ => literal(e).is_some(),
+        }
+    }
+    let mut found = false;
+    visit(e, &mut |x| {
+        found |= matches!(&x.kind, ExprKind::Binary(BinOp::Add | BinOp::Sub | BinOp::Mul, a, b) if constant(a) && constant(b))
+    });
+    found
 }
 
 /// A decimal number `num / 10^scale`, exactly.
@@ -613,6 +638,56 @@ fn var(v: Var, sort: &Sort) -> Expr {
 
 fn binary(op: BinOp, a: &Expr, b: &Expr) -> Expr {
     Expr { kind: ExprKind::Binary(op, Box::new(a.clone()), Box::new(b.clone())), sort: Sort::Bool, loc: Loc::default() }
+}
+
+/// A hash of a fact for ordering and sets, as equality sees it (without locations).
+pub(crate) fn fact_hash(e: &Expr) -> u64 {
+    let mut h = FxHasher::default();
+    e.hash(&mut h);
+    h.finish()
+}
+
+/// rustc's FxHash: much faster than the default SipHash on the many small terms a
+/// context hashes, and contexts need no protection against adversarial collisions.
+#[derive(Clone, Copy, Default)]
+pub(crate) struct FxHasher(u64);
+
+impl FxHasher {
+    fn add(&mut self, word: u64) {
+        self.0 = (self.0.rotate_left(5) ^ word).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+}
+
+impl Hasher for FxHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        let mut chunks = bytes.chunks_exact(8);
+        for c in &mut chunks {
+            let mut w = [0u8; 8];
+            w.copy_from_slice(c);
+            self.add(u64::from_le_bytes(w));
+        }
+        let rest = chunks.remainder();
+        if !rest.is_empty() {
+            let mut w = [0u8; 8];
+            w[..rest.len()].copy_from_slice(rest);
+            self.add(u64::from_le_bytes(w));
+        }
+    }
+    fn write_u8(&mut self, i: u8) {
+        self.add(u64::from(i));
+    }
+    fn write_u32(&mut self, i: u32) {
+        self.add(u64::from(i));
+    }
+    fn write_u64(&mut self, i: u64) {
+        self.add(i);
+    }
+    fn write_usize(&mut self, i: usize) {
+        self.add(i as u64);
+    }
+    fn finish(&self) -> u64 {
+        self.0
+    }
 }
 
 /// Calls `f` on every subterm of `e`.

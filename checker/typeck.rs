@@ -34,9 +34,7 @@ use crate::obligation::{Goal, Obligation, Rule};
 use crate::project::{describe, motion_text, print_bounded, NOTE_NODES};
 use crate::sigma::{self, instantiate, Sigma};
 use crate::subtype::{and_all, conjuncts, mentions, not, refinement, subst_values, unfold, value_expr, RecEnv};
-use std::collections::hash_map::DefaultHasher;
 use std::collections::{BTreeMap, HashMap, HashSet};
-use std::hash::{Hash, Hasher};
 use std::rc::Rc;
 
 /// Checks every participant's process against its projection. Participants whose
@@ -639,9 +637,7 @@ fn shape_clash(p: &Process, t: &Local) -> bool {
 }
 
 fn hash_of(e: &Expr) -> u64 {
-    let mut h = DefaultHasher::new();
-    e.hash(&mut h);
-    h.finish()
+    sigma::fact_hash(e)
 }
 
 fn fields_text(fields: &[Field]) -> String {

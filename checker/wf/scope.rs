@@ -504,13 +504,10 @@ impl<'a> Contexts<'a> {
             self.loops.push((var, names.clone()));
             let out = self.walk(body, candidate.clone());
             self.loops.pop();
-            let mut next = candidate.clone();
-            for (i, reached) in &self.jumps[marks.2..] {
-                if *i == depth {
-                    next.retain(|f| reached.contains(f));
-                }
-            }
-            if next.len() == candidate.len() {
+            let reached: Vec<&Sigma> =
+                self.jumps[marks.2..].iter().filter(|(i, _)| *i == depth).map(|(_, s)| s).collect();
+            let stable = candidate.facts().iter().all(|f| reached.iter().all(|s| s.contains(f)));
+            if stable {
                 // Stable: this walk's obligations stand. Jumps to this loop are used up;
                 // jumps to enclosing loops stay for them.
                 let mut k = 0;
@@ -520,10 +517,14 @@ impl<'a> Contexts<'a> {
                 });
                 return out;
             }
+            if walks >= MAX_LOOP_WALKS || self.steps > STEP_BUDGET {
+                candidate = Sigma::new();
+            } else {
+                candidate.retain(|f| reached.iter().all(|s| s.contains(f)));
+            }
             self.obligations.truncate(marks.0);
             self.runs.truncate(marks.1);
             self.jumps.truncate(marks.2);
-            candidate = if walks >= MAX_LOOP_WALKS || self.steps > STEP_BUDGET { Sigma::new() } else { next };
         }
     }
 }
