@@ -26,6 +26,7 @@ pub mod lower;
 pub mod obligation;
 pub mod project;
 pub mod render;
+pub mod sigma;
 pub mod smt;
 pub mod source;
 pub mod subtype;

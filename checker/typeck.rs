@@ -9,9 +9,12 @@
 //! - [T-CHOICE1,2] a receive handles every label of `&` from the same sender (more are
 //!   allowed, [SUB-IN]); each branch continues under `Σ ∧ P_i{x_i/v}`;
 //! - [T-MOTION] a motion matches `dt<a>` (or refines it, [SUB-MOTION]); the obligation
-//!   is `Σ ⇒ Pre`, and afterwards Σ is the primitive's postcondition plus the facts
-//!   that mention no physical variable (time has passed, so facts about positions no
-//!   longer hold; a weaker context is sound);
+//!   is `Σ ⇒ Pre`, and afterwards Σ is the strongest postcondition of the motion
+//!   ([`Sigma::run`]): what held of the participant's variables now holds of their
+//!   snapshot `old(r.x)`, and the primitive's postcondition (with its `old(x)`) and the
+//!   kind's invariant are added, so `x == old(x)` keeps the position known before.
+//!   Facts about other participants are forgotten: they moved too, in ways this process
+//!   cannot see. The paper's rule takes Σ := Post; ours implies it and is still sound;
 //! - `if e then P else Q` checks both branches against the same type under `Σ ∧ e` and
 //!   `Σ ∧ ¬e`. This generalises [T-COND]: with [SUB-OUT] each branch may implement a
 //!   subset of the labels of `⊕`, and the guards are checked at each send;
@@ -29,12 +32,9 @@ use crate::diag::{Code, Diagnostic};
 use crate::hir::*;
 use crate::obligation::{Goal, Obligation, Rule};
 use crate::project::{describe, motion_text, print_bounded, NOTE_NODES};
-use crate::subtype::{
-    and_all, conjuncts, map_vars, mentions, not, refinement, subst_values, unfold, value_expr, RecEnv,
-};
-use std::collections::hash_map::DefaultHasher;
+use crate::sigma::{self, instantiate, Sigma};
+use crate::subtype::{and_all, conjuncts, mentions, not, refinement, subst_values, unfold, value_expr, RecEnv};
 use std::collections::{BTreeMap, HashMap, HashSet};
-use std::hash::{Hash, Hasher};
 use std::sync::Arc;
 
 /// Checks every participant's process against its projection. Participants whose
@@ -61,10 +61,8 @@ pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalRc>) 
             continue;
         };
         let mut c = Checker::new(prog, role);
-        let mut st = State { sigma: Vec::new(), vals: HashMap::new(), penv: Vec::new(), tenv: Vec::new(), actions: 0 };
-        for e in c.initial() {
-            st.assume(e);
-        }
+        let sigma = Sigma::from_facts(&c.initial());
+        let st = State { sigma, vals: HashMap::new(), penv: Vec::new(), tenv: Vec::new(), actions: 0 };
         c.check(&def.body, ty.clone(), st);
         diags.extend(c.diags);
         obligations.extend(c.obligations);
@@ -87,9 +85,14 @@ pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalRc>) 
     let mut seen = HashSet::new();
     diags.retain(|d| seen.insert((d.code, d.span, d.message.clone())));
     // A loop checked under several contexts may meet the same goal under the same
-    // hypotheses again.
+    // hypotheses again (learnt at other places: hypotheses compare without locations,
+    // in any order).
     let mut seen = HashSet::new();
-    obligations.retain(|o| seen.insert((o.rule, o.span, format!("{:?}", o.hyps), format!("{:?}", o.goal))));
+    obligations.retain(|o| {
+        let mut hyps = o.hyps.clone();
+        hyps.sort_by_key(hash_of);
+        seen.insert((o.rule, o.span, hyps, format!("{:?}", o.goal)))
+    });
     (diags, obligations)
 }
 
@@ -118,7 +121,7 @@ struct Checker<'a> {
 #[derive(Clone)]
 struct State<'p> {
     /// Σ, as conjuncts.
-    sigma: Vec<Expr>,
+    sigma: Sigma,
     /// The type's value variables (payload fields, by name) as process expressions.
     vals: HashMap<String, Expr>,
     /// Enclosing process loops: variable, `mu` node, actions performed when entered.
@@ -131,13 +134,7 @@ struct State<'p> {
 
 impl State<'_> {
     fn assume(&mut self, e: Expr) {
-        let mut cs = Vec::new();
-        conjuncts(&e, &mut cs);
-        for c in cs {
-            if !self.sigma.contains(&c) {
-                self.sigma.push(c);
-            }
-        }
+        self.sigma.assume(&e);
     }
 
     /// Forgets what is known about the value variables `names` (they get new values).
@@ -146,26 +143,22 @@ impl State<'_> {
             return;
         }
         let hit = |v: &Var| matches!(v, Var::Value(_, n) if names.contains(&n.as_str()));
-        self.sigma.retain(|e| !mentions(e, &hit));
+        self.sigma.forget_values(names);
         self.vals.retain(|_, e| !mentions(e, &hit));
     }
 }
 
 /// Variables whose value changes when time passes.
 fn is_physical(v: &Var) -> bool {
-    matches!(v, Var::Role(..) | Var::Own(_) | Var::Old(_) | Var::Clock | Var::Point(_))
+    matches!(v, Var::Role(..) | Var::Snap(..) | Var::Own(_) | Var::Old(_) | Var::Clock | Var::Point(_))
 }
 
 impl<'a> Checker<'a> {
     fn new(prog: &'a Program, role: RoleId) -> Checker<'a> {
-        let mut invariant = Vec::new();
-        if let Some(inv) = &prog.kind_of(role).invariant {
-            conjuncts(&instantiate(inv, role, &[]), &mut invariant);
-        }
         Checker {
             prog,
             role,
-            invariant,
+            invariant: sigma::invariant(prog, role),
             diags: Vec::new(),
             obligations: Vec::new(),
             assumed: HashSet::new(),
@@ -175,10 +168,7 @@ impl<'a> Checker<'a> {
 
     /// The initial context: `init` and the invariant.
     fn initial(&self) -> Vec<Expr> {
-        let mut out = Vec::new();
-        if let Some(init) = &self.prog.role(self.role).init {
-            conjuncts(init, &mut out);
-        }
+        let mut out = sigma::init(self.prog, self.role);
         out.extend(self.invariant.iter().cloned());
         out
     }
@@ -337,10 +327,10 @@ impl<'a> Checker<'a> {
         let pair = (body as *const Process as usize, Arc::as_ptr(t) as usize);
         let n = self.contexts.get(&pair).copied().unwrap_or(0);
         if n >= WIDEN_AFTER {
-            st.sigma = self.invariant.clone();
+            st.sigma = Sigma::from_facts(&self.invariant);
             st.vals.clear();
         }
-        let mut sigma = st.sigma.clone();
+        let mut sigma = st.sigma.facts().to_vec();
         sigma.sort_by_key(hash_of);
         let mut vals: Vec<(String, Expr)> = st.vals.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
         vals.sort_by(|a, b| a.0.cmp(&b.0));
@@ -402,7 +392,7 @@ impl<'a> Checker<'a> {
                 rule: Rule::TOut,
                 span: loc.0,
                 what: format!("`{}` may send `{to}!{}`: the guard and payload refinement hold", self.name(), b.label),
-                hyps: st.sigma.clone(),
+                hyps: st.sigma.facts().to_vec(),
                 goal: Goal::Valid(and_all(goal, loc)),
             });
         }
@@ -539,18 +529,15 @@ impl<'a> Checker<'a> {
                     print::prim_app(self.prog, a),
                     self.name()
                 ),
-                hyps: st.sigma.clone(),
+                hyps: st.sigma.facts().to_vec(),
                 goal: Goal::Valid(and_all(pre, loc)),
             });
         }
-        let mut post = Vec::new();
-        conjuncts(&prim.post, &mut post);
-        let post: Vec<Expr> = post.iter().filter_map(|c| post_fact(c, self.role, &args)).collect();
-        st.sigma.retain(|e| !mentions(e, &is_physical));
+        // Σ := the strongest postcondition; the others moved meanwhile.
+        st.sigma.run(self.prog, self.role, a.prim, &args);
+        let me = self.role;
+        st.sigma.forget(&|v| matches!(v, Var::Role(r, _) | Var::Snap(r, _) if *r != me));
         st.vals.retain(|_, e| !mentions(e, &is_physical));
-        for e in self.invariant.iter().cloned().chain(post) {
-            st.assume(e);
-        }
         st.actions += 1;
         true
     }
@@ -649,35 +636,8 @@ fn shape_clash(p: &Process, t: &Local) -> bool {
     )
 }
 
-/// A primitive's predicate from the participant's view: `Var::Own(slot)` becomes
-/// `role.slot`, `Var::Param(i)` the i-th argument.
-fn instantiate(e: &Expr, role: RoleId, args: &[Expr]) -> Expr {
-    map_vars(e, &mut |v, sort| match v {
-        Var::Own(slot) => Some(Expr { kind: ExprKind::Var(Var::Role(role, *slot)), sort: sort.clone(), loc: e.loc }),
-        Var::Param(i) => args.get(*i).cloned(),
-        _ => None,
-    })
-}
-
-/// A conjunct of a postcondition as a fact about the state after the motion, or
-/// `None` when it speaks about the state before it (`old(x)`, or an argument that reads
-/// the state, which was evaluated when the motion started) or about time.
-fn post_fact(c: &Expr, role: RoleId, args: &[Expr]) -> Option<Expr> {
-    let before = |v: &Var| match v {
-        Var::Old(_) | Var::Clock | Var::Point(_) => true,
-        Var::Param(i) => args.get(*i).is_none_or(|a| mentions(a, &is_physical)),
-        _ => false,
-    };
-    if mentions(c, &before) {
-        return None;
-    }
-    Some(instantiate(c, role, args))
-}
-
 fn hash_of(e: &Expr) -> u64 {
-    let mut h = DefaultHasher::new();
-    e.hash(&mut h);
-    h.finish()
+    sigma::fact_hash(e)
 }
 
 fn fields_text(fields: &[Field]) -> String {
@@ -784,21 +744,59 @@ mod tests {
 
     const GOOD_A: &str = "process A = mu k. C?go(y).dt<work>.C!done.k;";
 
+    /// The hypotheses of each obligation of `rule`, printed.
+    fn hyps_of(prog: &Program, obs: &[Obligation], rule: Rule) -> Vec<Vec<String>> {
+        obs.iter()
+            .filter(|o| o.rule == rule)
+            .map(|o| o.hyps.iter().map(|h| print::expr(prog, None, h)).collect())
+            .collect()
+    }
+
+    /// A shuttle in the style of Fig 2: forward, stay (`x == old(x)`), back, and again.
+    const SHUTTLE: &str = "
+        motion Cart.stay { interruptible: true; pre: v == 0; post: x == old(x) && v == 0; }
+        motion Cart.fwd(xf: real) { interruptible: false; pre: xf > x && v == 0; post: x == xf && v == 0; }
+        motion Cart.back(xf: real) { interruptible: false; pre: xf < x && v == 0; post: x == xf && v == 0; }
+        choreography G = mu t. C -> A : go. dt<C: fwd(1.0), A: work>. C -> A : at. dt<C: stay, A: work>.
+                               A -> C : done. dt<C: back(0), A: work>. C -> A : home. t;
+        process C = mu k. A!go.dt<fwd(1.0)>.A!at.dt<stay>.A?done.dt<back(0)>.A!home.k;
+        process A = mu k. C?go.dt<work>.C?at.dt<work>.C!done.dt<work>.C?home.k;
+    ";
+
+    #[test]
+    fn t_motion_keeps_what_a_post_with_old_preserves() {
+        let (prog, d, obs) = check_with(SHUTTLE, "");
+        assert!(d.is_empty(), "{d:?}");
+        // [T-MOTION]: after `stay` (post `x == old(x)`) the cart is still where `fwd`
+        // left it, so `back(0)`'s precondition `0 < C.x` follows. The loop closes after
+        // one iteration: `back(0)` leaves the context the loop started in.
+        assert_eq!(goals(&prog, &obs, Rule::TMotion), vec!["1.0 > C.x && C.v == 0", "C.v == 0", "0 < C.x && C.v == 0"]);
+        assert_eq!(
+            hyps_of(&prog, &obs, Rule::TMotion),
+            vec![
+                vec!["C.x == 0", "C.v == 0", "0 <= C.v"],
+                vec!["C.x == 1.0", "C.v == 0", "0 <= C.v"],
+                vec!["C.x == 1.0", "C.v == 0", "0 <= C.v"],
+            ]
+        );
+        assert!(obs.iter().filter(|o| o.rule == Rule::TMotion).nth(1).is_some_and(Obligation::trivially_holds));
+    }
+
     #[test]
     fn a_well_typed_system_has_only_obligations() {
         let (prog, d, obs) = check(&format!("process C = mu k. A!go(x + 1).dt<move(x + 1)>.A?done.k; {GOOD_A}"));
         assert!(d.is_empty(), "{d:?}");
-        // Two iterations: the first knows the initial state, the second only the
-        // invariant, because `move`'s postcondition `x == xf` speaks of the `x + 1`
-        // computed before the motion. The third meets the second's context again.
-        assert_eq!(goals(&prog, &obs, Rule::TOut), vec!["C.x + 1 > C.x"; 2]);
-        assert_eq!(goals(&prog, &obs, Rule::TMotion), vec!["C.x + 1 > C.x && C.v == 0"; 2]);
-        let hyps: Vec<Vec<String>> = obs
-            .iter()
-            .filter(|o| o.rule == Rule::TMotion)
-            .map(|o| o.hyps.iter().map(|h| print::expr(&prog, None, h)).collect())
-            .collect();
-        assert_eq!(hyps, vec![vec!["C.x == 0", "C.v == 0", "C.v >= 0"], vec!["C.v >= 0"]]);
+        // `move`'s postcondition `x == xf` with `xf` the `x + 1` computed before the
+        // motion: each iteration knows the cart one further, `C.x == 1`, `C.x == 2`, ...,
+        // so the contexts never repeat. After WIDEN_AFTER of them the context is widened
+        // to the invariant, and the iteration after that meets it again.
+        assert_eq!(goals(&prog, &obs, Rule::TOut), vec!["C.x + 1 > C.x"; WIDEN_AFTER + 1]);
+        assert_eq!(goals(&prog, &obs, Rule::TMotion), vec!["C.x + 1 > C.x && C.v == 0"; WIDEN_AFTER + 1]);
+        let hyps = hyps_of(&prog, &obs, Rule::TMotion);
+        assert_eq!(hyps[0], vec!["C.x == 0", "C.v == 0", "0 <= C.v"]);
+        assert_eq!(hyps[1], vec!["C.x == 1", "0 <= C.v"]);
+        assert_eq!(hyps[2], vec!["C.x == 2", "0 <= C.v"]);
+        assert_eq!(hyps[WIDEN_AFTER], vec!["0 <= C.v"]);
         assert_eq!(obs.iter().filter(|o| o.rule == Rule::TSess).count(), 1);
         assert!(goals(&prog, &obs, Rule::Refinement).is_empty());
         let _ = prog;
@@ -866,6 +864,20 @@ mod tests {
     }
 
     #[test]
+    fn facts_about_others_are_forgotten_when_the_participant_moves() {
+        // The arm learns `tf > C.x` with `go`; once it has moved, so has the cart.
+        let chor = "choreography G = C -> A : go(tf: real { tf > C.x }). dt<C: idle, A: work>.
+                                     A -> C : [tf > 0] ack(u: real { u == tf }). end;";
+        let (prog, d, obs) =
+            check_with(chor, "process C = A!go(1.0).dt<idle>.A?ack(w).end; process A = C?go(y).dt<work>.C!ack(y).end;");
+        assert!(d.is_empty(), "{d:?}");
+        assert_eq!(goals(&prog, &obs, Rule::TOut), vec!["1.0 > C.x", "y > 0 && y == y"]);
+        let hyps = hyps_of(&prog, &obs, Rule::TOut);
+        assert_eq!(hyps[0], vec!["C.x == 0", "C.v == 0", "0 <= C.v"]);
+        assert_eq!(hyps[1], Vec::<String>::new(), "`C.x < y` went stale when the arm moved");
+    }
+
+    #[test]
     fn received_refinements_enter_the_context() {
         let chor =
             "choreography G = C -> A : go(tf: real { tf > 0 }). A -> C : [tf > 0] ack(u: real { u == tf }). end;";
@@ -873,7 +885,7 @@ mod tests {
         assert!(d.is_empty(), "{d:?}");
         let outs: Vec<&Obligation> = obs.iter().filter(|o| o.rule == Rule::TOut).collect();
         assert_eq!(goals(&prog, &obs, Rule::TOut), vec!["1.0 > 0", "y > 0 && y == y"]);
-        assert!(outs[1].hyps.iter().any(|h| print::expr(&prog, None, h) == "y > 0"));
+        assert!(outs[1].hyps.iter().any(|h| print::expr(&prog, None, h) == "0 < y"));
     }
 
     #[test]
@@ -886,7 +898,7 @@ mod tests {
         assert!(d.is_empty(), "{d:?}");
         let out: Vec<&Obligation> = obs.iter().filter(|o| o.rule == Rule::TOut).collect();
         assert_eq!(out.len(), 1);
-        assert!(out[0].hyps.iter().any(|h| print::expr(&prog, None, h) == "C.x > 1"));
+        assert!(out[0].hyps.iter().any(|h| print::expr(&prog, None, h) == "1 < C.x"));
     }
 
     #[test]

@@ -10,15 +10,37 @@
 //!
 //! Predicates are not decided here; each joint motion yields an [AGCOMP] obligation,
 //! each `*` a full-separation obligation and each guarded choice a total-choice one.
+//! They are made by a second walk, [`Contexts`], which threads the logical context Σ
+//! ([`Sigma`]) through the type (not unfolded: loops get an invariant instead) and gives
+//! each obligation the Σ of its point as hypotheses:
+//!
+//! - the root starts from every participant's `init` and its kind's invariant ([T-SESS]);
+//! - after `p -> q : [P] l(v: S {P'})`, Σ ∧ P ∧ P' (payload fields are value variables;
+//!   a field of the same name bound earlier is forgotten first);
+//! - each branch of a choice starts from Σ ∧ its first message's guard, and after the
+//!   choice Σ is what all branches that continue agree on;
+//! - a joint motion `dt<p: a, q: b>` applies the effect of every part
+//!   ([`Sigma::run_joint`]: strongest postcondition, one level of snapshots);
+//! - `g1 * g2`: each side starts from the facts of Σ over its own participants (and over
+//!   values and constants only), and afterwards Σ is the conjunction of the sides' ends;
+//! - `mu t. G`: a loop invariant by a syntactic fixpoint. The candidate is Σ at entry;
+//!   the body is walked under it, and every `t` reached must hold each candidate fact
+//!   literally; the facts some `t` lacks are dropped and the body walked again, until
+//!   nothing is dropped (the candidate only shrinks, so this ends). Only the last walk's
+//!   obligations are kept. Recursion parameters are forgotten at entry and at each `t`.
+//!
+//! Every step only keeps or weakens what holds, so every obligation's hypotheses hold
+//! whenever the choreography reaches its point.
 
 use crate::diag::{Code, Diagnostic};
 use crate::hir::expr::BinOp;
 use crate::hir::*;
-use crate::obligation::{Goal, Obligation, Rule};
+use crate::obligation::{Goal, Obligation, Rule, Run, Side};
+use crate::sigma::Sigma;
 use std::collections::HashMap;
 
 pub fn check(prog: &Program, g: &Global) -> (Vec<Diagnostic>, Vec<Obligation>) {
-    let mut s = Scope { prog, diags: Vec::new(), obligations: Vec::new(), recs: HashMap::new(), unfolding: Vec::new() };
+    let mut s = Scope { prog, diags: Vec::new(), recs: HashMap::new(), unfolding: Vec::new() };
     let mut used = Vec::new();
     g.participants(&mut used);
     for r in prog.role_ids() {
@@ -37,13 +59,22 @@ pub fn check(prog: &Program, g: &Global) -> (Vec<Diagnostic>, Vec<Obligation>) {
     // The root scope is P; an unused participant was reported above (E0313), so scope
     // with pt{G} to avoid reporting it again at every motion.
     s.walk(g, &used, true);
-    (s.diags, s.obligations)
+    let mut c = Contexts {
+        prog,
+        obligations: Vec::new(),
+        loops: Vec::new(),
+        jumps: Vec::new(),
+        runs: Vec::new(),
+        in_par: 0,
+        steps: 0,
+    };
+    c.walk(g, Sigma::initial(prog, prog.role_ids()));
+    (s.diags, c.obligations)
 }
 
 struct Scope<'a> {
     prog: &'a Program,
     diags: Vec<Diagnostic>,
-    obligations: Vec<Obligation>,
     /// Recursion variable → its body, for the one unfolding.
     recs: HashMap<&'a str, &'a Global>,
     /// Variables being unfolded (their second occurrence is a leaf).
@@ -56,8 +87,8 @@ fn names(prog: &Program, rs: &[RoleId]) -> String {
 }
 
 impl<'a> Scope<'a> {
-    /// `original` is false inside an unfolded copy, where obligations and per-node
-    /// errors were already produced for the original.
+    /// `original` is false inside an unfolded copy, where per-node errors were already
+    /// produced for the original.
     fn walk(&mut self, g: &'a Global, scope: &[RoleId], original: bool) {
         stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.walk_inner(g, scope, original))
     }
@@ -95,12 +126,7 @@ impl<'a> Scope<'a> {
                 }
             }
             Global::Seq(items, _) => items.iter().for_each(|i| self.walk(i, scope, original)),
-            Global::Choice(branches, _) => {
-                if original {
-                    self.total_choice(branches, scope);
-                }
-                branches.iter().for_each(|b| self.walk(b, scope, original));
-            }
+            Global::Choice(branches, _) => branches.iter().for_each(|b| self.walk(b, scope, original)),
             Global::Par(sides, loc) => self.par(sides, *loc, scope, original),
             Global::Rec { var, body, .. } => {
                 self.recs.insert(var, body);
@@ -173,46 +199,6 @@ impl<'a> Scope<'a> {
                     .with_help("make all but one of them interruptible"),
             );
         }
-        // A lone participant whose assumption is literally `true` has nothing to compose:
-        // [AGCOMP] with one primitive leaves only the assumption to discharge.
-        let trivial = m.parts.len() == 1 && self.prog.prim(m.parts[0].1.prim).assume.is_true();
-        if !trivial {
-            self.obligations.push(Obligation {
-                rule: Rule::AgComp,
-                span: m.loc.0,
-                what: format!("joint motion of {}", names(self.prog, &who)),
-                hyps: Vec::new(),
-                goal: Goal::Compatible { parts: m.parts.clone() },
-            });
-        }
-    }
-
-    fn total_choice(&mut self, branches: &[Global], _scope: &[RoleId]) {
-        let guards: Vec<Option<&Expr>> =
-            branches.iter().map(|b| super::side::first_message(b).and_then(|m| m.guard.as_ref())).collect();
-        if guards.iter().any(|g| g.is_none_or(Expr::is_true)) {
-            return; // an unguarded branch: the disjunction is trivially valid
-        }
-        let Some(m) = branches.first().and_then(super::side::first_message) else { return };
-        let mut disj: Option<Expr> = None;
-        for g in guards.into_iter().flatten() {
-            disj = Some(match disj {
-                None => g.clone(),
-                Some(d) => {
-                    let loc = d.loc;
-                    Expr { kind: ExprKind::Binary(BinOp::Or, Box::new(d), Box::new(g.clone())), sort: Sort::Bool, loc }
-                }
-            });
-        }
-        if let Some(goal) = disj {
-            self.obligations.push(Obligation {
-                rule: Rule::TotalChoice,
-                span: m.loc.0,
-                what: format!("the guards of the choice by `{}`", self.prog.role_name(m.from)),
-                hyps: Vec::new(),
-                goal: Goal::Valid(goal),
-            });
-        }
     }
 
     fn par(&mut self, sides: &'a [Global], loc: Loc, scope: &[RoleId], original: bool) {
@@ -267,20 +253,6 @@ impl<'a> Scope<'a> {
                 );
             }
             self.coupling(sides, &owner);
-            if sides.len() > 1 {
-                self.obligations.push(Obligation {
-                    rule: Rule::FullSeparation,
-                    span: loc.0,
-                    what: format!("footprints of the {} sides of `*`", sides.len()),
-                    hyps: Vec::new(),
-                    goal: Goal::Separated {
-                        sides: pts
-                            .iter()
-                            .map(|roles| crate::obligation::Side { roles: roles.clone(), runs: Vec::new() })
-                            .collect(),
-                    },
-                });
-            }
         }
         for (side, pt) in sides.iter().zip(&pts) {
             let sub: Vec<RoleId> = if pt.len() * scope.len() > 4096 {
@@ -332,6 +304,227 @@ impl<'a> Scope<'a> {
                     }
                 }
             }
+        }
+    }
+}
+
+/// After this many walks of one loop body its candidate invariant is given up for
+/// `true` (which is always an invariant), and so once the whole walk has taken
+/// [`STEP_BUDGET`] steps: nested loops would otherwise multiply their walks.
+const MAX_LOOP_WALKS: usize = 32;
+const STEP_BUDGET: usize = 1 << 20;
+
+/// The walk that threads Σ through the type and makes the predicate obligations (see
+/// the module documentation).
+struct Contexts<'a> {
+    prog: &'a Program,
+    obligations: Vec<Obligation>,
+    /// Enclosing recursions, innermost last: the variable and its parameters' names.
+    loops: Vec<(&'a str, Vec<&'a str>)>,
+    /// The contexts reached at recursion variables: (index into `loops`, Σ there).
+    jumps: Vec<(usize, Sigma)>,
+    /// The primitives run inside some `*`, in walk order, with the context each starts
+    /// in; each side of a `*` takes the ones logged while it was walked.
+    runs: Vec<Run>,
+    /// How many `*` enclose the current point.
+    in_par: usize,
+    steps: usize,
+}
+
+impl<'a> Contexts<'a> {
+    /// Walks `g` from context `sigma`; the context at its end, or `None` when no path
+    /// goes past it (it loops back or ends).
+    fn walk(&mut self, g: &'a Global, sigma: Sigma) -> Option<Sigma> {
+        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.walk_inner(g, sigma))
+    }
+
+    fn walk_inner(&mut self, g: &'a Global, mut sigma: Sigma) -> Option<Sigma> {
+        self.steps += 1;
+        match g {
+            Global::Msg(m) => {
+                sigma.assume_message(m);
+                Some(sigma)
+            }
+            Global::Motion(m) => {
+                self.motion(m, &mut sigma);
+                Some(sigma)
+            }
+            Global::Seq(items, _) => {
+                let mut cur = Some(sigma);
+                for it in items {
+                    // What follows a `t` or `end` is unreachable (E0314): `true` will do.
+                    cur = self.walk(it, cur.unwrap_or_default());
+                }
+                cur
+            }
+            Global::Choice(branches, _) => {
+                self.total_choice(branches, &sigma);
+                let mut out: Option<Sigma> = None;
+                for b in branches {
+                    let mut s = sigma.clone();
+                    if let Some(guard) = super::side::first_message(b).and_then(|m| m.guard.as_ref()) {
+                        s.assume(guard);
+                    }
+                    if let Some(end) = self.walk(b, s) {
+                        out = Some(match out {
+                            None => end,
+                            Some(o) => o.join(&end),
+                        });
+                    }
+                }
+                out
+            }
+            Global::Par(sides, loc) => self.par(sides, *loc, sigma),
+            Global::Rec { var, params, body, .. } => self.rec(var, params, body, sigma),
+            Global::Var(v) => {
+                if let Some(i) = self.loops.iter().rposition(|(n, _)| *n == v.var) {
+                    // The arguments are the parameters' new values.
+                    sigma.forget_values(&self.loops[i].1);
+                    self.jumps.push((i, sigma));
+                }
+                None
+            }
+            Global::End(_) => None,
+        }
+    }
+
+    /// [AGCOMP] under Σ, the runs for enclosing `*`s, then the motion's effect.
+    fn motion(&mut self, m: &Motion, sigma: &mut Sigma) {
+        // A lone participant whose assumption is literally `true` has nothing to compose:
+        // [AGCOMP] with one primitive leaves only the assumption to discharge.
+        let trivial = m.parts.len() == 1 && self.prog.prim(m.parts[0].1.prim).assume.is_true();
+        if !trivial {
+            let who: Vec<RoleId> = m.parts.iter().map(|(r, _)| *r).collect();
+            self.obligations.push(Obligation {
+                rule: Rule::AgComp,
+                span: m.loc.0,
+                what: format!("joint motion of {}", names(self.prog, &who)),
+                hyps: sigma.facts().to_vec(),
+                goal: Goal::Compatible { parts: m.parts.clone() },
+            });
+        }
+        if self.in_par > 0 {
+            for (role, app) in &m.parts {
+                self.runs.push(Run { role: *role, app: app.clone(), hyps: sigma.facts().to_vec() });
+            }
+        }
+        sigma.run_joint(self.prog, &m.parts);
+    }
+
+    /// Def 4.4 (1): under Σ, some guard holds.
+    fn total_choice(&mut self, branches: &[Global], sigma: &Sigma) {
+        let guards: Vec<Option<&Expr>> =
+            branches.iter().map(|b| super::side::first_message(b).and_then(|m| m.guard.as_ref())).collect();
+        if guards.iter().any(|g| g.is_none_or(Expr::is_true)) {
+            return; // an unguarded branch: the disjunction is trivially valid
+        }
+        let Some(m) = branches.first().and_then(super::side::first_message) else { return };
+        let mut disj: Option<Expr> = None;
+        for g in guards.into_iter().flatten() {
+            disj = Some(match disj {
+                None => g.clone(),
+                Some(d) => {
+                    let loc = d.loc;
+                    Expr { kind: ExprKind::Binary(BinOp::Or, Box::new(d), Box::new(g.clone())), sort: Sort::Bool, loc }
+                }
+            });
+        }
+        if let Some(goal) = disj {
+            self.obligations.push(Obligation {
+                rule: Rule::TotalChoice,
+                span: m.loc.0,
+                what: format!("the guards of the choice by `{}`", self.prog.role_name(m.from)),
+                hyps: sigma.facts().to_vec(),
+                goal: Goal::Valid(goal),
+            });
+        }
+    }
+
+    /// `g1 * ... * gn`: each side from the facts over its own participants; one
+    /// separation obligation listing what each side may run.
+    fn par(&mut self, sides: &'a [Global], loc: Loc, sigma: Sigma) -> Option<Sigma> {
+        let pts: Vec<Vec<RoleId>> = sides
+            .iter()
+            .map(|s| {
+                let mut v = Vec::new();
+                s.participants(&mut v);
+                v
+            })
+            .collect();
+        // Pushed now so that obligations keep the order of the type; the sides are
+        // filled in once they have been walked.
+        let slot = (sides.len() > 1).then(|| {
+            self.obligations.push(Obligation {
+                rule: Rule::FullSeparation,
+                span: loc.0,
+                what: format!("footprints of the {} sides of `*`", sides.len()),
+                hyps: sigma.facts().to_vec(),
+                goal: Goal::Separated { sides: Vec::new() },
+            });
+            self.obligations.len() - 1
+        });
+        let starts = sigma.split(&pts);
+        let mut out = Some(Sigma::new());
+        let mut done = Vec::with_capacity(sides.len());
+        self.in_par += 1;
+        for ((side, roles), start) in sides.iter().zip(pts).zip(starts) {
+            let from = self.runs.len();
+            let end = self.walk(side, start);
+            done.push(Side { roles, runs: self.runs[from..].to_vec() });
+            out = match (out, end) {
+                (Some(mut o), Some(e)) => {
+                    o.meet(e);
+                    Some(o)
+                }
+                _ => None,
+            };
+        }
+        self.in_par -= 1;
+        if self.in_par == 0 {
+            self.runs.clear();
+        }
+        if let Some(i) = slot {
+            if let Some(Obligation { goal: Goal::Separated { sides }, .. }) = self.obligations.get_mut(i) {
+                *sides = done;
+            }
+        }
+        out
+    }
+
+    /// `mu t. G`: the syntactic fixpoint for a loop invariant (module documentation).
+    fn rec(&mut self, var: &'a str, params: &'a [RecParam], body: &'a Global, sigma: Sigma) -> Option<Sigma> {
+        let names: Vec<&'a str> = params.iter().map(|p| p.name.as_str()).collect();
+        let mut candidate = sigma;
+        candidate.forget_values(&names);
+        let marks = (self.obligations.len(), self.runs.len(), self.jumps.len());
+        let depth = self.loops.len();
+        let mut walks = 0;
+        loop {
+            walks += 1;
+            self.loops.push((var, names.clone()));
+            let out = self.walk(body, candidate.clone());
+            self.loops.pop();
+            let reached: Vec<&Sigma> =
+                self.jumps[marks.2..].iter().filter(|(i, _)| *i == depth).map(|(_, s)| s).collect();
+            let stable = candidate.facts().iter().all(|f| reached.iter().all(|s| s.contains(f)));
+            if stable {
+                // Stable: this walk's obligations stand. Jumps to this loop are used up;
+                // jumps to enclosing loops stay for them.
+                let mut k = 0;
+                self.jumps.retain(|(i, _)| {
+                    k += 1;
+                    k <= marks.2 || *i != depth
+                });
+                return out;
+            }
+            if walks >= MAX_LOOP_WALKS || self.steps > STEP_BUDGET {
+                candidate = Sigma::new();
+            } else {
+                candidate.retain(|f| reached.iter().all(|s| s.contains(f)));
+            }
+            self.obligations.truncate(marks.0);
+            self.runs.truncate(marks.1);
+            self.jumps.truncate(marks.2);
         }
     }
 }
@@ -424,5 +617,154 @@ mod tests {
             "P -> Q : [x > 0] a. dt<P: wait, Q: wait, V: wait>. end + P -> Q : b. dt<P: wait, Q: wait, V: wait>. end",
         );
         assert!(!o.contains(&Rule::TotalChoice), "an unguarded branch makes it trivial");
+    }
+}
+
+#[cfg(test)]
+mod context_tests {
+    //! The hypotheses of the obligations: Σ threaded through the type.
+    use crate::hir::{print, Program};
+    use crate::lower::tests::lower_src;
+    use crate::obligation::{Goal, Obligation, Rule};
+
+    /// Three robots on a line; `go` moves to a target, `hold` stays (`x == old(x)`).
+    const SYS: &str = "
+        robot R { state x: real; invariant: 0 <= x <= 10; }
+        motion R.go(to: real) { interruptible: false; post: x == to; }
+        motion R.hold { interruptible: true; post: x == old(x); }
+        system S {
+          participant P: R { init: x == 0; }
+          participant Q: R { init: x == 5; }
+          participant V: R { init: x == 9; }
+        }
+    ";
+
+    fn obligations(chor: &str) -> (Program, Vec<Obligation>) {
+        let (p, d) = lower_src(&format!("{SYS} choreography G = {chor};"));
+        assert!(d.is_empty(), "{d:?}");
+        let body = p.choreography.as_ref().map(|c| c.body.clone()).expect("choreography");
+        let (d, o) = super::check(&p, &body);
+        assert!(d.is_empty(), "{d:?}");
+        (p, o)
+    }
+
+    fn show(prog: &Program, hyps: &[crate::hir::Expr]) -> Vec<String> {
+        hyps.iter().map(|h| print::expr(prog, None, h)).collect()
+    }
+
+    /// The hypotheses of each obligation of `rule`, printed and sorted.
+    fn hyps(prog: &Program, obs: &[Obligation], rule: Rule) -> Vec<Vec<String>> {
+        obs.iter().filter(|o| o.rule == rule).map(|o| sorted(show(prog, &o.hyps))).collect()
+    }
+
+    fn sorted<S: ToString>(v: impl IntoIterator<Item = S>) -> Vec<String> {
+        let mut v: Vec<String> = v.into_iter().map(|s| s.to_string()).collect();
+        v.sort();
+        v
+    }
+
+    const INIT: [&str; 9] =
+        ["P.x == 0", "0 <= P.x", "P.x <= 10", "Q.x == 5", "0 <= Q.x", "Q.x <= 10", "V.x == 9", "0 <= V.x", "V.x <= 10"];
+
+    #[test]
+    fn agcomp_hypotheses_follow_messages_and_motions() {
+        let (p, o) = obligations(
+            "P -> Q : a(n: real {n > x && n <= 10}). dt<P: go(n), Q: hold, V: hold>.
+             Q -> P : b. dt<P: hold, Q: go(1), V: hold>. end",
+        );
+        let h = hyps(&p, &o, Rule::AgComp);
+        assert_eq!(h.len(), 2);
+        // [T-SESS]'s initial state and the refinement of `a`.
+        assert_eq!(h[0], sorted(INIT.iter().chain(&["P.x < n", "n <= 10"])));
+        // After the motion P is at n (and `P.x < n` before it says `0 < n`); Q and V held.
+        let after = ["P.x == n", "0 <= P.x", "P.x <= 10", "0 < n", "n <= 10"];
+        assert_eq!(h[1], sorted(INIT[3..].iter().chain(&after)));
+    }
+
+    #[test]
+    fn choices_assume_their_guards() {
+        let (p, o) = obligations(
+            "P -> Q : [x >= 1] l. dt<P: go(2), Q: hold, V: hold>. end
+           + P -> Q : [x < 1] r. dt<P: go(3), Q: hold, V: hold>. end",
+        );
+        assert_eq!(hyps(&p, &o, Rule::TotalChoice), vec![sorted(INIT)]);
+        let h = hyps(&p, &o, Rule::AgComp);
+        assert_eq!(h, vec![sorted(INIT.iter().chain(&["1 <= P.x"])), sorted(INIT.iter().chain(&["P.x < 1"]))]);
+    }
+
+    #[test]
+    fn loops_get_a_syntactic_invariant_and_one_obligation_per_motion() {
+        // P moves one further each round: `P.x == 0` is not invariant; Q and V hold.
+        let (p, o) = obligations("mu t. P -> Q : a. dt<P: go(x + 1), Q: hold, V: hold>. Q -> P : b. t");
+        let h = hyps(&p, &o, Rule::AgComp);
+        assert_eq!(h, vec![sorted(&INIT[1..])]);
+        // A jump from an inner loop to the outer one weakens the outer invariant too.
+        let (p, o) = obligations(
+            "mu t. P -> Q : a. dt<P: hold, Q: hold, V: hold>.
+               mu s. ( Q -> P : b. dt<P: hold, Q: hold, V: hold>. s
+                     + Q -> P : c. dt<P: hold, Q: go(3), V: hold>. t )",
+        );
+        let h = hyps(&p, &o, Rule::AgComp);
+        assert_eq!(h.len(), 3, "one obligation per joint motion: {h:?}");
+        let without_q = sorted(INIT.iter().filter(|f| **f != "Q.x == 5"));
+        assert_eq!(h[0], without_q);
+        assert_eq!(h[1], without_q, "the inner loop's invariant");
+        assert_eq!(h[2], without_q);
+    }
+
+    #[test]
+    fn recursion_parameters_are_new_values_at_each_round() {
+        let (p, o) = obligations(
+            "mu t(k: int = 0). P -> Q : a(n: int {n == k && k >= 0}). dt<P: go(n), Q: hold, V: hold>. Q -> P : b. t(k + 1)",
+        );
+        let h = hyps(&p, &o, Rule::AgComp);
+        // `n == k` holds at the motion; nothing about `k` survives the jump back (the
+        // parameter is unrefined: its `0 <= k` is not checked, so not assumed either).
+        assert_eq!(h, vec![sorted(INIT[1..].iter().chain(&["n == k", "0 <= k"]))]);
+    }
+
+    #[test]
+    fn separation_lists_the_runs_of_each_side_with_their_contexts() {
+        let (p, o) = obligations(
+            "mu t. P -> Q : a. ((dt<P: go(2), Q: hold>. Q -> P : b. (dt<P: hold> * dt<Q: hold>)) * dt<V: hold>). t",
+        );
+        let seps: Vec<&Obligation> = o.iter().filter(|o| o.rule == Rule::FullSeparation).collect();
+        assert_eq!(seps.len(), 2);
+        assert_eq!(o.iter().filter(|o| o.rule == Rule::AgComp).count(), 1);
+        let runs = |ob: &Obligation| -> Vec<Vec<(String, Vec<String>)>> {
+            let Goal::Separated { sides } = &ob.goal else { panic!("separation") };
+            sides
+                .iter()
+                .map(|s| {
+                    s.runs
+                        .iter()
+                        .map(|r| {
+                            let who = format!("{}: {}", p.role_name(r.role), print::prim_app(&p, &r.app));
+                            (who, sorted(show(&p, &r.hyps)))
+                        })
+                        .collect()
+                })
+                .collect()
+        };
+        // P is at 2 after a round, so `P.x == 0` is not part of the loop's invariant.
+        let pq = sorted(["0 <= P.x", "P.x <= 10", "Q.x == 5", "0 <= Q.x", "Q.x <= 10"]);
+        let outer = runs(seps[0]);
+        // The P/Q side sees nothing of V, and its runs include the nested `*`'s.
+        assert_eq!(
+            outer[0],
+            vec![
+                ("P: go(2)".to_string(), pq.clone()),
+                ("Q: hold".to_string(), pq),
+                ("P: hold".to_string(), sorted(["P.x == 2", "0 <= P.x", "P.x <= 10"])),
+                ("Q: hold".to_string(), sorted(["Q.x == 5", "0 <= Q.x", "Q.x <= 10"])),
+            ]
+        );
+        assert_eq!(outer[1], vec![("V: hold".to_string(), sorted(&INIT[6..]))]);
+        let inner = runs(seps[1]);
+        assert_eq!(inner.len(), 2);
+        assert_eq!(inner[0], vec![outer[0][2].clone()]);
+        assert_eq!(inner[1], vec![outer[0][3].clone()]);
+        // The obligation's own hypotheses: Σ at the `*`.
+        assert_eq!(sorted(show(&p, &seps[0].hyps)), sorted(INIT.iter().filter(|f| **f != "P.x == 0")));
     }
 }
