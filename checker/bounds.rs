@@ -191,6 +191,11 @@ fn eval_inner(prog: &Program, e: &Expr, ranges: &dyn Ranges) -> Option<Interval>
 pub fn trig(f: Builtin, arg: Option<Interval>) -> Interval {
     let unit = Interval { lo: -1.0, hi: 1.0 };
     let Some(x) = arg.filter(Interval::is_finite) else { return unit };
+    if x.is_exactly(0.0) {
+        // The one argument where both are rational: exact, so `sin(0) == 0` holds.
+        let v = if f == Builtin::Sin { 0.0 } else { 1.0 };
+        return Interval { lo: v, hi: v };
+    }
     let mid = (x.lo + x.hi) / 2.0;
     let half = (x.hi - x.lo) / 2.0;
     let v = if f == Builtin::Sin { mid.sin() } else { mid.cos() };

@@ -22,7 +22,7 @@ use crate::bounds;
 use crate::hir::expr::{BinOp, UnOp};
 use crate::hir::{Builtin, Expr, ExprKind, Program, RoleId, Slot, Sort, Var};
 use std::collections::{BTreeMap, HashMap};
-use z3::ast::{Bool, Int, Real};
+use z3::ast::{Ast, Bool, Int, Real};
 
 /// A construct the encoding does not handle; the message names it.
 #[derive(Clone, Debug, PartialEq)]
@@ -390,13 +390,24 @@ impl<'p> Encoder<'p> {
         let num = |v: f64| real_of_f64(v);
         let unit = Real::add(&[Real::mul(&[s.clone(), s.clone()]), Real::mul(&[c.clone(), c.clone()])]).eq(one());
         self.side.push(unit);
+        // A constant argument, written as one or bound to a parameter: enclose its value.
+        let constant = match a.simplify().as_rational() {
+            Some((n, d)) if d != 0 && n.unsigned_abs() < 1 << 53 && d < 1 << 53 => Some(if n == 0 {
+                bounds::Interval { lo: 0.0, hi: 0.0 }
+            } else {
+                bounds::Interval::new(n as f64 / d as f64, n as f64 / d as f64)
+            }),
+            _ => None,
+        };
         let closed = !mentions_free(e);
-        let bound = closed.then(|| bounds::eval(self.prog, e, &bounds::closed)).flatten().filter(|i| i.is_finite());
+        let bound = constant
+            .or_else(|| closed.then(|| bounds::eval(self.prog, e, &bounds::closed)).flatten())
+            .filter(|i| i.is_finite());
         if let Some(iv) = bound {
             for (f, t) in [(Builtin::Sin, &s), (Builtin::Cos, &c)] {
                 let b = bounds::trig(f, Some(iv));
                 if let (Some(lo), Some(hi)) = (num(b.lo), num(b.hi)) {
-                    self.side.push(Bool::and(&[t.ge(&lo), t.le(&hi)]));
+                    self.side.push(if b.lo == b.hi { t.eq(&lo) } else { Bool::and(&[t.ge(&lo), t.le(&hi)]) });
                 }
             }
         } else {

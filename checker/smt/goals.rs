@@ -12,9 +12,9 @@
 //! - footprints are in the participant's frame: the world point `(x, y, z)` is moved
 //!   into it by the inverse of the participant's `pose`.
 
-use super::encode::{Encoder, Frame, Term, Unsupported};
+use super::encode::{real_of_f64, Encoder, Frame, Term, Unsupported};
 use crate::bounds::{self, Interval};
-use crate::hir::{Builtin, Expr, ExprKind, Global, PrimApp, Primitive, Program, RoleId, Slot, Sort, Var};
+use crate::hir::{Builtin, Expr, Global, PrimApp, Primitive, Program, RoleId, Slot, Var};
 use crate::obligation::{Goal, Obligation, Run, Side};
 use std::collections::HashSet;
 use z3::ast::{Bool, Real};
@@ -417,14 +417,23 @@ impl<'a> Inst<'a> {
 }
 
 /// The world point moved into `role`'s frame: `R^T (p - o)` for `pose(o, roll, pitch,
-/// yaw)`, `R = Rz(yaw) Ry(pitch) Rx(roll)`. Angles that are literally zero are skipped;
-/// others go through the encoder's sound trigonometry.
+/// yaw)`, `R = Rz(yaw) Ry(pitch) Rx(roll)`. Angles that are literally zero are skipped.
+///
+/// **Tolerance (documented in ARCHITECTURE.md):** a pose's angles are constants, and
+/// their cosines and sines enter as the exact rationals of their double-precision values
+/// (`f64::cos`, `f64::sin`, within an ulp). The rotation used thus differs from the
+/// exact one by under 1e-15 (values within 1e-15 of 0 or ±1 are
+/// taken as exact), which moves a point 10 m from the pose's origin by under
+/// 1e-14 m; a pose written in decimals is itself no closer to the physical angle. Using
+/// exact enclosures instead makes every footprint query nonlinear in the rotation and
+/// slowed separation checks from milliseconds to timeouts.
 fn to_local(enc: &mut Encoder, role: RoleId, p: &[Real; 3]) -> Result<[Real; 3], Unsupported> {
-    let pose = enc.prog().role(role).pose.clone();
+    let prog = enc.prog();
+    let pose = prog.role(role).pose.clone();
     let mut v = p.clone();
     for (k, c) in v.iter_mut().enumerate() {
         if let Some(o) = pose.get(k) {
-            if !is_zero(enc.prog(), o) {
+            if !is_zero(prog, o) {
                 *c = Real::sub(&[c.clone(), enc.real(o)?]);
             }
         }
@@ -432,15 +441,29 @@ fn to_local(enc: &mut Encoder, role: RoleId, p: &[Real; 3]) -> Result<[Real; 3],
     // Undo yaw (about z), then pitch (about y), then roll (about x).
     for (idx, axes) in [(5usize, (0usize, 1usize)), (4, (2, 0)), (3, (1, 2))] {
         let Some(angle) = pose.get(idx) else { continue };
-        if is_zero(enc.prog(), angle) {
+        if is_zero(prog, angle) {
             continue;
         }
-        let call = |f: Builtin| Expr { kind: ExprKind::Call(f, vec![angle.clone()]), sort: Sort::Real, loc: angle.loc };
-        let (c, s) = (enc.real(&call(Builtin::Cos))?, enc.real(&call(Builtin::Sin))?);
-        let (a, b) = (v[axes.0].clone(), v[axes.1].clone());
-        // Rotation by -angle in the (a, b) plane.
-        v[axes.0] = Real::add(&[Real::mul(&[c.clone(), a.clone()]), Real::mul(&[s.clone(), b.clone()])]);
-        v[axes.1] = Real::sub(&[Real::mul(&[c, b]), Real::mul(&[s, a])]);
+        let iv = bounds::eval(prog, angle, &bounds::closed)
+            .filter(|i| i.is_finite() && i.hi - i.lo < 1e-9)
+            .ok_or_else(|| Unsupported("a pose angle that is not a constant".into()))?;
+        let a = (iv.lo + iv.hi) / 2.0;
+        let exact = |v: f64| real_of_f64(v).ok_or_else(|| Unsupported("a pose angle".into()));
+        // Within the tolerance, quarter turns are exact (sin(pi) is 1.2e-16 in f64).
+        let snap = |v: f64| {
+            if (v.abs() - 1.0).abs() < 1e-15 {
+                v.signum()
+            } else if v.abs() < 1e-15 {
+                0.0
+            } else {
+                v
+            }
+        };
+        let (c, s) = (exact(snap(a.cos()))?, exact(snap(a.sin()))?);
+        let (x, y) = (v[axes.0].clone(), v[axes.1].clone());
+        // Rotation by -angle in the (x, y) plane of these axes.
+        v[axes.0] = Real::add(&[Real::mul(&[c.clone(), x.clone()]), Real::mul(&[s.clone(), y.clone()])]);
+        v[axes.1] = Real::sub(&[Real::mul(&[c, y]), Real::mul(&[s, x])]);
     }
     Ok(v)
 }
