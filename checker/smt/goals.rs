@@ -140,11 +140,30 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
         }
         Goal::InitiallyDisjoint => {
             let firsts = first_runs(prog);
+            // Boxes first, as for separation: only participants whose boxes meet need Z3.
+            let boxes: Vec<Option<[Interval; 3]>> = firsts
+                .iter()
+                .map(|(role, apps)| {
+                    let side = Side {
+                        roles: vec![*role],
+                        runs: apps.iter().map(|a| Run { role: *role, app: a.clone(), hyps: ob.hyps.clone() }).collect(),
+                    };
+                    side_box(prog, &side)
+                })
+                .collect();
             let mut out = Vec::new();
             for r in 0..firsts.len() {
                 for s in r + 1..firsts.len() {
+                    if let (Some(x), Some(y)) = (&boxes[r], &boxes[s]) {
+                        if (0..3).any(|k| x[k].disjoint(y[k])) {
+                            continue;
+                        }
+                    }
                     out.push(Part::InitiallyApart { r, s });
                 }
+            }
+            if out.is_empty() {
+                return Plan::Holds(None);
             }
             Plan::Parts(out)
         }
