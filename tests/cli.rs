@@ -249,3 +249,65 @@ fn project_prints_example_4_9s_local_type_of_the_cart() {
     let o = mochi(&["project", "choreographies/cart-and-arms.chor", "--role", "Nobody"]);
     assert_eq!(o.status.code(), Some(1));
 }
+
+// ---- honesty: what Z3 cannot decide is unknown, never verified ------------------------
+
+/// The undecided diagnostics of a JSON report, with their notes joined.
+fn undecided_notes(v: &serde_json::Value) -> Vec<String> {
+    v["diagnostics"]
+        .as_array()
+        .expect("diagnostics")
+        .iter()
+        .filter(|d| d["code"] == "U0001")
+        .map(|d| {
+            d["notes"]
+                .as_array()
+                .map(|n| n.iter().filter_map(|s| s.as_str()).collect::<Vec<_>>().join(" | "))
+                .unwrap_or_default()
+        })
+        .collect()
+}
+
+#[test]
+fn a_forced_timeout_gives_unknown_and_exit_3() {
+    // True by Fermat's last theorem for cubes, far beyond what Z3 proves in 0.3 s.
+    let o = mochi(&["check", "tests/data/hard-integer-guard.chor", "--timeout", "0.3", "--format", "json"]);
+    assert_eq!(o.status.code(), Some(3), "{}", stdout(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
+    assert_eq!(v["verdict"], "unknown");
+    let notes = undecided_notes(&v);
+    assert!(!notes.is_empty() && notes.iter().all(|n| n.contains("timed out after 300 ms")), "{notes:?}");
+    assert!(v["diagnostics"].as_array().expect("diagnostics").iter().all(|d| d["severity"] != "error"), "{v}");
+}
+
+#[test]
+fn a_nonlinear_query_beyond_the_encoding_gives_unknown_and_exit_3() {
+    // Valid for the real cosine, but its polynomial enclosure admits a model: Z3 answers
+    // sat, mochi sees the model's cosine is not the real one and reports unknown.
+    let o = mochi(&["check", "tests/data/trig-beyond-enclosure.chor", "--format", "json"]);
+    assert_eq!(o.status.code(), Some(3), "{}", stdout(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
+    assert_eq!(v["verdict"], "unknown");
+    let notes = undecided_notes(&v);
+    assert!(
+        !notes.is_empty() && notes.iter().all(|n| n.contains("sin/cos values the real functions do not take")),
+        "{notes:?}"
+    );
+}
+
+#[test]
+fn dump_smt_writes_one_smt_lib_file_per_query() {
+    let dir = TempDir::new("dump");
+    let out = dir.0.join("queries");
+    let o = mochi(&["check", "choreographies/cart-and-arms.chor", "--dump-smt", path_arg(&out)]);
+    assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
+    let files: Vec<_> = std::fs::read_dir(&out).expect("dump directory").filter_map(|e| e.ok()).collect();
+    assert!(files.len() >= 10, "{} files", files.len());
+    for f in &files {
+        let name = f.file_name().to_string_lossy().into_owned();
+        assert!(name.ends_with(".smt2") && name.contains("cart-and-arms-chor-"), "{name}");
+        let text = std::fs::read_to_string(f.path()).expect("readable");
+        assert!(text.starts_with("; mochi: ") && text.trim_end().ends_with("(check-sat)"), "{name}: {text}");
+    }
+    assert!(files.iter().any(|f| f.file_name().to_string_lossy().contains("-agcomp-")), "no [AGCOMP] query dumped");
+}
