@@ -325,7 +325,7 @@ pub struct Diagnostic {
     pub notes: Vec<String>,
     pub help: Option<String>,
     /// For a failed predicate check: the model Z3 found.
-    pub counterexample: Option<Counterexample>,
+    pub counterexample: Option<Box<Counterexample>>,
 }
 
 impl Diagnostic {
@@ -362,7 +362,7 @@ impl Diagnostic {
     }
 
     pub fn with_counterexample(mut self, c: Counterexample) -> Diagnostic {
-        self.counterexample = Some(c);
+        self.counterexample = Some(Box::new(c));
         self
     }
 

@@ -146,7 +146,14 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
                 .map(|(role, apps)| {
                     let side = Side {
                         roles: vec![*role],
-                        runs: apps.iter().map(|a| Run { role: *role, app: a.clone(), hyps: ob.hyps.clone() }).collect(),
+                        runs: apps
+                            .iter()
+                            .map(|a| Run {
+                                role: *role,
+                                app: a.clone(),
+                                hyps: slice(&ob.hyps, seeds_of(prog, &[(*role, a.clone())])),
+                            })
+                            .collect(),
                     };
                     side_box(prog, &side)
                 })
@@ -817,7 +824,7 @@ pub fn run_box(prog: &Program, run: &Run) -> Option<[Interval; 3]> {
     let inv = prog.kind(prim.kind).invariant.as_ref();
     let start: Vec<&Expr> = run.hyps.iter().collect();
     let shared = bounds::ranges_from(prog, &start, &bounds::closed);
-    let shared_lookup = |v: &Var| shared.iter().find(|(k, _)| k == v).map(|(_, i)| *i);
+    let shared_lookup = |v: &Var| shared.get(v).copied();
     // In the primitive's frame: old(x) and the start are the participant's `Role` vars.
     let role = run.role;
     let args = &run.app.args;
@@ -834,7 +841,7 @@ pub fn run_box(prog: &Program, run: &Run) -> Option<[Interval; 3]> {
     let own = bounds::ranges_from(prog, &facts, &lift);
     // Old(x) gets its range from the start facts and from the invariant over Own.
     let all = |v: &Var| -> Option<Interval> {
-        let o = own.iter().find(|(k, _)| k == v).map(|(_, i)| *i);
+        let o = own.get(v).copied();
         let l = lift(v);
         match (o, l) {
             (Some(a), Some(b)) => Some(a.meet(b)),

@@ -383,7 +383,7 @@ impl Worker<'_> {
         // Z3's default solver spends ~5 ms per check choosing a strategy; naming the logic
         // skips that (nlsat: complete for nonlinear real arithmetic). Queries with integer
         // variables keep the default solver.
-        let mut solver = z3::Solver::new_for_logic("QF_NRA").unwrap_or_else(z3::Solver::new);
+        let mut solver = z3::Solver::new_for_logic("QF_NRA").unwrap_or_default();
         assert_all(&solver);
         let text = solver.to_string();
         if text.contains(" () Int)") {
