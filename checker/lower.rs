@@ -531,6 +531,17 @@ impl Lowerer {
         let mut cx = Scopes::default();
         let body = self.global(&c.body, &mut cx);
         self.prog.choreography = Some(Choreography { name: c.name.name.clone(), body, span: c.name.span });
+        for p in &c.partitions {
+            let names = [p.point[0].name.clone(), p.point[1].name.clone(), p.point[2].name.clone()];
+            let env = Env { point: Some(&names), part: Some("a partition"), ..Env::consts_only() };
+            let regions = p.regions.iter().map(|r| self.pred(r, &env, "a partition's region")).collect();
+            self.prog.partitions.push(crate::hir::Partition {
+                par: p.par,
+                point: names.clone(),
+                regions,
+                span: p.span,
+            });
+        }
     }
 
     fn global(&mut self, g: &ast::Global, cx: &mut Scopes) -> Global {
@@ -1270,6 +1281,14 @@ impl Lowerer {
 
     fn not_allowed(&mut self, span: Span, what: &str, env: &Env) {
         let part = env.part.unwrap_or("this expression");
+        if part == "a partition" {
+            return self.err(
+                Code::VariableNotAllowed,
+                span,
+                format!("a partition's region cannot read {what}"),
+                "a region is a fixed part of the world: it reads its point and constants only (Sec 3.4, ∃ FP1, FP2)",
+            );
+        }
         let reads = match part {
             "the precondition" => "state and input variables",
             "the assumption" => "input variables and `clock`",

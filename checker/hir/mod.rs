@@ -189,6 +189,16 @@ pub struct LocalDef {
     pub span: Span,
 }
 
+/// A partition written after a `*` (span `par`): the region of the world, a predicate
+/// over the point named `point` ([`Var::Point`]), that each side keeps to.
+#[derive(Clone, Debug)]
+pub struct Partition {
+    pub par: Span,
+    pub point: [String; 3],
+    pub regions: Vec<Expr>,
+    pub span: Span,
+}
+
 /// A whole resolved program: the tables every later stage reads.
 #[derive(Clone, Debug, Default)]
 pub struct Program {
@@ -201,6 +211,7 @@ pub struct Program {
     pub choreography: Option<Choreography>,
     pub processes: Vec<ProcessDef>,
     pub locals: Vec<LocalDef>,
+    pub partitions: Vec<Partition>,
 }
 
 impl Program {
@@ -225,6 +236,11 @@ impl Program {
     pub fn kind_of(&self, r: RoleId) -> &RobotKind {
         self.kind(self.role(r).kind)
     }
+    /// The partition written for the `*` at `par`, if any.
+    pub fn partition(&self, par: Span) -> Option<&Partition> {
+        self.partitions.iter().find(|p| p.par == par)
+    }
+
     pub fn value(&self, v: ValueId) -> &ValueVar {
         &self.values[v.idx()]
     }

@@ -40,6 +40,10 @@ pub enum Part {
     Refine(RefineItem),
     /// [T-SESS]: the first motions of `r` and `s` start with disjoint footprints.
     InitiallyApart { r: usize, s: usize },
+    /// A written partition: the regions of sides `a` and `b` are disjoint.
+    RegionsApart(usize, usize),
+    /// A written partition: run `ra` of side `a` stays in the side's region.
+    InRegion { a: usize, ra: usize },
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -120,7 +124,20 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
             }
             Plan::Parts(out)
         }
-        Goal::Separated { sides } => separation_plan(prog, sides),
+        Goal::Separated { sides } => match prog.partition(ob.span) {
+            Some(p) if p.regions.len() == sides.len() => {
+                let mut parts = Vec::new();
+                for a in 0..sides.len() {
+                    for b in a + 1..sides.len() {
+                        parts.push(Part::RegionsApart(a, b));
+                    }
+                    parts.extend((0..sides[a].runs.len()).map(|ra| Part::InRegion { a, ra }));
+                }
+                Plan::Parts(parts)
+            }
+            Some(_) => Plan::Fails("the partition does not have one region per side".into()),
+            None => separation_plan(prog, sides),
+        },
         Goal::Refines { concrete, abstract_, .. } => {
             if abstract_.len() == 1 && abstract_[0] == *concrete {
                 return Plan::Holds(None); // a primitive refines itself
@@ -211,6 +228,32 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
             }
             q.point = Some(p);
             q.times = times;
+        }
+        (Goal::Separated { .. }, Part::RegionsApart(a, b)) => {
+            let p = world_point(&mut q);
+            let regions = &prog.partition(ob.span).ok_or_else(|| Unsupported("a partition".into()))?.regions;
+            let frame = Frame { point: Some(p.clone()), ..Frame::default() };
+            for i in [*a, *b] {
+                let r = q.enc.in_frame(&frame, |enc| enc.boolean(&regions[i]))?;
+                q.assertions.push(r);
+            }
+            q.point = Some(p);
+        }
+        (Goal::Separated { sides }, Part::InRegion { a, ra }) => {
+            let run = &sides[*a].runs[*ra];
+            let regions = &prog.partition(ob.span).ok_or_else(|| Unsupported("a partition".into()))?.regions;
+            hyps(&mut q, &slice(&run.hyps, seeds_of(prog, &[(run.role, run.app.clone())])))?;
+            let p = world_point(&mut q);
+            let t = q.enc.named_real("time");
+            let inst = Inst::new(&mut q.enc, run.role, &run.app, t.clone(), "t")?;
+            inst.started(&mut q)?;
+            inst.running(&mut q)?;
+            inst.occupies(&mut q, &p)?;
+            let frame = Frame { point: Some(p.clone()), ..Frame::default() };
+            let r = q.enc.in_frame(&frame, |enc| enc.boolean(&regions[*a]))?;
+            q.assertions.push(r.not());
+            q.point = Some(p);
+            q.times = vec![t];
         }
         (Goal::Refines { role, concrete, abstract_ }, Part::Refine(item)) => {
             refine(&mut q, *role, concrete, abstract_, *item)?

@@ -533,6 +533,18 @@ fn describe(prog: &Program, ob: &Obligation, part: &Part) -> String {
                 b + 1
             )
         }
+        (Goal::Separated { .. }, Part::RegionsApart(a, b)) => {
+            format!("the regions of sides {} and {} of the written partition are disjoint", a + 1, b + 1)
+        }
+        (Goal::Separated { sides }, Part::InRegion { a, ra }) => {
+            let run = &sides[*a].runs[*ra];
+            format!(
+                "the footprint of `{}` ({}) stays in the region the partition gives side {}",
+                prim(&run.app),
+                prog.role_name(run.role),
+                a + 1
+            )
+        }
         (Goal::Refines { concrete, abstract_, .. }, Part::Refine(item)) => {
             let abs: Vec<String> = abstract_.iter().map(prim).collect();
             format!("`{}` refines `{}`: {}", prim(concrete), abs.join(" /\\ "), item.text())

@@ -152,6 +152,19 @@ pub struct ChorDecl {
     pub name: Ident,
     pub body: Global,
     pub span: Span,
+    /// The partitions written after `*`s (`g1 * g2 partition(x, y, z) { P1; P2 }`).
+    pub partitions: Vec<PartitionDecl>,
+}
+
+/// `partition(x, y, z) { P1; ...; Pn }` after the last side of an n-ary `*` whose span
+/// is `par`: the region (a predicate over a world point) each side keeps to, the
+/// `∃ FP1, FP2` of [AGCOMP] written out as PGCD requires.
+#[derive(Clone, Debug)]
+pub struct PartitionDecl {
+    pub par: Span,
+    pub point: [Ident; 3],
+    pub regions: Vec<Expr>,
+    pub span: Span,
 }
 
 /// `process Role = P;`

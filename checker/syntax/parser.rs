@@ -43,7 +43,7 @@ const RESERVED: &[&str] = &[
 /// Parses one file.
 pub fn parse(file: FileId, text: &str) -> (File, Vec<Diagnostic>) {
     let (toks, diags) = lex(file, text);
-    let mut p = Parser { toks, pos: 0, diags, depth: 0 };
+    let mut p = Parser { toks, pos: 0, diags, depth: 0, partitions: Vec::new() };
     let f = p.file();
     (f, p.diags)
 }
@@ -65,7 +65,7 @@ pub fn parse_expr(file: FileId, text: &str) -> (Option<Expr>, Vec<Diagnostic>) {
 
 fn parse_with<T>(file: FileId, text: &str, f: fn(&mut Parser) -> PResult<T>) -> (Option<T>, Vec<Diagnostic>) {
     let (toks, diags) = lex(file, text);
-    let mut p = Parser { toks, pos: 0, diags, depth: 0 };
+    let mut p = Parser { toks, pos: 0, diags, depth: 0, partitions: Vec::new() };
     let res = f(&mut p).ok();
     let res = match res {
         Some(r) if p.at_eof() => Some(r),
@@ -86,6 +86,8 @@ struct Parser {
     pos: usize,
     diags: Vec<Diagnostic>,
     depth: usize,
+    /// Partitions met in the choreography being parsed.
+    partitions: Vec<PartitionDecl>,
 }
 
 impl Parser {
@@ -310,9 +312,11 @@ impl Parser {
             "choreography" => {
                 let name = self.ident("a choreography name")?;
                 self.expect_punct("=")?;
+                self.partitions.clear();
                 let body = self.global()?;
                 self.expect_punct(";")?;
-                Item::Choreography(ChorDecl { name, body, span: start.to(self.prev_span()) })
+                let partitions = std::mem::take(&mut self.partitions);
+                Item::Choreography(ChorDecl { name, body, span: start.to(self.prev_span()), partitions })
             }
             "process" => {
                 let role = self.ident("a participant name")?;
@@ -634,7 +638,47 @@ impl Parser {
     }
 
     fn global_par(&mut self) -> PResult<Global> {
-        self.global_nary("*", Parser::global_seq, Global::Par)
+        let g = self.global_nary("*", Parser::global_seq, Global::Par)?;
+        if let (Global::Par(_, par), true) = (&g, self.is_kw("partition")) {
+            let par = *par;
+            let start = self.bump().span;
+            self.expect_punct("(")?;
+            let a = self.ident("a coordinate name")?;
+            self.expect_punct(",")?;
+            let b = self.ident("a coordinate name")?;
+            self.expect_punct(",")?;
+            let c = self.ident("a coordinate name")?;
+            self.expect_punct(")")?;
+            self.expect_punct("{")?;
+            let mut regions = vec![self.expr()?];
+            while self.eat_punct(";") {
+                if self.is_punct("}") {
+                    break;
+                }
+                regions.push(self.expr()?);
+            }
+            self.expect_punct("}")?;
+            let span = start.to(self.prev_span());
+            if let Global::Par(sides, _) = &g {
+                if sides.len() != regions.len() {
+                    self.diags.push(
+                        Diagnostic::error(
+                            Code::ArityMismatch,
+                            span,
+                            format!(
+                                "this partition has {} region(s), the `*` before it has {} sides",
+                                regions.len(),
+                                sides.len()
+                            ),
+                        )
+                        .with_label(par, "the sides")
+                        .with_help("write one region per side, in the order of the sides, separated by `;`"),
+                    );
+                }
+            }
+            self.partitions.push(PartitionDecl { par, point: [a, b, c], regions, span });
+        }
+        Ok(g)
     }
 
     fn global_seq(&mut self) -> PResult<Global> {
