@@ -216,7 +216,9 @@ codes! {
         "[AGCOMP] (Sec 3.4): the footprints of the primitives of a joint motion must be disjoint at \
          every time of the motion, given their guarantees. The counterexample is a point of the world \
          (x, y, z, in metres) and a time (seconds since the motion started) at which both footprints \
-         contain the point, with the states that put them there. Move a participant (its pose or the \
+         contain the point, with the states that put them there. A footprint may cover space swept over \
+         the whole motion (Sec 3.5's cart box grows with time), so the point need not be where the robot's \
+         body is at that instant, only where its footprint allows it to be. Move a participant (its pose or the \
          target of its motion), shrink a footprint, or strengthen a guarantee (for example, make an \
          arm stay up while a cart approaches, as Sec 3.5 does).";
     DurationsIncompatible = "E0405", "the durations of a joint motion do not fit together",
@@ -237,6 +239,13 @@ codes! {
          FP_c ⊆ FP_s at every state and time, both are (non-)interruptible alike, and for \
          durations D_s ⊆ D_c (interruptible) or D_c ⊆ D_s (non-interruptible). The message names \
          the item that fails and the counterexample the states where it does.";
+    MotionCannotEnd = "E0408", "a motion primitive cannot end in a state its robot allows",
+        "Every joint motion must be able to finish (Sec 3.4 relies on contracts being deadlock \
+         free: from the precondition a trajectory exists). mochi checks that, from what is known \
+         when the primitive starts, some end state satisfies its postcondition and its robot \
+         kind's invariant. When none does (for example `m_move(12)` for a cart whose invariant \
+         keeps it within 10 m), everything after the motion would hold vacuously, so this is an \
+         error. Change the motion's arguments, or its postcondition or the invariant.";
     MotionPrecondition = "E0708", "a motion's precondition may not hold in the process",
         "[T-MOTION] (Table 1): when a process starts a motion, what it knows (Σ: its initial state, \
          the postconditions of its earlier motions, the refinements of values it received, the \

@@ -299,6 +299,7 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
     let code = match (ob.rule, &f.which) {
         (Rule::TotalChoice, _) => Code::ChoiceNotTotal,
         (Rule::AgComp, Some(Part::Pre(_))) => Code::PreconditionAtMotion,
+        (Rule::AgComp, Some(Part::CanEnd(_) | Part::CanStart(_))) => Code::MotionCannotEnd,
         (Rule::AgComp, Some(Part::Assume(_))) => Code::AssumptionNotDischarged,
         (Rule::AgComp, Some(Part::Within(..) | Part::Meet)) => Code::DurationsIncompatible,
         (Rule::AgComp, _) => Code::FootprintsOverlap,
@@ -314,6 +315,7 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
         Code::PreconditionAtMotion => "establish the precondition before the motion (an earlier motion's postcondition, a message's refinement), or weaken it",
         Code::AssumptionNotDischarged => "strengthen the partners' guarantees so that they imply the assumption, or weaken the assumption",
         Code::FootprintsOverlap => "keep the participants apart: change a pose or a motion's target, shrink a footprint, or strengthen a guarantee so the footprints stay clear of each other",
+        Code::MotionCannotEnd => "change the motion's arguments so that it ends inside the robot's invariant, or fix its postcondition",
         Code::DurationsIncompatible => "make the non-interruptible primitive's duration fit within its partners' (or let it be interrupted)",
         Code::SidesOverlap => "keep the sides of `*` in disjoint regions, or merge the motions that meet into one joint motion",
         Code::RefinementFails => "use a primitive whose contract refines the one the choreography names (Def 3.4, corrected direction)",
@@ -345,7 +347,8 @@ fn counterexample_text(cx: &Counterexample) -> Option<String> {
         };
         parts.push(format!("{at}the point (x, y, z) = ({}, {}, {}) m is in both footprints", p[0], p[1], p[2]));
     }
-    let hidden = |n: &str| n.starts_with("point.") || n.starts_with("time");
+    // The point and the time are shown above when there is an overlap.
+    let hidden = |n: &str| cx.overlap.is_some() && (n.starts_with("point.") || n.starts_with("time"));
     let values: Vec<String> =
         cx.values.iter().filter(|a| !hidden(&a.name)).take(16).map(|a| format!("{} = {}", a.name, a.value)).collect();
     if !values.is_empty() {

@@ -150,8 +150,19 @@ impl<'p> Encoder<'p> {
         Ok(t)
     }
 
-    /// The term of participant `r`'s variable in the shared vocabulary (`Cart.x`).
+    /// The term of participant `r`'s variable in the shared vocabulary (`Cart.x`). An
+    /// input is the state variable of the participant it is connected to (Sec 3.1), so
+    /// `DCart.d` is `Env.d`: what is known of one is known of the other.
     pub fn role_var(&mut self, r: RoleId, slot: Slot) -> Result<Term, Unsupported> {
+        if let Slot::Input(i) = slot {
+            let src = self.prog.role(r).input_sources.get(i).copied().flatten();
+            let name = &self.prog.kind_of(r).inputs[i].0;
+            if let Some((src, src_slot)) = src.and_then(|s| Some((s, self.prog.kind_of(s).slot(name)?.0))) {
+                if matches!(src_slot, Slot::State(_)) {
+                    return self.role_var(src, src_slot);
+                }
+            }
+        }
         let (n, s) = self.prog.kind_of(r).var(slot);
         let name = format!("{}.{n}", self.prog.role_name(r));
         self.named(&name, &s.clone())

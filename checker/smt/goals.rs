@@ -26,6 +26,14 @@ pub enum Part {
     Valid,
     /// [AGCOMP] "compatible from Pre": part `i`'s precondition holds at the `dt`.
     Pre(usize),
+    /// Part `i` can end: its postcondition and its kind's invariant are consistent with
+    /// the context (a **sat** question; see [`Part::is_sat_question`]).
+    CanEnd(usize),
+    /// Part `i` can start: Σ, its precondition and invariant are consistent (asked when
+    /// it cannot end, to tell a contradictory motion from an unreachable point).
+    CanStart(usize),
+    /// Conjunct `k` of a `Valid` goal.
+    Conjunct(usize),
     /// [AGCOMP]: the others' guarantees discharge part `i`'s assumption.
     Assume(usize),
     /// [AGCOMP]: the footprints of parts `i` and `j` are disjoint at every time.
@@ -44,6 +52,13 @@ pub enum Part {
     RegionsApart(usize, usize),
     /// A written partition: run `ra` of side `a` stays in the side's region.
     InRegion { a: usize, ra: usize },
+}
+
+impl Part {
+    /// Parts that must be satisfiable (a model is the witness) rather than unsat.
+    pub fn is_sat_question(&self) -> bool {
+        matches!(self, Part::CanEnd(_) | Part::CanStart(_))
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -90,14 +105,21 @@ pub enum Plan {
 
 pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
     match &ob.goal {
-        Goal::Valid(_) => Plan::Parts(vec![Part::Valid]),
+        Goal::Valid(e) => {
+            // One part per conjunct, so that a failure names the conjunct that fails.
+            let n = conjuncts(e).len();
+            Plan::Parts(if n > 1 { (0..n).map(Part::Conjunct).collect() } else { vec![Part::Valid] })
+        }
         Goal::Compatible { parts } => {
             let mut out = Vec::new();
+            // A lone primitive's precondition is [T-MOTION]'s to check, in its process.
+            let lone = parts.len() == 1;
             for (i, (_, app)) in parts.iter().enumerate() {
                 let p = prog.prim(app.prim);
-                if !p.pre.is_true() {
+                if !p.pre.is_true() && !lone {
                     out.push(Part::Pre(i));
                 }
+                out.push(Part::CanEnd(i));
                 if !p.assume.is_true() {
                     out.push(Part::Assume(i));
                 }
@@ -212,6 +234,12 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
             let g = q.enc.boolean(goal)?;
             q.assertions.push(g.not());
         }
+        (Goal::Valid(goal), Part::Conjunct(k)) => {
+            let c = conjuncts(goal)[*k];
+            hyps(&mut q, &slice(&ob.hyps, vars_of([c])))?;
+            let g = q.enc.boolean(c)?;
+            q.assertions.push(g.not());
+        }
         (Goal::Compatible { parts }, _) => compat(&mut q, &ob.hyps, parts, part)?,
         (Goal::Separated { sides }, Part::Apart { a, ra, b, rb }) => {
             let (x, y) = (&sides[*a].runs[*ra], &sides[*b].runs[*rb]);
@@ -277,7 +305,9 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
                     let start_is_now = inst.at_start(&mut q.enc)?;
                     inside.push(Bool::and(&[fp, start_is_now]));
                 }
-                any.push(Bool::or(&inside));
+                // Each first footprint contains the robot at time 0, so the robot lies in
+                // their intersection (not merely their union).
+                any.push(Bool::and(&inside));
             }
             q.assertions.extend(any);
             q.point = Some(p);
@@ -291,6 +321,18 @@ struct Int0;
 impl Int0 {
     fn real() -> Real {
         z3::ast::Int::from_i64(0).to_real()
+    }
+}
+
+/// The conjuncts of `e`.
+fn conjuncts(e: &Expr) -> Vec<&Expr> {
+    match &e.kind {
+        crate::hir::ExprKind::Binary(crate::hir::expr::BinOp::And, a, b) => {
+            let mut v = conjuncts(a);
+            v.extend(conjuncts(b));
+            v
+        }
+        _ => vec![e],
     }
 }
 
@@ -542,7 +584,11 @@ fn is_zero(prog: &Program, e: &Expr) -> bool {
 }
 
 fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], part: &Part) -> Result<(), Unsupported> {
-    hyps(q, &slice(hs, seeds_of(q.enc.prog(), parts)))?;
+    if part.is_sat_question() {
+        hyps(q, hs)?;
+    } else {
+        hyps(q, &slice(hs, seeds_of(q.enc.prog(), parts)))?;
+    }
     let t = q.enc.named_real("time");
     let mut insts = Vec::new();
     for (r, app) in parts {
@@ -550,6 +596,21 @@ fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], part: &Part) 
     }
     connect(q, &mut insts);
     match part {
+        Part::CanStart(i) => insts[*i].started(q)?,
+        Part::CanEnd(i) => {
+            // Satisfiable iff some end state satisfies Post and the invariant from a start
+            // allowed by Σ and the precondition (no hypotheses sliced away: a
+            // contradiction anywhere in Σ must show).
+            let inst = &insts[*i];
+            inst.started(q)?;
+            let end = end_frame(&mut q.enc, inst)?;
+            let post = inst.pred(&mut q.enc, &inst.prim.post, &end)?;
+            q.assertions.push(post);
+            if let Some(inv) = q.enc.prog().kind(inst.prim.kind).invariant.clone() {
+                let b = inst.pred(&mut q.enc, &inv, &end)?;
+                q.assertions.push(b);
+            }
+        }
         Part::Pre(i) => {
             let inst = &insts[*i];
             if let Some(inv) = q.enc.prog().kind(inst.prim.kind).invariant.clone() {

@@ -356,6 +356,40 @@ impl Worker<'_> {
                 Err(Unsupported(what)) => Answer::Unknown(Why::Unsupported(what)),
                 Ok(q) => self.solve(q, index, k, &mut stats),
             };
+            if part.is_sat_question() {
+                // Satisfiable means it holds (a witness exists). Unsat fails, unless the
+                // point itself cannot be reached (then everything there holds vacuously,
+                // as for any dead branch).
+                match answer {
+                    Answer::Sat { .. } => {}
+                    Answer::Unknown(why) => {
+                        unknown.get_or_insert((describe(self.prog, ob, part), why));
+                    }
+                    Answer::Unsat => {
+                        let Part::CanEnd(i) = part else { continue };
+                        stats.queries += 1;
+                        let reachable = match goals::build(self.prog, ob, &Part::CanStart(*i)) {
+                            Err(Unsupported(what)) => Answer::Unknown(Why::Unsupported(what)),
+                            Ok(q) => self.solve(q, index, k, &mut stats),
+                        };
+                        match reachable {
+                            Answer::Unsat => {}
+                            Answer::Unknown(why) => {
+                                unknown.get_or_insert((describe(self.prog, ob, part), why));
+                            }
+                            Answer::Sat { .. } => {
+                                let which = Some(part.clone());
+                                let part = describe(self.prog, ob, part);
+                                return (
+                                    Decision::Fails(Failure { part, which, values: Vec::new(), overlap: None }),
+                                    stats,
+                                );
+                            }
+                        }
+                    }
+                }
+                continue;
+            }
             match answer {
                 Answer::Unsat => {}
                 Answer::Sat { values, overlap } => {
@@ -501,6 +535,16 @@ fn describe(prog: &Program, ob: &Obligation, part: &Part) -> String {
                 prog.role_name(parts[*i].0)
             )
         }
+        (Goal::Compatible { parts }, Part::CanEnd(i) | Part::CanStart(i)) => format!(
+            "`{}` ({}) can end: its postcondition and the kind's invariant are consistent with what is known when it starts",
+            prim(&parts[*i].1),
+            prog.role_name(parts[*i].0)
+        ),
+        (Goal::Valid(goal), Part::Conjunct(k)) => {
+            let mut cs = Vec::new();
+            conjuncts_of(goal, &mut cs);
+            format!("{}: `{}`", ob.what, crate::hir::print::expr(prog, None, cs[*k]))
+        }
         (Goal::Compatible { parts }, Part::Assume(i)) => format!(
             "the guarantees of the other primitives discharge the assumption of `{}` ({})",
             prim(&parts[*i].1),
@@ -636,6 +680,35 @@ mod tests {
         assert_eq!(valid("", "(point(x, 1, 2) - point(0, 1, 2)).x == x"), Verdict::Holds);
     }
 
+    /// [T-SESS] on two bots (radius 0.1, footprint the ball) placed `gap` apart.
+    fn initially_apart(gap: &str) -> Decision {
+        let src = format!(
+            "robot Bot {{ state s: real; }}
+             motion Bot.hold {{ interruptible: true; footprint(x, y, z): x^2 + y^2 + z^2 <= 0.01; }}
+             system S {{ participant A: Bot {{ init: s == 0; }} participant B: Bot {{ init: s == 0; at: pose({gap}, 0, 0); }} }}
+             choreography G = dt<A: hold> * dt<B: hold>;"
+        );
+        let (prog, d) = lower_src(&src);
+        assert!(d.is_empty(), "{d:?}");
+        let hyps = prog.roles.iter().filter_map(|r| r.init.clone()).collect();
+        let ob = Obligation {
+            rule: crate::obligation::Rule::TSess,
+            span: Default::default(),
+            what: "initial states".into(),
+            hyps,
+            goal: Goal::InitiallyDisjoint,
+        };
+        discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0
+    }
+
+    #[test]
+    fn initially_apart_holds_for_distant_bots_and_fails_for_touching_ones() {
+        assert!(matches!(initially_apart("0.5"), Decision::Holds(_)));
+        let Decision::Fails(f) = initially_apart("0.15") else { panic!("the balls overlap") };
+        let o = f.overlap.expect("a point");
+        assert!(o.point[0] >= 0.05 - 1e-9 && o.point[0] <= 0.1 + 1e-9, "{o:?}");
+    }
+
     #[test]
     fn canonical_text_forgets_names_only() {
         let a = "(declare-fun |C1.x| () Real)\n(assert (<= |C1.x| 10.0))\n";
@@ -655,5 +728,15 @@ mod tests {
             Verdict::Unknown(_) => {}
             other => panic!("expected unknown, got {other:?}"),
         }
+    }
+}
+
+fn conjuncts_of<'e>(e: &'e Expr, out: &mut Vec<&'e Expr>) {
+    match &e.kind {
+        crate::hir::ExprKind::Binary(crate::hir::expr::BinOp::And, a, b) => {
+            conjuncts_of(a, out);
+            conjuncts_of(b, out);
+        }
+        _ => out.push(e),
     }
 }

@@ -390,19 +390,15 @@ impl<'a> Contexts<'a> {
 
     /// [AGCOMP] under Σ, the runs for enclosing `*`s, then the motion's effect.
     fn motion(&mut self, m: &Motion, sigma: &mut Sigma) {
-        // A lone participant whose assumption is literally `true` has nothing to compose:
-        // [AGCOMP] with one primitive leaves only the assumption to discharge.
-        let trivial = m.parts.len() == 1 && self.prog.prim(m.parts[0].1.prim).assume.is_true();
-        if !trivial {
-            let who: Vec<RoleId> = m.parts.iter().map(|(r, _)| *r).collect();
-            self.obligations.push(Obligation {
-                rule: Rule::AgComp,
-                span: m.loc.0,
-                what: format!("joint motion of {}", names(self.prog, &who)),
-                hyps: sigma.facts().to_vec(),
-                goal: Goal::Compatible { parts: m.parts.clone() },
-            });
-        }
+        // Every dt gets one: even a lone primitive must be able to end (see smt::goals).
+        let who: Vec<RoleId> = m.parts.iter().map(|(r, _)| *r).collect();
+        self.obligations.push(Obligation {
+            rule: Rule::AgComp,
+            span: m.loc.0,
+            what: format!("joint motion of {}", names(self.prog, &who)),
+            hyps: sigma.facts().to_vec(),
+            goal: Goal::Compatible { parts: m.parts.clone() },
+        });
         if self.in_par > 0 {
             for (role, app) in &m.parts {
                 self.runs.push(Run { role: *role, app: app.clone(), hyps: sigma.facts().to_vec() });
@@ -567,8 +563,8 @@ mod tests {
     fn figure_2_shape_is_well_scoped() {
         let (d, o) = run("mu t. P -> Q : a. P -> V : c. ((dt<P: go, Q: wait>. P -> Q : b. (dt<P: go> * dt<Q: wait>)) * dt<V: wait>). t");
         assert_eq!(d, vec![]);
-        // One joint motion needs [AGCOMP]; lone primitives assuming `true` need none; two `*` need separation.
-        assert_eq!(o.iter().filter(|r| **r == Rule::AgComp).count(), 1);
+        // Every dt needs [AGCOMP] (a lone one only that it can end: 4 of them); two `*` need separation.
+        assert_eq!(o.iter().filter(|r| **r == Rule::AgComp).count(), 4);
         assert_eq!(o.iter().filter(|r| **r == Rule::FullSeparation).count(), 2);
     }
 
@@ -730,7 +726,7 @@ mod context_tests {
         );
         let seps: Vec<&Obligation> = o.iter().filter(|o| o.rule == Rule::FullSeparation).collect();
         assert_eq!(seps.len(), 2);
-        assert_eq!(o.iter().filter(|o| o.rule == Rule::AgComp).count(), 1);
+        assert_eq!(o.iter().filter(|o| o.rule == Rule::AgComp).count(), 4);
         let runs = |ob: &Obligation| -> Vec<Vec<(String, Vec<String>)>> {
             let Goal::Separated { sides } = &ob.goal else { panic!("separation") };
             sides
