@@ -605,6 +605,16 @@ fn describe(prog: &Program, ob: &Obligation, part: &Part) -> String {
     }
 }
 
+fn conjuncts_of<'e>(e: &'e Expr, out: &mut Vec<&'e Expr>) {
+    match &e.kind {
+        crate::hir::ExprKind::Binary(crate::hir::expr::BinOp::And, a, b) => {
+            conjuncts_of(a, out);
+            conjuncts_of(b, out);
+        }
+        _ => out.push(e),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -728,15 +738,5 @@ mod tests {
             Verdict::Unknown(_) => {}
             other => panic!("expected unknown, got {other:?}"),
         }
-    }
-}
-
-fn conjuncts_of<'e>(e: &'e Expr, out: &mut Vec<&'e Expr>) {
-    match &e.kind {
-        crate::hir::ExprKind::Binary(crate::hir::expr::BinOp::And, a, b) => {
-            conjuncts_of(a, out);
-            conjuncts_of(b, out);
-        }
-        _ => out.push(e),
     }
 }
