@@ -296,10 +296,7 @@ fn even_powers(e: &Expr, coord: &dyn Fn(&Expr) -> Option<usize>) -> Option<Vec<(
 /// `x == y` after `y == 1` is found).
 pub fn ranges_from(prog: &Program, facts: &[&Expr], start: &dyn Ranges) -> HashMap<Var, Interval> {
     let mut known: HashMap<Var, Interval> = HashMap::new();
-    let mut cs: Vec<&Expr> = Vec::new();
-    for f in facts {
-        conjuncts(f, &mut cs);
-    }
+    let cs: Vec<&Expr> = facts.iter().flat_map(|f| f.conjuncts()).collect();
     let is_var = |e: &Expr| match &e.kind {
         ExprKind::Var(v @ (Var::Role(..) | Var::Value(..) | Var::Own(_) | Var::Old(_) | Var::Snap(..))) => {
             Some(v.clone())
@@ -340,16 +337,6 @@ pub fn ranges_from(prog: &Program, facts: &[&Expr], start: &dyn Ranges) -> HashM
         }
     }
     known
-}
-
-fn conjuncts<'e>(e: &'e Expr, out: &mut Vec<&'e Expr>) {
-    match &e.kind {
-        ExprKind::Binary(BinOp::And, a, b) => {
-            conjuncts(a, out);
-            conjuncts(b, out);
-        }
-        _ => out.push(e),
-    }
 }
 
 #[cfg(test)]

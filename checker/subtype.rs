@@ -439,16 +439,9 @@ pub(crate) fn mentions(e: &Expr, pred: &dyn Fn(&Var) -> bool) -> bool {
     })
 }
 
-/// The conjuncts of `e`, without `true`.
+/// The conjuncts of `e`, without `true`, appended to `out`.
 pub(crate) fn conjuncts(e: &Expr, out: &mut Vec<Expr>) {
-    stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || match &e.kind {
-        ExprKind::Binary(BinOp::And, a, b) => {
-            conjuncts(a, out);
-            conjuncts(b, out);
-        }
-        _ if e.is_true() => {}
-        _ => out.push(e.clone()),
-    })
+    out.extend(e.conjuncts().into_iter().cloned());
 }
 
 /// The conjunction of `items` (`true` when empty).

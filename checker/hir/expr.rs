@@ -221,6 +221,24 @@ impl Expr {
         Expr { kind: ExprKind::Binary(BinOp::And, Box::new(self), Box::new(other)), sort: Sort::Bool, loc }
     }
 
+    /// The conjuncts of `self` (split at every `&&`), left to right, without `true`.
+    /// Iterative, so that long conjunctions cannot exhaust the stack.
+    pub fn conjuncts(&self) -> Vec<&Expr> {
+        let mut out = Vec::new();
+        let mut todo = vec![self];
+        while let Some(e) = todo.pop() {
+            match &e.kind {
+                ExprKind::Binary(BinOp::And, a, b) => {
+                    todo.push(b);
+                    todo.push(a);
+                }
+                _ if e.is_true() => {}
+                _ => out.push(e),
+            }
+        }
+        out
+    }
+
     /// Calls `f` on every variable occurrence.
     pub fn visit_vars(&self, f: &mut dyn FnMut(&Var, Loc)) {
         match &self.kind {

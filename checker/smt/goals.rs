@@ -107,7 +107,7 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
     match &ob.goal {
         Goal::Valid(e) => {
             // One part per conjunct, so that a failure names the conjunct that fails.
-            let n = conjuncts(e).len();
+            let n = e.conjuncts().len();
             Plan::Parts(if n > 1 { (0..n).map(Part::Conjunct).collect() } else { vec![Part::Valid] })
         }
         Goal::Compatible { parts } => {
@@ -235,7 +235,7 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
             q.assertions.push(g.not());
         }
         (Goal::Valid(goal), Part::Conjunct(k)) => {
-            let c = conjuncts(goal)[*k];
+            let c = goal.conjuncts()[*k];
             hyps(&mut q, &slice(&ob.hyps, vars_of([c])))?;
             let g = q.enc.boolean(c)?;
             q.assertions.push(g.not());
@@ -321,18 +321,6 @@ struct Int0;
 impl Int0 {
     fn real() -> Real {
         z3::ast::Int::from_i64(0).to_real()
-    }
-}
-
-/// The conjuncts of `e`.
-fn conjuncts(e: &Expr) -> Vec<&Expr> {
-    match &e.kind {
-        crate::hir::ExprKind::Binary(crate::hir::expr::BinOp::And, a, b) => {
-            let mut v = conjuncts(a);
-            v.extend(conjuncts(b));
-            v
-        }
-        _ => vec![e],
     }
 }
 

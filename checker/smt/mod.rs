@@ -541,9 +541,7 @@ fn describe(prog: &Program, ob: &Obligation, part: &Part) -> String {
             prog.role_name(parts[*i].0)
         ),
         (Goal::Valid(goal), Part::Conjunct(k)) => {
-            let mut cs = Vec::new();
-            conjuncts_of(goal, &mut cs);
-            format!("{}: `{}`", ob.what, crate::hir::print::expr(prog, None, cs[*k]))
+            format!("{}: `{}`", ob.what, crate::hir::print::expr(prog, None, goal.conjuncts()[*k]))
         }
         (Goal::Compatible { parts }, Part::Assume(i)) => format!(
             "the guarantees of the other primitives discharge the assumption of `{}` ({})",
@@ -602,16 +600,6 @@ fn describe(prog: &Program, ob: &Obligation, part: &Part) -> String {
             )
         }
         _ => ob.what.clone(),
-    }
-}
-
-fn conjuncts_of<'e>(e: &'e Expr, out: &mut Vec<&'e Expr>) {
-    match &e.kind {
-        crate::hir::ExprKind::Binary(crate::hir::expr::BinOp::And, a, b) => {
-            conjuncts_of(a, out);
-            conjuncts_of(b, out);
-        }
-        _ => out.push(e),
     }
 }
 
