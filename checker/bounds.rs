@@ -64,31 +64,12 @@ impl Interval {
         self.hi < o.lo || o.hi < self.lo
     }
 
-    fn add(self, o: Interval) -> Interval {
-        Interval { lo: self.lo + o.lo, hi: self.hi + o.hi }.widen()
-    }
-
-    fn neg(self) -> Interval {
-        Interval { lo: -self.hi, hi: -self.lo }
-    }
-
-    fn mul(self, o: Interval) -> Interval {
-        let ps = [self.lo * o.lo, self.lo * o.hi, self.hi * o.lo, self.hi * o.hi];
-        if ps.iter().any(|p| p.is_nan()) {
-            // 0 * inf: the product is unbounded on the side of the infinite factor.
-            return ALL;
-        }
-        let lo = ps.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = ps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        Interval { lo, hi }.widen()
-    }
-
     fn div(self, o: Interval) -> Option<Interval> {
         if o.lo <= 0.0 && o.hi >= 0.0 {
             return None; // the divisor may be zero
         }
         let inv = Interval { lo: 1.0 / o.hi, hi: 1.0 / o.lo }.widen();
-        Some(self.mul(inv))
+        Some(self * inv)
     }
 
     fn pow(self, n: i64) -> Interval {
@@ -103,6 +84,35 @@ impl Interval {
             }
             _ => Interval { lo: self.lo.powi(n as i32), hi: self.hi.powi(n as i32) }.widen(),
         }
+    }
+}
+
+/// Sums, negations and products enclose the exact result (outward rounding).
+impl std::ops::Add for Interval {
+    type Output = Interval;
+    fn add(self, o: Interval) -> Interval {
+        Interval { lo: self.lo + o.lo, hi: self.hi + o.hi }.widen()
+    }
+}
+
+impl std::ops::Neg for Interval {
+    type Output = Interval;
+    fn neg(self) -> Interval {
+        Interval { lo: -self.hi, hi: -self.lo }
+    }
+}
+
+impl std::ops::Mul for Interval {
+    type Output = Interval;
+    fn mul(self, o: Interval) -> Interval {
+        let ps = [self.lo * o.lo, self.lo * o.hi, self.hi * o.lo, self.hi * o.hi];
+        if ps.iter().any(|p| p.is_nan()) {
+            // 0 * inf: the product is unbounded on the side of the infinite factor.
+            return ALL;
+        }
+        let lo = ps.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = ps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        Interval { lo, hi }.widen()
     }
 }
 
@@ -133,7 +143,7 @@ fn eval_inner(prog: &Program, e: &Expr, ranges: &dyn Ranges) -> Option<Interval>
         ExprKind::Real(r) => Interval::point(r.parse().ok()?),
         ExprKind::Var(Var::Const(c)) => eval(prog, &prog.consts[c.idx()].value, ranges)?,
         ExprKind::Var(v) => ranges.range(v)?,
-        ExprKind::Unary(UnOp::Neg, a) => eval(prog, a, ranges)?.neg(),
+        ExprKind::Unary(UnOp::Neg, a) => -eval(prog, a, ranges)?,
         ExprKind::Binary(op, a, b) => {
             let x = eval(prog, a, ranges)?;
             if *op == BinOp::Pow {
@@ -142,9 +152,9 @@ fn eval_inner(prog: &Program, e: &Expr, ranges: &dyn Ranges) -> Option<Interval>
             }
             let y = eval(prog, b, ranges)?;
             match op {
-                BinOp::Add => x.add(y),
-                BinOp::Sub => x.add(y.neg()),
-                BinOp::Mul => x.mul(y),
+                BinOp::Add => x + y,
+                BinOp::Sub => x + -y,
+                BinOp::Mul => x * y,
                 BinOp::Div => x.div(y)?,
                 _ => return None,
             }
@@ -166,7 +176,7 @@ fn eval_inner(prog: &Program, e: &Expr, ranges: &dyn Ranges) -> Option<Interval>
                     if x.lo >= 0.0 {
                         x
                     } else if x.hi <= 0.0 {
-                        x.neg()
+                        -x
                     } else {
                         Interval { lo: 0.0, hi: x.hi.max(-x.lo) }
                     }

@@ -72,8 +72,10 @@ pub enum Goal {
     /// the footprints of its own motions. `sides[i]` lists every primitive side `i` may
     /// run (each part of a joint motion separately), with the context it starts in.
     Separated { sides: Vec<Side> },
-    /// The participants' initial geometries are pairwise disjoint.
-    InitiallyDisjoint,
+    /// The participants' initial geometries are pairwise disjoint. `firsts` lists, for
+    /// each participant that moves, the primitives it may run first (one per path); the
+    /// footprints of all of them at time 0 contain it in its initial state.
+    InitiallyDisjoint { firsts: Vec<(RoleId, Vec<PrimApp>)> },
 }
 
 /// One side of a `*`: its participants and the primitives they may run on it.
@@ -136,6 +138,6 @@ mod tests {
         assert!(ob(vec![], t.clone()).trivially_holds());
         assert!(ob(vec![x.clone()], x.clone()).trivially_holds());
         assert!(!ob(vec![], x).trivially_holds());
-        assert!(!Obligation { goal: Goal::InitiallyDisjoint, ..ob(vec![], t) }.trivially_holds());
+        assert!(!Obligation { goal: Goal::InitiallyDisjoint { firsts: Vec::new() }, ..ob(vec![], t) }.trivially_holds());
     }
 }

@@ -79,7 +79,7 @@ pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalRc>) 
             span,
             what: "the participants' initial geometries are pairwise disjoint".to_string(),
             hyps,
-            goal: Goal::InitiallyDisjoint,
+            goal: Goal::InitiallyDisjoint { firsts: prog.first_motions() },
         });
     }
     let mut seen = HashSet::new();

@@ -34,6 +34,41 @@ impl Global {
         }
     }
 
+    /// Collects `r`'s possible first primitives in `self` (one per path, deduplicated);
+    /// returns whether every path has one, so that nothing after `self` can be first.
+    pub fn first_primitives(&self, r: RoleId, out: &mut Vec<PrimApp>) -> bool {
+        match self {
+            Global::Motion(m) => match m.parts.iter().find(|(p, _)| *p == r) {
+                Some((_, app)) => {
+                    if !out.contains(app) {
+                        out.push(app.clone());
+                    }
+                    true
+                }
+                None => false,
+            },
+            Global::Msg(_) | Global::Var(_) | Global::End(_) => false,
+            Global::Seq(items, _) => items.iter().any(|i| i.first_primitives(r, out)),
+            Global::Choice(bs, _) => {
+                // Every branch is visited (no short circuit): each may contribute.
+                let mut all = true;
+                for b in bs {
+                    all &= b.first_primitives(r, out);
+                }
+                all
+            }
+            Global::Par(sides, _) => sides.iter().any(|s| s.first_primitives(r, out)),
+            Global::Rec { body, .. } => body.first_primitives(r, out),
+        }
+    }
+
+    /// `pt{G}` as a new list.
+    pub fn participant_list(&self) -> Vec<RoleId> {
+        let mut out = Vec::new();
+        self.participants(&mut out);
+        out
+    }
+
     /// The participants of a global type, `pt{G}` (Sec 4.1), in order of appearance.
     pub fn participants(&self, out: &mut Vec<RoleId>) {
         let add = |r: RoleId, out: &mut Vec<RoleId>| {

@@ -236,6 +236,32 @@ impl Program {
     pub fn kind_of(&self, r: RoleId) -> &RobotKind {
         self.kind(self.role(r).kind)
     }
+    /// For [T-SESS]: each participant's possible first primitives, in role order.
+    /// Participants that never move are left out (they have no footprint to place).
+    pub fn first_motions(&self) -> Vec<(RoleId, Vec<PrimApp>)> {
+        let Some(chor) = &self.choreography else { return Vec::new() };
+        self.role_ids()
+            .filter_map(|r| {
+                let mut apps = Vec::new();
+                chor.body.first_primitives(r, &mut apps);
+                (!apps.is_empty()).then_some((r, apps))
+            })
+            .collect()
+    }
+
+    /// The variable a participant's input stands for: the connected participant's state
+    /// variable of the same name (Sec 3.1). Other variables are themselves.
+    pub fn source_of(&self, v: &Var) -> Var {
+        if let Var::Role(r, Slot::Input(i)) = v {
+            let name = &self.kind_of(*r).inputs[*i].0;
+            let src = self.role(*r).input_sources.get(*i).copied().flatten();
+            if let Some((s, slot @ Slot::State(_))) = src.and_then(|s| Some((s, self.kind_of(s).slot(name)?.0))) {
+                return Var::Role(s, slot);
+            }
+        }
+        v.clone()
+    }
+
     /// The partition written for the `*` at `par`, if any.
     pub fn partition(&self, par: Span) -> Option<&Partition> {
         self.partitions.iter().find(|p| p.par == par)

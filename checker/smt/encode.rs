@@ -37,6 +37,19 @@ pub enum Term {
     V([Real; 3]),
 }
 
+impl Term {
+    /// `self == other` when both have the same sort.
+    pub fn equals(&self, other: &Term) -> Option<Bool> {
+        Some(match (self, other) {
+            (Term::B(x), Term::B(y)) => x.eq(y),
+            (Term::I(x), Term::I(y)) => x.eq(y),
+            (Term::R(x), Term::R(y)) => x.eq(y),
+            (Term::V(x), Term::V(y)) => Bool::and(&[x[0].eq(&y[0]), x[1].eq(&y[1]), x[2].eq(&y[2])]),
+            _ => return None,
+        })
+    }
+}
+
 /// What a primitive's own variables mean while its contract is encoded.
 #[derive(Clone, Default)]
 pub struct Frame {
@@ -154,13 +167,9 @@ impl<'p> Encoder<'p> {
     /// input is the state variable of the participant it is connected to (Sec 3.1), so
     /// `DCart.d` is `Env.d`: what is known of one is known of the other.
     pub fn role_var(&mut self, r: RoleId, slot: Slot) -> Result<Term, Unsupported> {
-        if let Slot::Input(i) = slot {
-            let src = self.prog.role(r).input_sources.get(i).copied().flatten();
-            let name = &self.prog.kind_of(r).inputs[i].0;
-            if let Some((src, src_slot)) = src.and_then(|s| Some((s, self.prog.kind_of(s).slot(name)?.0))) {
-                if matches!(src_slot, Slot::State(_)) {
-                    return self.role_var(src, src_slot);
-                }
+        if let Var::Role(src, src_slot @ Slot::State(_)) = self.prog.source_of(&Var::Role(r, slot)) {
+            if src != r {
+                return self.role_var(src, src_slot);
             }
         }
         let (n, s) = self.prog.kind_of(r).var(slot);
@@ -453,7 +462,7 @@ impl<'p> Encoder<'p> {
     /// `sort` is the occurrence's sort, used when the variable was declared without one
     /// (a process binder takes its sort from the payload field it receives).
     fn var(&mut self, v: &Var, sort: &Sort) -> Result<Term, Unsupported> {
-        let frame_var = |_: &Self, what: &str, t: Option<Term>| {
+        let frame_var = |what: &str, t: Option<Term>| {
             t.ok_or_else(|| Unsupported(format!("{what} outside a motion primitive's contract")))
         };
         match v {
@@ -481,23 +490,23 @@ impl<'p> Encoder<'p> {
             }
             Var::Own(slot) => {
                 let t = self.frame.as_ref().and_then(|f| f.own.get(slot).cloned());
-                frame_var(self, "a primitive's own variable", t)
+                frame_var("a primitive's own variable", t)
             }
             Var::Old(i) => {
                 let t = self.frame.as_ref().and_then(|f| f.old.get(*i).cloned());
-                frame_var(self, "`old(..)`", t)
+                frame_var("`old(..)`", t)
             }
             Var::Param(i) => {
                 let t = self.frame.as_ref().and_then(|f| f.params.get(*i).cloned());
-                frame_var(self, "a primitive's parameter", t)
+                frame_var("a primitive's parameter", t)
             }
             Var::Clock => {
                 let t = self.frame.as_ref().and_then(|f| f.clock.clone()).map(Term::R);
-                frame_var(self, "`clock`", t)
+                frame_var("`clock`", t)
             }
             Var::Point(i) => {
                 let t = self.frame.as_ref().and_then(|f| f.point.as_ref()).map(|p| Term::R(p[(*i).min(2)].clone()));
-                frame_var(self, "a footprint's point", t)
+                frame_var("a footprint's point", t)
             }
         }
     }

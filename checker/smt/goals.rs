@@ -14,7 +14,7 @@
 
 use super::encode::{real_of_f64, Encoder, Frame, Term, Unsupported};
 use crate::bounds::{self, Interval};
-use crate::hir::{Builtin, Expr, Global, PrimApp, Primitive, Program, RoleId, Slot, Var};
+use crate::hir::{Builtin, Expr, PrimApp, Primitive, Program, RoleId, Slot, Var};
 use crate::obligation::{Goal, Obligation, Run, Side};
 use std::collections::HashSet;
 use z3::ast::{Bool, Real};
@@ -177,8 +177,7 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
             use RefineItem::*;
             Plan::Parts([Pre, Assume, Guarantee, Post, Footprint, Duration].into_iter().map(Part::Refine).collect())
         }
-        Goal::InitiallyDisjoint => {
-            let firsts = first_runs(prog);
+        Goal::InitiallyDisjoint { firsts } => {
             // Boxes first, as for separation: only participants whose boxes meet need Z3.
             let boxes: Vec<Option<[Interval; 3]>> = firsts
                 .iter()
@@ -190,7 +189,7 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
                             .map(|a| Run {
                                 role: *role,
                                 app: a.clone(),
-                                hyps: slice(&ob.hyps, seeds_of(prog, &[(*role, a.clone())])),
+                                hyps: slice(prog, &ob.hyps, seeds_of(prog, &[(*role, a.clone())])),
                             })
                             .collect(),
                     };
@@ -229,14 +228,14 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
     let mut q = Query { enc: Encoder::new(prog), assertions: Vec::new(), point: None, times: Vec::new() };
     match (&ob.goal, part) {
         (Goal::Valid(goal), Part::Valid) => {
-            let seeds = vars_of([goal]);
-            hyps(&mut q, &slice(&ob.hyps, seeds))?;
+            let seeds = vars_of(prog, [goal]);
+            hyps(&mut q, &slice(prog, &ob.hyps, seeds))?;
             let g = q.enc.boolean(goal)?;
             q.assertions.push(g.not());
         }
         (Goal::Valid(goal), Part::Conjunct(k)) => {
             let c = goal.conjuncts()[*k];
-            hyps(&mut q, &slice(&ob.hyps, vars_of([c])))?;
+            hyps(&mut q, &slice(prog, &ob.hyps, vars_of(prog, [c])))?;
             let g = q.enc.boolean(c)?;
             q.assertions.push(g.not());
         }
@@ -246,7 +245,7 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
             let p = world_point(&mut q);
             let mut times = Vec::new();
             for (run, tag) in [(x, "t1"), (y, "t2")] {
-                hyps(&mut q, &slice(&run.hyps, seeds_of(prog, &[(run.role, run.app.clone())])))?;
+                hyps(&mut q, &slice(prog, &run.hyps, seeds_of(prog, &[(run.role, run.app.clone())])))?;
                 let t = q.enc.named_real(if tag == "t1" { "time 1" } else { "time 2" });
                 let inst = Inst::new(&mut q.enc, run.role, &run.app, t.clone(), tag)?;
                 inst.started(&mut q)?;
@@ -270,7 +269,7 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
         (Goal::Separated { sides }, Part::InRegion { a, ra }) => {
             let run = &sides[*a].runs[*ra];
             let regions = &prog.partition(ob.span).ok_or_else(|| Unsupported("a partition".into()))?.regions;
-            hyps(&mut q, &slice(&run.hyps, seeds_of(prog, &[(run.role, run.app.clone())])))?;
+            hyps(&mut q, &slice(prog, &run.hyps, seeds_of(prog, &[(run.role, run.app.clone())])))?;
             let p = world_point(&mut q);
             let t = q.enc.named_real("time");
             let inst = Inst::new(&mut q.enc, run.role, &run.app, t.clone(), "t")?;
@@ -286,15 +285,14 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
         (Goal::Refines { role, concrete, abstract_ }, Part::Refine(item)) => {
             refine(&mut q, *role, concrete, abstract_, *item)?
         }
-        (Goal::InitiallyDisjoint, Part::InitiallyApart { r, s }) => {
-            let firsts = first_runs(prog);
+        (Goal::InitiallyDisjoint { firsts }, Part::InitiallyApart { r, s }) => {
             let mut involved = Vec::new();
             for (role, apps) in [&firsts[*r], &firsts[*s]] {
                 involved.extend(apps.iter().map(|a| (*role, a.clone())));
             }
-            hyps(&mut q, &slice(&ob.hyps, seeds_of(prog, &involved)))?;
+            hyps(&mut q, &slice(prog, &ob.hyps, seeds_of(prog, &involved)))?;
             let p = world_point(&mut q);
-            let zero = Int0::real();
+            let zero = zero();
             let mut any = Vec::new();
             for (role, apps) in [&firsts[*r], &firsts[*s]] {
                 // Whichever first motion the participant takes, it starts inside it.
@@ -302,7 +300,7 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
                 for app in apps {
                     let inst = Inst::new(&mut q.enc, *role, app, zero.clone(), "0")?;
                     let fp = inst.footprint(&mut q.enc, &p)?;
-                    let start_is_now = inst.at_start(&mut q.enc)?;
+                    let start_is_now = inst.at_start();
                     inside.push(Bool::and(&[fp, start_is_now]));
                 }
                 // Each first footprint contains the robot at time 0, so the robot lies in
@@ -317,20 +315,18 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
     Ok(q)
 }
 
-struct Int0;
-impl Int0 {
-    fn real() -> Real {
-        z3::ast::Int::from_i64(0).to_real()
-    }
+fn zero() -> Real {
+    z3::ast::Int::from_i64(0).to_real()
 }
 
 /// The variables of some expressions (constants excepted).
-fn vars_of<'e>(es: impl IntoIterator<Item = &'e Expr>) -> HashSet<Var> {
+/// Inputs count as their source's state variable, which they are.
+fn vars_of<'e>(prog: &Program, es: impl IntoIterator<Item = &'e Expr>) -> HashSet<Var> {
     let mut out = HashSet::new();
     for e in es {
         e.visit_vars(&mut |v, _| {
             if !matches!(v, Var::Const(_)) {
-                out.insert(v.clone());
+                out.insert(prog.source_of(v));
             }
         });
     }
@@ -340,7 +336,7 @@ fn vars_of<'e>(es: impl IntoIterator<Item = &'e Expr>) -> HashSet<Var> {
 /// What the hypotheses of a motion query may be about: the participants' variables
 /// (now and at their latest snapshot), their input sources', and the arguments'.
 fn seeds_of(prog: &Program, parts: &[(RoleId, PrimApp)]) -> HashSet<Var> {
-    let mut out = vars_of(parts.iter().flat_map(|(_, a)| a.args.iter()));
+    let mut out = vars_of(prog, parts.iter().flat_map(|(_, a)| a.args.iter()));
     for (r, _) in parts {
         let mut roles = vec![*r];
         roles.extend(prog.role(*r).input_sources.iter().flatten().copied());
@@ -351,7 +347,7 @@ fn seeds_of(prog: &Program, parts: &[(RoleId, PrimApp)]) -> HashSet<Var> {
                 out.insert(Var::Snap(role, Slot::State(i)));
             }
             for i in 0..kind.inputs.len() {
-                out.insert(Var::Role(role, Slot::Input(i)));
+                out.insert(prog.source_of(&Var::Role(role, Slot::Input(i))));
             }
         }
     }
@@ -363,8 +359,8 @@ fn seeds_of(prog: &Program, parts: &[(RoleId, PrimApp)]) -> HashSet<Var> {
 /// about different participants share a cache entry. It is sound: fewer hypotheses
 /// can only turn "holds" into "fails" — and only when the dropped ones contradict each
 /// other, i.e. the point is unreachable, which is reported rather than hidden.
-fn slice(hs: &[Expr], mut seeds: HashSet<Var>) -> Vec<Expr> {
-    let vars: Vec<HashSet<Var>> = hs.iter().map(|h| vars_of([h])).collect();
+fn slice(prog: &Program, hs: &[Expr], mut seeds: HashSet<Var>) -> Vec<Expr> {
+    let vars: Vec<HashSet<Var>> = hs.iter().map(|h| vars_of(prog, [h])).collect();
     let mut keep = vec![false; hs.len()];
     loop {
         let mut grew = false;
@@ -395,6 +391,7 @@ fn world_point(q: &mut Query) -> [Real; 3] {
 }
 
 /// A participant running a primitive, encoded.
+#[derive(Clone)]
 struct Inst<'a> {
     role: RoleId,
     prim: &'a Primitive,
@@ -448,15 +445,10 @@ impl<'a> Inst<'a> {
     }
 
     /// `now` equals the start state (for time 0).
-    fn at_start(&self, enc: &mut Encoder) -> Result<Bool, Unsupported> {
-        let mut eqs = Vec::new();
-        for (slot, now) in &self.frame.own {
-            if let (Term::R(a), Some(Term::R(b))) = (now, self.start.get(slot)) {
-                eqs.push(a.eq(b));
-            }
-        }
-        let _ = enc;
-        Ok(Bool::and(&eqs))
+    fn at_start(&self) -> Bool {
+        let eqs: Vec<Bool> =
+            self.frame.own.iter().filter_map(|(slot, now)| now.equals(self.start.get(slot)?)).collect();
+        Bool::and(&eqs)
     }
 
     /// The motion started: its precondition and the invariant held at the start.
@@ -474,8 +466,8 @@ impl<'a> Inst<'a> {
     /// The motion is running at its clock: `0 <= t <= hi`, its guarantee and the
     /// invariant hold of the state now.
     fn running(&self, q: &mut Query) -> Result<(), Unsupported> {
-        let t = self.frame.clock.clone().unwrap_or_else(Int0::real);
-        q.assertions.push(t.ge(Int0::real()));
+        let t = self.frame.clock.clone().unwrap_or_else(zero);
+        q.assertions.push(t.ge(zero()));
         if let Some(hi) = &self.prim.duration.hi {
             let hi = q.enc.in_frame(&self.start_frame(), |enc| enc.real(hi))?;
             q.assertions.push(t.le(&hi));
@@ -575,7 +567,7 @@ fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], part: &Part) 
     if part.is_sat_question() {
         hyps(q, hs)?;
     } else {
-        hyps(q, &slice(hs, seeds_of(q.enc.prog(), parts)))?;
+        hyps(q, &slice(q.enc.prog(), hs, seeds_of(q.enc.prog(), parts)))?;
     }
     let t = q.enc.named_real("time");
     let mut insts = Vec::new();
@@ -613,7 +605,7 @@ fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], part: &Part) 
                 inst.started(q)?;
                 if j == *i {
                     // Its own guarantee is not assumed: that would be circular.
-                    q.assertions.push(t.ge(Int0::real()));
+                    q.assertions.push(t.ge(zero()));
                 } else {
                     inst.running(q)?;
                 }
@@ -680,11 +672,8 @@ fn connect(q: &mut Query, insts: &mut [Inst]) {
             let Some(b) = insts.iter().find(|b| b.role == *src) else { continue };
             let name = &prog.kind_of(a.role).inputs[i].0;
             let Some((slot, _)) = prog.kind_of(*src).slot(name) else { continue };
-            match (a.frame.own.get(&Slot::Input(i)), b.frame.own.get(&slot)) {
-                (Some(Term::R(x)), Some(Term::R(y))) => eqs.push(x.eq(y)),
-                (Some(Term::I(x)), Some(Term::I(y))) => eqs.push(x.eq(y)),
-                (Some(Term::B(x)), Some(Term::B(y))) => eqs.push(x.eq(y)),
-                _ => {}
+            if let (Some(x), Some(y)) = (a.frame.own.get(&Slot::Input(i)), b.frame.own.get(&slot)) {
+                eqs.extend(x.equals(y));
             }
         }
     }
@@ -729,7 +718,7 @@ fn refine(q: &mut Query, role: RoleId, c: &PrimApp, ss: &[PrimApp], item: Refine
         RefineItem::Assume => {
             let a_s = all(q, &|p| &p.assume, &ci.frame, false)?;
             let a_c = ci.pred(&mut q.enc, &ci.prim.assume, &ci.frame)?;
-            q.assertions.extend([pre_s, t.ge(Int0::real()), a_s, a_c.not()]);
+            q.assertions.extend([pre_s, t.ge(zero()), a_s, a_c.not()]);
         }
         RefineItem::Guarantee | RefineItem::Footprint => {
             q.assertions.push(pre_s);
@@ -742,8 +731,7 @@ fn refine(q: &mut Query, role: RoleId, c: &PrimApp, ss: &[PrimApp], item: Refine
                 let fc = ci.footprint(&mut q.enc, &p)?;
                 let mut fs = Vec::new();
                 for si in &sis {
-                    let si_now =
-                        Inst { frame: Frame { own: ci.frame.own.clone(), ..si.frame.clone() }, ..clone_inst(si) };
+                    let si_now = Inst { frame: Frame { own: ci.frame.own.clone(), ..si.frame.clone() }, ..si.clone() };
                     fs.push(si_now.footprint(&mut q.enc, &p)?);
                 }
                 q.assertions.extend([fc, Bool::and(&fs).not()]);
@@ -767,7 +755,7 @@ fn refine(q: &mut Query, role: RoleId, c: &PrimApp, ss: &[PrimApp], item: Refine
             // The meet's duration is the intersection of the abstract ones.
             let mut nested = Vec::new();
             for si in &sis {
-                let si_start = Inst { frame: Frame { own: ci.start.clone(), ..si.frame.clone() }, ..clone_inst(si) };
+                let si_start = Inst { frame: Frame { own: ci.start.clone(), ..si.frame.clone() }, ..si.clone() };
                 let (slo, shi) = si_start.duration(&mut q.enc)?;
                 let (outer_lo, outer_hi, inner_lo, inner_hi) = if ci.prim.interruptible {
                     (clo.clone(), chi.clone(), slo, shi) // D_s ⊆ D_c
@@ -787,10 +775,6 @@ fn refine(q: &mut Query, role: RoleId, c: &PrimApp, ss: &[PrimApp], item: Refine
     Ok(())
 }
 
-fn clone_inst<'a>(i: &Inst<'a>) -> Inst<'a> {
-    Inst { role: i.role, prim: i.prim, frame: i.frame.clone(), start: i.start.clone() }
-}
-
 /// The frame at the end of the motion: own variables are fresh `role.x(end)`.
 fn end_frame(enc: &mut Encoder, inst: &Inst) -> Result<Frame, Unsupported> {
     let prog = enc.prog();
@@ -801,48 +785,6 @@ fn end_frame(enc: &mut Encoder, inst: &Inst) -> Result<Frame, Unsupported> {
         own.insert(Slot::State(i), enc.named(&format!("{}.{n}(end)", prog.role_name(inst.role)), &sort)?);
     }
     Ok(Frame { own, clock: None, ..inst.frame.clone() })
-}
-
-/// For [T-SESS]: each participant's possible first primitives, in role order; roles
-/// that never move are left out (they have no footprint to place).
-pub fn first_runs(prog: &Program) -> Vec<(RoleId, Vec<PrimApp>)> {
-    let Some(chor) = &prog.choreography else { return Vec::new() };
-    let mut out = Vec::new();
-    for r in prog.role_ids() {
-        let mut apps = Vec::new();
-        firsts(&chor.body, r, &mut apps);
-        if !apps.is_empty() {
-            out.push((r, apps));
-        }
-    }
-    out
-}
-
-/// Collects `r`'s first primitives in `g`; returns whether every path through `g`
-/// has one (so that what follows `g` cannot be first).
-fn firsts(g: &Global, r: RoleId, out: &mut Vec<PrimApp>) -> bool {
-    match g {
-        Global::Motion(m) => match m.parts.iter().find(|(p, _)| *p == r) {
-            Some((_, app)) => {
-                if !out.contains(app) {
-                    out.push(app.clone());
-                }
-                true
-            }
-            None => false,
-        },
-        Global::Msg(_) | Global::Var(_) | Global::End(_) => false,
-        Global::Seq(items, _) => items.iter().any(|i| firsts(i, r, out)),
-        Global::Choice(bs, _) => {
-            let mut all = true;
-            for b in bs {
-                all &= firsts(b, r, out);
-            }
-            all
-        }
-        Global::Par(sides, _) => sides.iter().any(|s| firsts(s, r, out)),
-        Global::Rec { body, .. } => firsts(body, r, out),
-    }
 }
 
 /// Separation: first by boxes (a sound enclosure of each run's footprint in the world;
@@ -969,25 +911,11 @@ fn to_world(prog: &Program, role: RoleId, b: [Interval; 3]) -> Option<[Interval;
         }
         let (cs, sn) = (bounds::trig(Builtin::Cos, Some(angle)), bounds::trig(Builtin::Sin, Some(angle)));
         let (x, y) = (v[a], v[c]);
-        v[a] = add(mul(cs, x), neg(mul(sn, y)));
-        v[c] = add(mul(sn, x), mul(cs, y));
+        v[a] = cs * x + -(sn * y);
+        v[c] = sn * x + cs * y;
     }
     for (k, c) in v.iter_mut().enumerate() {
-        *c = add(*c, num(k)?);
+        *c = *c + num(k)?;
     }
     Some(v)
-}
-
-fn add(a: Interval, b: Interval) -> Interval {
-    Interval::new(a.lo + b.lo, a.hi + b.hi)
-}
-fn neg(a: Interval) -> Interval {
-    Interval { lo: -a.hi, hi: -a.lo }
-}
-fn mul(a: Interval, b: Interval) -> Interval {
-    let ps = [a.lo * b.lo, a.lo * b.hi, a.hi * b.lo, a.hi * b.hi];
-    Interval::new(
-        ps.iter().copied().fold(f64::INFINITY, f64::min),
-        ps.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-    )
 }

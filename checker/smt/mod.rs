@@ -591,8 +591,7 @@ fn describe(prog: &Program, ob: &Obligation, part: &Part) -> String {
             let abs: Vec<String> = abstract_.iter().map(prim).collect();
             format!("`{}` refines `{}`: {}", prim(concrete), abs.join(" /\\ "), item.text())
         }
-        (Goal::InitiallyDisjoint, Part::InitiallyApart { r, s }) => {
-            let firsts = goals::first_runs(prog);
+        (Goal::InitiallyDisjoint { firsts }, Part::InitiallyApart { r, s }) => {
             format!(
                 "`{}` and `{}` start apart (their first footprints at time 0 are disjoint)",
                 prog.role_name(firsts[*r].0),
@@ -694,7 +693,7 @@ mod tests {
             span: Default::default(),
             what: "initial states".into(),
             hyps,
-            goal: Goal::InitiallyDisjoint,
+            goal: Goal::InitiallyDisjoint { firsts: prog.first_motions() },
         };
         discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0
     }
@@ -705,6 +704,26 @@ mod tests {
         let Decision::Fails(f) = initially_apart("0.15") else { panic!("the balls overlap") };
         let o = f.overlap.expect("a point");
         assert!(o.point[0] >= 0.05 - 1e-9 && o.point[0] <= 0.1 + 1e-9, "{o:?}");
+    }
+
+    #[test]
+    fn an_input_is_its_source_state() {
+        // `C.d` is an input connected to `E.d` (Sec 3.1): knowing one is knowing the other.
+        let src = "robot Car { state x: real; input d: real; } robot Env { state d: real; }
+             system S { participant C: Car; participant E: Env; }
+             choreography G = C -> E : [d == 0] go. E -> C : [d == 0] back. end;";
+        let (prog, d) = lower_src(src);
+        assert!(d.is_empty(), "{d:?}");
+        let Some(crate::hir::Global::Seq(items, _)) = prog.choreography.as_ref().map(|c| c.body.clone()) else {
+            panic!("expected a sequence")
+        };
+        let guard = |i: usize| match &items[i] {
+            crate::hir::Global::Msg(m) => m.guard.clone().expect("guard"),
+            _ => panic!("expected a message"),
+        };
+        let (car_d, env_d) = (guard(0), guard(1));
+        assert_eq!(check_valid(&prog, std::slice::from_ref(&car_d), &env_d, &SmtConfig::default()), Verdict::Holds);
+        assert_eq!(check_valid(&prog, &[env_d], &car_d, &SmtConfig::default()), Verdict::Holds);
     }
 
     #[test]

@@ -202,14 +202,7 @@ impl<'a> Scope<'a> {
     }
 
     fn par(&mut self, sides: &'a [Global], loc: Loc, scope: &[RoleId], original: bool) {
-        let pts: Vec<Vec<RoleId>> = sides
-            .iter()
-            .map(|s| {
-                let mut v = Vec::new();
-                s.participants(&mut v);
-                v
-            })
-            .collect();
+        let pts: Vec<Vec<RoleId>> = sides.iter().map(Global::participant_list).collect();
         if original {
             // Each participant's side, found in one pass (n-ary `*` of PGCD's lanes has
             // hundreds of sides, so no pairwise comparison of sides).
@@ -439,14 +432,7 @@ impl<'a> Contexts<'a> {
     /// `g1 * ... * gn`: each side from the facts over its own participants; one
     /// separation obligation listing what each side may run.
     fn par(&mut self, sides: &'a [Global], loc: Loc, sigma: Sigma) -> Option<Sigma> {
-        let pts: Vec<Vec<RoleId>> = sides
-            .iter()
-            .map(|s| {
-                let mut v = Vec::new();
-                s.participants(&mut v);
-                v
-            })
-            .collect();
+        let pts: Vec<Vec<RoleId>> = sides.iter().map(Global::participant_list).collect();
         // Pushed now so that obligations keep the order of the type; the sides are
         // filled in once they have been walked.
         let slot = (sides.len() > 1).then(|| {
