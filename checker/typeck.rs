@@ -33,7 +33,9 @@ use crate::hir::*;
 use crate::obligation::{Goal, Obligation, Rule};
 use crate::project::{describe, motion_text, print_bounded, NOTE_NODES};
 use crate::sigma::{self, instantiate, Sigma};
-use crate::subtype::{and_all, conjuncts, mentions, not, refinement, subst_values, unfold, value_expr, RecEnv};
+use crate::subtype::{
+    and_all, conjuncts, mentions, not, refinement, subst_values, unfold_with, value_expr, RecEnv, RecStep,
+};
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::sync::Arc;
 
@@ -180,25 +182,46 @@ impl<'a> Checker<'a> {
     /// Checks `p` against `t`. Sequences are followed in a loop; branches recurse.
     fn check_inner<'p>(&mut self, mut p: &'p Process, mut t: LocalRc, mut st: State<'p>) {
         loop {
-            let looped = match unfold(&t, &mut st.tenv) {
+            // The type's loop steps, with the new values of its parameters (type terms).
+            let mut steps: Vec<(bool, Vec<RecParam>, Vec<Expr>)> = Vec::new();
+            let looped = match unfold_with(&t, &mut st.tenv, &mut |s| {
+                steps.push(match s {
+                    RecStep::Enter(ps) => (false, ps.to_vec(), sigma::initial_values(ps)),
+                    RecStep::Jump(ps, args) => (true, ps.to_vec(), args.to_vec()),
+                })
+            }) {
                 Ok((u, looped)) => {
                     t = u;
                     looped
                 }
                 Err(d) => return self.diags.push(d),
             };
-            if let Some((var, _)) = &looped {
-                // A new iteration of the type's loop: its parameters have new values.
-                let rec = st.tenv.iter().rev().find(|(v, _)| v == var).map(|(_, r)| r.clone());
-                if let Some(Local::Rec { params, .. }) = rec.as_deref() {
-                    let names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
-                    st.forget(&names);
+            // The type's parameters are ghost values the process follows in `vals`.
+            let mut last = None;
+            for (jump, params, values) in steps {
+                let values: Vec<Expr> = values.iter().map(|e| subst_values(e, &st.vals)).collect();
+                // What Σ knows of a parameter the process did not follow speaks of its
+                // old value: forgotten. A followed one appears in Σ only through `vals`.
+                let unmapped: Vec<&str> =
+                    params.iter().map(|p| p.name.as_str()).filter(|n| !st.vals.contains_key(*n)).collect();
+                st.forget(&unmapped);
+                for (p, v) in params.iter().zip(&values) {
+                    st.vals.insert(p.name.clone(), v.clone());
                 }
+                last = Some((jump, params));
             }
             match p {
                 Process::Rec { var, params, body, .. } => {
-                    let names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
-                    st.forget(&names);
+                    let inits = sigma::initial_values(params);
+                    let ty = last.filter(|(jump, tp)| !jump && tp.len() == params.len());
+                    self.loop_params(
+                        params,
+                        &inits,
+                        params.iter().map(|p| p.init.loc).collect(),
+                        ty.map(|t| t.1),
+                        &mut st,
+                        false,
+                    );
                     st.penv.push((var, p, st.actions));
                     if !self.enter(body, &t, &mut st) {
                         return;
@@ -206,7 +229,7 @@ impl<'a> Checker<'a> {
                     p = body;
                     continue;
                 }
-                Process::Var { var, loc, .. } => {
+                Process::Var { var, args, loc } => {
                     let Some(i) = st.penv.iter().rposition(|(v, _, _)| *v == var) else {
                         return self.diags.push(
                             Diagnostic::error(
@@ -241,8 +264,13 @@ impl<'a> Checker<'a> {
                     if let Some(last) = st.penv.last_mut() {
                         last.2 = st.actions;
                     }
-                    let names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
-                    st.forget(&names);
+                    if args.len() == params.len() {
+                        let ty = last.filter(|(jump, tp)| *jump && tp.len() == params.len());
+                        self.loop_params(params, args, vec![*loc; args.len()], ty.map(|t| t.1), &mut st, true);
+                    } else {
+                        let names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
+                        st.forget(&names);
+                    }
                     if !self.enter(body, &t, &mut st) {
                         return;
                     }
@@ -317,6 +345,77 @@ impl<'a> Checker<'a> {
                     t = tc.clone();
                 }
                 _ => return self.mismatch(p, &t, looped.as_ref()),
+            }
+        }
+    }
+
+    /// The process's loop parameters get `values` (process terms, evaluated now), at
+    /// entry (`jump` false) or at a jump back: [T-REC]/[T-VAR] with parameters.
+    /// - Their refinements must hold of the values (E0712 at entry, E0713 at a jump),
+    ///   and the loop body assumes them of the (fresh) parameters.
+    /// - When the local type enters or repeats a loop with as many parameters at the
+    ///   same step (`ty`: its parameters, whose new values are in `vals` already), the
+    ///   process's parameters stand for the type's: each value must equal the type's
+    ///   (E0714), and afterwards the type's parameter is the process's in `vals`.
+    fn loop_params(
+        &mut self,
+        params: &[RecParam],
+        values: &[Expr],
+        locs: Vec<Loc>,
+        ty: Option<Vec<RecParam>>,
+        st: &mut State,
+        jump: bool,
+    ) {
+        let (rule, when) = if jump { (Rule::TRecJump, "the argument") } else { (Rule::TRecInit, "the initial value") };
+        for ((p, v), loc) in params.iter().zip(values).zip(&locs) {
+            if let Some(r) = &p.refinement {
+                self.obligations.push(Obligation {
+                    rule,
+                    span: loc.0,
+                    what: format!(
+                        "the refinement `{}` of `{}`'s loop parameter `{}` holds of {when} `{}`",
+                        print::expr(self.prog, None, r),
+                        self.name(),
+                        p.name,
+                        print::expr(self.prog, None, v)
+                    ),
+                    hyps: st.sigma.facts().to_vec(),
+                    goal: Goal::Valid(sigma::subst_params(r, params, values)),
+                });
+            }
+        }
+        if let Some(tp) = &ty {
+            for (((p, v), t), loc) in params.iter().zip(values).zip(tp).zip(&locs) {
+                let Some(want) = st.vals.get(&t.name) else { continue };
+                let goal = Expr {
+                    kind: ExprKind::Binary(crate::hir::expr::BinOp::Eq, Box::new(v.clone()), Box::new(want.clone())),
+                    sort: Sort::Bool,
+                    loc: *loc,
+                };
+                self.obligations.push(Obligation {
+                    rule: Rule::TRecArgs,
+                    span: loc.0,
+                    what: format!(
+                        "{when} `{}` of `{}`'s loop parameter `{}` equals the local type's `{}` for its parameter `{}`",
+                        print::expr(self.prog, None, v),
+                        self.name(),
+                        p.name,
+                        print::expr(self.prog, None, want),
+                        t.name
+                    ),
+                    hyps: st.sigma.facts().to_vec(),
+                    goal: Goal::Valid(goal),
+                });
+            }
+        }
+        let names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
+        st.forget(&names);
+        for r in params.iter().filter_map(|p| p.refinement.as_ref()) {
+            st.assume(r.clone());
+        }
+        if let Some(tp) = ty {
+            for (p, t) in params.iter().zip(tp) {
+                st.vals.insert(t.name.clone(), value_expr(p.value, &p.name, &p.sort));
             }
         }
     }
