@@ -190,13 +190,13 @@ impl Sigma {
             let k = kept.get(term);
             if let (Some(x), Some(y)) = (&a.0, &b.0) {
                 let w = if x.tighter(y, true) { y } else { x };
-                if !k.and_then(|k| k.0.as_ref()).is_some_and(|have| !w.tighter(have, true)) {
+                if k.and_then(|k| k.0.as_ref()).is_none_or(|have| w.tighter(have, true)) {
                     adds.push(normalize(binary(w.op(), &w.lit, term)));
                 }
             }
             if let (Some(x), Some(y)) = (&a.1, &b.1) {
                 let w = if x.tighter(y, false) { y } else { x };
-                if !k.and_then(|k| k.1.as_ref()).is_some_and(|have| !w.tighter(have, false)) {
+                if k.and_then(|k| k.1.as_ref()).is_none_or(|have| w.tighter(have, false)) {
                     adds.push(normalize(binary(w.op(), term, &w.lit)));
                 }
             }

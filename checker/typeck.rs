@@ -23,7 +23,12 @@
 //!   context is assumed well typed, so a process may unfold its loop at a different
 //!   point than its type. Contexts differ between iterations, so the body is checked
 //!   under each new one; after [`WIDEN_AFTER`] contexts for one pair the context is
-//!   widened to the invariant (the paper's `true` context of [T-REC]).
+//!   widened to the invariant (the paper's `true` context of [T-REC]);
+//! - [T-REC]/[T-VAR] with parameters (DATUM): a process loop's refinement holds of its
+//!   initial value (E0712) and of each jump's arguments (E0713) and is assumed in the
+//!   body. The type's parameters are values the process follows in `vals`; where process
+//!   and type enter or repeat their loops at the same step with as many parameters, the
+//!   process's stand for the type's and must get the same values (E0714).
 //!
 //! Every structural error is reported and the check continues with the next branch.
 //! [T-SESS] contributes one obligation: the initial geometries are disjoint.
@@ -1105,6 +1110,36 @@ mod tests {
     fn e0208_argument_sorts() {
         let (_, d, _) = check(&format!("process C = mu k. A!go(true).dt<move(1.0)>.A?done.k; {GOOD_A}"));
         assert!(codes(&d).contains(&Code::SortMismatch), "{d:?}");
+    }
+
+    #[test]
+    fn the_types_loop_parameters_are_followed_in_the_process() {
+        let chor = "choreography G = mu t(n: int {n >= 0} = 1).
+                      C -> A : [n > 0] go. dt<C: idle, A: work>. A -> C : done. t(n - 1);";
+        // C does not keep a counter: the type's `n` is 1, then 1 - 1, ... The second
+        // `A!go` must show `1 - 1 > 0`, which fails: C may not say `go` forever.
+        let (prog, d, obs) =
+            check_with(chor, "process C = mu k. A!go.dt<idle>.A?done.k; process A = mu k. C?go.dt<work>.C!done.k;");
+        assert!(d.is_empty(), "{d:?}");
+        let outs = goals(&prog, &obs, Rule::TOut);
+        assert_eq!(outs[..2], ["1 > 0", "1 - 1 > 0"]);
+        assert!(goals(&prog, &obs, Rule::TRecArgs).is_empty(), "C's loop has no parameter to align");
+        // C mirrors the parameter: `j` stands for `n`, so the guard is `j > 0`, known
+        // from the `if`; the arguments must agree with the type's, the refinement hold.
+        let (prog, d, obs) = check_with(
+            chor,
+            "process C = mu k(j: int {j >= 0} = 1). if j > 0 then A!go.dt<idle>.A?done.k(j - 1) else A!go.dt<idle>.A?done.k(j);
+             process A = mu k. C?go.dt<work>.C!done.k;",
+        );
+        assert!(d.is_empty(), "{d:?}");
+        assert_eq!(goals(&prog, &obs, Rule::TRecInit), vec!["1 >= 0"]);
+        assert_eq!(goals(&prog, &obs, Rule::TRecArgs), vec!["1 == 1", "j - 1 == j - 1", "j == j - 1"]);
+        assert_eq!(goals(&prog, &obs, Rule::TRecJump), vec!["j - 1 >= 0", "j >= 0"]);
+        // (The `else` branch sends `go` at j == 0: its `j > 0` fails, as it should.)
+        let outs = goals(&prog, &obs, Rule::TOut);
+        assert!(!outs.is_empty() && outs.iter().all(|g| g == "j > 0"), "{outs:?}");
+        let hyps = hyps_of(&prog, &obs, Rule::TRecJump);
+        assert!(hyps[0].contains(&"0 <= j".to_string()) && hyps[0].contains(&"0 < j".to_string()), "{hyps:?}");
     }
 
     #[test]

@@ -18,15 +18,19 @@
 //! - after `p -> q : [P] l(v: S {P'})`, Σ ∧ P ∧ P' (payload fields are value variables;
 //!   a field of the same name bound earlier is forgotten first);
 //! - each branch of a choice starts from Σ ∧ its first message's guard, and after the
-//!   choice Σ is what all branches that continue agree on;
+//!   choice Σ is the join of the branches that continue (what they agree on, with
+//!   literal bounds weakened to cover every branch);
 //! - a joint motion `dt<p: a, q: b>` applies the effect of every part
 //!   ([`Sigma::run_joint`]: strongest postcondition, one level of snapshots);
 //! - `g1 * g2`: each side starts from the facts of Σ over its own participants (and over
 //!   values and constants only), and afterwards Σ is the conjunction of the sides' ends;
-//! - `mu t. G`: a loop invariant by a syntactic fixpoint. The candidate is Σ at entry;
-//!   the body is walked under it, and every `t` reached must hold each candidate fact
-//!   literally; the facts some `t` lacks are dropped and the body walked again, until
-//!   nothing is dropped (the candidate only shrinks, so this ends). Only the last walk's
+//! - `mu t(n: S {R} = e). G`: R must hold of `e` at entry (E0414) and of the arguments
+//!   at each `t(a)` (E0415); the body assumes it. The rest of the loop invariant is a
+//!   fixpoint: the candidate is Σ at entry; the body is walked under it (and R), and the
+//!   next candidate is its join ([`Sigma::join`]: common facts, and the weaker of two
+//!   literal bounds on a term) with the context at every `t` reached, until it is the
+//!   candidate again. After [`WEAKEN_WALKS`] walks only facts every `t` holds literally
+//!   are kept (widening), so the candidate shrinks and this ends. Only the last walk's
 //!   obligations are kept. Recursion parameters are forgotten at entry and at each `t`.
 //!
 //! Every step only keeps or weakens what holds, so every obligation's hypotheses hold
