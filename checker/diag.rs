@@ -246,6 +246,18 @@ codes! {
          kind's invariant. When none does (for example `m_move(12)` for a cart whose invariant \
          keeps it within 10 m), everything after the motion would hold vacuously, so this is an \
          error. Change the motion's arguments, or its postcondition or the invariant.";
+    RecInitRefinement = "E0414", "a recursion parameter's initial value breaks its refinement",
+        "Parameterised recursion (DATUM's `mu T(n : S {P}) <n = e>`, mochi's \
+         `mu t(n: S {P} = e). G`): the refinement P is what every iteration of the loop may assume \
+         of n, so it must hold of the initial value e when the loop is entered, under what is known \
+         there. The counterexample is a state allowed at the entry in which P[e/n] is false. \
+         Start the parameter at a value that satisfies its refinement, or weaken the refinement.";
+    RecJumpRefinement = "E0415", "a jump back to a loop breaks its parameter's refinement",
+        "Parameterised recursion: at each `t(a)` the arguments become the parameters' values for \
+         the next iteration, which assumes their refinement P. So P[a/n] must hold under what is \
+         known at the jump, on every path that reaches it. The counterexample is a state (with the \
+         current parameters) that reaches the jump with arguments that break P. Guard the branch \
+         that jumps (for example `[n > 0]` before `t(n - 1)`), or change the arguments.";
     MotionPrecondition = "E0708", "a motion's precondition may not hold in the process",
         "[T-MOTION] (Table 1): when a process starts a motion, what it knows (Σ: its initial state, \
          the postconditions of its earlier motions, the refinements of values it received, the \
@@ -265,6 +277,21 @@ codes! {
         "[SUB-OUT], [SUB-IN] (Fig 5) and [T-COND]: where a process or a local type is checked \
          against another, their predicates must imply each other in the direction the rule states. \
          The counterexample is a state where the implication fails.";
+    ProcessRecInit = "E0712", "a process loop's initial value breaks its parameter's refinement",
+        "[T-REC] with parameters (DATUM): a process loop `mu x(k: S {P} = e). P` may assume P of k \
+         in its body, so P must hold of e under what the process knows when it enters the loop. \
+         The counterexample is a state the process may be in there where P[e/k] is false.";
+    ProcessRecJump = "E0713", "a process jump breaks its loop parameter's refinement",
+        "[T-VAR] with parameters (DATUM): at `x(a)` the arguments become the loop's parameters, \
+         whose refinement P the body assumes, so P[a/k] must hold under what the process knows at \
+         the jump. The counterexample is such a state where it fails.";
+    ProcessRecArgs = "E0714", "a process loop's parameters disagree with its type's",
+        "When a process enters or repeats its loop where its local type enters or repeats a \
+         parameterised loop with as many parameters, the process's parameters stand for the type's \
+         (positionally): their initial values and the arguments of each jump must be equal to the \
+         type's, evaluated with what the process knows (values it sent and received). This is how \
+         guards and refinements that read the type's parameters are checked in the process. The \
+         counterexample is a state where the process passes a different value than its type.";
     Undecided = "U0001", "proof obligations undecided",
         "Some checks reduce to predicate validity (total choice, [AGCOMP] compatibility, full \
          separation of footprints, refinement and typing side conditions). When a query could not \

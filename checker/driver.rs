@@ -309,6 +309,11 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
         (Rule::TOut, _) => Code::SendPredicate,
         (Rule::TSess, _) => Code::InitialCollision,
         (Rule::TCond | Rule::Subtype, _) => Code::SubtypePredicate,
+        (Rule::RecInit, _) => Code::RecInitRefinement,
+        (Rule::RecJump, _) => Code::RecJumpRefinement,
+        (Rule::TRecInit, _) => Code::ProcessRecInit,
+        (Rule::TRecJump, _) => Code::ProcessRecJump,
+        (Rule::TRecArgs, _) => Code::ProcessRecArgs,
     };
     let help = match code {
         Code::ChoiceNotTotal => "add a branch whose guard covers the counterexample's state, or weaken a guard",
@@ -322,6 +327,9 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
         Code::MotionPrecondition => "establish the precondition before the motion in the process, or choose another primitive",
         Code::SendPredicate => "send values that satisfy the refinement, or establish the guard before sending",
         Code::InitialCollision => "move the participants apart (`at: pose(...)` or `init:`)",
+        Code::RecInitRefinement | Code::ProcessRecInit => "start the parameter at a value that satisfies its refinement, or weaken the refinement",
+        Code::RecJumpRefinement | Code::ProcessRecJump => "guard the branch that jumps back (e.g. `[n > 0]` before `t(n - 1)`), or pass arguments that satisfy the refinement",
+        Code::ProcessRecArgs => "pass the loop the same values as the local type's recursion (its initial values and the arguments of its jump), computed from what the process sent and received",
         _ => "make the process's predicate imply the type's",
     };
     let mut d = Diagnostic::error(code, ob.span, format!("{} ({})", code.title(), ob.what))

@@ -29,6 +29,17 @@ pub enum Rule {
     Subtype,
     /// Table 1 [T-SESS]: initial states are collision free.
     TSess,
+    /// Parameterised recursion (DATUM) in the global type: the refinement of a
+    /// parameter holds of its initial value.
+    RecInit,
+    /// ... and of the arguments of each jump back.
+    RecJump,
+    /// [T-REC] with parameters: a process loop's refinement holds of its initial value.
+    TRecInit,
+    /// [T-VAR] with parameters: ... and of the arguments of each process jump.
+    TRecJump,
+    /// [T-REC]/[T-VAR] with parameters: the process's loop arguments equal its type's.
+    TRecArgs,
 }
 
 impl Rule {
@@ -43,6 +54,11 @@ impl Rule {
             Rule::TCond => "[T-COND]",
             Rule::Subtype => "[SUB-OUT]/[SUB-IN]",
             Rule::TSess => "[T-SESS]",
+            Rule::RecInit => "recursion parameter at entry (DATUM)",
+            Rule::RecJump => "recursion parameter at a jump (DATUM)",
+            Rule::TRecInit => "[T-REC] with parameters",
+            Rule::TRecJump => "[T-VAR] with parameters",
+            Rule::TRecArgs => "[T-REC]/[T-VAR]: parameters as the type's",
         }
     }
 
@@ -52,9 +68,16 @@ impl Rule {
             Rule::TotalChoice => "total-choice",
             Rule::AgComp => "compatibility",
             Rule::FullSeparation => "separation",
-            Rule::Refinement | Rule::TMotion | Rule::TOut | Rule::TCond | Rule::Subtype | Rule::TSess => {
-                "typing-obligations"
-            }
+            Rule::RecInit | Rule::RecJump => "recursion-parameters",
+            Rule::Refinement
+            | Rule::TMotion
+            | Rule::TOut
+            | Rule::TCond
+            | Rule::Subtype
+            | Rule::TSess
+            | Rule::TRecInit
+            | Rule::TRecJump
+            | Rule::TRecArgs => "typing-obligations",
         }
     }
 }

@@ -47,15 +47,36 @@ const UNFOLD_LIMIT: usize = 256;
 /// an action or `end` comes first. Returns that node and, when the last step was a
 /// jump back, the variable it went through and where it is written.
 pub(crate) fn unfold(t: &LocalRc, env: &mut RecEnv) -> Result<(LocalRc, Option<(String, Loc)>), Diagnostic> {
+    unfold_with(t, env, &mut |_| {})
+}
+
+/// A step [`unfold_with`] took through a parameterised recursion of a local type.
+pub(crate) enum RecStep<'t> {
+    /// Entering `mu t(n = e)`: the parameters, with their initial values.
+    Enter(&'t [RecParam]),
+    /// Jumping back with `t(a)`: the loop's parameters and the arguments.
+    Jump(&'t [RecParam], &'t [Expr]),
+}
+
+/// [`unfold`], telling `step` about each step through a recursion with parameters
+/// (process typing follows the type's parameters' values).
+pub(crate) fn unfold_with(
+    t: &LocalRc,
+    env: &mut RecEnv,
+    step: &mut dyn FnMut(RecStep),
+) -> Result<(LocalRc, Option<(String, Loc)>), Diagnostic> {
     let mut t = t.clone();
     let mut looped = None;
     for _ in 0..UNFOLD_LIMIT {
         let next = match &*t {
-            Local::Rec { var, body, .. } => {
+            Local::Rec { var, params, body, .. } => {
+                if !params.is_empty() {
+                    step(RecStep::Enter(params));
+                }
                 env.push((var.clone(), t.clone()));
                 body.clone()
             }
-            Local::Var { var, loc, .. } => {
+            Local::Var { var, loc, args } => {
                 let Some(i) = env.iter().rposition(|(v, _)| v == var) else {
                     return Err(Diagnostic::error(
                         Code::RecursionMismatch,
@@ -66,9 +87,12 @@ pub(crate) fn unfold(t: &LocalRc, env: &mut RecEnv) -> Result<(LocalRc, Option<(
                 };
                 env.truncate(i + 1);
                 let Some((_, rec)) = env.get(i) else { break };
-                let Local::Rec { body, .. } = &**rec else {
+                let Local::Rec { body, params, .. } = &**rec else {
                     break;
                 };
+                if !params.is_empty() {
+                    step(RecStep::Jump(params, args));
+                }
                 looped = Some((var.clone(), *loc));
                 body.clone()
             }

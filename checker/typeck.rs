@@ -23,7 +23,12 @@
 //!   context is assumed well typed, so a process may unfold its loop at a different
 //!   point than its type. Contexts differ between iterations, so the body is checked
 //!   under each new one; after [`WIDEN_AFTER`] contexts for one pair the context is
-//!   widened to the invariant (the paper's `true` context of [T-REC]).
+//!   widened to the invariant (the paper's `true` context of [T-REC]);
+//! - [T-REC]/[T-VAR] with parameters (DATUM): a process loop's refinement holds of its
+//!   initial value (E0712) and of each jump's arguments (E0713) and is assumed in the
+//!   body. The type's parameters are values the process follows in `vals`; where process
+//!   and type enter or repeat their loops at the same step with as many parameters, the
+//!   process's stand for the type's and must get the same values (E0714).
 //!
 //! Every structural error is reported and the check continues with the next branch.
 //! [T-SESS] contributes one obligation: the initial geometries are disjoint.
@@ -33,7 +38,9 @@ use crate::hir::*;
 use crate::obligation::{Goal, Obligation, Rule};
 use crate::project::{describe, motion_text, print_bounded, NOTE_NODES};
 use crate::sigma::{self, instantiate, Sigma};
-use crate::subtype::{and_all, conjuncts, mentions, not, refinement, subst_values, unfold, value_expr, RecEnv};
+use crate::subtype::{
+    and_all, conjuncts, mentions, not, refinement, subst_values, unfold_with, value_expr, RecEnv, RecStep,
+};
 use std::collections::{BTreeMap, HashMap, HashSet};
 use std::sync::Arc;
 
@@ -180,25 +187,46 @@ impl<'a> Checker<'a> {
     /// Checks `p` against `t`. Sequences are followed in a loop; branches recurse.
     fn check_inner<'p>(&mut self, mut p: &'p Process, mut t: LocalRc, mut st: State<'p>) {
         loop {
-            let looped = match unfold(&t, &mut st.tenv) {
+            // The type's loop steps, with the new values of its parameters (type terms).
+            let mut steps: Vec<(bool, Vec<RecParam>, Vec<Expr>)> = Vec::new();
+            let looped = match unfold_with(&t, &mut st.tenv, &mut |s| {
+                steps.push(match s {
+                    RecStep::Enter(ps) => (false, ps.to_vec(), sigma::initial_values(ps)),
+                    RecStep::Jump(ps, args) => (true, ps.to_vec(), args.to_vec()),
+                })
+            }) {
                 Ok((u, looped)) => {
                     t = u;
                     looped
                 }
                 Err(d) => return self.diags.push(d),
             };
-            if let Some((var, _)) = &looped {
-                // A new iteration of the type's loop: its parameters have new values.
-                let rec = st.tenv.iter().rev().find(|(v, _)| v == var).map(|(_, r)| r.clone());
-                if let Some(Local::Rec { params, .. }) = rec.as_deref() {
-                    let names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
-                    st.forget(&names);
+            // The type's parameters are ghost values the process follows in `vals`.
+            let mut last = None;
+            for (jump, params, values) in steps {
+                let values: Vec<Expr> = values.iter().map(|e| subst_values(e, &st.vals)).collect();
+                // What Σ knows of a parameter the process did not follow speaks of its
+                // old value: forgotten. A followed one appears in Σ only through `vals`.
+                let unmapped: Vec<&str> =
+                    params.iter().map(|p| p.name.as_str()).filter(|n| !st.vals.contains_key(*n)).collect();
+                st.forget(&unmapped);
+                for (p, v) in params.iter().zip(&values) {
+                    st.vals.insert(p.name.clone(), v.clone());
                 }
+                last = Some((jump, params));
             }
             match p {
                 Process::Rec { var, params, body, .. } => {
-                    let names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
-                    st.forget(&names);
+                    let inits = sigma::initial_values(params);
+                    let ty = last.filter(|(jump, tp)| !jump && tp.len() == params.len());
+                    self.loop_params(
+                        params,
+                        &inits,
+                        params.iter().map(|p| p.init.loc).collect(),
+                        ty.map(|t| t.1),
+                        &mut st,
+                        false,
+                    );
                     st.penv.push((var, p, st.actions));
                     if !self.enter(body, &t, &mut st) {
                         return;
@@ -206,7 +234,7 @@ impl<'a> Checker<'a> {
                     p = body;
                     continue;
                 }
-                Process::Var { var, loc, .. } => {
+                Process::Var { var, args, loc } => {
                     let Some(i) = st.penv.iter().rposition(|(v, _, _)| *v == var) else {
                         return self.diags.push(
                             Diagnostic::error(
@@ -241,8 +269,13 @@ impl<'a> Checker<'a> {
                     if let Some(last) = st.penv.last_mut() {
                         last.2 = st.actions;
                     }
-                    let names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
-                    st.forget(&names);
+                    if args.len() == params.len() {
+                        let ty = last.filter(|(jump, tp)| *jump && tp.len() == params.len());
+                        self.loop_params(params, args, vec![*loc; args.len()], ty.map(|t| t.1), &mut st, true);
+                    } else {
+                        let names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
+                        st.forget(&names);
+                    }
                     if !self.enter(body, &t, &mut st) {
                         return;
                     }
@@ -317,6 +350,77 @@ impl<'a> Checker<'a> {
                     t = tc.clone();
                 }
                 _ => return self.mismatch(p, &t, looped.as_ref()),
+            }
+        }
+    }
+
+    /// The process's loop parameters get `values` (process terms, evaluated now), at
+    /// entry (`jump` false) or at a jump back: [T-REC]/[T-VAR] with parameters.
+    /// - Their refinements must hold of the values (E0712 at entry, E0713 at a jump),
+    ///   and the loop body assumes them of the (fresh) parameters.
+    /// - When the local type enters or repeats a loop with as many parameters at the
+    ///   same step (`ty`: its parameters, whose new values are in `vals` already), the
+    ///   process's parameters stand for the type's: each value must equal the type's
+    ///   (E0714), and afterwards the type's parameter is the process's in `vals`.
+    fn loop_params(
+        &mut self,
+        params: &[RecParam],
+        values: &[Expr],
+        locs: Vec<Loc>,
+        ty: Option<Vec<RecParam>>,
+        st: &mut State,
+        jump: bool,
+    ) {
+        let (rule, when) = if jump { (Rule::TRecJump, "the argument") } else { (Rule::TRecInit, "the initial value") };
+        for ((p, v), loc) in params.iter().zip(values).zip(&locs) {
+            if let Some(r) = &p.refinement {
+                self.obligations.push(Obligation {
+                    rule,
+                    span: loc.0,
+                    what: format!(
+                        "the refinement `{}` of `{}`'s loop parameter `{}` holds of {when} `{}`",
+                        print::expr(self.prog, None, r),
+                        self.name(),
+                        p.name,
+                        print::expr(self.prog, None, v)
+                    ),
+                    hyps: st.sigma.facts().to_vec(),
+                    goal: Goal::Valid(sigma::subst_params(r, params, values)),
+                });
+            }
+        }
+        if let Some(tp) = &ty {
+            for (((p, v), t), loc) in params.iter().zip(values).zip(tp).zip(&locs) {
+                let Some(want) = st.vals.get(&t.name) else { continue };
+                let goal = Expr {
+                    kind: ExprKind::Binary(crate::hir::expr::BinOp::Eq, Box::new(v.clone()), Box::new(want.clone())),
+                    sort: Sort::Bool,
+                    loc: *loc,
+                };
+                self.obligations.push(Obligation {
+                    rule: Rule::TRecArgs,
+                    span: loc.0,
+                    what: format!(
+                        "{when} `{}` of `{}`'s loop parameter `{}` equals the local type's `{}` for its parameter `{}`",
+                        print::expr(self.prog, None, v),
+                        self.name(),
+                        p.name,
+                        print::expr(self.prog, None, want),
+                        t.name
+                    ),
+                    hyps: st.sigma.facts().to_vec(),
+                    goal: Goal::Valid(goal),
+                });
+            }
+        }
+        let names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
+        st.forget(&names);
+        for r in params.iter().filter_map(|p| p.refinement.as_ref()) {
+            st.assume(r.clone());
+        }
+        if let Some(tp) = ty {
+            for (p, t) in params.iter().zip(tp) {
+                st.vals.insert(t.name.clone(), value_expr(p.value, &p.name, &p.sort));
             }
         }
     }
@@ -1006,6 +1110,36 @@ mod tests {
     fn e0208_argument_sorts() {
         let (_, d, _) = check(&format!("process C = mu k. A!go(true).dt<move(1.0)>.A?done.k; {GOOD_A}"));
         assert!(codes(&d).contains(&Code::SortMismatch), "{d:?}");
+    }
+
+    #[test]
+    fn the_types_loop_parameters_are_followed_in_the_process() {
+        let chor = "choreography G = mu t(n: int {n >= 0} = 1).
+                      C -> A : [n > 0] go. dt<C: idle, A: work>. A -> C : done. t(n - 1);";
+        // C does not keep a counter: the type's `n` is 1, then 1 - 1, ... The second
+        // `A!go` must show `1 - 1 > 0`, which fails: C may not say `go` forever.
+        let (prog, d, obs) =
+            check_with(chor, "process C = mu k. A!go.dt<idle>.A?done.k; process A = mu k. C?go.dt<work>.C!done.k;");
+        assert!(d.is_empty(), "{d:?}");
+        let outs = goals(&prog, &obs, Rule::TOut);
+        assert_eq!(outs[..2], ["1 > 0", "1 - 1 > 0"]);
+        assert!(goals(&prog, &obs, Rule::TRecArgs).is_empty(), "C's loop has no parameter to align");
+        // C mirrors the parameter: `j` stands for `n`, so the guard is `j > 0`, known
+        // from the `if`; the arguments must agree with the type's, the refinement hold.
+        let (prog, d, obs) = check_with(
+            chor,
+            "process C = mu k(j: int {j >= 0} = 1). if j > 0 then A!go.dt<idle>.A?done.k(j - 1) else A!go.dt<idle>.A?done.k(j);
+             process A = mu k. C?go.dt<work>.C!done.k;",
+        );
+        assert!(d.is_empty(), "{d:?}");
+        assert_eq!(goals(&prog, &obs, Rule::TRecInit), vec!["1 >= 0"]);
+        assert_eq!(goals(&prog, &obs, Rule::TRecArgs), vec!["1 == 1", "j - 1 == j - 1", "j == j - 1"]);
+        assert_eq!(goals(&prog, &obs, Rule::TRecJump), vec!["j - 1 >= 0", "j >= 0"]);
+        // (The `else` branch sends `go` at j == 0: its `j > 0` fails, as it should.)
+        let outs = goals(&prog, &obs, Rule::TOut);
+        assert!(!outs.is_empty() && outs.iter().all(|g| g == "j > 0"), "{outs:?}");
+        let hyps = hyps_of(&prog, &obs, Rule::TRecJump);
+        assert!(hyps[0].contains(&"0 <= j".to_string()) && hyps[0].contains(&"0 < j".to_string()), "{hyps:?}");
     }
 
     #[test]

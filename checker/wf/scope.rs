@@ -18,15 +18,19 @@
 //! - after `p -> q : [P] l(v: S {P'})`, Σ ∧ P ∧ P' (payload fields are value variables;
 //!   a field of the same name bound earlier is forgotten first);
 //! - each branch of a choice starts from Σ ∧ its first message's guard, and after the
-//!   choice Σ is what all branches that continue agree on;
+//!   choice Σ is the join of the branches that continue (what they agree on, with
+//!   literal bounds weakened to cover every branch);
 //! - a joint motion `dt<p: a, q: b>` applies the effect of every part
 //!   ([`Sigma::run_joint`]: strongest postcondition, one level of snapshots);
 //! - `g1 * g2`: each side starts from the facts of Σ over its own participants (and over
 //!   values and constants only), and afterwards Σ is the conjunction of the sides' ends;
-//! - `mu t. G`: a loop invariant by a syntactic fixpoint. The candidate is Σ at entry;
-//!   the body is walked under it, and every `t` reached must hold each candidate fact
-//!   literally; the facts some `t` lacks are dropped and the body walked again, until
-//!   nothing is dropped (the candidate only shrinks, so this ends). Only the last walk's
+//! - `mu t(n: S {R} = e). G`: R must hold of `e` at entry (E0414) and of the arguments
+//!   at each `t(a)` (E0415); the body assumes it. The rest of the loop invariant is a
+//!   fixpoint: the candidate is Σ at entry; the body is walked under it (and R), and the
+//!   next candidate is its join ([`Sigma::join`]: common facts, and the weaker of two
+//!   literal bounds on a term) with the context at every `t` reached, until it is the
+//!   candidate again. After [`WEAKEN_WALKS`] walks only facts every `t` holds literally
+//!   are kept (widening), so the candidate shrinks and this ends. Only the last walk's
 //!   obligations are kept. Recursion parameters are forgotten at entry and at each `t`.
 //!
 //! Every step only keeps or weakens what holds, so every obligation's hypotheses hold
@@ -305,6 +309,12 @@ impl<'a> Scope<'a> {
 /// `true` (which is always an invariant), and so once the whole walk has taken
 /// [`STEP_BUDGET`] steps: nested loops would otherwise multiply their walks.
 const MAX_LOOP_WALKS: usize = 32;
+/// For this many walks the candidate is joined with the jumps' contexts by
+/// [`Sigma::join`], whose bounds may weaken step by step (`x <= 1`, `x <= 2`, ...);
+/// after them only facts every jump holds literally are kept (the widening: a bound
+/// that keeps weakening goes to ±∞), so the candidate can only shrink and the
+/// fixpoint ends.
+const WEAKEN_WALKS: usize = 4;
 const STEP_BUDGET: usize = 1 << 20;
 
 /// The walk that threads Σ through the type and makes the predicate obligations (see
@@ -312,8 +322,8 @@ const STEP_BUDGET: usize = 1 << 20;
 struct Contexts<'a> {
     prog: &'a Program,
     obligations: Vec<Obligation>,
-    /// Enclosing recursions, innermost last: the variable and its parameters' names.
-    loops: Vec<(&'a str, Vec<&'a str>)>,
+    /// Enclosing recursions, innermost last: the variable and its parameters.
+    loops: Vec<(&'a str, &'a [RecParam])>,
     /// The contexts reached at recursion variables: (index into `loops`, Σ there).
     jumps: Vec<(usize, Sigma)>,
     /// The primitives run inside some `*`, in walk order, with the context each starts
@@ -371,8 +381,29 @@ impl<'a> Contexts<'a> {
             Global::Rec { var, params, body, .. } => self.rec(var, params, body, sigma),
             Global::Var(v) => {
                 if let Some(i) = self.loops.iter().rposition(|(n, _)| *n == v.var) {
+                    let params = self.loops[i].1;
+                    // The next iteration assumes the refinements of the arguments.
+                    if params.len() == v.args.len() {
+                        for p in params {
+                            let Some(r) = &p.refinement else { continue };
+                            self.obligations.push(Obligation {
+                                rule: Rule::RecJump,
+                                span: v.loc.0,
+                                what: format!(
+                                    "the refinement `{}` of parameter `{}` of `{}` holds of the argument{}",
+                                    print::expr(self.prog, None, r),
+                                    p.name,
+                                    v.var,
+                                    args_text(self.prog, &v.args)
+                                ),
+                                hyps: sigma.facts().to_vec(),
+                                goal: Goal::Valid(crate::sigma::subst_params(r, params, &v.args)),
+                            });
+                        }
+                    }
                     // The arguments are the parameters' new values.
-                    sigma.forget_values(&self.loops[i].1);
+                    let names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
+                    sigma.forget_values(&names);
                     self.jumps.push((i, sigma));
                 }
                 None
@@ -473,8 +504,26 @@ impl<'a> Contexts<'a> {
         out
     }
 
-    /// `mu t. G`: the syntactic fixpoint for a loop invariant (module documentation).
+    /// `mu t(n: S {R} = e). G`: the refinement `R` must hold of `e` at entry (and of
+    /// the arguments at each jump, see `walk`), so the body assumes it; the rest of the
+    /// loop invariant is the fixpoint of the module documentation.
     fn rec(&mut self, var: &'a str, params: &'a [RecParam], body: &'a Global, sigma: Sigma) -> Option<Sigma> {
+        let inits = crate::sigma::initial_values(params);
+        for p in params {
+            let Some(r) = &p.refinement else { continue };
+            self.obligations.push(Obligation {
+                rule: Rule::RecInit,
+                span: p.init.loc.0,
+                what: format!(
+                    "the refinement `{}` of parameter `{}` of `{var}` holds of its initial value `{}`",
+                    print::expr(self.prog, None, r),
+                    p.name,
+                    print::expr(self.prog, None, &p.init)
+                ),
+                hyps: sigma.facts().to_vec(),
+                goal: Goal::Valid(crate::sigma::subst_params(r, params, &inits)),
+            });
+        }
         let names: Vec<&'a str> = params.iter().map(|p| p.name.as_str()).collect();
         let mut candidate = sigma;
         candidate.forget_values(&names);
@@ -483,15 +532,27 @@ impl<'a> Contexts<'a> {
         let mut walks = 0;
         loop {
             walks += 1;
-            self.loops.push((var, names.clone()));
-            let out = self.walk(body, candidate.clone());
+            let mut start = candidate.clone();
+            for r in params.iter().filter_map(|p| p.refinement.as_ref()) {
+                start.assume(r);
+            }
+            self.loops.push((var, params));
+            let out = self.walk(body, start);
             self.loops.pop();
             let reached: Vec<&Sigma> =
                 self.jumps[marks.2..].iter().filter(|(i, _)| *i == depth).map(|(_, s)| s).collect();
-            let stable = candidate.facts().iter().all(|f| reached.iter().all(|s| s.contains(f)));
-            if stable {
-                // Stable: this walk's obligations stand. Jumps to this loop are used up;
-                // jumps to enclosing loops stay for them.
+            // The next candidate: implied by the current one and by every jump's context.
+            let next = if walks <= WEAKEN_WALKS {
+                reached.iter().fold(candidate.clone(), |c, s| c.join(s))
+            } else {
+                let mut c = candidate.clone();
+                c.retain(|f| reached.iter().all(|s| s.contains(f)));
+                c
+            };
+            if next == candidate {
+                // Stable: every jump implies the candidate. This walk's obligations
+                // stand. Jumps to this loop are used up; jumps to enclosing loops stay
+                // for them.
                 let mut k = 0;
                 self.jumps.retain(|(i, _)| {
                     k += 1;
@@ -499,16 +560,18 @@ impl<'a> Contexts<'a> {
                 });
                 return out;
             }
-            if walks >= MAX_LOOP_WALKS || self.steps > STEP_BUDGET {
-                candidate = Sigma::new();
-            } else {
-                candidate.retain(|f| reached.iter().all(|s| s.contains(f)));
-            }
+            candidate = if walks >= MAX_LOOP_WALKS || self.steps > STEP_BUDGET { Sigma::new() } else { next };
             self.obligations.truncate(marks.0);
             self.runs.truncate(marks.1);
             self.jumps.truncate(marks.2);
         }
     }
+}
+
+/// "s `a, b`": the arguments of a jump as written, for messages.
+fn args_text(prog: &Program, args: &[Expr]) -> String {
+    let v: Vec<String> = args.iter().map(|a| print::expr(prog, None, a)).collect();
+    format!("s `{}`", v.join(", "))
 }
 
 fn collect_motions<'g>(g: &'g Global, out: &mut Vec<&'g Motion>) {
@@ -688,7 +751,8 @@ mod context_tests {
         );
         let h = hyps(&p, &o, Rule::AgComp);
         assert_eq!(h.len(), 3, "one obligation per joint motion: {h:?}");
-        let without_q = sorted(INIT.iter().filter(|f| **f != "Q.x == 5"));
+        // Q is at 5 or 3: the interval join keeps `3 <= Q.x <= 5` of `Q.x == 5`.
+        let without_q = sorted(INIT.iter().filter(|f| **f != "Q.x == 5").chain(&["3 <= Q.x", "Q.x <= 5"]));
         assert_eq!(h[0], without_q);
         assert_eq!(h[1], without_q, "the inner loop's invariant");
         assert_eq!(h[2], without_q);
@@ -728,8 +792,9 @@ mod context_tests {
                 })
                 .collect()
         };
-        // P is at 2 after a round, so `P.x == 0` is not part of the loop's invariant.
-        let pq = sorted(["0 <= P.x", "P.x <= 10", "Q.x == 5", "0 <= Q.x", "Q.x <= 10"]);
+        // P is at 2 after a round, so `P.x == 0` is not part of the loop's invariant;
+        // the interval join of 0 and 2 keeps `P.x <= 2`.
+        let pq = sorted(["0 <= P.x", "P.x <= 10", "P.x <= 2", "Q.x == 5", "0 <= Q.x", "Q.x <= 10"]);
         let outer = runs(seps[0]);
         // The P/Q side sees nothing of V, and its runs include the nested `*`'s.
         assert_eq!(
@@ -747,6 +812,82 @@ mod context_tests {
         assert_eq!(inner[0], vec![outer[0][2].clone()]);
         assert_eq!(inner[1], vec![outer[0][3].clone()]);
         // The obligation's own hypotheses: Σ at the `*`.
-        assert_eq!(sorted(show(&p, &seps[0].hyps)), sorted(INIT.iter().filter(|f| **f != "P.x == 0")));
+        assert_eq!(
+            sorted(show(&p, &seps[0].hyps)),
+            sorted(INIT.iter().filter(|f| **f != "P.x == 0").chain(&["P.x <= 2"]))
+        );
+    }
+
+    /// Robots without an invariant, so that only the loop invariant bounds them.
+    const FREE: &str = "
+        robot F { state x: real; }
+        motion F.go(to: real) { interruptible: false; post: x == to; }
+        motion F.hold { interruptible: true; post: x == old(x); }
+        system S { participant P: F { init: x >= 0; } participant Q: F { init: x == 0; } }
+    ";
+
+    fn free_obligations(chor: &str) -> (Program, Vec<Obligation>) {
+        let (p, d) = lower_src(&format!("{FREE} choreography G = {chor};"));
+        assert!(d.is_empty(), "{d:?}");
+        let body = p.choreography.as_ref().map(|c| c.body.clone()).expect("choreography");
+        let (d, o) = super::check(&p, &body);
+        assert!(d.is_empty(), "{d:?}");
+        (p, o)
+    }
+
+    #[test]
+    fn a_weaker_bound_every_jump_keeps_survives() {
+        // `P.x >= 0` at entry; one branch leaves P at 1, the other at 2. Neither jump
+        // holds `0 <= P.x` literally, but both imply it: the invariant keeps it (it
+        // was dropped before the interval join, a false alarm for any motion needing it).
+        let (p, o) = free_obligations(
+            "mu t. P -> Q : a. dt<P: hold, Q: hold>.
+               ( P -> Q : l. dt<P: go(1), Q: hold>. t
+               + P -> Q : r. dt<P: go(2), Q: hold>. t )",
+        );
+        let h = hyps(&p, &o, Rule::AgComp);
+        assert_eq!(h.len(), 3);
+        assert_eq!(h[0], sorted(["0 <= P.x", "Q.x == 0"]));
+        // The choice's join weakens too: after it, P is between 1 and 2.
+        let (p, o) = free_obligations(
+            "mu t. P -> Q : a. dt<P: hold, Q: hold>.
+               ( P -> Q : l. dt<P: go(1), Q: hold>. Q -> P : m. dt<P: hold, Q: hold>. t
+               + P -> Q : r. dt<P: go(2), Q: hold>. Q -> P : m. dt<P: hold, Q: hold>. t )",
+        );
+        let h = hyps(&p, &o, Rule::AgComp);
+        assert_eq!(h[0], sorted(["0 <= P.x", "Q.x == 0"]));
+    }
+
+    #[test]
+    fn bounds_that_keep_weakening_are_widened_away() {
+        // Q steps down by one each round: -1, -2, ... The join would weaken the lower
+        // bound forever; after WEAKEN_WALKS walks only literal facts are kept.
+        let (p, o) = free_obligations("mu t. P -> Q : a. dt<P: hold, Q: go(x - 1)>. Q -> P : b. t");
+        let h = hyps(&p, &o, Rule::AgComp);
+        assert_eq!(h, vec![sorted(["0 <= P.x"])]);
+        let (_, o) = free_obligations("mu t. P -> Q : a. dt<P: hold, Q: go(x - 1)>. Q -> P : b. t");
+        assert_eq!(o.len(), 1, "one obligation per motion, from the last walk only");
+    }
+
+    #[test]
+    fn recursion_parameters_are_checked_at_entry_and_jumps_and_assumed() {
+        let (p, o) = free_obligations(
+            "mu t(n: int {n >= 0} = 2). ( P -> Q : [n > 0] more. dt<P: hold, Q: hold>. t(n - 1)
+                                        + P -> Q : [n == 0] stop. dt<P: hold, Q: hold>. end )",
+        );
+        let goals = |rule: Rule| -> Vec<String> {
+            o.iter()
+                .filter(|ob| ob.rule == rule)
+                .map(|ob| match &ob.goal {
+                    Goal::Valid(e) => print::expr(&p, None, e),
+                    _ => panic!("a predicate"),
+                })
+                .collect()
+        };
+        assert_eq!(goals(Rule::RecInit), vec!["2 >= 0"]);
+        assert_eq!(goals(Rule::RecJump), vec!["n - 1 >= 0"]);
+        // The body assumes the refinement: total choice and the jump see `0 <= n`.
+        assert!(hyps(&p, &o, Rule::TotalChoice)[0].contains(&"0 <= n".to_string()));
+        assert_eq!(hyps(&p, &o, Rule::RecJump), vec![sorted(["0 <= P.x", "Q.x == 0", "0 <= n", "0 < n"])]);
     }
 }
