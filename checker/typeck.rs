@@ -102,7 +102,7 @@ pub const WIDEN_AFTER: usize = 8;
 
 /// A process loop body and a type node, with the context and value map they are
 /// checked under.
-type LoopKey = (usize, usize, Vec<Expr>, Vec<(String, Expr)>);
+type LoopKey = (usize, usize, Vec<Expr>, Vec<(ValueId, Expr)>);
 
 struct Checker<'a> {
     prog: &'a Program,
@@ -122,8 +122,11 @@ struct Checker<'a> {
 struct State<'p> {
     /// Σ, as conjuncts.
     sigma: Sigma,
-    /// The type's value variables (payload fields, by name) as process expressions.
-    vals: HashMap<String, Expr>,
+    /// The type's value variables (payload fields, by binding site) as process
+    /// expressions: a receive substitutes the process's binder for the type's field, a
+    /// send the sent expression. The type's binder and the process's are different
+    /// binding sites linked only through this map, never through their names.
+    vals: HashMap<ValueId, Expr>,
     /// Enclosing process loops: variable, `mu` node, actions performed when entered.
     penv: Vec<(&'p str, &'p Process, usize)>,
     /// Enclosing `mu`s of the local type.
@@ -137,14 +140,15 @@ impl State<'_> {
         self.sigma.assume(&e);
     }
 
-    /// Forgets what is known about the value variables `names` (they get new values).
-    fn forget(&mut self, names: &[&str]) {
-        if names.is_empty() {
+    /// Forgets what is known about the value variables `ids` (they get new values): the
+    /// facts about them and the type's values that stood for them (or were them).
+    fn forget(&mut self, ids: &[ValueId]) {
+        if ids.is_empty() {
             return;
         }
-        let hit = |v: &Var| matches!(v, Var::Value(_, n) if names.contains(&n.as_str()));
-        self.sigma.forget_values(names);
-        self.vals.retain(|_, e| !mentions(e, &hit));
+        let hit = |v: &Var| matches!(v, Var::Value(id, _) if ids.contains(id));
+        self.sigma.forget_values(ids);
+        self.vals.retain(|k, e| !ids.contains(k) && !mentions(e, &hit));
     }
 }
 
@@ -191,14 +195,14 @@ impl<'a> Checker<'a> {
                 // A new iteration of the type's loop: its parameters have new values.
                 let rec = st.tenv.iter().rev().find(|(v, _)| v == var).map(|(_, r)| r.clone());
                 if let Some(Local::Rec { params, .. }) = rec.as_deref() {
-                    let names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
-                    st.forget(&names);
+                    let ids: Vec<ValueId> = params.iter().map(|p| p.value).collect();
+                    st.forget(&ids);
                 }
             }
             match p {
                 Process::Rec { var, params, body, .. } => {
-                    let names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
-                    st.forget(&names);
+                    let ids: Vec<ValueId> = params.iter().map(|p| p.value).collect();
+                    st.forget(&ids);
                     st.penv.push((var, p, st.actions));
                     if !self.enter(body, &t, &mut st) {
                         return;
@@ -241,8 +245,8 @@ impl<'a> Checker<'a> {
                     if let Some(last) = st.penv.last_mut() {
                         last.2 = st.actions;
                     }
-                    let names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
-                    st.forget(&names);
+                    let ids: Vec<ValueId> = params.iter().map(|p| p.value).collect();
+                    st.forget(&ids);
                     if !self.enter(body, &t, &mut st) {
                         return;
                     }
@@ -332,8 +336,8 @@ impl<'a> Checker<'a> {
         }
         let mut sigma = st.sigma.facts().to_vec();
         sigma.sort_by_key(hash_of);
-        let mut vals: Vec<(String, Expr)> = st.vals.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
-        vals.sort_by(|a, b| a.0.cmp(&b.0));
+        let mut vals: Vec<(ValueId, Expr)> = st.vals.iter().map(|(k, v)| (*k, v.clone())).collect();
+        vals.sort_by_key(|a| a.0);
         if !self.assumed.insert((pair.0, pair.1, sigma, vals)) {
             return false;
         }
@@ -376,7 +380,7 @@ impl<'a> Checker<'a> {
         }
         let mut vals = st.vals.clone();
         for (a, f) in args.iter().zip(&b.payload) {
-            vals.insert(f.name.clone(), a.clone());
+            vals.insert(f.value, a.clone());
         }
         let mut goal = Vec::new();
         if let Some(g) = &b.guard {
@@ -454,11 +458,11 @@ impl<'a> Checker<'a> {
                 continue;
             }
             let mut s = st.clone();
-            let names: Vec<&str> = arm.binders.iter().map(|v| self.prog.value(*v).name.as_str()).collect();
-            s.forget(&names);
+            s.forget(&arm.binders);
             for (v, f) in arm.binders.iter().zip(&b.payload) {
-                // The binder takes the field's sort.
-                s.vals.insert(f.name.clone(), value_expr(*v, &self.prog.value(*v).name, &f.sort));
+                // The type's field is the process's binder from here on; the binder takes
+                // the field's sort.
+                s.vals.insert(f.value, value_expr(*v, &self.prog.value(*v).name, &f.sort));
             }
             for f in &b.payload {
                 if let Some(r) = &f.refinement {

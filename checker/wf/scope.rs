@@ -312,8 +312,8 @@ const STEP_BUDGET: usize = 1 << 20;
 struct Contexts<'a> {
     prog: &'a Program,
     obligations: Vec<Obligation>,
-    /// Enclosing recursions, innermost last: the variable and its parameters' names.
-    loops: Vec<(&'a str, Vec<&'a str>)>,
+    /// Enclosing recursions, innermost last: the variable and its parameters.
+    loops: Vec<(&'a str, Vec<ValueId>)>,
     /// The contexts reached at recursion variables: (index into `loops`, Σ there).
     jumps: Vec<(usize, Sigma)>,
     /// The primitives run inside some `*`, in walk order, with the context each starts
@@ -475,15 +475,15 @@ impl<'a> Contexts<'a> {
 
     /// `mu t. G`: the syntactic fixpoint for a loop invariant (module documentation).
     fn rec(&mut self, var: &'a str, params: &'a [RecParam], body: &'a Global, sigma: Sigma) -> Option<Sigma> {
-        let names: Vec<&'a str> = params.iter().map(|p| p.name.as_str()).collect();
+        let ids: Vec<ValueId> = params.iter().map(|p| p.value).collect();
         let mut candidate = sigma;
-        candidate.forget_values(&names);
+        candidate.forget_values(&ids);
         let marks = (self.obligations.len(), self.runs.len(), self.jumps.len());
         let depth = self.loops.len();
         let mut walks = 0;
         loop {
             walks += 1;
-            self.loops.push((var, names.clone()));
+            self.loops.push((var, ids.clone()));
             let out = self.walk(body, candidate.clone());
             self.loops.pop();
             let reached: Vec<&Sigma> =
