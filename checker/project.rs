@@ -1062,6 +1062,66 @@ pub(crate) mod tests {
         assert_eq!(printed(&prog, &map, "C"), "A?go.&{\n  A?more.end\n} & dt<m>.A!a.end");
     }
 
+    /// Def 4.7 compares the branches' projections up to the renaming of their binders:
+    /// each branch's `go(v)` is its own binding site, and the projections onto `C` are
+    /// alpha-equal, so they merge.
+    #[test]
+    fn alpha_equal_branches_merge() {
+        let src = format!(
+            "{ABC} choreography G =
+                A -> B : l1. A -> C : go(v: real {{v >= 0}}). C -> A : ok(u: real {{u == v}}). end
+              + A -> B : l2. A -> C : go(v: real {{v >= 0}}). C -> A : ok(u: real {{u == v}}). end;"
+        );
+        let (prog, map, diags) = projections(&src);
+        assert!(diags.is_empty(), "{diags:?}");
+        assert_eq!(printed(&prog, &map, "C"), "A?go(v: real { v >= 0 }).A!ok(u: real { u == v }).end");
+    }
+
+    /// Merging a shared label reads the second branch's continuation in terms of the
+    /// first branch's binders: the merged `A?b` speaks of the merged `go`'s `v`.
+    #[test]
+    fn merged_continuations_refer_to_the_merged_binder() {
+        let src = format!(
+            "{ABC} choreography G =
+                A -> B : l1. A -> C : go(v: real). A -> C : a(u: real {{u == v}}). end
+              + A -> B : l2. A -> C : go(v: real). A -> C : b(u: real {{u == v}}). end;"
+        );
+        let (prog, map, diags) = projections(&src);
+        assert!(diags.is_empty(), "{diags:?}");
+        let c = map.get(&prog.role_by_name("C").expect("C")).expect("projection");
+        let Local::Recv { branches, .. } = &**c else { panic!("a receive: {c:?}") };
+        let v = branches[0].payload[0].value;
+        let Local::Recv { branches: inner, .. } = &*branches[0].cont else { panic!("a receive") };
+        assert_eq!(inner.len(), 2);
+        for b in inner {
+            let mut seen = Vec::new();
+            b.payload[0].refinement.as_ref().expect("refinement").visit_vars(&mut |x, _| {
+                if let Var::Value(id, name) = x {
+                    if name == "v" {
+                        seen.push(*id);
+                    }
+                }
+            });
+            assert_eq!(seen, vec![v], "`{}` must read the merged `go`'s `v`", b.label);
+        }
+    }
+
+    /// Two projections that print the same but speak of different values are not
+    /// equal: in the second branch `v` is A's new `l2` field, not the `v` A received
+    /// before the choice. Merged by name (as before), `C` would have assumed in both
+    /// branches that `w` is the first `v`.
+    #[test]
+    fn same_text_about_different_values_does_not_merge() {
+        let src = format!(
+            "{ABC} choreography G = B -> A : pre(v: real).
+                ( A -> B : l1. A -> C : go(w: real {{w == v}}). end
+                + A -> B : l2(v: real). A -> C : go(w: real {{w == v}}). end );"
+        );
+        let (prog, map, diags) = projections(&src);
+        assert_eq!(diags.iter().map(|d| d.code).collect::<Vec<_>>(), vec![Code::Unmergeable], "{diags:?}");
+        assert!(!map.contains_key(&prog.role_by_name("C").expect("C")));
+    }
+
     #[test]
     fn a_role_outside_a_recursion_gets_end() {
         let src = format!("{ABC} choreography G = A -> C : hi. mu t. A -> B : ping. B -> A : pong. t;");

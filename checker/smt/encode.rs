@@ -168,6 +168,23 @@ impl<'p> Encoder<'p> {
         Ok(t)
     }
 
+    /// The values of this query that share their name with another of its values: their
+    /// symbol, their name and where they are bound (so that a counterexample naming `v`
+    /// and `v#2` can say which is which).
+    pub fn shared_names(&self) -> Vec<(String, String, crate::source::Span)> {
+        let mut out: Vec<(String, String, crate::source::Span)> = self
+            .value_names
+            .iter()
+            .filter(|(id, _)| {
+                let name = &self.prog.value(**id).name;
+                self.value_names.keys().any(|o| o != *id && self.prog.value(*o).name == *name)
+            })
+            .map(|(id, sym)| (sym.clone(), self.prog.value(*id).name.clone(), self.prog.value(*id).span))
+            .collect();
+        out.sort_by(|a, b| a.0.cmp(&b.0));
+        out
+    }
+
     /// A symbol for a new value variable named `name`: the name itself unless another
     /// value, a participant (whose variables are `Name.x`, as a point value's components
     /// are) or the time of a motion already has it, else `name#2`, `name#3`, ...
