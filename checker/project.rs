@@ -535,12 +535,21 @@ impl Projector<'_> {
                 None => out.push(b.clone()),
                 Some(x) => {
                     if payloads_differ(&x.payload, &b.payload) {
+                        let same_text = fields_text(self.prog, &x.payload) == fields_text(self.prog, &b.payload);
+                        let why = if same_text {
+                            format!(
+                                "the two branches receive `{}` with payloads that read alike, but a name in them stands for different values (a value is where it is bound, not its name)",
+                                b.label
+                            )
+                        } else {
+                            format!("the two branches receive `{}` with different payloads", b.label)
+                        };
                         return Err(Clash {
                             left: x.loc,
                             left_text: recv_text(self.prog, x),
                             right: b.loc,
                             right_text: recv_text(self.prog, b),
-                            why: Some(format!("the two branches receive `{}` with different payloads", b.label)),
+                            why: Some(why),
                         });
                     }
                     // `b`'s continuation speaks of `b`'s binders of this message: read it
@@ -604,6 +613,16 @@ fn flatten_seq<'g>(g: &'g Global, out: &mut Vec<&'g Global>) {
     }
 }
 
+/// The payload as printed (to tell "different" from "reads alike, means otherwise").
+fn fields_text(prog: &Program, fs: &[Field]) -> Vec<String> {
+    fs.iter()
+        .map(|f| {
+            let r = f.refinement.as_ref().map(|r| print::expr(prog, None, r)).unwrap_or_default();
+            format!("{}: {} {{{r}}}", f.name, f.sort)
+        })
+        .collect()
+}
+
 /// Whether two payloads of one message differ, up to the renaming of their binders.
 fn payloads_differ(a: &[Field], b: &[Field]) -> bool {
     !Differ::new().bind_fields(a, b)
@@ -618,8 +637,11 @@ fn payloads_differ(a: &[Field], b: &[Field]) -> bool {
 /// be the same binding site; binders must also have the same names, so that the types
 /// print the same. Pairs of nodes already found equal (or being compared) under the
 /// same renaming are remembered, so shared tails are compared once.
+/// A pair of nodes and the non-identity part of the renaming they were compared under.
+type Compared = (usize, usize, Vec<(ValueId, ValueId)>);
+
 struct Differ {
-    same: HashSet<(usize, usize, Vec<(ValueId, ValueId)>)>,
+    same: HashSet<Compared>,
     /// The binders in scope, outermost first: (binder of `a`, binder of `b`).
     ren: Vec<(ValueId, ValueId)>,
 }

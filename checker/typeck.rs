@@ -378,6 +378,10 @@ impl<'a> Checker<'a> {
                 );
             }
         }
+        // The type's fields get new values (a binding site met again in a loop): what
+        // was known of their earlier values goes. The guard reads only older values.
+        let fields: Vec<ValueId> = b.payload.iter().map(|f| f.value).collect();
+        st.forget(&fields);
         let mut vals = st.vals.clone();
         for (a, f) in args.iter().zip(&b.payload) {
             vals.insert(f.value, a.clone());
@@ -459,6 +463,8 @@ impl<'a> Checker<'a> {
             }
             let mut s = st.clone();
             s.forget(&arm.binders);
+            // The type's fields get new values too (see `send`).
+            s.forget(&b.payload.iter().map(|f| f.value).collect::<Vec<_>>());
             for (v, f) in arm.binders.iter().zip(&b.payload) {
                 // The type's field is the process's binder from here on; the binder takes
                 // the field's sort.
