@@ -859,18 +859,21 @@ fn rename_local(t: &LocalRc, map: &HashMap<ValueId, (ValueId, String)>, memo: &m
         return r.clone();
     }
     let e = |x: &Expr| {
-        crate::subtype::map_vars(x, &mut |v, _| match v {
+        crate::subtype::map_vars(x, &mut |v, sort| match v {
             Var::Value(id, _) => map.get(id).map(|(to, name)| Expr {
                 kind: ExprKind::Var(Var::Value(*to, name.clone())),
-                sort: x.sort.clone(),
+                sort: sort.clone(),
                 loc: Loc::default(),
             }),
             _ => None,
         })
     };
     let app = |a: &PrimApp| PrimApp { prim: a.prim, args: a.args.iter().map(e).collect(), loc: a.loc };
+    // A binder of a renamed value (were its site met again inside `t`) is renamed too,
+    // so that binders and occurrences stay consistent.
+    let to = |v: ValueId| map.get(&v).map(|(to, _)| *to).unwrap_or(v);
     let fields = |fs: &[Field]| -> Vec<Field> {
-        fs.iter().map(|f| Field { refinement: f.refinement.as_ref().map(e), ..f.clone() }).collect()
+        fs.iter().map(|f| Field { value: to(f.value), refinement: f.refinement.as_ref().map(e), ..f.clone() }).collect()
     };
     let out = stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || match &**t {
         Local::Motion { prims, cont, loc } => {
@@ -904,7 +907,12 @@ fn rename_local(t: &LocalRc, map: &HashMap<ValueId, (ValueId, String)>, memo: &m
             var: var.clone(),
             params: params
                 .iter()
-                .map(|p| RecParam { refinement: p.refinement.as_ref().map(e), init: e(&p.init), ..p.clone() })
+                .map(|p| RecParam {
+                    value: to(p.value),
+                    refinement: p.refinement.as_ref().map(e),
+                    init: e(&p.init),
+                    ..p.clone()
+                })
                 .collect(),
             body: rename_local(body, map, memo),
             loc: *loc,
@@ -1125,6 +1133,11 @@ pub(crate) mod tests {
                 }
             });
             assert_eq!(seen, vec![v], "`{}` must read the merged `go`'s `v`", b.label);
+            // `u == v`, the renamed `v` keeping its sort.
+            let Some(ExprKind::Binary(_, _, rhs)) = b.payload[0].refinement.as_ref().map(|r| &r.kind) else {
+                panic!("an equation")
+            };
+            assert_eq!((&rhs.kind, &rhs.sort), (&ExprKind::Var(Var::Value(v, "v".into())), &Sort::Real));
         }
     }
 
