@@ -335,6 +335,10 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
     let mut d = Diagnostic::error(code, ob.span, format!("{} ({})", code.title(), ob.what))
         .with_note(format!("required: {}", f.part))
         .with_note(format!("rule: {}", ob.rule.name()));
+    // Two values of one name are two variables (`v`, `v#2`): say where each is bound.
+    for (symbol, name, span) in &f.bound {
+        d = d.with_label(*span, format!("`{symbol}` in the counterexample is the `{name}` bound here"));
+    }
     let cx = Counterexample { values: f.values, overlap: f.overlap };
     if let Some(text) = counterexample_text(&cx) {
         d = d.with_note(text);

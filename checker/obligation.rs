@@ -163,4 +163,31 @@ mod tests {
         assert!(!ob(vec![], x).trivially_holds());
         assert!(!Obligation { goal: Goal::InitiallyDisjoint { firsts: Vec::new() }, ..ob(vec![], t) }.trivially_holds());
     }
+
+    /// A goal about one `v` is not settled by the same text about another `v` (two
+    /// binding sites of one name). Before, values compared by name and it was.
+    #[test]
+    fn a_hypothesis_about_another_value_of_the_same_name_settles_nothing() {
+        use crate::hir::{ValueId, Var};
+        let v = |id: u32| Expr {
+            kind: ExprKind::Var(Var::Value(ValueId(id), "v".into())),
+            sort: Sort::Real,
+            loc: Loc::default(),
+        };
+        let zero = Expr { kind: ExprKind::Int(0), sort: Sort::Int, loc: Loc::default() };
+        let pos = |id: u32| Expr {
+            kind: ExprKind::Binary(crate::hir::expr::BinOp::Lt, Box::new(zero.clone()), Box::new(v(id))),
+            sort: Sort::Bool,
+            loc: Loc::default(),
+        };
+        let ob = |hyp: Expr, goal: Expr| Obligation {
+            rule: Rule::TotalChoice,
+            span: Span::default(),
+            what: String::new(),
+            hyps: vec![hyp],
+            goal: Goal::Valid(goal),
+        };
+        assert!(ob(pos(0), pos(0)).trivially_holds());
+        assert!(!ob(pos(0), pos(1)).trivially_holds());
+    }
 }

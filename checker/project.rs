@@ -17,9 +17,11 @@
 //!   undefined otherwise; we follow the usual MPST convention that `r` has left the
 //!   protocol and project to `end`.
 //!
-//! Equality of local types ([`equal`]) ignores source locations and the ids of payload
-//! fields and recursion parameters (they are compared by name, as value variables are),
-//! and it compares the branches of a choice as a set.
+//! Equality of local types ([`equal`]) ignores source locations, compares the branches
+//! of a choice as a set, and is alpha-equivalence: payload fields and recursion
+//! parameters (binders) correspond by position, and a value is its binding site, never
+//! its name (see `Differ`). The merge reads one branch's continuation in terms of the
+//! other's binders of a shared message before merging the two (`rename_local`).
 
 use crate::diag::{Code, Diagnostic};
 use crate::hir::print;
@@ -140,15 +142,15 @@ impl Occurs {
     }
 }
 
-/// Whether two local types are equal up to locations, value-variable ids and the order
-/// of choice branches.
+/// Whether two local types are equal up to locations, the renaming of value binders
+/// (alpha-equivalence) and the order of choice branches.
 pub fn equal(a: &LocalRc, b: &LocalRc) -> bool {
     first_difference(a, b).is_none()
 }
 
 /// The locations of the first pair of nodes where `a` and `b` differ, if any.
 pub fn first_difference(a: &LocalRc, b: &LocalRc) -> Option<(Loc, Loc)> {
-    Differ { same: HashSet::new() }.diff(a, b)
+    Differ::new().diff(a, b)
 }
 
 /// A short description of the first action of a local type, for messages:
@@ -532,16 +534,35 @@ impl Projector<'_> {
             match out.iter_mut().find(|x| x.label == b.label) {
                 None => out.push(b.clone()),
                 Some(x) => {
-                    if !fields_equal(&x.payload, &b.payload) {
+                    if payloads_differ(&x.payload, &b.payload) {
+                        let same_text = fields_text(self.prog, &x.payload) == fields_text(self.prog, &b.payload);
+                        let why = if same_text {
+                            format!(
+                                "the two branches receive `{}` with payloads that read alike, but a name in them stands for different values (a value is where it is bound, not its name)",
+                                b.label
+                            )
+                        } else {
+                            format!("the two branches receive `{}` with different payloads", b.label)
+                        };
                         return Err(Clash {
                             left: x.loc,
                             left_text: recv_text(self.prog, x),
                             right: b.loc,
                             right_text: recv_text(self.prog, b),
-                            why: Some(format!("the two branches receive `{}` with different payloads", b.label)),
+                            why: Some(why),
                         });
                     }
-                    x.cont = self.merge(&x.cont, &b.cont)?;
+                    // `b`'s continuation speaks of `b`'s binders of this message: read it
+                    // in terms of `x`'s (the same message, so the same values).
+                    let map: HashMap<ValueId, (ValueId, String)> = b
+                        .payload
+                        .iter()
+                        .zip(&x.payload)
+                        .filter(|(y, x)| y.value != x.value)
+                        .map(|(y, x)| (y.value, (x.value, x.name.clone())))
+                        .collect();
+                    let cont = rename_local(&b.cont, &map, &mut HashMap::new());
+                    x.cont = self.merge(&x.cont, &cont)?;
                 }
             }
         }
@@ -592,32 +613,153 @@ fn flatten_seq<'g>(g: &'g Global, out: &mut Vec<&'g Global>) {
     }
 }
 
-/// Payload fields compared by name, sort and refinement (not by value id).
-pub(crate) fn fields_equal(a: &[Field], b: &[Field]) -> bool {
-    a.len() == b.len()
-        && a.iter().zip(b).all(|(x, y)| x.name == y.name && x.sort == y.sort && x.refinement == y.refinement)
+/// The payload as printed (to tell "different" from "reads alike, means otherwise").
+fn fields_text(prog: &Program, fs: &[Field]) -> Vec<String> {
+    fs.iter()
+        .map(|f| {
+            let r = f.refinement.as_ref().map(|r| print::expr(prog, None, r)).unwrap_or_default();
+            format!("{}: {} {{{r}}}", f.name, f.sort)
+        })
+        .collect()
 }
 
-fn params_equal(a: &[RecParam], b: &[RecParam]) -> bool {
-    a.len() == b.len()
-        && a.iter()
-            .zip(b)
-            .all(|(x, y)| x.name == y.name && x.sort == y.sort && x.refinement == y.refinement && x.init == y.init)
+/// Whether two payloads of one message differ, up to the renaming of their binders.
+fn payloads_differ(a: &[Field], b: &[Field]) -> bool {
+    !Differ::new().bind_fields(a, b)
 }
 
-fn same_prims(a: &[PrimApp], b: &[PrimApp]) -> bool {
-    a.len() == b.len() && a.iter().all(|x| b.contains(x)) && b.iter().all(|y| a.contains(y))
-}
+/// Structural comparison of two local types up to the renaming of their value binders
+/// (alpha-equivalence). A value is its binding site ([`ValueId`]); two types describe
+/// the same protocol when they are equal once each binder of `b` (a payload field, a
+/// recursion parameter) is renamed to the binder of `a` at the same position. The
+/// renaming is scoped: it holds in the binder's message (its refinements may read the
+/// fields) and in the continuation. Values free in both types (bound before them) must
+/// be the same binding site; binders must also have the same names, so that the types
+/// print the same. Pairs of nodes already found equal (or being compared) under the
+/// same renaming are remembered, so shared tails are compared once.
+/// A pair of nodes and the non-identity part of the renaming they were compared under.
+type Compared = (usize, usize, Vec<(ValueId, ValueId)>);
 
-/// Structural comparison of two local types. Pairs already found equal (or being
-/// compared) are remembered, so shared tails are compared once.
 struct Differ {
-    same: HashSet<(usize, usize)>,
+    same: HashSet<Compared>,
+    /// The binders in scope, outermost first: (binder of `a`, binder of `b`).
+    ren: Vec<(ValueId, ValueId)>,
 }
 
 impl Differ {
+    fn new() -> Differ {
+        Differ { same: HashSet::new(), ren: Vec::new() }
+    }
+
+    /// Whether the renaming in scope is the identity (then equal ids mean equal values
+    /// and identical nodes are equal).
+    fn renamed(&self) -> Vec<(ValueId, ValueId)> {
+        self.ren.iter().filter(|(x, y)| x != y).copied().collect()
+    }
+
+    /// `x` (in `a`) and `y` (in `b`) are the same value: bound by corresponding binders,
+    /// or both free and the same binding site.
+    fn value_eq(&self, x: ValueId, y: ValueId) -> bool {
+        let by_b = self.ren.iter().rposition(|p| p.1 == y);
+        let by_a = self.ren.iter().rposition(|p| p.0 == x);
+        match (by_b, by_a) {
+            (Some(i), Some(j)) => self.ren[i].0 == x && self.ren[j].1 == y,
+            (None, None) => x == y,
+            _ => false,
+        }
+    }
+
+    fn expr(&self, a: &Expr, b: &Expr) -> bool {
+        if self.ren.iter().all(|(x, y)| x == y) {
+            return a == b;
+        }
+        self.expr_renamed(a, b)
+    }
+
+    fn expr_renamed(&self, a: &Expr, b: &Expr) -> bool {
+        if a.sort != b.sort {
+            return false;
+        }
+        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || match (&a.kind, &b.kind) {
+            (ExprKind::Var(Var::Value(x, n)), ExprKind::Var(Var::Value(y, m))) => n == m && self.value_eq(*x, *y),
+            (ExprKind::Var(Var::Value(..)), _) | (_, ExprKind::Var(Var::Value(..))) => false,
+            (ExprKind::Unary(o, x), ExprKind::Unary(p, y)) => o == p && self.expr_renamed(x, y),
+            (ExprKind::Component(x, i), ExprKind::Component(y, j)) => i == j && self.expr_renamed(x, y),
+            (ExprKind::Binary(o, x1, x2), ExprKind::Binary(p, y1, y2)) => {
+                o == p && self.expr_renamed(x1, y1) && self.expr_renamed(x2, y2)
+            }
+            (ExprKind::If(x1, x2, x3), ExprKind::If(y1, y2, y3)) => {
+                self.expr_renamed(x1, y1) && self.expr_renamed(x2, y2) && self.expr_renamed(x3, y3)
+            }
+            (ExprKind::Call(f, xs), ExprKind::Call(g, ys)) => f == g && self.exprs(xs, ys),
+            (ExprKind::Tuple(xs), ExprKind::Tuple(ys)) => self.exprs(xs, ys),
+            (
+                ExprKind::Unary(..)
+                | ExprKind::Component(..)
+                | ExprKind::Binary(..)
+                | ExprKind::If(..)
+                | ExprKind::Call(..)
+                | ExprKind::Tuple(..),
+                _,
+            ) => false,
+            // Literals and other variables: no value inside.
+            _ => a.kind == b.kind,
+        })
+    }
+
+    fn exprs(&self, a: &[Expr], b: &[Expr]) -> bool {
+        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| self.expr_renamed(x, y))
+    }
+
+    fn opt_expr(&self, a: &Option<Expr>, b: &Option<Expr>) -> bool {
+        match (a, b) {
+            (None, None) => true,
+            (Some(x), Some(y)) => self.expr(x, y),
+            _ => false,
+        }
+    }
+
+    fn app(&self, a: &PrimApp, b: &PrimApp) -> bool {
+        a.prim == b.prim && a.args.len() == b.args.len() && a.args.iter().zip(&b.args).all(|(x, y)| self.expr(x, y))
+    }
+
+    /// The motion merge compares as a set.
+    fn prims(&self, a: &[PrimApp], b: &[PrimApp]) -> bool {
+        a.len() == b.len()
+            && a.iter().all(|x| b.iter().any(|y| self.app(x, y)))
+            && b.iter().all(|y| a.iter().any(|x| self.app(x, y)))
+    }
+
+    /// Brings the fields' binders into scope, pairwise, and compares the fields (their
+    /// refinements may read the message's fields). The caller truncates `ren`.
+    fn bind_fields(&mut self, a: &[Field], b: &[Field]) -> bool {
+        if a.len() != b.len() {
+            return false;
+        }
+        self.ren.extend(a.iter().zip(b).map(|(x, y)| (x.value, y.value)));
+        a.iter()
+            .zip(b)
+            .all(|(x, y)| x.name == y.name && x.sort == y.sort && self.opt_expr(&x.refinement, &y.refinement))
+    }
+
+    /// As [`Differ::bind_fields`] for recursion parameters; their initial values are
+    /// read outside the binders.
+    fn bind_params(&mut self, a: &[RecParam], b: &[RecParam]) -> bool {
+        if a.len() != b.len() || !a.iter().zip(b).all(|(x, y)| self.expr(&x.init, &y.init)) {
+            return false;
+        }
+        self.ren.extend(a.iter().zip(b).map(|(x, y)| (x.value, y.value)));
+        a.iter()
+            .zip(b)
+            .all(|(x, y)| x.name == y.name && x.sort == y.sort && self.opt_expr(&x.refinement, &y.refinement))
+    }
+
     fn diff(&mut self, a: &LocalRc, b: &LocalRc) -> Option<(Loc, Loc)> {
-        if Arc::ptr_eq(a, b) || !self.same.insert((Arc::as_ptr(a) as usize, Arc::as_ptr(b) as usize)) {
+        let renamed = self.renamed();
+        if renamed.is_empty() && Arc::ptr_eq(a, b) {
+            return None;
+        }
+        if !self.same.insert((Arc::as_ptr(a) as usize, Arc::as_ptr(b) as usize, renamed)) {
             return None;
         }
         stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.diff_inner(a, b))
@@ -625,9 +767,10 @@ impl Differ {
 
     fn diff_inner(&mut self, a: &LocalRc, b: &LocalRc) -> Option<(Loc, Loc)> {
         let here = Some((a.loc(), b.loc()));
+        let mark = self.ren.len();
         match (&**a, &**b) {
             (Local::Motion { prims: p1, cont: c1, .. }, Local::Motion { prims: p2, cont: c2, .. }) => {
-                if !same_prims(p1, p2) {
+                if !self.prims(p1, p2) {
                     return here;
                 }
                 self.diff(c1, c2)
@@ -640,11 +783,15 @@ impl Differ {
                     let Some(y) = b2.iter().find(|y| y.to == x.to && y.label == x.label) else {
                         return Some((x.loc, b.loc()));
                     };
-                    if x.guard != y.guard || !fields_equal(&x.payload, &y.payload) {
+                    // The guard reads the values before the message.
+                    if !self.opt_expr(&x.guard, &y.guard) || !self.bind_fields(&x.payload, &y.payload) {
+                        self.ren.truncate(mark);
                         return Some((x.loc, y.loc));
                     }
-                    if let Some(d) = self.diff(&x.cont, &y.cont) {
-                        return Some(d);
+                    let d = self.diff(&x.cont, &y.cont);
+                    self.ren.truncate(mark);
+                    if d.is_some() {
+                        return d;
                     }
                 }
                 None
@@ -657,17 +804,20 @@ impl Differ {
                     let Some(y) = b2.iter().find(|y| y.from == x.from && y.label == x.label) else {
                         return Some((x.loc, b.loc()));
                     };
-                    if !fields_equal(&x.payload, &y.payload) {
+                    if !self.bind_fields(&x.payload, &y.payload) {
+                        self.ren.truncate(mark);
                         return Some((x.loc, y.loc));
                     }
-                    if let Some(d) = self.diff(&x.cont, &y.cont) {
-                        return Some(d);
+                    let d = self.diff(&x.cont, &y.cont);
+                    self.ren.truncate(mark);
+                    if d.is_some() {
+                        return d;
                     }
                 }
                 match (d1, d2) {
                     (None, None) => None,
                     (Some((p1, c1)), Some((p2, c2))) => {
-                        if !same_prims(p1, p2) {
+                        if !self.prims(p1, p2) {
                             let l1 = p1.first().map(|p| p.loc).unwrap_or(a.loc());
                             let l2 = p2.first().map(|p| p.loc).unwrap_or(b.loc());
                             return Some((l1, l2));
@@ -678,13 +828,16 @@ impl Differ {
                 }
             }
             (Local::Rec { var: v1, params: p1, body: c1, .. }, Local::Rec { var: v2, params: p2, body: c2, .. }) => {
-                if v1 != v2 || !params_equal(p1, p2) {
+                if v1 != v2 || !self.bind_params(p1, p2) {
+                    self.ren.truncate(mark);
                     return here;
                 }
-                self.diff(c1, c2)
+                let d = self.diff(c1, c2);
+                self.ren.truncate(mark);
+                d
             }
             (Local::Var { var: v1, args: a1, .. }, Local::Var { var: v2, args: a2, .. }) => {
-                if v1 != v2 || a1 != a2 {
+                if v1 != v2 || a1.len() != a2.len() || !a1.iter().zip(a2).all(|(x, y)| self.expr(x, y)) {
                     return here;
                 }
                 None
@@ -693,6 +846,83 @@ impl Differ {
             _ => here,
         }
     }
+}
+
+/// `t` with the value variables `map` renamed (occurrences only; binders inside `t` keep
+/// their identity). Used by the merge to read one branch's continuation in terms of
+/// the other branch's binders of the same message. Shared tails stay shared.
+fn rename_local(t: &LocalRc, map: &HashMap<ValueId, (ValueId, String)>, memo: &mut HashMap<usize, LocalRc>) -> LocalRc {
+    if map.is_empty() {
+        return t.clone();
+    }
+    if let Some(r) = memo.get(&(Arc::as_ptr(t) as usize)) {
+        return r.clone();
+    }
+    let e = |x: &Expr| {
+        crate::subtype::map_vars(x, &mut |v, sort| match v {
+            Var::Value(id, _) => map.get(id).map(|(to, name)| Expr {
+                kind: ExprKind::Var(Var::Value(*to, name.clone())),
+                sort: sort.clone(),
+                loc: Loc::default(),
+            }),
+            _ => None,
+        })
+    };
+    let app = |a: &PrimApp| PrimApp { prim: a.prim, args: a.args.iter().map(e).collect(), loc: a.loc };
+    // A binder of a renamed value (were its site met again inside `t`) is renamed too,
+    // so that binders and occurrences stay consistent.
+    let to = |v: ValueId| map.get(&v).map(|(to, _)| *to).unwrap_or(v);
+    let fields = |fs: &[Field]| -> Vec<Field> {
+        fs.iter().map(|f| Field { value: to(f.value), refinement: f.refinement.as_ref().map(e), ..f.clone() }).collect()
+    };
+    let out = stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || match &**t {
+        Local::Motion { prims, cont, loc } => {
+            Local::Motion { prims: prims.iter().map(app).collect(), cont: rename_local(cont, map, memo), loc: *loc }
+        }
+        Local::Send { branches, loc } => Local::Send {
+            branches: branches
+                .iter()
+                .map(|b| SendBranch {
+                    guard: b.guard.as_ref().map(e),
+                    payload: fields(&b.payload),
+                    cont: rename_local(&b.cont, map, memo),
+                    ..b.clone()
+                })
+                .collect(),
+            loc: *loc,
+        },
+        Local::Recv { branches, default, loc } => Local::Recv {
+            branches: branches
+                .iter()
+                .map(|b| RecvBranch {
+                    payload: fields(&b.payload),
+                    cont: rename_local(&b.cont, map, memo),
+                    ..b.clone()
+                })
+                .collect(),
+            default: default.as_ref().map(|(ps, c)| (ps.iter().map(app).collect(), rename_local(c, map, memo))),
+            loc: *loc,
+        },
+        Local::Rec { var, params, body, loc } => Local::Rec {
+            var: var.clone(),
+            params: params
+                .iter()
+                .map(|p| RecParam {
+                    value: to(p.value),
+                    refinement: p.refinement.as_ref().map(e),
+                    init: e(&p.init),
+                    ..p.clone()
+                })
+                .collect(),
+            body: rename_local(body, map, memo),
+            loc: *loc,
+        },
+        Local::Var { var, args, loc } => Local::Var { var: var.clone(), args: args.iter().map(e).collect(), loc: *loc },
+        Local::End(loc) => Local::End(*loc),
+    });
+    let out = Arc::new(out);
+    memo.insert(Arc::as_ptr(t) as usize, out.clone());
+    out
 }
 
 #[cfg(test)]
@@ -860,6 +1090,71 @@ pub(crate) mod tests {
         let (prog, map, diags) = projections(&src);
         assert!(diags.is_empty(), "{diags:?}");
         assert_eq!(printed(&prog, &map, "C"), "A?go.&{\n  A?more.end\n} & dt<m>.A!a.end");
+    }
+
+    /// Def 4.7 compares the branches' projections up to the renaming of their binders:
+    /// each branch's `go(v)` is its own binding site, and the projections onto `C` are
+    /// alpha-equal, so they merge.
+    #[test]
+    fn alpha_equal_branches_merge() {
+        let src = format!(
+            "{ABC} choreography G =
+                A -> B : l1. A -> C : go(v: real {{v >= 0}}). C -> A : ok(u: real {{u == v}}). end
+              + A -> B : l2. A -> C : go(v: real {{v >= 0}}). C -> A : ok(u: real {{u == v}}). end;"
+        );
+        let (prog, map, diags) = projections(&src);
+        assert!(diags.is_empty(), "{diags:?}");
+        assert_eq!(printed(&prog, &map, "C"), "A?go(v: real { v >= 0 }).A!ok(u: real { u == v }).end");
+    }
+
+    /// Merging a shared label reads the second branch's continuation in terms of the
+    /// first branch's binders: the merged `A?b` speaks of the merged `go`'s `v`.
+    #[test]
+    fn merged_continuations_refer_to_the_merged_binder() {
+        let src = format!(
+            "{ABC} choreography G =
+                A -> B : l1. A -> C : go(v: real). A -> C : a(u: real {{u == v}}). end
+              + A -> B : l2. A -> C : go(v: real). A -> C : b(u: real {{u == v}}). end;"
+        );
+        let (prog, map, diags) = projections(&src);
+        assert!(diags.is_empty(), "{diags:?}");
+        let c = map.get(&prog.role_by_name("C").expect("C")).expect("projection");
+        let Local::Recv { branches, .. } = &**c else { panic!("a receive: {c:?}") };
+        let v = branches[0].payload[0].value;
+        let Local::Recv { branches: inner, .. } = &*branches[0].cont else { panic!("a receive") };
+        assert_eq!(inner.len(), 2);
+        for b in inner {
+            let mut seen = Vec::new();
+            b.payload[0].refinement.as_ref().expect("refinement").visit_vars(&mut |x, _| {
+                if let Var::Value(id, name) = x {
+                    if name == "v" {
+                        seen.push(*id);
+                    }
+                }
+            });
+            assert_eq!(seen, vec![v], "`{}` must read the merged `go`'s `v`", b.label);
+            // `u == v`, the renamed `v` keeping its sort.
+            let Some(ExprKind::Binary(_, _, rhs)) = b.payload[0].refinement.as_ref().map(|r| &r.kind) else {
+                panic!("an equation")
+            };
+            assert_eq!((&rhs.kind, &rhs.sort), (&ExprKind::Var(Var::Value(v, "v".into())), &Sort::Real));
+        }
+    }
+
+    /// Two projections that print the same but speak of different values are not
+    /// equal: in the second branch `v` is A's new `l2` field, not the `v` A received
+    /// before the choice. Merged by name (as before), `C` would have assumed in both
+    /// branches that `w` is the first `v`.
+    #[test]
+    fn same_text_about_different_values_does_not_merge() {
+        let src = format!(
+            "{ABC} choreography G = B -> A : pre(v: real).
+                ( A -> B : l1. A -> C : go(w: real {{w == v}}). end
+                + A -> B : l2(v: real). A -> C : go(w: real {{w == v}}). end );"
+        );
+        let (prog, map, diags) = projections(&src);
+        assert_eq!(diags.iter().map(|d| d.code).collect::<Vec<_>>(), vec![Code::Unmergeable], "{diags:?}");
+        assert!(!map.contains_key(&prog.role_by_name("C").expect("C")));
     }
 
     #[test]

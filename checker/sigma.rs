@@ -118,14 +118,14 @@ impl Sigma {
     }
 
     /// What holds after the message `p -> q : [P] l(v: S {P'})`: its guard `P` (about
-    /// the values before it), then, a field's name now naming the new value, the
-    /// refinements `P'`.
+    /// the values before it), then, the fields now holding new values (a binding site
+    /// met again in a loop rebinds its value), the refinements `P'`.
     pub fn assume_message(&mut self, m: &Msg) {
         if let Some(g) = &m.guard {
             self.assume(g);
         }
-        let names: Vec<&str> = m.payload.iter().map(|f| f.name.as_str()).collect();
-        self.forget_values(&names);
+        let ids: Vec<ValueId> = m.payload.iter().map(|f| f.value).collect();
+        self.forget_values(&ids);
         for f in &m.payload {
             if let Some(r) = &f.refinement {
                 self.assume(r);
@@ -150,12 +150,13 @@ impl Sigma {
         self.retain(|e| !mentions(e, hit));
     }
 
-    /// Forgets what is known about the value variables `names` (they get new values).
-    pub fn forget_values(&mut self, names: &[&str]) {
-        if names.is_empty() {
+    /// Forgets what is known about the value variables `ids` (they get new values).
+    /// By binding site, not by name: another value of the same name is another variable.
+    pub fn forget_values(&mut self, ids: &[ValueId]) {
+        if ids.is_empty() {
             return;
         }
-        self.forget(&|v| matches!(v, Var::Value(_, n) if names.contains(&n.as_str())));
+        self.forget(&|v| matches!(v, Var::Value(id, _) if ids.contains(id)));
     }
 
     /// The conjunction of two contexts: every fact of either.
@@ -912,11 +913,54 @@ mod tests {
     }
 
     #[test]
-    fn forgetting_values_by_name() {
+    fn forgetting_values_by_binding_site() {
         let (prog, g) = setup(&["C: n > x && v == 0"]);
         let mut s = Sigma::from_facts(&g);
-        s.forget_values(&["n"]);
+        let n = ValueId(prog.values.iter().position(|v| v.name == "n").expect("n") as u32);
+        s.forget_values(&[n]);
         assert_eq!(shown(&prog, &s), vec!["C.v == 0"]);
+    }
+
+    /// The refinements `n == 0` of two payload fields that are both named `n`.
+    fn two_values_named_n() -> (Program, Expr, Expr, ValueId, ValueId) {
+        let (prog, d) = lower_src(&format!(
+            "{SRC} choreography G = C -> A : first(n: real {{n == 0}}). A -> C : second(n: real {{n == 0}}). end;"
+        ));
+        assert!(d.is_empty(), "{d:?}");
+        let Some(Global::Seq(items, _)) = prog.choreography.as_ref().map(|c| c.body.clone()) else {
+            panic!("a sequence")
+        };
+        let fields: Vec<Field> = items
+            .iter()
+            .filter_map(|g| match g {
+                Global::Msg(m) => m.payload.first().cloned(),
+                _ => None,
+            })
+            .collect();
+        let [a, b] = &fields[..] else { panic!("two messages") };
+        let r = |f: &Field| f.refinement.clone().expect("refinement");
+        (prog, r(a), r(b), a.value, b.value)
+    }
+
+    /// Shadowing: a fact about one `n` is no fact about another `n`. The loop fixpoint
+    /// keeps a candidate fact only if every `t` reached `contains` it, the `*` conjoins
+    /// the sides' facts, and the join keeps the shared ones: all by identity. (Before,
+    /// values compared by name and the second `n == 0` "re-established" the first.)
+    #[test]
+    fn same_named_values_are_different_facts() {
+        let (prog, first, second, n1, n2) = two_values_named_n();
+        assert_ne!(n1, n2);
+        assert_ne!(first, second, "equal by name, different by binding site");
+        let s = Sigma::from_facts([&first]);
+        assert!(!s.contains(&second));
+        assert!(s.join(&Sigma::from_facts([&second])).is_empty());
+        let mut both = s.clone();
+        both.meet(Sigma::from_facts([&second]));
+        assert_eq!(both.len(), 2);
+        // Forgetting the second `n` (it is rebound) keeps what is known of the first.
+        both.forget_values(&[n2]);
+        assert_eq!(both, s);
+        assert_eq!(shown(&prog, &both), vec!["n == 0"]);
     }
 
     #[test]

@@ -104,9 +104,9 @@ pub(crate) fn unfold_with(
         .with_help("put a message or a motion between `mu t.` and `t`"))
 }
 
-/// Renaming of the super type's value variables (by name) to expressions of the sub
-/// type.
-type Renaming = HashMap<String, Expr>;
+/// Renaming of the super type's value variables (by binding site) to expressions of
+/// the sub type.
+type Renaming = HashMap<ValueId, Expr>;
 
 struct Sub<'a> {
     prog: &'a Program,
@@ -395,13 +395,14 @@ pub(crate) fn refinement(
     }))
 }
 
-/// Maps the super type's payload names to the sub type's value variables.
+/// Maps the super type's payload fields to the sub type's value variables (the two
+/// binding sites describe one message).
 fn rename_fields(ren: &mut Renaming, sup: &[Field], sub: &[Field]) {
     for (y, x) in sup.iter().zip(sub) {
-        if x.name == y.name {
-            ren.remove(&y.name);
+        if x.value == y.value {
+            ren.remove(&y.value);
         } else {
-            ren.insert(y.name.clone(), value_expr(x.value, &x.name, &x.sort));
+            ren.insert(y.value, value_expr(x.value, &x.name, &x.sort));
         }
     }
 }
@@ -440,13 +441,13 @@ pub(crate) fn map_vars(e: &Expr, f: &mut dyn FnMut(&Var, &Sort) -> Option<Expr>)
     })
 }
 
-/// Substitutes value variables by name.
-pub(crate) fn subst_values(e: &Expr, map: &HashMap<String, Expr>) -> Expr {
+/// Substitutes value variables by binding site.
+pub(crate) fn subst_values(e: &Expr, map: &HashMap<ValueId, Expr>) -> Expr {
     if map.is_empty() {
         return e.clone();
     }
     map_vars(e, &mut |v, _| match v {
-        Var::Value(_, name) => map.get(name).cloned(),
+        Var::Value(id, _) => map.get(id).cloned(),
         _ => None,
     })
 }

@@ -109,7 +109,7 @@ pub const WIDEN_AFTER: usize = 8;
 
 /// A process loop body and a type node, with the context and value map they are
 /// checked under.
-type LoopKey = (usize, usize, Vec<Expr>, Vec<(String, Expr)>);
+type LoopKey = (usize, usize, Vec<Expr>, Vec<(ValueId, Expr)>);
 
 struct Checker<'a> {
     prog: &'a Program,
@@ -129,8 +129,11 @@ struct Checker<'a> {
 struct State<'p> {
     /// Σ, as conjuncts.
     sigma: Sigma,
-    /// The type's value variables (payload fields, by name) as process expressions.
-    vals: HashMap<String, Expr>,
+    /// The type's value variables (payload fields, by binding site) as process
+    /// expressions: a receive substitutes the process's binder for the type's field, a
+    /// send the sent expression. The type's binder and the process's are different
+    /// binding sites linked only through this map, never through their names.
+    vals: HashMap<ValueId, Expr>,
     /// Enclosing process loops: variable, `mu` node, actions performed when entered.
     penv: Vec<(&'p str, &'p Process, usize)>,
     /// Enclosing `mu`s of the local type.
@@ -144,14 +147,15 @@ impl State<'_> {
         self.sigma.assume(&e);
     }
 
-    /// Forgets what is known about the value variables `names` (they get new values).
-    fn forget(&mut self, names: &[&str]) {
-        if names.is_empty() {
+    /// Forgets what is known about the value variables `ids` (they get new values): the
+    /// facts about them and the type's values that stood for them (or were them).
+    fn forget(&mut self, ids: &[ValueId]) {
+        if ids.is_empty() {
             return;
         }
-        let hit = |v: &Var| matches!(v, Var::Value(_, n) if names.contains(&n.as_str()));
-        self.sigma.forget_values(names);
-        self.vals.retain(|_, e| !mentions(e, &hit));
+        let hit = |v: &Var| matches!(v, Var::Value(id, _) if ids.contains(id));
+        self.sigma.forget_values(ids);
+        self.vals.retain(|k, e| !ids.contains(k) && !mentions(e, &hit));
     }
 }
 
@@ -207,11 +211,11 @@ impl<'a> Checker<'a> {
                 let values: Vec<Expr> = values.iter().map(|e| subst_values(e, &st.vals)).collect();
                 // What Σ knows of a parameter the process did not follow speaks of its
                 // old value: forgotten. A followed one appears in Σ only through `vals`.
-                let unmapped: Vec<&str> =
-                    params.iter().map(|p| p.name.as_str()).filter(|n| !st.vals.contains_key(*n)).collect();
+                let unmapped: Vec<ValueId> =
+                    params.iter().map(|p| p.value).filter(|id| !st.vals.contains_key(id)).collect();
                 st.forget(&unmapped);
                 for (p, v) in params.iter().zip(&values) {
-                    st.vals.insert(p.name.clone(), v.clone());
+                    st.vals.insert(p.value, v.clone());
                 }
                 last = Some((jump, params));
             }
@@ -273,8 +277,8 @@ impl<'a> Checker<'a> {
                         let ty = last.filter(|(jump, tp)| *jump && tp.len() == params.len());
                         self.loop_params(params, args, vec![*loc; args.len()], ty.map(|t| t.1), &mut st, true);
                     } else {
-                        let names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
-                        st.forget(&names);
+                        let ids: Vec<ValueId> = params.iter().map(|p| p.value).collect();
+                        st.forget(&ids);
                     }
                     if !self.enter(body, &t, &mut st) {
                         return;
@@ -391,7 +395,7 @@ impl<'a> Checker<'a> {
         }
         if let Some(tp) = &ty {
             for (((p, v), t), loc) in params.iter().zip(values).zip(tp).zip(&locs) {
-                let Some(want) = st.vals.get(&t.name) else { continue };
+                let Some(want) = st.vals.get(&t.value) else { continue };
                 let goal = Expr {
                     kind: ExprKind::Binary(crate::hir::expr::BinOp::Eq, Box::new(v.clone()), Box::new(want.clone())),
                     sort: Sort::Bool,
@@ -413,14 +417,14 @@ impl<'a> Checker<'a> {
                 });
             }
         }
-        let names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
-        st.forget(&names);
+        let ids: Vec<ValueId> = params.iter().map(|p| p.value).collect();
+        st.forget(&ids);
         for r in params.iter().filter_map(|p| p.refinement.as_ref()) {
             st.assume(r.clone());
         }
         if let Some(tp) = ty {
             for (p, t) in params.iter().zip(tp) {
-                st.vals.insert(t.name.clone(), value_expr(p.value, &p.name, &p.sort));
+                st.vals.insert(t.value, value_expr(p.value, &p.name, &p.sort));
             }
         }
     }
@@ -436,8 +440,8 @@ impl<'a> Checker<'a> {
         }
         let mut sigma = st.sigma.facts().to_vec();
         sigma.sort_by_key(hash_of);
-        let mut vals: Vec<(String, Expr)> = st.vals.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
-        vals.sort_by(|a, b| a.0.cmp(&b.0));
+        let mut vals: Vec<(ValueId, Expr)> = st.vals.iter().map(|(k, v)| (*k, v.clone())).collect();
+        vals.sort_by_key(|a| a.0);
         if !self.assumed.insert((pair.0, pair.1, sigma, vals)) {
             return false;
         }
@@ -478,9 +482,13 @@ impl<'a> Checker<'a> {
                 );
             }
         }
+        // The type's fields get new values (a binding site met again in a loop): what
+        // was known of their earlier values goes. The guard reads only older values.
+        let fields: Vec<ValueId> = b.payload.iter().map(|f| f.value).collect();
+        st.forget(&fields);
         let mut vals = st.vals.clone();
         for (a, f) in args.iter().zip(&b.payload) {
-            vals.insert(f.name.clone(), a.clone());
+            vals.insert(f.value, a.clone());
         }
         let mut goal = Vec::new();
         if let Some(g) = &b.guard {
@@ -558,11 +566,13 @@ impl<'a> Checker<'a> {
                 continue;
             }
             let mut s = st.clone();
-            let names: Vec<&str> = arm.binders.iter().map(|v| self.prog.value(*v).name.as_str()).collect();
-            s.forget(&names);
+            s.forget(&arm.binders);
+            // The type's fields get new values too (see `send`).
+            s.forget(&b.payload.iter().map(|f| f.value).collect::<Vec<_>>());
             for (v, f) in arm.binders.iter().zip(&b.payload) {
-                // The binder takes the field's sort.
-                s.vals.insert(f.name.clone(), value_expr(*v, &self.prog.value(*v).name, &f.sort));
+                // The type's field is the process's binder from here on; the binder takes
+                // the field's sort.
+                s.vals.insert(f.value, value_expr(*v, &self.prog.value(*v).name, &f.sort));
             }
             for f in &b.payload {
                 if let Some(r) = &f.refinement {

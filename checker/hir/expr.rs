@@ -67,8 +67,12 @@ pub enum Slot {
     Input(usize),
 }
 
-/// What a variable occurrence refers to.
-#[derive(Clone, Debug, Eq)]
+/// What a variable occurrence refers to. Equality and hashing are by identity: a value
+/// variable is its binding site ([`ValueId`]); its name is carried for printing only.
+/// Two values of one name (shadowing) are two variables everywhere: in Σ, in
+/// obligations and in the SMT encoding. Where alpha-equivalence is meant (merging and
+/// comparing local types, Defs 4.7-4.8), `project::equal` establishes it explicitly.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub enum Var {
     Const(ConstId),
     /// This robot's variable, inside a primitive's contract or a kind's invariant.
@@ -83,46 +87,12 @@ pub enum Var {
     Clock,
     /// A participant's variable (`Cart.x`).
     Role(RoleId, Slot),
-    /// A value variable; compared by name so alpha-equal types are equal.
+    /// A value variable: its binding site, and its name for printing.
     Value(ValueId, String),
     /// A participant's state variable as it was when its latest motion started: what
     /// `old(x)` of that motion refers to, kept in the logical context Σ after the
     /// motion so that a post such as `x == old(x)` still links to earlier facts.
     Snap(RoleId, Slot),
-}
-
-impl PartialEq for Var {
-    fn eq(&self, other: &Var) -> bool {
-        match (self, other) {
-            (Var::Value(_, a), Var::Value(_, b)) => a == b,
-            (Var::Const(a), Var::Const(b)) => a == b,
-            (Var::Own(a), Var::Own(b)) => a == b,
-            (Var::Old(a), Var::Old(b)) => a == b,
-            (Var::Param(a), Var::Param(b)) => a == b,
-            (Var::Point(a), Var::Point(b)) => a == b,
-            (Var::Clock, Var::Clock) => true,
-            (Var::Role(a, s), Var::Role(b, t)) | (Var::Snap(a, s), Var::Snap(b, t)) => a == b && s == t,
-            _ => false,
-        }
-    }
-}
-
-/// Hashes what equality compares: a value variable by its name only.
-impl std::hash::Hash for Var {
-    fn hash<H: std::hash::Hasher>(&self, h: &mut H) {
-        std::mem::discriminant(self).hash(h);
-        match self {
-            Var::Const(c) => c.hash(h),
-            Var::Own(s) => s.hash(h),
-            Var::Old(i) | Var::Param(i) | Var::Point(i) => i.hash(h),
-            Var::Clock => {}
-            Var::Role(r, s) | Var::Snap(r, s) => {
-                r.hash(h);
-                s.hash(h);
-            }
-            Var::Value(_, name) => name.hash(h),
-        }
-    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

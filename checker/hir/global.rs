@@ -104,8 +104,8 @@ pub struct Msg {
     pub label_loc: Loc,
 }
 
-/// A refined payload field `{v : S | P}`. Equality ignores the value's id, as
-/// [`Var::Value`](super::Var) does: binders are compared by name.
+/// A refined payload field `{v : S | P}`. Equality includes the value's id (its binding
+/// site), as [`Var::Value`](super::Var) does; `project::equal` compares up to renaming.
 #[derive(Clone, Debug)]
 pub struct Field {
     pub value: ValueId,
@@ -130,7 +130,7 @@ pub struct PrimApp {
 }
 
 /// A parameter of a parameterised recursion (DATUM's `mu T(curr : Z {P}) <curr = 0>`).
-/// Equality ignores the value's id.
+/// Equality includes the value's id.
 #[derive(Clone, Debug)]
 pub struct RecParam {
     pub value: ValueId,
@@ -150,12 +150,16 @@ pub struct RecVar {
 
 impl PartialEq for Field {
     fn eq(&self, o: &Field) -> bool {
-        self.name == o.name && self.sort == o.sort && self.refinement == o.refinement
+        self.value == o.value && self.name == o.name && self.sort == o.sort && self.refinement == o.refinement
     }
 }
 
 impl PartialEq for RecParam {
     fn eq(&self, o: &RecParam) -> bool {
-        self.name == o.name && self.sort == o.sort && self.refinement == o.refinement && self.init == o.init
+        self.value == o.value
+            && self.name == o.name
+            && self.sort == o.sort
+            && self.refinement == o.refinement
+            && self.init == o.init
     }
 }

@@ -20,7 +20,7 @@
 
 use crate::bounds;
 use crate::hir::expr::{BinOp, UnOp};
-use crate::hir::{Builtin, Expr, ExprKind, Program, RoleId, Slot, Sort, Var};
+use crate::hir::{Builtin, Expr, ExprKind, Program, RoleId, Slot, Sort, ValueId, Var};
 use std::collections::{BTreeMap, HashMap};
 use z3::ast::{Ast, Bool, Int, Real};
 
@@ -78,6 +78,10 @@ pub struct Encoder<'p> {
     frame: Option<Frame>,
     trig: Vec<TrigPair>,
     trig_by_arg: HashMap<String, usize>,
+    /// The symbol of each value variable met so far. A value is its binding site: two
+    /// values of one name (shadowing) are two symbols, `v` and `v#2`, in order of first
+    /// appearance (so equal queries still have equal text).
+    value_names: HashMap<ValueId, String>,
 }
 
 impl<'p> Encoder<'p> {
@@ -89,6 +93,7 @@ impl<'p> Encoder<'p> {
             frame: None,
             trig: Vec::new(),
             trig_by_arg: HashMap::new(),
+            value_names: HashMap::new(),
         }
     }
 
@@ -161,6 +166,40 @@ impl<'p> Encoder<'p> {
         };
         self.vars.insert(name.to_string(), t.clone());
         Ok(t)
+    }
+
+    /// The values of this query that share their name with another of its values: their
+    /// symbol, their name and where they are bound (so that a counterexample naming `v`
+    /// and `v#2` can say which is which).
+    pub fn shared_names(&self) -> Vec<(String, String, crate::source::Span)> {
+        let mut out: Vec<(String, String, crate::source::Span)> = self
+            .value_names
+            .iter()
+            .filter(|(id, _)| {
+                let name = &self.prog.value(**id).name;
+                self.value_names.keys().any(|o| o != *id && self.prog.value(*o).name == *name)
+            })
+            .map(|(id, sym)| (sym.clone(), self.prog.value(*id).name.clone(), self.prog.value(*id).span))
+            .collect();
+        out.sort_by(|a, b| a.0.cmp(&b.0));
+        out
+    }
+
+    /// A symbol for a new value variable named `name`: the name itself unless another
+    /// value, a participant (whose variables are `Name.x`, as a point value's components
+    /// are) or the time of a motion already has it, else `name#2`, `name#3`, ...
+    fn value_symbol(&self, name: &str) -> String {
+        let taken = |s: &str| {
+            s == "time"
+                || s == "point"
+                || self.vars.contains_key(s)
+                || self.value_names.values().any(|n| n == s)
+                || self.prog.roles.iter().any(|r| r.name == s)
+        };
+        if !taken(name) {
+            return name.to_string();
+        }
+        (2..).map(|k| format!("{name}#{k}")).find(|s| !taken(s)).unwrap_or_else(|| name.to_string())
     }
 
     /// The term of participant `r`'s variable in the shared vocabulary (`Cart.x`). An
@@ -480,13 +519,15 @@ impl<'p> Encoder<'p> {
             Var::Value(id, name) => {
                 let declared = self.prog.value(*id).sort.clone();
                 let sort = if declared == Sort::Any { sort.clone() } else { declared };
-                // Distinct values may share a source name; keep them apart, show the name.
-                let key = format!("{name}#{}", id.0);
-                if let Some(t) = self.vars.get(&key).or_else(|| self.vars.get(name)) {
-                    return Ok(t.clone());
-                }
-                let t = self.named(name, &sort)?;
-                Ok(t)
+                let symbol = match self.value_names.get(id) {
+                    Some(s) => s.clone(),
+                    None => {
+                        let s = self.value_symbol(name);
+                        self.value_names.insert(*id, s.clone());
+                        s
+                    }
+                };
+                self.named(&symbol, &sort)
             }
             Var::Own(slot) => {
                 let t = self.frame.as_ref().and_then(|f| f.own.get(slot).cloned());

@@ -90,6 +90,10 @@ pub struct Failure {
     pub which: Option<Part>,
     pub values: Vec<Assignment>,
     pub overlap: Option<Overlap>,
+    /// Values that share a name with another value of the counterexample: their symbol
+    /// there (`v`, `v#2`), their name, and where each is bound.
+    #[serde(skip)]
+    pub bound: Vec<(String, String, crate::source::Span)>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -314,7 +318,7 @@ fn progress_bar(cfg: &SmtConfig, n: usize) -> Option<indicatif::ProgressBar> {
 #[derive(Clone)]
 enum Answer {
     Unsat,
-    Sat { values: Vec<Assignment>, overlap: Option<Overlap> },
+    Sat { values: Vec<Assignment>, overlap: Option<Overlap>, bound: Vec<(String, String, crate::source::Span)> },
     Unknown(Why),
 }
 
@@ -342,7 +346,16 @@ impl Worker<'_> {
                 return (Decision::Holds(note), stats);
             }
             Plan::Fails(why) => {
-                return (Decision::Fails(Failure { part: why, which: None, values: Vec::new(), overlap: None }), stats);
+                return (
+                    Decision::Fails(Failure {
+                        part: why,
+                        which: None,
+                        values: Vec::new(),
+                        overlap: None,
+                        bound: Vec::new(),
+                    }),
+                    stats,
+                );
             }
             Plan::Unknown(Unsupported(what)) => {
                 return (Decision::Unknown { part: String::new(), why: Why::Unsupported(what) }, stats);
@@ -381,7 +394,13 @@ impl Worker<'_> {
                                 let which = Some(part.clone());
                                 let part = describe(self.prog, ob, part);
                                 return (
-                                    Decision::Fails(Failure { part, which, values: Vec::new(), overlap: None }),
+                                    Decision::Fails(Failure {
+                                        part,
+                                        which,
+                                        values: Vec::new(),
+                                        overlap: None,
+                                        bound: Vec::new(),
+                                    }),
                                     stats,
                                 );
                             }
@@ -392,10 +411,10 @@ impl Worker<'_> {
             }
             match answer {
                 Answer::Unsat => {}
-                Answer::Sat { values, overlap } => {
+                Answer::Sat { values, overlap, bound } => {
                     let which = Some(part.clone());
                     let part = describe(self.prog, ob, part);
-                    return (Decision::Fails(Failure { part, which, values, overlap }), stats);
+                    return (Decision::Fails(Failure { part, which, values, overlap, bound }), stats);
                 }
                 Answer::Unknown(why) => {
                     unknown.get_or_insert((describe(self.prog, ob, part), why));
@@ -435,7 +454,12 @@ impl Worker<'_> {
         let canonical = canonical(&text);
         if let Some(a) = self.cache.lock().ok().and_then(|c| c.get(&text).cloned()) {
             stats.cached += 1;
-            return a;
+            // The same text may come from other values of the same names: where this
+            // query's values are bound is this query's.
+            return match a {
+                Answer::Sat { values, overlap, .. } => Answer::Sat { values, overlap, bound: q.enc.shared_names() },
+                other => other,
+            };
         }
         if let Some(a) = self.cache.lock().ok().and_then(|c| c.get(&canonical).cloned()) {
             if !matches!(a, Answer::Sat { .. }) {
@@ -458,9 +482,9 @@ impl Worker<'_> {
                         point: [0, 1, 2].map(|i| encode::Encoder::value_of(&m, &p[i]).unwrap_or(f64::NAN)),
                         times: q.times.iter().map(|t| encode::Encoder::value_of(&m, t).unwrap_or(f64::NAN)).collect(),
                     });
-                    Answer::Sat { values: q.enc.assignments(&m), overlap }
+                    Answer::Sat { values: q.enc.assignments(&m), overlap, bound: q.enc.shared_names() }
                 }
-                None => Answer::Sat { values: Vec::new(), overlap: None },
+                None => Answer::Sat { values: Vec::new(), overlap: None, bound: Vec::new() },
             },
             z3::SatResult::Unknown if timed_out => Answer::Unknown(Why::Timeout(self.cfg.timeout)),
             z3::SatResult::Unknown => {
@@ -637,6 +661,50 @@ mod tests {
         assert_eq!(valid("", "(if b then x else 0 - x) >= 0 || (b && x < 0) || (!b && x > 0)"), Verdict::Holds);
         assert_eq!(valid("", "min(x, 1) <= 1 && abs(x) >= 0"), Verdict::Holds);
         assert_eq!(valid("", "x == -0.5 => x < 0"), Verdict::Holds);
+    }
+
+    /// Two payload fields named `v` are two values: two Z3 constants, shown as `v` and
+    /// `v#2`. (Before, both were the constant `v`, so `v == 1` and `v == 2` were
+    /// contradictory hypotheses and every goal held.)
+    #[test]
+    fn same_named_values_are_distinct_constants() {
+        use crate::hir::expr::BinOp;
+        use crate::hir::Sort;
+        let src = "robot R { state x: real; }
+             system S { participant A: R; participant B: R; }
+             choreography G = A -> B : first(v: real {v == 1}). A -> B : second(v: real {v == 2}). end;";
+        let (prog, d) = lower_src(src);
+        assert!(d.is_empty(), "{d:?}");
+        let Some(crate::hir::Global::Seq(items, _)) = prog.choreography.as_ref().map(|c| c.body.clone()) else {
+            panic!("expected a sequence")
+        };
+        let hyps: Vec<Expr> = items
+            .iter()
+            .filter_map(|g| match g {
+                crate::hir::Global::Msg(m) => m.payload[0].refinement.clone(),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(hyps.len(), 2);
+        // Goal: first + second == 3 - 1, which fails (it is 3); read as one `v`, the
+        // hypotheses contradict each other and it "holds".
+        let lhs = |e: &Expr| match &e.kind {
+            crate::hir::ExprKind::Binary(_, a, _) => (**a).clone(),
+            _ => panic!("an equation"),
+        };
+        let bin = |op, a: Expr, b: Expr| Expr {
+            kind: crate::hir::ExprKind::Binary(op, Box::new(a), Box::new(b)),
+            sort: if op == BinOp::Eq { Sort::Bool } else { Sort::Real },
+            loc: crate::hir::Loc::default(),
+        };
+        let two = Expr { kind: crate::hir::ExprKind::Int(2), sort: Sort::Int, loc: crate::hir::Loc::default() };
+        let goal = bin(BinOp::Eq, bin(BinOp::Add, lhs(&hyps[0]), lhs(&hyps[1])), two);
+        let Verdict::Fails(model) = check_valid(&prog, &hyps, &goal, &SmtConfig::default()) else {
+            panic!("v + v#2 == 2 does not follow from v == 1 and v#2 == 2: two values, not one")
+        };
+        let value = |n: &str| model.iter().find(|a| a.name == n).map(|a| a.value.clone());
+        assert_eq!(value("v").as_deref(), Some("1"), "{model:?}");
+        assert_eq!(value("v#2").as_deref(), Some("2"), "{model:?}");
     }
 
     #[test]

@@ -402,8 +402,8 @@ impl<'a> Contexts<'a> {
                         }
                     }
                     // The arguments are the parameters' new values.
-                    let names: Vec<&str> = params.iter().map(|p| p.name.as_str()).collect();
-                    sigma.forget_values(&names);
+                    let ids: Vec<ValueId> = params.iter().map(|p| p.value).collect();
+                    sigma.forget_values(&ids);
                     self.jumps.push((i, sigma));
                 }
                 None
@@ -524,9 +524,9 @@ impl<'a> Contexts<'a> {
                 goal: Goal::Valid(crate::sigma::subst_params(r, params, &inits)),
             });
         }
-        let names: Vec<&'a str> = params.iter().map(|p| p.name.as_str()).collect();
+        let ids: Vec<ValueId> = params.iter().map(|p| p.value).collect();
         let mut candidate = sigma;
-        candidate.forget_values(&names);
+        candidate.forget_values(&ids);
         let marks = (self.obligations.len(), self.runs.len(), self.jumps.len());
         let depth = self.loops.len();
         let mut walks = 0;
