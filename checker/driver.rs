@@ -68,9 +68,28 @@ pub struct Report {
 }
 
 /// Checks the file at `path` (and its imports, read from disk).
+/// A file that is not UTF-8 is a rejected report with its E0107; a file that cannot be
+/// read at all (missing, a directory, a device, too large) is the `Err`.
 pub fn check_file(db: &mut SourceDb, path: &Path, cfg: &Config) -> std::io::Result<Report> {
-    let root = syntax::load_root(db, path)?;
-    Ok(check_loaded(db, root, cfg))
+    let loaded = syntax::load(db, path)?;
+    Ok(check_root(db, loaded, cfg))
+}
+
+/// Checks standard input (named `<stdin>`; imports relative to the current directory).
+pub fn check_stdin(db: &mut SourceDb, cfg: &Config) -> std::io::Result<Report> {
+    let loaded = syntax::load_stdin(db)?;
+    Ok(check_root(db, loaded, cfg))
+}
+
+fn check_root(db: &mut SourceDb, (root, bad): (FileId, Option<Diagnostic>), cfg: &Config) -> Report {
+    match bad {
+        None => check_loaded(db, root, cfg),
+        Some(d) => {
+            let mut run = Run::default();
+            run.record("parse", vec![d]);
+            run.finish()
+        }
+    }
 }
 
 /// Checks source text given in memory under the display name `name`. Imports are read
@@ -83,7 +102,7 @@ pub fn check_source(db: &mut SourceDb, name: &str, text: &str, cfg: &Config) -> 
 /// Runs the pipeline on a file already in `db`.
 pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config) -> Report {
     let mut run = Run::default();
-    let mut read = |p: &Path| std::fs::read_to_string(p);
+    let mut read = |p: &Path| syntax::read_source(p);
     let (parsed, diags) = run.stage(|| syntax::parse_with_imports(db, root, &mut read));
     if !run.record("parse", diags) {
         return run.finish();
