@@ -233,7 +233,11 @@ fn shapes() {
             let text = mochi::render::report_text(&db, &name, &report, false, false);
             let slowest = report.checks.iter().max_by(|a, b| a.millis.total_cmp(&b.millis));
             let slowest = slowest.map(|c| format!("{} {:.0} ms", c.name, c.millis)).unwrap_or_default();
-            (format!("{ms:.1}"), format!("{:.1}", text.len() as f64 / 1024.0), format!("{:?}, {slowest}", report.verdict))
+            (
+                format!("{ms:.1}"),
+                format!("{:.1}", text.len() as f64 / 1024.0),
+                format!("{:?}, {slowest}", report.verdict),
+            )
         } else {
             ("skipped".into(), "-".into(), "-".into())
         };

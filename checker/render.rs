@@ -277,7 +277,13 @@ impl<'a> Files<'a> {
             let caret_at = pre.len() + (col - 1 - from);
             let carets = width.min(to.saturating_sub(col - 1)).max(1);
             writeln!(out, "{:pad$} | {:caret_at$}{}", "", "", "^".repeat(carets))?;
-            writeln!(out, "{:pad$} = note: line {line} has {} characters; columns {}-{to} are shown", "", text.len(), from + 1)?;
+            writeln!(
+                out,
+                "{:pad$} = note: line {line} has {} characters; columns {}-{to} are shown",
+                "",
+                text.len(),
+                from + 1
+            )?;
         }
         for l in &d.labels {
             if contains(self.db, l.span) {
@@ -348,7 +354,9 @@ fn displayable(text: &str) -> Cow<'_, str> {
     let b = text.as_bytes();
     let bad = |i: usize| {
         let c = b[i];
-        (c < 0x20 && c != b'\t' && c != b'\n' && c != b'\r') || c == 0x7f || (c == b'\r' && b.get(i + 1) != Some(&b'\n'))
+        (c < 0x20 && c != b'\t' && c != b'\n' && c != b'\r')
+            || c == 0x7f
+            || (c == b'\r' && b.get(i + 1) != Some(&b'\n'))
     };
     if !(0..b.len()).any(bad) {
         return Cow::Borrowed(text);

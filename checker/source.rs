@@ -56,9 +56,7 @@ impl SourceFile {
         let mut line_starts = vec![0];
         let b = text.as_bytes();
         line_starts.extend(
-            (0..b.len())
-                .filter(|&i| b[i] == b'\n' || (b[i] == b'\r' && b.get(i + 1) != Some(&b'\n')))
-                .map(|i| i + 1),
+            (0..b.len()).filter(|&i| b[i] == b'\n' || (b[i] == b'\r' && b.get(i + 1) != Some(&b'\n'))).map(|i| i + 1),
         );
         SourceFile { name, text, line_starts }
     }

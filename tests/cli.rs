@@ -424,7 +424,11 @@ fn a_byte_order_mark_cr_line_ends_nul_and_bad_utf8_are_handled() {
     assert_eq!(o.status.code(), Some(1));
     let v: Value = serde_json::from_slice(&o.stdout).expect("JSON");
     let d = &v["diagnostics"][0];
-    assert_eq!((d["code"].as_str(), d["line"].as_u64(), d["column"].as_u64()), (Some("E0107"), Some(2), Some(7)), "{d}");
+    assert_eq!(
+        (d["code"].as_str(), d["line"].as_u64(), d["column"].as_u64()),
+        (Some("E0107"), Some(2), Some(7)),
+        "{d}"
+    );
     assert!(d["message"].as_str().is_some_and(|m| m.contains("byte 0xe9 at offset 19")), "{d}");
 }
 
@@ -458,7 +462,10 @@ fn sequences_are_not_nesting_and_constants_come_in_any_order() {
     // stage, not the parser, is what makes long sequences slow.)
     let (chor, lib) = sequence(1500);
     dir.write("lib.mochi", &lib);
-    let file = dir.write("long.chor", &chor.replace("system S", "const later: real = early * 2;\nconst early: real = 1;\nsystem S"));
+    let file = dir.write(
+        "long.chor",
+        &chor.replace("system S", "const later: real = early * 2;\nconst early: real = 1;\nsystem S"),
+    );
     let o = mochi(&["check", path_arg(&file)]);
     assert_eq!(o.status.code(), Some(0), "{}{}", stdout(&o), stderr(&o));
     let o = mochi(&["check", "--format", "json", "choreographies/rejected/E0213-constant-cycle.chor"]);
@@ -498,7 +505,8 @@ fn directories_stdin_summary_and_deadline() {
     assert_eq!(o.status.code(), Some(0));
     assert!(stdout(&o).contains("verdict: verified (<stdin>)"), "{}", stdout(&o));
     // A deadline already past: unknown (exit 3), never verified.
-    let o = mochi(&["check", "--deadline", "0.000001", path_arg(&dir.0.join("b.chor")), path_arg(&dir.0.join("b.chor"))]);
+    let o =
+        mochi(&["check", "--deadline", "0.000001", path_arg(&dir.0.join("b.chor")), path_arg(&dir.0.join("b.chor"))]);
     assert_eq!(o.status.code(), Some(3), "{}", stdout(&o));
     assert!(stdout(&o).contains("the --deadline of"), "{}", stdout(&o));
     assert!(!stdout(&o).contains("verdict: verified"), "{}", stdout(&o));
@@ -519,7 +527,8 @@ fn project_without_a_role_prints_every_local_type() {
 #[test]
 fn explain_list_is_sorted_by_code() {
     let o = mochi(&["explain", "--list"]);
-    let codes: Vec<&str> = std::str::from_utf8(&o.stdout).expect("utf8").lines().filter_map(|l| l.split(' ').next()).collect();
+    let codes: Vec<&str> =
+        std::str::from_utf8(&o.stdout).expect("utf8").lines().filter_map(|l| l.split(' ').next()).collect();
     let mut sorted = codes.clone();
     sorted.sort();
     assert_eq!(codes, sorted);

@@ -147,7 +147,8 @@ enum Mutation {
 
 /// Inputs that are not what they seem (issue 8): a byte-order mark, line ends, control
 /// characters, deep nesting and long operator chains.
-const ODD: &[&str] = &["\u{feff}", "\r", "\r\n", "\0", "\x1b[31m", "\t", "((((((((((", "2 ^ 2 ^ 2 ^ ", "~~~~", "\u{2192}"];
+const ODD: &[&str] =
+    &["\u{feff}", "\r", "\r\n", "\0", "\x1b[31m", "\t", "((((((((((", "2 ^ 2 ^ 2 ^ ", "~~~~", "\u{2192}"];
 
 fn mutation() -> impl Strategy<Value = Mutation> {
     prop_oneof![

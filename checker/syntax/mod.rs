@@ -38,10 +38,9 @@ impl std::fmt::Display for SourceError {
             SourceError::TooLarge(n) => {
                 write!(f, "it has {n} bytes, more than the limit of {} MiB", MAX_FILE_SIZE >> 20)
             }
-            SourceError::NotUtf8 { byte, offset, line, column } => write!(
-                f,
-                "it is not valid UTF-8: byte 0x{byte:02x} at offset {offset} (line {line}, column {column})"
-            ),
+            SourceError::NotUtf8 { byte, offset, line, column } => {
+                write!(f, "it is not valid UTF-8: byte 0x{byte:02x} at offset {offset} (line {line}, column {column})")
+            }
         }
     }
 }
@@ -83,8 +82,7 @@ pub fn decode(bytes: Vec<u8>) -> Result<String, SourceError> {
         let bytes = e.as_bytes();
         let before = std::str::from_utf8(&bytes[..offset]).unwrap_or_default();
         let line_start = before.rfind(['\n', '\r']).map_or(0, |i| i + 1);
-        let line = 1 + before.matches('\n').count() + before.matches('\r').count()
-            - before.matches("\r\n").count();
+        let line = 1 + before.matches('\n').count() + before.matches('\r').count() - before.matches("\r\n").count();
         let column = before[line_start..].chars().count() + 1;
         SourceError::NotUtf8 { byte: bytes[offset], offset, line, column }
     })
@@ -214,23 +212,20 @@ fn visit(
                 visit(db, child, read, seen, order, diags);
             }
             Err(e) => diags.push(match source_error(&e) {
-                Some(err @ SourceError::NotUtf8 { .. }) => Diagnostic::error(
-                    Code::NotUtf8,
-                    imp.span,
-                    format!("cannot import `{}`: {err}", path.display()),
-                )
-                .with_help("save the imported file as UTF-8"),
+                Some(err @ SourceError::NotUtf8 { .. }) => {
+                    Diagnostic::error(Code::NotUtf8, imp.span, format!("cannot import `{}`: {err}", path.display()))
+                        .with_help("save the imported file as UTF-8")
+                }
                 Some(err) => Diagnostic::error(
                     Code::NotSourceFile,
                     imp.span,
                     format!("cannot import `{}`: {err}", path.display()),
                 )
-                .with_help(format!(
-                    "import a regular `.mochi` or `.chor` file of at most {} MiB",
-                    MAX_FILE_SIZE >> 20
-                )),
-                None => Diagnostic::error(Code::ImportNotFound, imp.span, format!("cannot read `{}`: {e}", path.display()))
-                    .with_help("import paths are relative to the importing file"),
+                .with_help(format!("import a regular `.mochi` or `.chor` file of at most {} MiB", MAX_FILE_SIZE >> 20)),
+                None => {
+                    Diagnostic::error(Code::ImportNotFound, imp.span, format!("cannot read `{}`: {e}", path.display()))
+                        .with_help("import paths are relative to the importing file")
+                }
             }),
         }
     }
