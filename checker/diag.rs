@@ -62,7 +62,7 @@ codes! {
          `/dev/urandom` would never end), or a file larger than 64 MiB. Imports may point outside \
          the importing file's directory, so that projects can share libraries, but only at regular \
          mochi files. Rename or move the file, or import the library that declares what you need.";
-    NotUtf8 = "E0107", "source is not UTF-8",
+    NotUtf8 = "E0107", "invalid utf-8 in a source file",
         "A source file, an imported file or standard input contains bytes that are not UTF-8. The \
          message gives the first bad byte with its offset, line and column. mochi source is ASCII \
          outside comments and strings; save the file as UTF-8 (a UTF-8 byte-order mark at the start \

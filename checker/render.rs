@@ -232,6 +232,7 @@ impl<'a> Files<'a> {
     /// on a very long line (minified or generated input) shows a window of that line.
     fn emit(&self, out: &mut Buffer, d: &Diagnostic) {
         if self.on_long_line(d) {
+            let d = &escaped(d);
             let _ = self.emit_long(out, d);
             return;
         }
@@ -242,7 +243,7 @@ impl<'a> Files<'a> {
             }
             // Only a span codespan cannot place gets here; the clamping should prevent it.
             Err(_) => {
-                let _ = self.emit_plain(out, d);
+                let _ = self.emit_plain(out, &escaped(d));
             }
         }
     }
@@ -326,9 +327,10 @@ impl<'a> Files<'a> {
         let secondary = d.labels.iter().filter_map(|l| self.label(LabelStyle::Secondary, l.span, &l.message));
         let mut notes: Vec<String> = d.notes.iter().map(|n| format!("note: {n}")).collect();
         notes.extend(d.help.iter().map(|h| format!("help: {h}")));
+        let notes = notes.iter().map(|n| escape_controls(n).into_owned()).collect();
         cs::Diagnostic::new(severity)
             .with_code(d.code.as_str())
-            .with_message(&d.message)
+            .with_message(escape_controls(&d.message))
             .with_labels(primary.into_iter().chain(secondary).collect())
             .with_notes(notes)
     }
@@ -338,8 +340,36 @@ impl<'a> Files<'a> {
             return None;
         }
         let text = &self.db.file(span.file).text;
-        Some(cs::Label::new(style, span.file.0 as usize, clamp(text, span)).with_message(message))
+        Some(cs::Label::new(style, span.file.0 as usize, clamp(text, span)).with_message(escape_controls(message)))
     }
+}
+
+/// `s` with control characters other than line ends and tabs escaped (`\0`, `\u{1b}`):
+/// messages quote the user's text (an import path, a string), which must not reach a
+/// terminal raw.
+fn escape_controls(s: &str) -> Cow<'_, str> {
+    if !s.chars().any(|c| c.is_control() && c != '\n' && c != '\t') {
+        return Cow::Borrowed(s);
+    }
+    Cow::Owned(
+        s.chars()
+            .map(
+                |c| if c.is_control() && c != '\n' && c != '\t' { c.escape_debug().to_string() } else { c.to_string() },
+            )
+            .collect(),
+    )
+}
+
+/// `d` with every text field passed through [`escape_controls`].
+fn escaped(d: &Diagnostic) -> Diagnostic {
+    let mut d = d.clone();
+    d.message = escape_controls(&d.message).into_owned();
+    d.notes = d.notes.iter().map(|n| escape_controls(n).into_owned()).collect();
+    d.help = d.help.as_deref().map(|h| escape_controls(h).into_owned());
+    for l in &mut d.labels {
+        l.message = escape_controls(&l.message).into_owned();
+    }
+    d
 }
 
 /// Lines longer than this many bytes are shown as a window of [`WINDOW`] characters.
@@ -549,6 +579,17 @@ mod tests {
         let out = text(&db, &d, false);
         assert!(!out.contains('\x1b') && !out.contains('\0'), "{out:?}");
         assert!(out.contains("--> a.chor:2:1"), "{out}");
+    }
+
+    #[test]
+    fn control_characters_in_messages_are_escaped() {
+        let (db, f) = db_with("import \"x\";\n");
+        let d = Diagnostic::error(Code::NotSourceFile, Span::new(f, 0, 6), "`a\0b\x1b[2J` is not a mochi file")
+            .with_label(Span::new(f, 7, 10), "\x07")
+            .with_help("h\0");
+        let out = text(&db, &d, false);
+        assert!(!out.bytes().any(|b| b < 0x20 && b != b'\n'), "{out:?}");
+        assert!(out.contains("`a\\0b\\u{1b}[2J`"), "{out}");
     }
 
     #[test]
