@@ -527,9 +527,9 @@ impl Parser {
     fn sort(&mut self) -> PResult<SortAst> {
         let start = self.span();
         if self.eat_punct("(") {
-            let mut parts = vec![self.sort()?];
+            let mut parts = vec![self.nested(Parser::sort)?];
             while self.eat_punct(",") {
-                parts.push(self.sort()?);
+                parts.push(self.nested(Parser::sort)?);
             }
             self.expect_punct(")")?;
             let span = start.to(self.prev_span());
@@ -1152,12 +1152,28 @@ impl Parser {
             return Ok(Expr { span: start.to(inner.span), kind: ExprKind::Unary(op, Box::new(inner)) });
         }
         let mut e = self.expr_atom()?;
+        // `a.b.c` is a tree as deep as the chain is long: each `.` is a level.
+        let mut levels = 0;
+        let mut res = Ok(());
         while self.is_punct(".") && matches!(self.peek_at(1), Tok::Ident(_)) {
+            res = self.enter();
+            if res.is_err() {
+                break;
+            }
+            levels += 1;
             self.bump();
-            let field = self.ident("a field name")?;
-            e = Expr { span: e.span.to(field.span), kind: ExprKind::Dot(Box::new(e), field) };
+            match self.ident("a field name") {
+                Ok(field) => e = Expr { span: e.span.to(field.span), kind: ExprKind::Dot(Box::new(e), field) },
+                Err(()) => {
+                    res = Err(());
+                    break;
+                }
+            }
         }
-        Ok(e)
+        for _ in 0..levels {
+            self.leave();
+        }
+        res.map(|()| e)
     }
 
     fn expr_atom(&mut self) -> PResult<Expr> {
@@ -1280,6 +1296,20 @@ mod tests {
         }
         let (_, d) = parse_expr(FileId(0), &format!("1{}", " + 1".repeat(900)));
         assert!(d.is_empty(), "{d:?}");
+    }
+
+    #[test]
+    fn sorts_and_field_chains_count_as_nesting() {
+        // Before: a sort nested a million deep overflowed the stack (a crash, not an error).
+        on_big_stack(|| {
+            let deep_sort = format!("const a: {}int{} = 1;", "(".repeat(1_000_000), ")".repeat(1_000_000));
+            let dots = format!("const a = x{};", ".y".repeat(100_000));
+            for src in [deep_sort, dots] {
+                let (_, d) = parse(FileId(0), &src);
+                assert_eq!(d.len(), 1, "{d:?}");
+                assert_eq!(d[0].code, Code::TooDeep);
+            }
+        });
     }
 
     #[test]
