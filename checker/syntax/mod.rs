@@ -281,6 +281,26 @@ mod tests {
     }
 
     #[test]
+    fn only_regular_utf8_files_within_the_size_limit_are_read() {
+        let dir = std::env::temp_dir().join(format!("mochi-read-source-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let kind = |p: &Path| read_source(p).map_err(|e| source_error(&e).cloned());
+        assert_eq!(kind(&dir), Err(Some(SourceError::NotRegular("a directory"))));
+        #[cfg(unix)]
+        assert_eq!(kind(Path::new("/dev/zero")), Err(Some(SourceError::NotRegular("a character device"))));
+        // A sparse file just over the limit: refused from its metadata, nothing is read.
+        let big = dir.join("big.mochi");
+        std::fs::File::create(&big).and_then(|f| f.set_len(MAX_FILE_SIZE + 1)).expect("sparse file");
+        assert_eq!(kind(&big), Err(Some(SourceError::TooLarge(MAX_FILE_SIZE + 1))));
+        let bad = dir.join("bad.mochi");
+        std::fs::write(&bad, b"ab\r\ncd\rx\xffy").expect("write");
+        assert_eq!(kind(&bad), Err(Some(SourceError::NotUtf8 { byte: 0xff, offset: 8, line: 3, column: 2 })));
+        std::fs::write(&bad, "const a = 1;").expect("write");
+        assert_eq!(kind(&bad), Ok("const a = 1;".to_string()));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
     fn a_missing_import_is_reported_at_the_import() {
         let mut db = SourceDb::new();
         let root = db.add("main.chor", "import \"nope.mochi\";");
