@@ -133,7 +133,10 @@ fn write_summary(
 ///                     "counterexample": null | { "values": [{ "name", "value" }],
 ///                                                "overlap": null | { "point": [x, y, z], "times": [t] } } }],
 ///   "checks": [{ "name", "status": "pass" | "fail" | "unknown", "millis", "queries" }],
-///   "partitions": ["file:line:col: partition inferred: ..."] }
+///   "partitions": [{ "file", "line", "column", "how": "written" | "inferred" | "queries",
+///                    "point": null | [x, y, z],
+///                    "sides": [{ "roles": [..], "region": null | "predicate",
+///                                "box": null | [[x_lo, x_hi], [y_lo, y_hi], [z_lo, z_hi]] }] }] }
 /// ```
 ///
 /// Lines and columns are 1-based (columns count characters). A location in a file the
@@ -163,7 +166,7 @@ pub fn report_json(db: &SourceDb, file_name: &str, report: &Report) -> Value {
         "verdict": verdict,
         "diagnostics": report.diagnostics.iter().map(|d| diagnostic_json(db, d)).collect::<Vec<_>>(),
         "checks": checks,
-        "partitions": report.partitions,
+        "partitions": report.separations,
     })
 }
 
@@ -470,6 +473,7 @@ mod tests {
             }],
             projections: BTreeMap::new(),
             partitions: Vec::new(),
+            separations: Vec::new(),
         }
     }
 

@@ -228,6 +228,25 @@ fn the_quick_start_example_is_verified_with_every_check_run() {
     let queries = |name: &str| checks.iter().find(|c| c["name"] == name).and_then(|c| c["queries"].as_u64());
     assert!(queries("compatibility").is_some_and(|n| n > 0), "{v}");
     assert!(v["diagnostics"].as_array().expect("diagnostics").is_empty());
+    // Partitions are structured (they were free text): sides with roles, written regions as
+    // predicates, boxes as numbers.
+    let parts = v["partitions"].as_array().expect("partitions");
+    let written = parts.iter().find(|p| p["how"] == "written").expect("the written partition of Fig. 2");
+    assert_eq!(written["point"], serde_json::json!(["px", "py", "pz"]));
+    assert_eq!(written["sides"][0]["region"], "px >= -0.5", "{written}");
+    assert_eq!(written["sides"][1]["roles"], serde_json::json!(["RRobot"]), "{written}");
+    for p in parts {
+        assert!(p["line"].is_u64() && p["column"].is_u64(), "{p}");
+        for side in p["sides"].as_array().expect("sides") {
+            assert!(side["roles"].as_array().is_some_and(|r| !r.is_empty()), "{side}");
+            let b = &side["box"];
+            assert!(
+                b.is_null()
+                    || b.as_array().is_some_and(|b| b.len() == 3 && b.iter().all(|i| i[0].as_f64() <= i[1].as_f64())),
+                "{side}"
+            );
+        }
+    }
 }
 
 #[test]
