@@ -14,6 +14,12 @@
 //! ratios compare like with like. With the separating conjunction the checker should
 //! grow about linearly, i.e. ratios near 10. Peak RSS (`VmHWM`) is printed at the end.
 //!
+//! A second table times the hostile input shapes of issue 8 once each (`MOCHI_BENCH_SHAPES=0`
+//! skips it): flat sequences of 1,000 to 100,000 messages (parse and name resolution alone
+//! for every size, the whole check up to 3,000, where the synchronisability stage's
+//! quadratic cost dominates), 20 MB of one repeated definition, and a 10^4 chain of `^`.
+//! For each it prints the size of the rendered text diagnostics, which the caps keep small.
+//!
 //! No dependencies (no criterion): the numbers are meant to be read, not tracked.
 
 use mochi::driver::{check_source, Config, Report};
@@ -59,6 +65,14 @@ fn main() {
     );
     let rows: Vec<Row> = sizes.iter().map(|&n| measure(n, budget)).collect();
     print_table(&rows);
+
+    if std::env::var("MOCHI_BENCH_SHAPES").map_or(true, |v| v != "0") {
+        // Later stages recurse once per step of a sequence: give them main's stack.
+        let worker = std::thread::Builder::new().stack_size(256 << 20).spawn(shapes);
+        if let Err(e) = worker.map(|w| w.join()) {
+            println!("shapes: cannot start the thread: {e}");
+        }
+    }
 
     match peak_rss_kib() {
         Some(kib) => println!("\npeak RSS (VmHWM): {:.1} MiB", kib as f64 / 1024.0),
@@ -171,6 +185,66 @@ fn print_table(rows: &[Row]) {
             r.verdict
         ));
         println!("{line}");
+    }
+}
+
+/// A choreography of `n` messages in sequence between two Bots, with its processes
+/// (`n` steps each); the library is imported by absolute path.
+fn sequence(n: usize) -> String {
+    let bot = std::fs::canonicalize("motion-primitives/bot.mochi").unwrap_or_default();
+    format!(
+        "import \"{}\";\nsystem S {{ participant p1: Bot {{ init: s == 0; at: pose(0, 0, 0); }} \
+         participant p2: Bot {{ init: s == 0; at: pose(1, 0, 0); }} }}\n\
+         choreography C = dt<p1: wave, p2: wave>.\n{}end;\nprocess p1 = dt<wave>.{}end;\nprocess p2 = dt<wave>.{}end;\n",
+        bot.display(),
+        "p1 -> p2: l.\n".repeat(n),
+        "p2!l.".repeat(n),
+        "p1?l.".repeat(n)
+    )
+}
+
+/// Times the input shapes of issue 8 (see the module documentation).
+fn shapes() {
+    let mut cases: Vec<(String, String, bool)> = Vec::new();
+    for n in [1_000, 3_000, 10_000, 100_000] {
+        cases.push((format!("sequence of {n}"), sequence(n), n <= 3_000));
+    }
+    cases.push(("20 MB repeated const".into(), "const a = 1;\n".repeat(20 << 20 >> 4), false));
+    cases.push(("10^4 chain of ^".into(), format!("const x = {}1;\n", "2 ^ ".repeat(10_000)), true));
+    println!(
+        "\n{:<22} {:>9} {:>10} {:>10} {:>12} {:>14}  verdict / slowest stage",
+        "shape", "src KiB", "parse ms", "names ms", "check ms", "text out KiB"
+    );
+    for (name, src, full) in cases {
+        let mut db = SourceDb::new();
+        let root = db.add(format!("{}.chor", name.replace(' ', "-")), src.as_str());
+        let t = Instant::now();
+        let (parsed, _) = mochi::syntax::parse_with_imports(&mut db, root, &mut |p| mochi::syntax::read_source(p));
+        let parse_ms = t.elapsed().as_secs_f64() * 1000.0;
+        let t = Instant::now();
+        let (prog, _) = mochi::lower::lower(&parsed);
+        let names_ms = t.elapsed().as_secs_f64() * 1000.0;
+        drop((prog, parsed));
+        let (check, out, verdict) = if full {
+            let mut db = SourceDb::new();
+            let t = Instant::now();
+            let report = check_source(&mut db, &format!("{name}.chor"), &src, &Config::default());
+            let ms = t.elapsed().as_secs_f64() * 1000.0;
+            let text = mochi::render::report_text(&db, &name, &report, false, false);
+            let slowest = report.checks.iter().max_by(|a, b| a.millis.total_cmp(&b.millis));
+            let slowest = slowest.map(|c| format!("{} {:.0} ms", c.name, c.millis)).unwrap_or_default();
+            (
+                format!("{ms:.1}"),
+                format!("{:.1}", text.len() as f64 / 1024.0),
+                format!("{:?}, {slowest}", report.verdict),
+            )
+        } else {
+            ("skipped".into(), "-".into(), "-".into())
+        };
+        println!(
+            "{name:<22} {:>9.1} {parse_ms:>10.1} {names_ms:>10.1} {check:>12} {out:>14}  {verdict}",
+            src.len() as f64 / 1024.0
+        );
     }
 }
 

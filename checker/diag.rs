@@ -56,6 +56,23 @@ codes! {
     ImportNotFound = "E0105", "imported file cannot be read",
         "An `import \"path\";` names a file that does not exist or cannot be read. Paths are \
          relative to the importing file. Each file is loaded once, so import cycles are harmless.";
+    NotSourceFile = "E0106", "not a mochi source file",
+        "An `import` names something mochi does not read as source: a file whose name does not end \
+         in `.mochi` or `.chor`, a directory, a device, a FIFO or a socket (reading `/dev/zero` or \
+         `/dev/urandom` would never end), or a file larger than 64 MiB. Imports may point outside \
+         the importing file's directory, so that projects can share libraries, but only at regular \
+         mochi files. Rename or move the file, or import the library that declares what you need.";
+    NotUtf8 = "E0107", "invalid utf-8 in a source file",
+        "A source file, an imported file or standard input contains bytes that are not UTF-8. The \
+         message gives the first bad byte with its offset, line and column. mochi source is ASCII \
+         outside comments and strings; save the file as UTF-8 (a UTF-8 byte-order mark at the start \
+         is accepted and skipped).";
+    TooDeep = "E0108", "nesting too deep",
+        "A term is nested deeper than 1000 levels. Every kind of nesting counts: parentheses, \
+         prefixes such as `-` and `!`, `mu`, `if`, and chains of binary operators such as \
+         `a + b + c` or `2 ^ 2 ^ 2` (each operator is a level of the term's tree). A sequence of \
+         steps (`p -> q : a. q -> p : b. ...`, or `q!a.p?b. ...` in processes and local types) is \
+         not nesting and may be as long as the file allows. Split a deep term with named constants.";
     UnknownRobot = "E0201", "unknown robot kind",
         "A participant or a motion primitive names a robot kind that no `robot` declaration \
          defines. Declare it, or import the file of `robots/` that does.";
@@ -101,6 +118,11 @@ codes! {
         "A motion primitive must say whether it can be interrupted by a message \
          (`interruptible: true;`) or not (`interruptible: false;`), Def 3.4. Other fields default \
          to the weakest contract: `true` predicates, a footprint filling space, duration `[0, inf]`.";
+    ConstCycle = "E0213", "constants defined in a cycle",
+        "Constants may be declared in any order, but a constant's value cannot depend on itself, \
+         directly (`const a = a + 1;`) or through other constants (`const a = b; const b = a;`). \
+         The message names the cycle. Give one of the constants a value that does not mention the \
+         others.";
     SelfMessage = "E0301", "message to oneself",
         "Def 4.1 requires `p != q` in `p -> q : l`. A participant cannot send a message to itself; \
          use a local computation in its process instead.";

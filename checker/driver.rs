@@ -65,12 +65,61 @@ pub struct Report {
     pub projections: BTreeMap<String, String>,
     /// How each `*` was found separated (the inferred partitions), for `--verbose`.
     pub partitions: Vec<String>,
+    /// The same, structured, for every `*` found separated (written partitions too), for
+    /// `--format json`.
+    pub separations: Vec<Separation>,
+}
+
+/// How one `*` was found separated.
+#[derive(Clone, Debug, Serialize)]
+pub struct Separation {
+    /// Where the `*` is (1-based line and column; `None` outside the loaded files).
+    pub file: Option<String>,
+    pub line: Option<usize>,
+    pub column: Option<usize>,
+    /// `written` (the choreography's `partition` clause), `inferred` (disjoint boxes around
+    /// the sides' footprints) or `queries` (footprints proved apart pair by pair).
+    pub how: &'static str,
+    /// The coordinate names a written partition's regions use.
+    pub point: Option<[String; 3]>,
+    pub sides: Vec<SeparationSide>,
+}
+
+/// One side of a `*`: its participants and its region.
+#[derive(Clone, Debug, Serialize)]
+pub struct SeparationSide {
+    pub roles: Vec<String>,
+    /// A written region, printed in mochi's notation.
+    pub region: Option<String>,
+    /// A box around the side's footprints, `[[x_lo, x_hi], [y_lo, y_hi], [z_lo, z_hi]]`
+    /// in metres, where they can be bounded.
+    #[serde(rename = "box")]
+    pub bounds: Option<[[f64; 2]; 3]>,
 }
 
 /// Checks the file at `path` (and its imports, read from disk).
+/// A file that is not UTF-8 is a rejected report with its E0107; a file that cannot be
+/// read at all (missing, a directory, a device, too large) is the `Err`.
 pub fn check_file(db: &mut SourceDb, path: &Path, cfg: &Config) -> std::io::Result<Report> {
-    let root = syntax::load_root(db, path)?;
-    Ok(check_loaded(db, root, cfg))
+    let loaded = syntax::load(db, path)?;
+    Ok(check_root(db, loaded, cfg))
+}
+
+/// Checks standard input (named `<stdin>`; imports relative to the current directory).
+pub fn check_stdin(db: &mut SourceDb, cfg: &Config) -> std::io::Result<Report> {
+    let loaded = syntax::load_stdin(db)?;
+    Ok(check_root(db, loaded, cfg))
+}
+
+fn check_root(db: &mut SourceDb, (root, bad): (FileId, Option<Diagnostic>), cfg: &Config) -> Report {
+    match bad {
+        None => check_loaded(db, root, cfg),
+        Some(d) => {
+            let mut run = Run::default();
+            run.record("parse", vec![d]);
+            run.finish()
+        }
+    }
 }
 
 /// Checks source text given in memory under the display name `name`. Imports are read
@@ -83,7 +132,7 @@ pub fn check_source(db: &mut SourceDb, name: &str, text: &str, cfg: &Config) -> 
 /// Runs the pipeline on a file already in `db`.
 pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config) -> Report {
     let mut run = Run::default();
-    let mut read = |p: &Path| std::fs::read_to_string(p);
+    let mut read = |p: &Path| syntax::read_source(p);
     let (parsed, diags) = run.stage(|| syntax::parse_with_imports(db, root, &mut read));
     if !run.record("parse", diags) {
         return run.finish();
@@ -142,6 +191,7 @@ struct Run {
     checks: Vec<CheckResult>,
     projections: BTreeMap<String, String>,
     partitions: Vec<String>,
+    separations: Vec<Separation>,
     last_millis: f64,
 }
 
@@ -188,7 +238,10 @@ impl Run {
             for (ob, d, st) in obs {
                 stats.add(&st);
                 match d {
-                    Decision::Holds(note) => self.partitions.extend(note.map(|n| format!("{}: {n}", where_(db, ob)))),
+                    Decision::Holds(note) => {
+                        self.separations.extend(separation(db, prog, ob, note.is_some()));
+                        self.partitions.extend(note.map(|n| format!("{}: {n}", where_(db, ob))));
+                    }
                     Decision::Fails(f) => {
                         failed += 1;
                         self.diagnostics.push(failure(ob, f));
@@ -271,11 +324,43 @@ impl Run {
             checks: self.checks,
             projections: self.projections,
             partitions: self.partitions,
+            separations: self.separations,
         }
     }
 }
 
 /// `file:line:col` of an obligation.
+/// The structured account of a separation obligation that holds (`None` for others).
+/// `by_boxes`: the SMT stage decided it from disjoint boxes, without queries.
+fn separation(db: &SourceDb, prog: &crate::hir::Program, ob: &Obligation, by_boxes: bool) -> Option<Separation> {
+    let crate::obligation::Goal::Separated { sides } = &ob.goal else { return None };
+    let (file, line, column) = if db.files().nth(ob.span.file.0 as usize).is_some() {
+        let (f, l, c) = db.location(ob.span);
+        (Some(f), Some(l), Some(c))
+    } else {
+        (None, None, None)
+    };
+    let written = prog.partition(ob.span);
+    let boxes = smt::goals::side_boxes(prog, sides);
+    let sides = sides
+        .iter()
+        .enumerate()
+        .map(|(i, s)| SeparationSide {
+            roles: s.roles.iter().map(|r| prog.role_name(*r).to_string()).collect(),
+            region: written.and_then(|p| p.regions.get(i)).map(|e| print::expr(prog, None, e)),
+            bounds: boxes.get(i).copied().flatten().map(|b| b.map(|iv| [iv.lo, iv.hi])),
+        })
+        .collect();
+    let how = if written.is_some() {
+        "written"
+    } else if by_boxes {
+        "inferred"
+    } else {
+        "queries"
+    };
+    Some(Separation { file, line, column, how, point: written.map(|p| p.point.clone()), sides })
+}
+
 fn where_(db: &SourceDb, ob: &Obligation) -> String {
     if db.files().nth(ob.span.file.0 as usize).is_none() {
         return "?".into();

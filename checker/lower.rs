@@ -22,11 +22,9 @@ pub fn lower(parsed: &Parsed) -> (Program, Vec<Diagnostic>) {
     let mut l = Lowerer::default();
     let items: Vec<&ast::Item> = parsed.files.iter().flat_map(|(_, f)| f.items.iter()).collect();
     let root_span = parsed.files.last().map(|(id, _)| Span::new(*id, 0, 0)).unwrap_or_default();
-    for it in &items {
-        if let ast::Item::Const(c) = it {
-            l.constant(c);
-        }
-    }
+    let consts: Vec<&ast::ConstDecl> =
+        items.iter().filter_map(|it| if let ast::Item::Const(c) = it { Some(c) } else { None }).collect();
+    l.constants(&consts);
     for it in &items {
         if let ast::Item::Robot(r) = it {
             l.robot_kind(r);
@@ -158,6 +156,51 @@ impl Lowerer {
     }
 
     // ---- declarations --------------------------------------------------------------
+
+    /// Lowers the constants in dependency order, so that their order in the files does not
+    /// matter (LANGUAGE.md), and reports each cycle once (E0213) instead of an unknown
+    /// variable. A constant in a cycle is still lowered (its value then lacks the
+    /// constant it depends on), so its uses elsewhere do not cascade into E0205s.
+    fn constants(&mut self, consts: &[&ast::ConstDecl]) {
+        let (order, cycles) = const_order(consts);
+        let mut cyclic_uses = std::collections::HashSet::new();
+        for cycle in &cycles {
+            let names: Vec<String> = cycle.iter().map(|&i| format!("`{}`", consts[i].name.name)).collect();
+            let first = consts[cycle[0]];
+            let mut d = Diagnostic::error(
+                Code::ConstCycle,
+                first.name.span,
+                format!("constants defined in a cycle: {} -> {}", names.join(" -> "), names[0]),
+            )
+            .with_help("give one of these constants a value that does not mention the others");
+            for &i in &cycle[1..] {
+                d = d.with_label(consts[i].name.span, format!("`{}` is defined here", consts[i].name.name));
+            }
+            self.diags.push(d);
+            let members: Vec<&str> = cycle.iter().map(|&i| consts[i].name.name.as_str()).collect();
+            for &i in cycle {
+                for (name, span) in const_refs(&consts[i].value) {
+                    if members.contains(&name) {
+                        cyclic_uses.insert(span);
+                    }
+                }
+            }
+        }
+        for i in order {
+            let before = self.diags.len();
+            self.constant(consts[i]);
+            if !cyclic_uses.is_empty() {
+                let mut k = before;
+                while k < self.diags.len() {
+                    if self.diags[k].code == Code::UnknownVariable && cyclic_uses.contains(&self.diags[k].span) {
+                        self.diags.remove(k);
+                    } else {
+                        k += 1;
+                    }
+                }
+            }
+        }
+    }
 
     fn constant(&mut self, c: &ast::ConstDecl) {
         let value = self.expr(&c.value, &Env::consts_only());
@@ -1400,6 +1443,75 @@ fn flatten_sum<'a>(parts: &'a [ast::Process], out: &mut Vec<&'a ast::Process>) {
 struct Scopes {
     values: Vec<ValueId>,
     recs: Vec<(String, usize)>,
+}
+
+/// The variable names an expression mentions, with their spans (an explicit stack: the
+/// expression may be up to the parser's nesting limit deep).
+fn const_refs(e: &ast::Expr) -> Vec<(&str, Span)> {
+    let mut out = Vec::new();
+    let mut stack = vec![e];
+    while let Some(e) = stack.pop() {
+        match &e.kind {
+            ast::ExprKind::Var(name) => out.push((name.as_str(), e.span)),
+            ast::ExprKind::Dot(a, _) | ast::ExprKind::Unary(_, a) => stack.push(a),
+            ast::ExprKind::Binary(_, a, b) => stack.extend([&**a, &**b]),
+            ast::ExprKind::If(a, b, c) => stack.extend([&**a, &**b, &**c]),
+            ast::ExprKind::Call(_, args) | ast::ExprKind::Tuple(args) => stack.extend(args.iter()),
+            ast::ExprKind::Int(_) | ast::ExprKind::Real(_) | ast::ExprKind::Bool(_) | ast::ExprKind::Error => {}
+        }
+    }
+    out
+}
+
+/// The constants in an order where each comes after those its value mentions (a depth-first
+/// post-order, otherwise the order of the files), and the cycles found, each as the
+/// indices along it. A name declared twice refers to its first declaration.
+fn const_order(consts: &[&ast::ConstDecl]) -> (Vec<usize>, Vec<Vec<usize>>) {
+    let mut first: HashMap<&str, usize> = HashMap::new();
+    for (i, c) in consts.iter().enumerate() {
+        first.entry(c.name.name.as_str()).or_insert(i);
+    }
+    let deps: Vec<Vec<usize>> = consts
+        .iter()
+        .map(|c| {
+            let mut d: Vec<usize> = const_refs(&c.value).iter().filter_map(|(n, _)| first.get(n).copied()).collect();
+            d.sort_unstable();
+            d.dedup();
+            d
+        })
+        .collect();
+    // 0 = not visited, 1 = on the current path, 2 = done.
+    let mut state = vec![0u8; consts.len()];
+    let mut order = Vec::with_capacity(consts.len());
+    let mut cycles = Vec::new();
+    for root in 0..consts.len() {
+        if state[root] != 0 {
+            continue;
+        }
+        let mut path: Vec<(usize, usize)> = vec![(root, 0)];
+        state[root] = 1;
+        while let Some((node, next)) = path.last_mut().map(|(n, k)| (*n, k)) {
+            if let Some(&dep) = deps[node].get(*next) {
+                *next += 1;
+                match state[dep] {
+                    0 => {
+                        state[dep] = 1;
+                        path.push((dep, 0));
+                    }
+                    1 => {
+                        let at = path.iter().position(|&(n, _)| n == dep).unwrap_or(0);
+                        cycles.push(path[at..].iter().map(|&(n, _)| n).collect());
+                    }
+                    _ => {}
+                }
+            } else {
+                state[node] = 2;
+                order.push(node);
+                path.pop();
+            }
+        }
+    }
+    (order, cycles)
 }
 
 #[cfg(test)]

@@ -8,19 +8,27 @@
 //! |------|----------------------------------------------------------------------|
 //! | 0    | every file verified                                                  |
 //! | 1    | a file was rejected, or the input was invalid (unreadable, no role)  |
-//! | 2    | command-line usage error (from clap), or an unknown code to explain  |
+//! | 2    | command-line usage error: a bad option value (`--timeout 0`, `--jobs |
+//! |      | 0`, an unwritable `--dump-smt` directory), or an unknown code to explain |
 //! | 3    | undecided: some verdict unknown, none rejected                       |
 //! | 101  | mochi crashed (a bug: the panic message says where)                  |
+//!
+//! Output follows rustc: results (the check table and verdict, the summary line, JSON,
+//! projections, explanations) go to stdout; diagnostics and errors go to stderr. With
+//! `--format json` every input file yields exactly one JSON object on stdout, even
+//! one that could not be read.
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use mochi::diag::Code;
-use mochi::driver::{self, Config, Report, Verdict};
+use mochi::driver::{self, CheckResult, Config, Report, Status, Verdict};
 use mochi::render;
 use mochi::source::SourceDb;
+use mochi::syntax;
 use std::io::{IsTerminal, Write};
 use std::panic::{self, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::time::{Duration, Instant};
 
 /// Checks run on a thread with this much stack, so that deeply nested input is limited
 /// by the parser's own depth limit rather than by the main thread's stack.
@@ -50,7 +58,9 @@ enum Command {
 
 #[derive(Args)]
 struct CheckArgs {
-    /// The files to check; each is checked on its own, with its imports
+    /// The files to check, each on its own with its imports; a directory means every
+    /// `.chor` file below it (sorted), `-` standard input (imports relative to the
+    /// current directory)
     #[arg(required = true, value_name = "FILE")]
     files: Vec<PathBuf>,
     #[arg(long, value_enum, default_value_t = Format::Text)]
@@ -58,11 +68,16 @@ struct CheckArgs {
     /// Also list the files read, the inferred partitions and the local types
     #[arg(long, short)]
     verbose: bool,
-    /// Seconds Z3 may spend on one query before it counts as unknown
-    #[arg(long, value_name = "SECONDS", default_value_t = mochi::smt::DEFAULT_TIMEOUT.as_secs_f64())]
+    /// Seconds Z3 may spend on one query before it counts as unknown (positive, finite)
+    #[arg(long, value_name = "SECONDS", default_value_t = mochi::smt::DEFAULT_TIMEOUT.as_secs_f64(),
+          value_parser = parse_seconds, allow_negative_numbers = true)]
     timeout: f64,
-    /// Worker threads for the SMT queries (default: all cores)
-    #[arg(long, short, value_name = "N")]
+    /// Seconds for the whole run: files not started by then are unknown, and no query of
+    /// a file started before runs past it
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds, allow_negative_numbers = true)]
+    deadline: Option<f64>,
+    /// Worker threads for the SMT queries, at least 1 (default: all cores)
+    #[arg(long, short, value_name = "N", value_parser = parse_jobs, allow_negative_numbers = true)]
     jobs: Option<usize>,
     /// Write every SMT query as an SMT-LIB file into DIR
     #[arg(long, value_name = "DIR")]
@@ -73,9 +88,9 @@ struct CheckArgs {
 struct ProjectArgs {
     #[arg(value_name = "FILE")]
     file: PathBuf,
-    /// The participant to project onto
+    /// The participant to project onto (default: every participant, as `local R = T;`)
     #[arg(long, value_name = "R")]
-    role: String,
+    role: Option<String>,
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
 }
@@ -112,6 +127,7 @@ enum Outcome {
     Unknown,
     Rejected,
     Invalid,
+    Usage,
     Crashed,
 }
 
@@ -121,6 +137,7 @@ impl Outcome {
             Outcome::Verified => 0,
             Outcome::Rejected | Outcome::Invalid => 1,
             Outcome::Unknown => 3,
+            Outcome::Usage => USAGE,
             Outcome::Crashed => 101,
         }
     }
@@ -149,126 +166,334 @@ fn run(cli: Cli) -> u8 {
 }
 
 fn check(args: &CheckArgs, color: ColorChoice) -> Outcome {
-    let color = use_color(color, std::io::stdout().is_terminal());
-    let json_lines = args.files.len() > 1;
-    let mut worst = Outcome::Verified;
-    if !(args.timeout.is_finite() && args.timeout > 0.0) {
-        eprintln_safe("error: --timeout takes a positive number of seconds");
-        return Outcome::Invalid;
-    }
+    let started = Instant::now();
+    let out_color = use_color(color, std::io::stdout().is_terminal());
+    let err_color = use_color(color, std::io::stderr().is_terminal());
     let mut config = Config::default();
-    config.smt.timeout = std::time::Duration::from_secs_f64(args.timeout.min(1e6));
+    config.smt.timeout = Duration::from_secs_f64(args.timeout);
     if let Some(j) = args.jobs {
-        config.smt.jobs = j.max(1);
+        config.smt.jobs = j;
+    }
+    if let Some(dir) = &args.dump_smt {
+        if let Err(e) = writable_dir(dir) {
+            eprintln_safe(&format!("error: --dump-smt {}: cannot write there: {e}", dir.display()));
+            return Outcome::Usage;
+        }
     }
     config.smt.dump_dir = args.dump_smt.clone();
     config.smt.progress = std::io::stderr().is_terminal();
-    for (i, path) in args.files.iter().enumerate() {
-        let mut db = SourceDb::new();
-        let Some(report) = check_path(&mut db, path, &config) else {
-            worst = worst.max(Outcome::Invalid);
-            continue;
+    let deadline = args.deadline.map(|d| started + Duration::from_secs_f64(d));
+    let mut inputs = Vec::new();
+    for path in &args.files {
+        expand(path, &mut inputs);
+    }
+    let json_lines = inputs.len() > 1;
+    let mut worst = Outcome::Verified;
+    let mut counts = [0usize; 4]; // verified, rejected, unknown, unreadable
+    for (i, input) in inputs.iter().enumerate() {
+        let name = match input {
+            Input::File(p) | Input::Unreadable(p, _) => p.display().to_string(),
+            Input::Stdin => syntax::STDIN_NAME.to_string(),
         };
-        let name = path.display().to_string();
-        let out = match args.format {
+        let mut db = SourceDb::new();
+        let mut cfg = config.clone();
+        let result = match (input, deadline) {
+            (Input::Unreadable(_, e), _) => Err(e.clone()),
+            (_, Some(d)) if Instant::now() >= d => Ok(past_deadline(args.deadline.unwrap_or_default())),
+            _ => {
+                if let Some(d) = deadline {
+                    cfg.smt.timeout = cfg.smt.timeout.min(d.saturating_duration_since(Instant::now()));
+                }
+                check_input(&mut db, input, &cfg)
+            }
+        };
+        let report = match result {
+            Ok(report) => report,
+            Err(CheckError::Unreadable(msg)) => {
+                counts[3] += 1;
+                worst = worst.max(Outcome::Invalid);
+                eprintln_safe(&format!("error: cannot read {name}: {msg}"));
+                if let Format::Json = args.format {
+                    let value = serde_json::json!({
+                        "file": name, "verdict": "unreadable", "error": msg,
+                        "diagnostics": [], "checks": [], "partitions": []
+                    });
+                    print_json(&value, json_lines);
+                }
+                continue;
+            }
+            Err(CheckError::Crashed) => {
+                counts[3] += 1;
+                worst = worst.max(Outcome::Crashed);
+                if let Format::Json = args.format {
+                    let value = serde_json::json!({
+                        "file": name, "verdict": "crashed", "error": "internal error: a bug in mochi",
+                        "diagnostics": [], "checks": [], "partitions": []
+                    });
+                    print_json(&value, json_lines);
+                }
+                continue;
+            }
+        };
+        match args.format {
             Format::Text => {
+                // Diagnostics on stderr, the table and verdict on stdout (rustc's split).
+                eprint_safe(&render::diagnostics_text(&db, &report, err_color));
                 let sep = if i > 0 { "\n" } else { "" };
-                format!("{sep}{}", render::report_text(&db, &name, &report, color, args.verbose))
+                print_safe(&format!("{sep}{}", render::summary_text(&db, &name, &report, out_color, args.verbose)));
             }
             Format::Json => {
-                let value = render::report_json(&db, &name, &report);
-                let res = if json_lines { serde_json::to_string(&value) } else { serde_json::to_string_pretty(&value) };
-                match res {
-                    Ok(s) => s + "\n",
-                    Err(e) => {
-                        eprintln_safe(&format!("error: cannot write the report of {name} as JSON: {e}"));
-                        worst = worst.max(Outcome::Crashed);
-                        continue;
-                    }
+                if !print_json(&render::report_json(&db, &name, &report), json_lines) {
+                    worst = worst.max(Outcome::Crashed);
+                    continue;
                 }
             }
-        };
-        print_safe(&out);
+        }
+        counts[match report.verdict {
+            Verdict::Verified => 0,
+            Verdict::Rejected => 1,
+            Verdict::Unknown => 2,
+        }] += 1;
         worst = worst.max(match report.verdict {
             Verdict::Verified => Outcome::Verified,
             Verdict::Unknown => Outcome::Unknown,
             Verdict::Rejected => Outcome::Rejected,
         });
     }
+    if inputs.len() > 1 && matches!(args.format, Format::Text) {
+        let unreadable = if counts[3] > 0 { format!(", {} unreadable", counts[3]) } else { String::new() };
+        print_safe(&format!(
+            "\n{} verified, {} rejected, {} unknown{unreadable} in {:.1} s\n",
+            counts[0],
+            counts[1],
+            counts[2],
+            started.elapsed().as_secs_f64()
+        ));
+    }
+    if inputs.is_empty() {
+        eprintln_safe("error: no `.chor` files to check");
+        worst = Outcome::Invalid;
+    }
     worst
+}
+
+/// One input of `mochi check` after directories are expanded.
+enum Input {
+    File(PathBuf),
+    Stdin,
+    /// A directory that could not be listed: reported in its turn like an unreadable file.
+    Unreadable(PathBuf, CheckError),
+}
+
+#[derive(Clone)]
+enum CheckError {
+    Unreadable(String),
+    Crashed,
+}
+
+/// `-` is standard input; a directory stands for every `.chor` file below it, sorted by
+/// path (hidden entries and symbolic links to directories are not followed, so a link
+/// cycle cannot make the walk endless); anything else is taken as a file.
+fn expand(path: &Path, out: &mut Vec<Input>) {
+    if path.as_os_str() == "-" {
+        out.push(Input::Stdin);
+        return;
+    }
+    if !path.is_dir() {
+        out.push(Input::File(path.to_path_buf()));
+        return;
+    }
+    let mut found = Vec::new();
+    let mut stack = vec![path.to_path_buf()];
+    while let Some(dir) = stack.pop() {
+        let entries = match std::fs::read_dir(&dir) {
+            Ok(e) => e,
+            Err(e) => {
+                out.push(Input::Unreadable(dir, CheckError::Unreadable(e.to_string())));
+                continue;
+            }
+        };
+        for entry in entries.flatten() {
+            let p = entry.path();
+            let hidden = entry.file_name().to_string_lossy().starts_with('.');
+            let Ok(ft) = entry.file_type() else { continue };
+            if ft.is_dir() && !hidden {
+                stack.push(p);
+            } else if !ft.is_dir() && p.extension().is_some_and(|e| e == "chor") {
+                found.push(p);
+            }
+        }
+    }
+    found.sort();
+    out.extend(found.into_iter().map(Input::File));
+}
+
+/// The report of a file not started because the `--deadline` had passed: unknown, never
+/// verified.
+fn past_deadline(seconds: f64) -> Report {
+    Report {
+        verdict: Verdict::Unknown,
+        diagnostics: Vec::new(),
+        checks: vec![CheckResult {
+            name: "deadline",
+            status: Status::Unknown,
+            millis: 0.0,
+            detail: format!("not checked: the --deadline of {seconds} s had passed"),
+            queries: 0,
+        }],
+        projections: Default::default(),
+        partitions: Vec::new(),
+        separations: Vec::new(),
+    }
+}
+
+/// Creates `dir` if needed and proves it writable by creating and removing a file, so a
+/// bad `--dump-smt` fails before any work instead of silently writing nothing.
+fn writable_dir(dir: &Path) -> std::io::Result<()> {
+    std::fs::create_dir_all(dir)?;
+    let probe = dir.join(format!(".mochi-probe-{}", std::process::id()));
+    std::fs::write(&probe, b"")?;
+    std::fs::remove_file(&probe)
+}
+
+/// Prints `value` as one line (several inputs: JSON Lines) or pretty; false if it could
+/// not be serialised (reported).
+fn print_json(value: &serde_json::Value, one_line: bool) -> bool {
+    let res = if one_line { serde_json::to_string(value) } else { serde_json::to_string_pretty(value) };
+    match res {
+        Ok(s) => {
+            print_safe(&(s + "\n"));
+            true
+        }
+        Err(e) => {
+            eprintln_safe(&format!("error: cannot write a report as JSON: {e}"));
+            false
+        }
+    }
+}
+
+/// `--timeout` and `--deadline`: a positive, finite number of seconds that a `Duration`
+/// can hold (`0`, `-1`, `inf`, `nan` and `1e400` are usage errors, exit 2).
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    let v: f64 = s.trim().parse().map_err(|_| format!("`{s}` is not a number of seconds"))?;
+    if !(v.is_finite() && v > 0.0) {
+        return Err(format!("`{s}` is not a positive, finite number of seconds"));
+    }
+    if v > 1e9 {
+        return Err(format!("`{s}` seconds is more than 10^9 (about 31 years)"));
+    }
+    Ok(v)
+}
+
+/// `--jobs`: at least one worker thread.
+fn parse_jobs(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(0) => Err("`0` workers cannot run anything: give at least 1".into()),
+        Ok(n) => Ok(n),
+        Err(_) => Err(format!("`{s}` is not a positive whole number")),
+    }
 }
 
 fn project(args: &ProjectArgs, color: ColorChoice) -> Outcome {
     let mut db = SourceDb::new();
     // Projection needs the structural checks only, not the SMT stage.
     let config = Config { structural_only: true, ..Config::default() };
-    let Some(report) = check_path(&mut db, &args.file, &config) else {
-        return Outcome::Invalid;
+    let input = if args.file.as_os_str() == "-" { Input::Stdin } else { Input::File(args.file.clone()) };
+    let name = match &input {
+        Input::Stdin => syntax::STDIN_NAME.to_string(),
+        _ => args.file.display().to_string(),
     };
-    let name = args.file.display().to_string();
-    let Some(local) = report.projections.get(&args.role) else {
+    let report = match check_input(&mut db, &input, &config) {
+        Ok(r) => r,
+        Err(CheckError::Unreadable(msg)) => {
+            eprintln_safe(&format!("error: cannot read {name}: {msg}"));
+            return Outcome::Invalid;
+        }
+        Err(CheckError::Crashed) => return Outcome::Crashed,
+    };
+    let selected: Vec<(&String, &String)> = match &args.role {
+        Some(role) => report.projections.get_key_value(role).into_iter().collect(),
+        None => report.projections.iter().collect(),
+    };
+    if selected.is_empty() {
         // The errors say why projection did not run; without any, the role is wrong.
         let color = use_color(color, std::io::stderr().is_terminal());
         let errors: String =
             report.diagnostics.iter().filter(|d| d.is_error()).map(|d| render::text(&db, d, color)).collect();
+        let role = args.role.as_deref().unwrap_or_default();
         if !errors.is_empty() {
             eprint_safe(&errors);
         } else if report.projections.is_empty() {
-            eprintln_safe(&format!(
-                "error: no participant named `{}`: no local types were computed for {name}",
-                args.role
-            ));
+            eprintln_safe(&format!("error: no local types were computed for {name}: it has no participants"));
         } else {
             let roles: Vec<&str> = report.projections.keys().map(String::as_str).collect();
             eprintln_safe(&format!(
-                "error: no participant named `{}`; the participants of {name} are {}",
-                args.role,
+                "error: no participant named `{role}`; the participants of {name} are {}",
                 roles.join(", ")
             ));
         }
         return Outcome::Invalid;
-    };
-    match args.format {
-        Format::Text if local.ends_with('\n') => print_safe(local),
-        Format::Text => print_safe(&format!("{local}\n")),
-        Format::Json => {
-            let value = serde_json::json!({ "file": name, "role": args.role, "local": local });
-            match serde_json::to_string_pretty(&value) {
-                Ok(s) => print_safe(&(s + "\n")),
-                Err(e) => {
-                    eprintln_safe(&format!("error: cannot write the projection as JSON: {e}"));
-                    return Outcome::Crashed;
-                }
+    }
+    match (args.format, &args.role) {
+        (Format::Text, Some(_)) => {
+            let local = selected[0].1;
+            print_safe(&format!("{}\n", local.trim_end_matches('\n')));
+        }
+        (Format::Text, None) => {
+            let text: String =
+                selected.iter().map(|(role, local)| format!("local {role} = {};\n", local.trim_end())).collect();
+            print_safe(&text);
+        }
+        (Format::Json, Some(role)) => {
+            let value = serde_json::json!({ "file": name, "role": role, "local": selected[0].1 });
+            if !print_json(&value, false) {
+                return Outcome::Crashed;
+            }
+        }
+        (Format::Json, None) => {
+            let locals: Vec<serde_json::Value> =
+                selected.iter().map(|(role, local)| serde_json::json!({ "role": role, "local": local })).collect();
+            if !print_json(&serde_json::json!({ "file": name, "locals": locals }), false) {
+                return Outcome::Crashed;
             }
         }
     }
     Outcome::Verified
 }
 
-/// Runs the driver on one file. `None` when the file cannot be read (reported here) or
-/// when a stage panicked (reported as a bug, after the panic message).
-fn check_path(db: &mut SourceDb, path: &Path, config: &Config) -> Option<Report> {
+/// Runs the driver on one input. `Err` when it cannot be read (the caller reports it) or
+/// when a stage panicked (reported here as a bug, after the panic message).
+fn check_input(db: &mut SourceDb, input: &Input, config: &Config) -> Result<Report, CheckError> {
     // The panic hook has already printed the message and location when this returns.
-    let res = panic::catch_unwind(AssertUnwindSafe(|| driver::check_file(db, path, config)));
+    let res = panic::catch_unwind(AssertUnwindSafe(|| match input {
+        Input::File(path) => driver::check_file(db, path, config),
+        Input::Stdin => driver::check_stdin(db, config),
+        Input::Unreadable(_, _) => Err(std::io::Error::other("unreadable")),
+    }));
     match res {
-        Ok(Ok(report)) => Some(report),
-        Ok(Err(e)) => {
-            eprintln_safe(&format!("error: cannot read {}: {e}", path.display()));
-            None
-        }
+        Ok(Ok(report)) => Ok(report),
+        Ok(Err(e)) => Err(CheckError::Unreadable(match syntax::source_error(&e) {
+            Some(err) => err.to_string(),
+            None => e.to_string(),
+        })),
         Err(_) => {
+            let name = match input {
+                Input::File(p) | Input::Unreadable(p, _) => p.display().to_string(),
+                Input::Stdin => syntax::STDIN_NAME.to_string(),
+            };
             eprintln_safe(&format!(
-                "error: internal error while checking {}; this is a bug in mochi, please report it",
-                path.display()
+                "error: internal error while checking {name}; this is a bug in mochi, please report it"
             ));
-            None
+            Err(CheckError::Crashed)
         }
     }
 }
 
 fn explain(args: &ExplainArgs) -> u8 {
     if args.list {
-        let list: String = Code::ALL.iter().map(|c| format!("{c}  {}\n", c.title())).collect();
+        let mut codes = Code::ALL.to_vec();
+        codes.sort_by_key(|c| c.as_str());
+        let list: String = codes.iter().map(|c| format!("{c}  {}\n", c.title())).collect();
         print_safe(&list);
         return 0;
     }

@@ -14,6 +14,7 @@ use codespan_reporting::files::SimpleFiles;
 use codespan_reporting::term::termcolor::{Buffer, Color, ColorSpec, WriteColor};
 use codespan_reporting::term::{self, Chars};
 use serde_json::{json, Value};
+use std::borrow::Cow;
 use std::io::Write;
 use std::ops::Range;
 
@@ -26,15 +27,52 @@ pub fn text(db: &SourceDb, d: &Diagnostic, color: bool) -> String {
     into_string(out)
 }
 
-/// Renders every diagnostic of `report`, then a summary: one line per check (status,
-/// name, time, detail) and the verdict for `file_name`. `verbose` adds the files that
-/// were read and the local type of each role, when projection ran.
+/// Renders every diagnostic of `report` ([`diagnostics_text`]), then a summary
+/// ([`summary_text`]).
 pub fn report_text(db: &SourceDb, file_name: &str, report: &Report, color: bool, verbose: bool) -> String {
+    diagnostics_text(db, report, color) + &summary_text(db, file_name, report, color, verbose)
+}
+
+/// At most this many diagnostics of one report are rendered as text...
+pub const MAX_SHOWN: usize = 50;
+/// ...and at most this many of one code; the rest are counted in a last note
+/// (`--format json` lists them all).
+pub const MAX_SHOWN_PER_CODE: usize = 10;
+
+/// The diagnostics of `report` as rustc shows them, capped like rustc's own limits: the
+/// first [`MAX_SHOWN_PER_CODE`] of each code and [`MAX_SHOWN`] in all, then one line that
+/// counts the others by code. 5 KB of garbage gives a screenful, not 38 MB.
+pub fn diagnostics_text(db: &SourceDb, report: &Report, color: bool) -> String {
     let files = Files::new(db);
     let mut out = buffer(color);
+    let mut shown = 0;
+    let mut per_code: std::collections::BTreeMap<&str, (usize, usize)> = Default::default();
     for d in &report.diagnostics {
+        let (seen, hidden) = per_code.entry(d.code.as_str()).or_default();
+        if shown >= MAX_SHOWN || *seen >= MAX_SHOWN_PER_CODE {
+            *hidden += 1;
+            continue;
+        }
+        *seen += 1;
+        shown += 1;
         files.emit(&mut out, d);
     }
+    let hidden: Vec<String> =
+        per_code.iter().filter(|(_, (_, h))| *h > 0).map(|(code, (_, h))| format!("{h} {code}")).collect();
+    if !hidden.is_empty() {
+        let total: usize = per_code.values().map(|(_, h)| h).sum();
+        let _ = writeln!(
+            out,
+            "note: {total} more diagnostic(s) not shown ({}); `--format json` lists them all\n",
+            hidden.join(", ")
+        );
+    }
+    into_string(out)
+}
+
+/// The check table, the optional `--verbose` listings and the verdict line.
+pub fn summary_text(db: &SourceDb, file_name: &str, report: &Report, color: bool, verbose: bool) -> String {
+    let mut out = buffer(color);
     // A `Buffer` is a `Vec<u8>` underneath: writing to it cannot fail.
     let _ = write_summary(&mut out, db, file_name, report, verbose);
     into_string(out)
@@ -95,7 +133,10 @@ fn write_summary(
 ///                     "counterexample": null | { "values": [{ "name", "value" }],
 ///                                                "overlap": null | { "point": [x, y, z], "times": [t] } } }],
 ///   "checks": [{ "name", "status": "pass" | "fail" | "unknown", "millis", "queries" }],
-///   "partitions": ["file:line:col: partition inferred: ..."] }
+///   "partitions": [{ "file", "line", "column", "how": "written" | "inferred" | "queries",
+///                    "point": null | [x, y, z],
+///                    "sides": [{ "roles": [..], "region": null | "predicate",
+///                                "box": null | [[x_lo, x_hi], [y_lo, y_hi], [z_lo, z_hi]] }] }] }
 /// ```
 ///
 /// Lines and columns are 1-based (columns count characters). A location in a file the
@@ -125,7 +166,7 @@ pub fn report_json(db: &SourceDb, file_name: &str, report: &Report) -> Value {
         "verdict": verdict,
         "diagnostics": report.diagnostics.iter().map(|d| diagnostic_json(db, d)).collect::<Vec<_>>(),
         "checks": checks,
-        "partitions": report.partitions,
+        "partitions": report.separations,
     })
 }
 
@@ -175,7 +216,7 @@ fn contains(db: &SourceDb, span: Span) -> bool {
 /// The files of a `SourceDb` in codespan's form; codespan ids are `FileId` indices.
 struct Files<'a> {
     db: &'a SourceDb,
-    files: SimpleFiles<&'a str, &'a str>,
+    files: SimpleFiles<&'a str, Cow<'a, str>>,
     config: term::Config,
 }
 
@@ -183,15 +224,21 @@ impl<'a> Files<'a> {
     fn new(db: &'a SourceDb) -> Files<'a> {
         let mut files = SimpleFiles::new();
         for (_, f) in db.files() {
-            files.add(f.name.as_str(), f.text.as_str());
+            files.add(f.name.as_str(), displayable(&f.text));
         }
         // ASCII art (`-->`, `|`, `^`) as rustc prints it, and safe in any terminal.
         let config = term::Config { chars: Chars::ascii(), ..term::Config::default() };
         Files { db, files, config }
     }
 
-    /// Writes `d` to `out`, or a plain one-line form if codespan refuses it.
+    /// Writes `d` to `out`, or a plain one-line form if codespan refuses it. A diagnostic
+    /// on a very long line (minified or generated input) shows a window of that line.
     fn emit(&self, out: &mut Buffer, d: &Diagnostic) {
+        if self.on_long_line(d) {
+            let d = &escaped(d);
+            let _ = self.emit_long(out, d);
+            return;
+        }
         let mut rich = if out.supports_color() { Buffer::ansi() } else { Buffer::no_color() };
         match term::emit(&mut rich, &self.config, &self.files, &self.to_codespan(d)) {
             Ok(()) => {
@@ -199,9 +246,62 @@ impl<'a> Files<'a> {
             }
             // Only a span codespan cannot place gets here; the clamping should prevent it.
             Err(_) => {
-                let _ = self.emit_plain(out, d);
+                let _ = self.emit_plain(out, &escaped(d));
             }
         }
+    }
+
+    /// Whether a label of `d` touches a line longer than [`MAX_LINE`] characters.
+    fn on_long_line(&self, d: &Diagnostic) -> bool {
+        std::iter::once(d.span).chain(d.labels.iter().map(|l| l.span)).filter(|s| contains(self.db, *s)).any(|s| {
+            let file = self.db.file(s.file);
+            let (l1, _) = file.line_col(s.start as usize);
+            let (l2, _) = file.line_col(s.end as usize);
+            (l1..=l2.min(l1 + 2)).any(|l| file.line_text(l).len() > MAX_LINE)
+        })
+    }
+
+    /// rustc's layout with the primary line cut to a window around the span, and the
+    /// secondary labels as notes with their locations.
+    fn emit_long(&self, out: &mut Buffer, d: &Diagnostic) -> std::io::Result<()> {
+        let severity = severity_word(d.severity);
+        writeln!(out, "{severity}[{}]: {}", d.code, d.message)?;
+        if contains(self.db, d.span) {
+            let (file, line, col) = self.db.location(d.span);
+            writeln!(out, "  --> {file}:{line}:{col}")?;
+            let text: Vec<char> = self.db.file(d.span.file).line_text(line).chars().collect();
+            let width = (d.span.end.saturating_sub(d.span.start) as usize).max(1);
+            let from = (col - 1).saturating_sub(WINDOW / 4);
+            let to = (from + WINDOW).min(text.len());
+            let shown: String = text[from.min(to)..to].iter().collect();
+            let pad = line.to_string().len();
+            let (pre, post) = (if from > 0 { "..." } else { "" }, if to < text.len() { "..." } else { "" });
+            writeln!(out, "{:pad$} |", "")?;
+            writeln!(out, "{line} | {pre}{}{post}", displayable(&shown))?;
+            let caret_at = pre.len() + (col - 1 - from);
+            let carets = width.min(to.saturating_sub(col - 1)).max(1);
+            writeln!(out, "{:pad$} | {:caret_at$}{}", "", "", "^".repeat(carets))?;
+            writeln!(
+                out,
+                "{:pad$} = note: line {line} has {} characters; columns {}-{to} are shown",
+                "",
+                text.len(),
+                from + 1
+            )?;
+        }
+        for l in &d.labels {
+            if contains(self.db, l.span) {
+                let (file, line, col) = self.db.location(l.span);
+                writeln!(out, "  = note: {file}:{line}:{col}: {}", l.message)?;
+            }
+        }
+        for note in &d.notes {
+            writeln!(out, "  = note: {note}")?;
+        }
+        if let Some(help) = &d.help {
+            writeln!(out, "  = help: {help}")?;
+        }
+        writeln!(out)
     }
 
     fn emit_plain(&self, out: &mut Buffer, d: &Diagnostic) -> std::io::Result<()> {
@@ -230,9 +330,10 @@ impl<'a> Files<'a> {
         let secondary = d.labels.iter().filter_map(|l| self.label(LabelStyle::Secondary, l.span, &l.message));
         let mut notes: Vec<String> = d.notes.iter().map(|n| format!("note: {n}")).collect();
         notes.extend(d.help.iter().map(|h| format!("help: {h}")));
+        let notes = notes.iter().map(|n| escape_controls(n).into_owned()).collect();
         cs::Diagnostic::new(severity)
             .with_code(d.code.as_str())
-            .with_message(&d.message)
+            .with_message(escape_controls(&d.message))
             .with_labels(primary.into_iter().chain(secondary).collect())
             .with_notes(notes)
     }
@@ -242,8 +343,67 @@ impl<'a> Files<'a> {
             return None;
         }
         let text = &self.db.file(span.file).text;
-        Some(cs::Label::new(style, span.file.0 as usize, clamp(text, span)).with_message(message))
+        Some(cs::Label::new(style, span.file.0 as usize, clamp(text, span)).with_message(escape_controls(message)))
     }
+}
+
+/// `s` with control characters other than line ends and tabs escaped (`\0`, `\u{1b}`):
+/// messages quote the user's text (an import path, a string), which must not reach a
+/// terminal raw.
+fn escape_controls(s: &str) -> Cow<'_, str> {
+    if !s.chars().any(|c| c.is_control() && c != '\n' && c != '\t') {
+        return Cow::Borrowed(s);
+    }
+    Cow::Owned(
+        s.chars()
+            .map(
+                |c| if c.is_control() && c != '\n' && c != '\t' { c.escape_debug().to_string() } else { c.to_string() },
+            )
+            .collect(),
+    )
+}
+
+/// `d` with every text field passed through [`escape_controls`].
+fn escaped(d: &Diagnostic) -> Diagnostic {
+    let mut d = d.clone();
+    d.message = escape_controls(&d.message).into_owned();
+    d.notes = d.notes.iter().map(|n| escape_controls(n).into_owned()).collect();
+    d.help = d.help.as_deref().map(|h| escape_controls(h).into_owned());
+    for l in &mut d.labels {
+        l.message = escape_controls(&l.message).into_owned();
+    }
+    d
+}
+
+/// Lines longer than this many bytes are shown as a window of [`WINDOW`] characters.
+const MAX_LINE: usize = 240;
+const WINDOW: usize = 120;
+
+/// `text` as it may be written to a terminal: control characters other than tab and line
+/// ends become `?` (one byte for one byte, so spans still fit), and a lone `\r` becomes
+/// `\n` so codespan numbers lines as [`SourceDb`] does. A NUL or an escape sequence in
+/// the input never reaches the terminal raw.
+fn displayable(text: &str) -> Cow<'_, str> {
+    let b = text.as_bytes();
+    let bad = |i: usize| {
+        let c = b[i];
+        (c < 0x20 && c != b'\t' && c != b'\n' && c != b'\r')
+            || c == 0x7f
+            || (c == b'\r' && b.get(i + 1) != Some(&b'\n'))
+    };
+    if !(0..b.len()).any(bad) {
+        return Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(text.len());
+    for (i, ch) in text.char_indices() {
+        out.push(match ch {
+            '\r' if b.get(i + 1) != Some(&b'\n') => '\n',
+            '\t' | '\n' | '\r' => ch,
+            c if c.is_ascii_control() => '?',
+            c => c,
+        });
+    }
+    Cow::Owned(out)
 }
 
 /// The byte range of `span` inside `text`: ends past the text are pulled back, and both
@@ -313,6 +473,7 @@ mod tests {
             }],
             projections: BTreeMap::new(),
             partitions: Vec::new(),
+            separations: Vec::new(),
         }
     }
 
@@ -392,6 +553,47 @@ mod tests {
         assert!(out.ends_with("verdict: rejected (a.chor)\n"), "{out}");
         assert!(!out.contains("files read"), "{out}");
         assert!(report_text(&db, "a.chor", &r, false, true).contains("files read: a.chor"));
+    }
+
+    #[test]
+    fn many_diagnostics_are_capped_per_code_and_in_all() {
+        let (db, f) = db_with(&"~ ".repeat(3000));
+        let many = |code| (0..3000).map(move |i| Diagnostic::error(code, Span::new(f, 2 * i, 2 * i + 1), "bad"));
+        let r = report(many(Code::UnexpectedChar).chain(many(Code::UnexpectedToken).take(5)).collect());
+        let out = diagnostics_text(&db, &r, false);
+        assert_eq!(out.matches("error[E0101]").count(), MAX_SHOWN_PER_CODE, "{out}");
+        assert_eq!(out.matches("error[E0103]").count(), 5);
+        assert!(out.contains("note: 2990 more diagnostic(s) not shown (2990 E0101)"), "{out}");
+        assert!(out.len() < 20_000, "{} bytes", out.len());
+    }
+
+    #[test]
+    fn a_long_line_is_shown_as_a_window_and_control_characters_are_escaped() {
+        let (db, f) = db_with(&format!("{}\0{}\n", "x".repeat(5000), "y".repeat(5000)));
+        let d = Diagnostic::error(Code::UnexpectedChar, Span::new(f, 5000, 5001), "unexpected character `\\0`")
+            .with_help("h");
+        let out = text(&db, &d, false);
+        assert!(out.len() < 1000, "{out}");
+        assert!(out.contains("--> a.chor:1:5001"), "{out}");
+        assert!(out.contains("1 | ...xxxxx") && out.contains("xxxxx?yyyyy"), "{out}");
+        assert!(!out.contains('\0'), "{out}");
+        assert!(out.contains("line 1 has 10001 characters"), "{out}");
+        let (db, f) = db_with("a\x1b[31mb\rc\0");
+        let d = Diagnostic::error(Code::UnexpectedChar, Span::new(f, 8, 9), "m");
+        let out = text(&db, &d, false);
+        assert!(!out.contains('\x1b') && !out.contains('\0'), "{out:?}");
+        assert!(out.contains("--> a.chor:2:1"), "{out}");
+    }
+
+    #[test]
+    fn control_characters_in_messages_are_escaped() {
+        let (db, f) = db_with("import \"x\";\n");
+        let d = Diagnostic::error(Code::NotSourceFile, Span::new(f, 0, 6), "`a\0b\x1b[2J` is not a mochi file")
+            .with_label(Span::new(f, 7, 10), "\x07")
+            .with_help("h\0");
+        let out = text(&db, &d, false);
+        assert!(!out.bytes().any(|b| b < 0x20 && b != b'\n'), "{out:?}");
+        assert!(out.contains("`a\\0b\\u{1b}[2J`"), "{out}");
     }
 
     #[test]

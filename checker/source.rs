@@ -52,8 +52,12 @@ pub struct SourceFile {
 
 impl SourceFile {
     fn new(name: String, text: String) -> SourceFile {
+        // A line ends at `\n`, `\r\n` or a lone `\r` (old Mac files), as the lexer's do.
         let mut line_starts = vec![0];
-        line_starts.extend(text.match_indices('\n').map(|(i, _)| i + 1));
+        let b = text.as_bytes();
+        line_starts.extend(
+            (0..b.len()).filter(|&i| b[i] == b'\n' || (b[i] == b'\r' && b.get(i + 1) != Some(&b'\n'))).map(|i| i + 1),
+        );
         SourceFile { name, text, line_starts }
     }
 
@@ -79,7 +83,7 @@ impl SourceFile {
             return "";
         };
         let end = self.line_starts.get(line).map(|e| e - 1).unwrap_or(self.text.len());
-        self.text[start..end.max(start)].trim_end_matches('\r')
+        self.text[start..end.max(start)].trim_end_matches(['\r', '\n'])
     }
 }
 
@@ -142,5 +146,16 @@ mod tests {
         assert_eq!(file.line_text(2), "cé d");
         assert_eq!(file.line_text(9), "");
         assert_eq!(file.line_col(1000), (3, 1));
+    }
+
+    #[test]
+    fn a_lone_carriage_return_ends_a_line() {
+        let mut db = SourceDb::new();
+        let f = db.add("a.chor", "ab\rcd\r\nef");
+        let file = db.file(f);
+        assert_eq!(file.line_col(3), (2, 1));
+        assert_eq!(file.line_col(7), (3, 1));
+        assert_eq!(file.line_text(1), "ab");
+        assert_eq!(file.line_text(2), "cd");
     }
 }

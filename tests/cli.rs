@@ -102,12 +102,14 @@ fn a_syntax_error_is_reported_in_text() {
     let file = dir.write("bad.chor", SYNTAX_ERROR);
     let o = mochi(&["check", path_arg(&file)]);
     assert_eq!(o.status.code(), Some(1));
-    let out = stdout(&o);
-    assert!(out.contains("error[E0103]"), "{out}");
-    assert!(out.contains(&format!("{}:1:11", file.display())), "{out}");
-    assert!(out.contains("1 | const a = ;"), "{out}");
+    // rustc's split: diagnostics on stderr, the check table and verdict on stdout.
+    let (out, err) = (stdout(&o), stderr(&o));
+    assert!(err.contains("error[E0103]"), "{err}");
+    assert!(err.contains(&format!("{}:1:11", file.display())), "{err}");
+    assert!(err.contains("1 | const a = ;"), "{err}");
+    assert!(!out.contains("error["), "{out}");
     assert!(out.contains("verdict: rejected"), "{out}");
-    assert!(!out.contains('\x1b'), "no colour when stdout is a pipe: {out}");
+    assert!(!out.contains('\x1b') && !err.contains('\x1b'), "no colour when writing to a pipe: {out}");
 }
 
 #[test]
@@ -117,6 +119,7 @@ fn colour_can_be_forced_on() {
     let o = mochi(&["check", "--color", "always", path_arg(&file)]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stdout(&o).contains('\x1b'), "{}", stdout(&o));
+    assert!(stderr(&o).contains('\x1b'), "{}", stderr(&o));
 }
 
 #[test]
@@ -176,8 +179,16 @@ fn an_unreadable_file_among_others_fails_the_run() {
     let missing = dir.0.join("missing.chor");
     let o = mochi(&["check", "--format", "json", path_arg(&bad), path_arg(&missing)]);
     assert_eq!(o.status.code(), Some(1));
-    assert_eq!(stdout(&o).lines().count(), 1, "only readable files produce a report");
+    // Every input yields one JSON object, the unreadable one too (it failed before).
+    let lines: Vec<Value> = stdout(&o).lines().map(|l| serde_json::from_str(l).expect("JSON")).collect();
+    assert_eq!(lines.len(), 2, "{}", stdout(&o));
+    assert_eq!(lines[1]["file"], path_arg(&missing));
+    assert_eq!(lines[1]["verdict"], "unreadable");
+    assert!(lines[1]["error"].as_str().is_some_and(|e| !e.is_empty()));
     assert!(stderr(&o).contains("cannot read"), "{}", stderr(&o));
+    let o = mochi(&["check", "--format", "json", path_arg(&missing)]);
+    let v: Value = serde_json::from_slice(&o.stdout).expect("one JSON document for one missing file");
+    assert_eq!(v["verdict"], "unreadable");
 }
 
 #[test]
@@ -217,6 +228,25 @@ fn the_quick_start_example_is_verified_with_every_check_run() {
     let queries = |name: &str| checks.iter().find(|c| c["name"] == name).and_then(|c| c["queries"].as_u64());
     assert!(queries("compatibility").is_some_and(|n| n > 0), "{v}");
     assert!(v["diagnostics"].as_array().expect("diagnostics").is_empty());
+    // Partitions are structured (they were free text): sides with roles, written regions as
+    // predicates, boxes as numbers.
+    let parts = v["partitions"].as_array().expect("partitions");
+    let written = parts.iter().find(|p| p["how"] == "written").expect("the written partition of Fig. 2");
+    assert_eq!(written["point"], serde_json::json!(["px", "py", "pz"]));
+    assert_eq!(written["sides"][0]["region"], "px >= -0.5", "{written}");
+    assert_eq!(written["sides"][1]["roles"], serde_json::json!(["RRobot"]), "{written}");
+    for p in parts {
+        assert!(p["line"].is_u64() && p["column"].is_u64(), "{p}");
+        for side in p["sides"].as_array().expect("sides") {
+            assert!(side["roles"].as_array().is_some_and(|r| !r.is_empty()), "{side}");
+            let b = &side["box"];
+            assert!(
+                b.is_null()
+                    || b.as_array().is_some_and(|b| b.len() == 3 && b.iter().all(|i| i[0].as_f64() <= i[1].as_f64())),
+                "{side}"
+            );
+        }
+    }
 }
 
 #[test]
@@ -310,4 +340,216 @@ fn dump_smt_writes_one_smt_lib_file_per_query() {
         assert!(text.starts_with("; mochi: ") && text.trim_end().ends_with("(check-sat)"), "{name}: {text}");
     }
     assert!(files.iter().any(|f| f.file_name().to_string_lossy().contains("-agcomp-")), "no [AGCOMP] query dumped");
+}
+
+// ---- hardening: option values, special inputs, output size (issue 8) -----------------
+
+/// A small verified choreography with `steps` messages in sequence; `lib` is its library.
+fn sequence(steps: usize) -> (String, String) {
+    // The library is shared from outside the test's directory, as users share theirs.
+    let bot = std::fs::canonicalize("motion-primitives/bot.mochi").expect("bot.mochi");
+    let lib = format!("import \"{}\";\n", bot.display());
+    let chor = format!(
+        "import \"lib.mochi\";\nsystem S {{ participant p1: Bot {{ init: s == 0; at: pose(0, 0, 0); }} \
+         participant p2: Bot {{ init: s == 0; at: pose(1, 0, 0); }} }}\n\
+         choreography C = dt<p1: wave, p2: wave>.\n{}end;\nprocess p1 = dt<wave>.{}end;\nprocess p2 = dt<wave>.{}end;\n",
+        "p1 -> p2: l.\n".repeat(steps),
+        "p2!l.".repeat(steps),
+        "p1?l.".repeat(steps)
+    );
+    (chor, lib)
+}
+
+#[test]
+fn bad_option_values_are_usage_errors() {
+    // Before: 0, inf, nan and 1e400 exited 1, -1 gave clap's "unexpected argument",
+    // --jobs 0 silently meant 1.
+    for t in ["0", "inf", "nan", "1e400", "abc", "-1", "-0.5"] {
+        let o = mochi(&["check", "--timeout", t, "x.chor"]);
+        assert_eq!(o.status.code(), Some(2), "--timeout {t}: {}", stderr(&o));
+        assert!(stderr(&o).contains("--timeout"), "{}", stderr(&o));
+        assert!(!stderr(&o).contains("unexpected argument"), "{}", stderr(&o));
+        assert_eq!(mochi(&["check", "--deadline", t, "x.chor"]).status.code(), Some(2), "--deadline {t}");
+    }
+    for j in ["0", "-1", "x"] {
+        assert_eq!(mochi(&["check", "-j", j, "x.chor"]).status.code(), Some(2), "--jobs {j}");
+    }
+}
+
+#[test]
+fn an_unwritable_dump_directory_is_an_error_before_any_work() {
+    let dir = TempDir::new("dump-unwritable");
+    let file = dir.write("a-file", "");
+    let o = mochi(&["check", "choreographies/example-4-2-1.chor", "--dump-smt", path_arg(&file.join("sub"))]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--dump-smt"), "{}", stderr(&o));
+    assert!(stdout(&o).is_empty(), "nothing was checked: {}", stdout(&o));
+}
+
+#[cfg(unix)]
+#[test]
+fn imports_of_devices_and_non_mochi_files_are_refused_quickly() {
+    let dir = TempDir::new("devices");
+    std::os::unix::fs::symlink("/dev/zero", dir.0.join("zero.mochi")).expect("symlink");
+    std::os::unix::fs::symlink("/dev/urandom", dir.0.join("random.chor")).expect("symlink");
+    for (import, want) in [
+        ("zero.mochi", "a character device, not a regular file"),
+        ("random.chor", "a character device"),
+        ("/etc/passwd", "not a mochi file"),
+        (".", "not a mochi file"),
+    ] {
+        let file = dir.write("main.chor", &format!("import \"{import}\";\n"));
+        let started = std::time::Instant::now();
+        let o = mochi(&["check", "--format", "json", path_arg(&file)]);
+        assert!(started.elapsed().as_secs() < 10, "{import} took {:?}", started.elapsed());
+        let v: Value = serde_json::from_slice(&o.stdout).expect("JSON");
+        let d = &v["diagnostics"][0];
+        assert_eq!(d["code"], "E0106", "{import}: {v}");
+        assert!(d["message"].as_str().is_some_and(|m| m.contains(want)), "{import}: {d}");
+        assert!(!d["message"].as_str().unwrap_or_default().contains("root:"), "no line of /etc/passwd: {d}");
+    }
+    // The file named on the command line is refused too, not read forever.
+    let o = mochi(&["check", path_arg(&dir.0.join("zero.mochi"))]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("not a regular file"), "{}", stderr(&o));
+}
+
+#[test]
+fn a_byte_order_mark_cr_line_ends_nul_and_bad_utf8_are_handled() {
+    let dir = TempDir::new("encodings");
+    let (chor, lib) = sequence(2);
+    dir.write("lib.mochi", &lib);
+    // BOM: before, E0101 on an invisible character.
+    let bom = dir.write("bom.chor", &format!("\u{feff}{chor}"));
+    let o = mochi(&["check", path_arg(&bom)]);
+    assert_eq!(o.status.code(), Some(0), "{}{}", stdout(&o), stderr(&o));
+    // CR-only line ends: before, the first comment swallowed the whole file.
+    let cr = dir.write("cr.chor", &format!("// a comment\r{}\rconst x = ;\r", chor.replace('\n', "\r")));
+    let o = mochi(&["check", "--format", "json", path_arg(&cr)]);
+    let v: Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    let d = &v["diagnostics"][0];
+    assert_eq!(d["code"], "E0103", "{v}");
+    assert_eq!(d["line"], 1 + chor.lines().count() + 2, "comment, choreography, blank line, const: {d}");
+    // NUL: escaped, never written raw.
+    let nul = dir.write("nul.chor", "const a = 1;\0\n");
+    let o = mochi(&["check", path_arg(&nul)]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(!o.stderr.contains(&0) && !o.stdout.contains(&0), "{}", stderr(&o));
+    assert!(stderr(&o).contains("unexpected character `\\0`"), "{}", stderr(&o));
+    // Not UTF-8: before, "stream did not contain valid UTF-8" with no code or position.
+    let latin1 = dir.0.join("latin1.chor");
+    std::fs::write(&latin1, b"const a = 1;\n// caf\xe9\n").expect("write");
+    let o = mochi(&["check", "--format", "json", path_arg(&latin1)]);
+    assert_eq!(o.status.code(), Some(1));
+    let v: Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    let d = &v["diagnostics"][0];
+    assert_eq!(
+        (d["code"].as_str(), d["line"].as_u64(), d["column"].as_u64()),
+        (Some("E0107"), Some(2), Some(7)),
+        "{d}"
+    );
+    assert!(d["message"].as_str().is_some_and(|m| m.contains("byte 0xe9 at offset 19")), "{d}");
+}
+
+#[test]
+fn garbage_gives_a_screenful_not_megabytes() {
+    let dir = TempDir::new("garbage");
+    // Before: 5,000 errors and 38 MB of output.
+    let tilde = dir.write("tilde.chor", &"~ ".repeat(2500));
+    let o = mochi(&["check", path_arg(&tilde)]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(o.stderr.len() < 20_000, "{} bytes", o.stderr.len());
+    assert!(stderr(&o).contains("more diagnostic(s) not shown"), "{}", stderr(&o));
+    // Before: a 10^4 chain of `^` escaped the nesting limit and printed 129 MB.
+    let pow = dir.write("pow.chor", &format!("const x = {}1;\n", "2 ^ ".repeat(10_000)));
+    let o = mochi(&["check", "--format", "json", path_arg(&pow)]);
+    let v: Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    assert_eq!(v["diagnostics"][0]["code"], "E0108", "{v}");
+    let o = mochi(&["check", path_arg(&pow)]);
+    assert!(o.stderr.len() < 5_000, "{} bytes: the long line is cut", o.stderr.len());
+    // A repeated definition: one screenful however often it repeats.
+    let rep = dir.write("rep.chor", &"const a = 1;\n".repeat(20_000));
+    let o = mochi(&["check", path_arg(&rep)]);
+    assert!(o.stderr.len() < 20_000, "{} bytes", o.stderr.len());
+}
+
+#[test]
+fn sequences_are_not_nesting_and_constants_come_in_any_order() {
+    let dir = TempDir::new("sequence");
+    // Before: 1,000 sequential steps hit "nesting deeper than 1000 levels". (100,000 are
+    // parsed in syntax::parser's tests and in benches/pipeline.rs: the synchronisability
+    // stage, not the parser, is what makes long sequences slow.)
+    let (chor, lib) = sequence(1500);
+    dir.write("lib.mochi", &lib);
+    let file = dir.write(
+        "long.chor",
+        &chor.replace("system S", "const later: real = early * 2;\nconst early: real = 1;\nsystem S"),
+    );
+    let o = mochi(&["check", path_arg(&file)]);
+    assert_eq!(o.status.code(), Some(0), "{}{}", stdout(&o), stderr(&o));
+    let o = mochi(&["check", "--format", "json", "choreographies/rejected/E0213-constant-cycle.chor"]);
+    let v: Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    assert_eq!(v["diagnostics"][0]["code"], "E0213");
+    assert!(v["diagnostics"][0]["message"].as_str().is_some_and(|m| m.contains("`reach` -> `margin` -> `reach`")));
+}
+
+#[test]
+fn directories_stdin_summary_and_deadline() {
+    let dir = TempDir::new("inputs");
+    let (chor, lib) = sequence(2);
+    dir.write("lib.mochi", &lib);
+    dir.write("b.chor", &chor);
+    std::fs::create_dir_all(dir.0.join("sub")).expect("mkdir");
+    std::fs::write(dir.0.join("sub/lib.mochi"), &lib).expect("write");
+    std::fs::write(dir.0.join("sub/a.chor"), SYNTAX_ERROR).expect("write");
+    dir.write("notes.txt", "not a choreography");
+    let o = mochi(&["check", path_arg(&dir.0)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let out = stdout(&o);
+    let b = out.find("verdict: verified").expect(&out);
+    let a = out.find("verdict: rejected").expect(&out);
+    assert!(b < a, "sorted by path: b.chor before sub/a.chor: {out}");
+    assert!(out.lines().any(|l| l.starts_with("1 verified, 1 rejected, 0 unknown in ") && l.ends_with(" s")), "{out}");
+    // Standard input, imports relative to the current directory.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mochi"))
+        .args(["check", "-"])
+        .current_dir(&dir.0)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    use std::io::Write;
+    child.stdin.take().expect("stdin").write_all(chor.as_bytes()).expect("write stdin");
+    let o = child.wait_with_output().expect("wait");
+    assert_eq!(o.status.code(), Some(0));
+    assert!(stdout(&o).contains("verdict: verified (<stdin>)"), "{}", stdout(&o));
+    // A deadline already past: unknown (exit 3), never verified.
+    let o =
+        mochi(&["check", "--deadline", "0.000001", path_arg(&dir.0.join("b.chor")), path_arg(&dir.0.join("b.chor"))]);
+    assert_eq!(o.status.code(), Some(3), "{}", stdout(&o));
+    assert!(stdout(&o).contains("the --deadline of"), "{}", stdout(&o));
+    assert!(!stdout(&o).contains("verdict: verified"), "{}", stdout(&o));
+}
+
+#[test]
+fn project_without_a_role_prints_every_local_type() {
+    let o = mochi(&["project", "choreographies/example-4-2-4.chor"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let out = stdout(&o);
+    let roles: Vec<&str> = out.lines().filter_map(|l| l.strip_prefix("local ")).map(|l| &l[..2]).collect();
+    assert_eq!(roles, ["p1", "p2", "p3"], "{out}");
+    let o = mochi(&["project", "--format", "json", "choreographies/example-4-2-4.chor"]);
+    let v: Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    assert_eq!(v["locals"].as_array().map(Vec::len), Some(3), "{v}");
+}
+
+#[test]
+fn explain_list_is_sorted_by_code() {
+    let o = mochi(&["explain", "--list"]);
+    let codes: Vec<&str> =
+        std::str::from_utf8(&o.stdout).expect("utf8").lines().filter_map(|l| l.split(' ').next()).collect();
+    let mut sorted = codes.clone();
+    sorted.sort();
+    assert_eq!(codes, sorted);
+    assert!(codes.contains(&"E0108") && codes.contains(&"E0213"));
 }

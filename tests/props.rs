@@ -2,6 +2,13 @@
 //! (deletions, duplications, token insertions) of the bundled choreographies go through
 //! every stage of `check_source`; whatever the verdict, it must come back with
 //! diagnostics that point inside the loaded files.
+//!
+//! The fuzz target is [`fuzz_mutated_corpus_for_a_bounded_time`]: mutations of the
+//! corpus (the bundled choreographies and `tests/fuzz-corpus/`) for
+//! `MOCHI_FUZZ_SECONDS` seconds (default 3, so `cargo test` in CI runs it every time;
+//! set more for a longer hunt). An input that panics is written to
+//! `target/fuzz-crashes/`; add it to `tests/fuzz-corpus/` with a comment saying what it
+//! broke, and [`the_fuzz_corpus_of_past_crashes_is_handled`] keeps it fixed.
 
 use mochi::driver::{check_source, Config, Verdict};
 use mochi::source::SourceDb;
@@ -87,8 +94,18 @@ const TOKENS: &[&str] = &[
 ];
 
 fn examples() -> Vec<(PathBuf, String)> {
+    read_chor(&["choreographies", "choreographies/rejected"])
+}
+
+/// The examples and the corpus of past crashes (some need a large stack: see
+/// [`on_big_stack`]).
+fn corpus() -> Vec<(PathBuf, String)> {
+    read_chor(&["choreographies", "choreographies/rejected", "tests/fuzz-corpus"])
+}
+
+fn read_chor(dirs: &[&str]) -> Vec<(PathBuf, String)> {
     let mut out = Vec::new();
-    for dir in ["choreographies", "choreographies/rejected"] {
+    for dir in dirs {
         let Ok(entries) = std::fs::read_dir(dir) else { continue };
         for e in entries.flatten() {
             let p = e.path();
@@ -106,6 +123,10 @@ fn examples() -> Vec<(PathBuf, String)> {
 fn check_does_not_panic(name: &str, text: &str) {
     let mut db = SourceDb::new();
     let report = check_source(&mut db, name, text, &Config::default());
+    // Rendering is part of the target: no panic, no raw control character, bounded size.
+    let out = mochi::render::diagnostics_text(&db, &report, false);
+    assert!(!out.bytes().any(|b| b < 0x20 && b != b'\n' && b != b'\t'), "raw control character in {out:?}");
+    assert!(out.len() < 200 * 1024, "{} bytes of diagnostics for {} bytes of input", out.len(), text.len());
     for d in &report.diagnostics {
         let file = db.file(d.span.file);
         assert!(d.span.start <= d.span.end && d.span.end as usize <= file.text.len(), "span out of range: {d:?}");
@@ -120,13 +141,21 @@ enum Mutation {
     Delete(usize, usize),
     Duplicate(usize, usize),
     Insert(usize, usize),
+    /// Inserts one of [`ODD`].
+    Odd(usize, usize),
 }
+
+/// Inputs that are not what they seem (issue 8): a byte-order mark, line ends, control
+/// characters, deep nesting and long operator chains.
+const ODD: &[&str] =
+    &["\u{feff}", "\r", "\r\n", "\0", "\x1b[31m", "\t", "((((((((((", "2 ^ 2 ^ 2 ^ ", "~~~~", "\u{2192}"];
 
 fn mutation() -> impl Strategy<Value = Mutation> {
     prop_oneof![
         (any::<usize>(), 1usize..40).prop_map(|(a, n)| Mutation::Delete(a, n)),
         (any::<usize>(), 1usize..80).prop_map(|(a, n)| Mutation::Duplicate(a, n)),
         (any::<usize>(), 0..TOKENS.len()).prop_map(|(a, t)| Mutation::Insert(a, t)),
+        (any::<usize>(), 0..ODD.len()).prop_map(|(a, t)| Mutation::Odd(a, t)),
     ]
 }
 
@@ -154,6 +183,10 @@ fn apply(text: &str, m: &Mutation) -> String {
         Mutation::Insert(a, t) => {
             let a = boundary(text, a);
             format!("{} {} {}", &text[..a], TOKENS[t], &text[a..])
+        }
+        Mutation::Odd(a, t) => {
+            let a = boundary(text, a);
+            format!("{}{}{}", &text[..a], ODD[t], &text[a..])
         }
     }
 }
@@ -183,6 +216,60 @@ proptest! {
         }
         check_does_not_panic(&path.display().to_string(), &t);
     }
+}
+
+/// Runs `f` on a thread with a large stack, as `main` does: later stages recurse once per
+/// step of a long sequence.
+fn on_big_stack(f: impl FnOnce() + Send + 'static) {
+    let worker = std::thread::Builder::new().stack_size(256 << 20).spawn(f).expect("spawn");
+    if let Err(panic) = worker.join() {
+        std::panic::resume_unwind(panic);
+    }
+}
+
+#[test]
+fn the_fuzz_corpus_of_past_crashes_is_handled() {
+    let corpus: Vec<(PathBuf, String)> =
+        corpus().into_iter().filter(|(p, _)| p.starts_with("tests/fuzz-corpus")).collect();
+    assert!(corpus.len() >= 8, "{} files in tests/fuzz-corpus", corpus.len());
+    on_big_stack(move || {
+        for (path, text) in &corpus {
+            let started = std::time::Instant::now();
+            check_does_not_panic(&path.display().to_string(), text);
+            assert!(started.elapsed().as_secs() < 20, "{} took {:?}", path.display(), started.elapsed());
+        }
+    });
+}
+
+/// The fuzz target: random mutations of the corpus for a bounded time (see the module
+/// documentation). A panicking input is saved before the test fails.
+#[test]
+fn fuzz_mutated_corpus_for_a_bounded_time() {
+    use proptest::strategy::ValueTree;
+    use proptest::test_runner::{Config as RunnerConfig, TestRunner};
+    let seconds: f64 = std::env::var("MOCHI_FUZZ_SECONDS").ok().and_then(|s| s.parse().ok()).unwrap_or(3.0);
+    on_big_stack(move || {
+        let corpus = corpus();
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs_f64(seconds);
+        let mut runner = TestRunner::new(RunnerConfig::default());
+        let strategy = (any::<prop::sample::Index>(), prop::collection::vec(mutation(), 1..6));
+        let mut runs = 0;
+        while std::time::Instant::now() < deadline {
+            let (pick, muts) = strategy.new_tree(&mut runner).expect("a case").current();
+            let (path, text) = &corpus[pick.index(corpus.len())];
+            let t = muts.iter().fold(text.clone(), |t: String, m| apply(&t, m));
+            let name = path.display().to_string();
+            if std::panic::catch_unwind(|| check_does_not_panic(&name, &t)).is_err() {
+                let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("../fuzz-crashes");
+                let _ = std::fs::create_dir_all(&dir);
+                let file = dir.join(format!("crash-{runs}.chor"));
+                let _ = std::fs::write(&file, &t);
+                panic!("{name} mutated by {muts:?} fails; input saved to {}", file.display());
+            }
+            runs += 1;
+        }
+        assert!(runs > 0, "no fuzz case ran in {seconds} s");
+    });
 }
 
 #[test]

@@ -836,6 +836,12 @@ fn separation_plan(prog: &Program, sides: &[Side]) -> Plan {
     Plan::Parts(parts)
 }
 
+/// The world box of each side's footprints, where they can be bounded (for reports: the
+/// driver lists an inferred partition's boxes in JSON).
+pub fn side_boxes(prog: &Program, sides: &[Side]) -> Vec<Option<[Interval; 3]>> {
+    sides.iter().map(|s| side_box(prog, s)).collect()
+}
+
 /// A world box around every footprint of a side, if each can be bounded.
 fn side_box(prog: &Program, side: &Side) -> Option<[Interval; 3]> {
     let mut acc: Option<[Interval; 3]> = None;

@@ -32,7 +32,8 @@ pub fn lex(file: FileId, text: &str) -> (Vec<Token>, Vec<Diagnostic>) {
     let bytes = text.as_bytes();
     let mut toks = Vec::new();
     let mut diags = Vec::new();
-    let mut i = 0;
+    // A UTF-8 byte-order mark, as some Windows editors write, is not part of the text.
+    let mut i = if text.starts_with('\u{feff}') { '\u{feff}'.len_utf8() } else { 0 };
     while i < bytes.len() {
         let c = bytes[i];
         if c.is_ascii_whitespace() {
@@ -41,7 +42,8 @@ pub fn lex(file: FileId, text: &str) -> (Vec<Token>, Vec<Diagnostic>) {
         }
         let start = i;
         if text[i..].starts_with("//") {
-            while i < bytes.len() && bytes[i] != b'\n' {
+            // `\r` ends a line too: files with old Mac line endings have no `\n` at all.
+            while i < bytes.len() && !matches!(bytes[i], b'\n' | b'\r') {
                 i += 1;
             }
             continue;
@@ -64,7 +66,7 @@ pub fn lex(file: FileId, text: &str) -> (Vec<Token>, Vec<Diagnostic>) {
             continue;
         }
         if c == b'"' {
-            match text[i + 1..].find(['"', '\n']) {
+            match text[i + 1..].find(['"', '\n', '\r']) {
                 Some(end) if bytes[i + 1 + end] == b'"' => {
                     let s = text[i + 1..i + 1 + end].to_string();
                     i += end + 2;
@@ -75,7 +77,7 @@ pub fn lex(file: FileId, text: &str) -> (Vec<Token>, Vec<Diagnostic>) {
                         Diagnostic::error(Code::Unterminated, Span::new(file, start, start + 1), "unterminated string")
                             .with_help("close the string with `\"` on the same line"),
                     );
-                    while i < bytes.len() && bytes[i] != b'\n' {
+                    while i < bytes.len() && !matches!(bytes[i], b'\n' | b'\r') {
                         i += 1;
                     }
                     toks.push(Token { tok: Tok::Error, span: Span::new(file, start, i) });
@@ -111,13 +113,27 @@ pub fn lex(file: FileId, text: &str) -> (Vec<Token>, Vec<Diagnostic>) {
             toks.push(Token { tok: Tok::Punct(p), span: Span::new(file, start, i) });
             continue;
         }
-        // Anything else: one whole character, so spans stay on char boundaries.
+        // Anything else: one whole character, so spans stay on char boundaries. A run of
+        // the same bad character (`~~~~~`) is one error, not one per character.
         let ch = text[i..].chars().next().unwrap_or('?');
         i += ch.len_utf8();
+        let mut count = 1;
+        while text[i..].starts_with(ch) {
+            i += ch.len_utf8();
+            count += 1;
+        }
         let span = Span::new(file, start, i);
-        let mut d = Diagnostic::error(Code::UnexpectedChar, span, format!("unexpected character `{ch}`"));
+        let shown = ch.escape_debug();
+        let message = if count == 1 {
+            format!("unexpected character `{shown}`")
+        } else {
+            format!("{count} unexpected characters `{shown}`")
+        };
+        let mut d = Diagnostic::error(Code::UnexpectedChar, span, message);
         if let Some(ascii) = ascii_spelling(ch) {
             d = d.with_help(format!("write `{ascii}` instead"));
+        } else if ch == '\u{feff}' {
+            d = d.with_help("remove the byte-order mark: it is accepted only at the start of a file");
         } else {
             d = d.with_help("mochi source is ASCII; see LANGUAGE.md for the tokens");
         }
@@ -231,6 +247,23 @@ mod tests {
         assert_eq!(kinds("1e-3"), vec![Tok::Real("1e-3".into()), Tok::Eof]);
         assert_eq!(kinds("t.1"), vec![Tok::Ident("t".into()), Tok::Punct("."), Tok::Int(1), Tok::Eof]);
         assert_eq!(kinds("ok."), vec![Tok::Ident("ok".into()), Tok::Punct("."), Tok::Eof]);
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_skipped_and_cr_ends_a_comment() {
+        let (toks, diags) = lex(FileId(0), "\u{feff}a // c\rb");
+        assert!(diags.is_empty(), "{diags:?}");
+        let names: Vec<Tok> = toks.into_iter().map(|t| t.tok).collect();
+        assert_eq!(names, vec![Tok::Ident("a".into()), Tok::Ident("b".into()), Tok::Eof]);
+    }
+
+    #[test]
+    fn control_characters_are_escaped_and_runs_are_one_error() {
+        let (_, diags) = lex(FileId(0), "a \0 ~~~~~ b");
+        assert_eq!(diags.len(), 2, "{diags:?}");
+        assert_eq!(diags[0].message, "unexpected character `\\0`");
+        assert_eq!(diags[1].message, "5 unexpected characters `~`");
+        assert_eq!(diags[1].span.range(), 4..9);
     }
 
     #[test]

@@ -179,7 +179,7 @@ impl Parser {
             Tok::Ident(s) => format!("`{s}`"),
             Tok::Int(i) => format!("number `{i}`"),
             Tok::Real(r) => format!("number `{r}`"),
-            Tok::Str(s) => format!("string \"{s}\""),
+            Tok::Str(s) => format!("string {s:?}"),
             Tok::Punct(p) => format!("`{p}`"),
             Tok::Error => "an invalid token".into(),
             Tok::Eof => "end of file".into(),
@@ -209,12 +209,8 @@ impl Parser {
     fn enter(&mut self) -> PResult<()> {
         self.depth += 1;
         if self.depth > MAX_DEPTH {
-            let d = Diagnostic::error(
-                Code::UnexpectedToken,
-                self.span(),
-                format!("nesting deeper than {MAX_DEPTH} levels"),
-            )
-            .with_help("split the term with named constants, a recursion or shorter sequences");
+            let d = Diagnostic::error(Code::TooDeep, self.span(), format!("nesting deeper than {MAX_DEPTH} levels"))
+                .with_help("split the term with named constants (long sequences `a. b. c` are fine)");
             self.diags.push(d);
             // Jump to the end so the caller does not report the same limit again.
             self.pos = self.toks.len() - 1;
@@ -531,9 +527,9 @@ impl Parser {
     fn sort(&mut self) -> PResult<SortAst> {
         let start = self.span();
         if self.eat_punct("(") {
-            let mut parts = vec![self.sort()?];
+            let mut parts = vec![self.nested(Parser::sort)?];
             while self.eat_punct(",") {
-                parts.push(self.sort()?);
+                parts.push(self.nested(Parser::sort)?);
             }
             self.expect_punct(")")?;
             let span = start.to(self.prev_span());
@@ -767,18 +763,66 @@ impl Parser {
         self.nested(Parser::local_inner)
     }
 
+    /// A sequence of prefixes `dt<a>.`, `q!l.`, `p?l.` ending in another local type, read
+    /// in a loop like [`Parser::process_prefix`] (a sequence is not nesting).
     fn local_inner(&mut self) -> PResult<Local> {
+        let mut heads: Vec<Local> = Vec::new();
+        let last = loop {
+            let start = self.span();
+            if self.eat_kw("dt") {
+                let prims = self.local_prims()?;
+                self.expect_punct(".")?;
+                let cont = Box::new(Local::End(start));
+                heads.push(Local::Motion { prims, cont, span: start.to(self.prev_span()) });
+                continue;
+            }
+            let single = !(self.is_punct("+") || self.is_punct("&") || self.is_punct("("));
+            if single && (self.is_punct("[") || matches!(self.peek_at(1), Tok::Punct("!"))) {
+                let b = self.local_send_head()?;
+                heads.push(Local::Send { branches: vec![b], span: start.to(self.prev_span()) });
+                continue;
+            }
+            if single && matches!(self.peek_at(1), Tok::Punct("?")) {
+                let b = self.local_recv_head()?;
+                heads.push(Local::Recv { branches: vec![b], default: None, span: start.to(self.prev_span()) });
+                continue;
+            }
+            break self.local_atom()?;
+        };
+        // Each prefix's span runs to the end of the whole sequence, as a recursive parse gives.
+        let end = self.prev_span();
+        let mut acc = last;
+        while let Some(mut head) = heads.pop() {
+            match &mut head {
+                Local::Motion { cont, span, .. } => {
+                    **cont = acc;
+                    *span = span.to(end);
+                }
+                Local::Send { branches, span } => {
+                    if let Some(b) = branches.first_mut() {
+                        b.cont = acc;
+                    }
+                    *span = span.to(end);
+                }
+                Local::Recv { branches, span, .. } => {
+                    if let Some(b) = branches.first_mut() {
+                        b.cont = acc;
+                    }
+                    *span = span.to(end);
+                }
+                _ => {}
+            }
+            acc = head;
+        }
+        Ok(acc)
+    }
+
+    fn local_atom(&mut self) -> PResult<Local> {
         let start = self.span();
         if self.eat_punct("(") {
             let t = self.local()?;
             self.expect_punct(")")?;
             return Ok(t);
-        }
-        if self.eat_kw("dt") {
-            let prims = self.local_prims()?;
-            self.expect_punct(".")?;
-            let cont = self.local()?;
-            return Ok(Local::Motion { prims, cont: Box::new(cont), span: start.to(self.prev_span()) });
         }
         if self.is_punct("+") && matches!(self.peek_at(1), Tok::Punct("{")) {
             self.bump();
@@ -808,14 +852,6 @@ impl Parser {
             }
             return Ok(Local::Recv { branches, default, span: start.to(self.prev_span()) });
         }
-        if self.is_punct("[") || matches!(self.peek_at(1), Tok::Punct("!")) {
-            let b = self.local_send()?;
-            return Ok(Local::Send { branches: vec![b], span: start.to(self.prev_span()) });
-        }
-        if matches!(self.peek_at(1), Tok::Punct("?")) {
-            let b = self.local_recv()?;
-            return Ok(Local::Recv { branches: vec![b], default: None, span: start.to(self.prev_span()) });
-        }
         if self.eat_kw("mu") {
             let var = self.ident("a recursion variable")?;
             let params = self.rec_params()?;
@@ -843,6 +879,13 @@ impl Parser {
     }
 
     fn local_send(&mut self) -> PResult<LocalSend> {
+        let mut b = self.local_send_head()?;
+        b.cont = self.local()?;
+        Ok(b)
+    }
+
+    /// `[g] q!l(fields).` with an `end` placeholder for the continuation.
+    fn local_send_head(&mut self) -> PResult<LocalSend> {
         let start = self.span();
         let guard = if self.eat_punct("[") {
             let g = self.expr()?;
@@ -863,11 +906,17 @@ impl Parser {
         };
         let span = start.to(self.prev_span());
         self.expect_punct(".")?;
-        let cont = self.local()?;
-        Ok(LocalSend { guard, to, label, payload, cont, span })
+        Ok(LocalSend { guard, to, label, payload, cont: Local::End(span), span })
     }
 
     fn local_recv(&mut self) -> PResult<LocalRecv> {
+        let mut b = self.local_recv_head()?;
+        b.cont = self.local()?;
+        Ok(b)
+    }
+
+    /// `p?l(fields).` with an `end` placeholder for the continuation.
+    fn local_recv_head(&mut self) -> PResult<LocalRecv> {
         let start = self.span();
         let from = self.ident("a sending participant")?;
         self.expect_punct("?")?;
@@ -881,8 +930,7 @@ impl Parser {
         };
         let span = start.to(self.prev_span());
         self.expect_punct(".")?;
-        let cont = self.local()?;
-        Ok(LocalRecv { from, label, payload, cont, span })
+        Ok(LocalRecv { from, label, payload, cont: Local::End(span), span })
     }
 
     // ---- processes (Sec 3.1) -------------------------------------------------------
@@ -904,26 +952,72 @@ impl Parser {
         Ok(Process::Sum(parts, span))
     }
 
-    /// The continuation of a prefix: another prefix (parenthesise sums).
-    fn process_cont(&mut self) -> PResult<Box<Process>> {
-        self.expect_punct(".")?;
-        Ok(Box::new(self.nested(Parser::process_prefix)?))
+    /// A sequence of prefixes `a.b.c. ... .P` (the continuation of a prefix is another
+    /// prefix: parenthesise sums). Read in a loop, not by recursion: a sequence is not
+    /// nesting, and a process of 100,000 steps must parse. The tree is built from the end.
+    fn process_prefix(&mut self) -> PResult<Process> {
+        let mut heads: Vec<Process> = Vec::new();
+        let last = loop {
+            let start = self.span();
+            let placeholder = || Box::new(Process::End(start));
+            if self.eat_kw("dt") {
+                self.expect_punct("<")?;
+                let prim = self.prim_call()?;
+                self.expect_punct(">")?;
+                let span = start.to(self.prev_span());
+                self.expect_punct(".")?;
+                heads.push(Process::Motion { prim, cont: placeholder(), span });
+                continue;
+            }
+            let is_comm = matches!(self.peek(), Tok::Ident(s) if !RESERVED.contains(&s.as_str()))
+                && matches!(self.peek_at(1), Tok::Punct("!" | "?"));
+            if !is_comm {
+                break self.process_atom()?;
+            }
+            let who = self.ident("a participant")?;
+            if self.eat_punct("!") {
+                let label = self.ident("a message label")?;
+                let args = self.opt_args()?;
+                let span = start.to(self.prev_span());
+                self.expect_punct(".")?;
+                heads.push(Process::Send { to: who, label, args, cont: placeholder(), span });
+            } else {
+                self.expect_punct("?")?;
+                let label = self.ident("a message label")?;
+                let mut binders = Vec::new();
+                if self.eat_punct("(") {
+                    if !self.is_punct(")") {
+                        loop {
+                            binders.push(self.ident("a variable to bind the received value")?);
+                            if !self.eat_punct(",") {
+                                break;
+                            }
+                        }
+                    }
+                    self.expect_punct(")")?;
+                }
+                let span = start.to(self.prev_span());
+                self.expect_punct(".")?;
+                heads.push(Process::Recv { from: who, label, binders, cont: placeholder(), span });
+            }
+        };
+        let mut acc = last;
+        while let Some(mut head) = heads.pop() {
+            if let Process::Motion { cont, .. } | Process::Send { cont, .. } | Process::Recv { cont, .. } = &mut head {
+                **cont = acc;
+            }
+            acc = head;
+        }
+        Ok(acc)
     }
 
-    fn process_prefix(&mut self) -> PResult<Process> {
+    /// A process that is not a prefix: `( P )`, `if`, `mu`, `end` or a variable.
+    fn process_atom(&mut self) -> PResult<Process> {
         let start = self.span();
         if self.eat_punct("(") {
             let p = self.process()?;
             self.expect_punct(")")?;
             return Ok(p);
-        }
-        if self.eat_kw("dt") {
-            self.expect_punct("<")?;
-            let prim = self.prim_call()?;
-            self.expect_punct(">")?;
-            let span = start.to(self.prev_span());
-            let cont = self.process_cont()?;
-            return Ok(Process::Motion { prim, cont, span });
         }
         if self.eat_kw("if") {
             let cond = self.expr()?;
@@ -948,34 +1042,9 @@ impl Parser {
         if self.eat_kw("end") {
             return Ok(Process::End(start));
         }
-        let who = self.ident("a process (`q!l(e).P`, `p?l(x).P`, `dt<a>.P`, `if`, `mu x.P`, `x` or `end`)")?;
-        if self.eat_punct("!") {
-            let label = self.ident("a message label")?;
-            let args = self.opt_args()?;
-            let span = start.to(self.prev_span());
-            let cont = self.process_cont()?;
-            return Ok(Process::Send { to: who, label, args, cont, span });
-        }
-        if self.eat_punct("?") {
-            let label = self.ident("a message label")?;
-            let mut binders = Vec::new();
-            if self.eat_punct("(") {
-                if !self.is_punct(")") {
-                    loop {
-                        binders.push(self.ident("a variable to bind the received value")?);
-                        if !self.eat_punct(",") {
-                            break;
-                        }
-                    }
-                }
-                self.expect_punct(")")?;
-            }
-            let span = start.to(self.prev_span());
-            let cont = self.process_cont()?;
-            return Ok(Process::Recv { from: who, label, binders, cont, span });
-        }
+        let var = self.ident("a process (`q!l(e).P`, `p?l(x).P`, `dt<a>.P`, `if`, `mu x.P`, `x` or `end`)")?;
         let args = self.opt_args()?;
-        Ok(Process::Var { var: who, args, span: start.to(self.prev_span()) })
+        Ok(Process::Var { var, args, span: start.to(self.prev_span()) })
     }
 
     // ---- expressions ---------------------------------------------------------------
@@ -1019,37 +1088,51 @@ impl Parser {
 
     /// Precedence climbing. `=>` and `^` associate to the right; comparison chains
     /// `a <= x <= b` mean `a <= x && x <= b`, as written in the paper.
+    ///
+    /// Every operator applied is a level of nesting (the tree `((a + b) + c) + ...` is as
+    /// deep as it is long, and later stages recurse over it), so a chain of operators
+    /// counts towards [`MAX_DEPTH`] like parentheses do. A chain is left-nested, so any
+    /// length of comparisons `a < b < c < d` is the conjunction of its neighbours; a
+    /// parenthesised comparison `(a < b) == c` starts no chain.
     fn expr_bp(&mut self, min: u8) -> PResult<Expr> {
         let mut lhs = self.expr_unary()?;
-        while let Some(op) = self.peek_binop() {
+        let mut levels = 0;
+        // The right operand of the last comparison of this chain, if the last operator was one.
+        let mut chain: Option<Expr> = None;
+        let res = loop {
+            let Some(op) = self.peek_binop() else { break Ok(lhs) };
             let prec = op.precedence();
             if prec < min {
-                break;
+                break Ok(lhs);
             }
+            if self.enter().is_err() {
+                break Err(());
+            }
+            levels += 1;
             self.bump();
             let right_assoc = matches!(op, BinOp::Implies | BinOp::Pow);
-            let rhs = self.expr_bp(if right_assoc { prec } else { prec + 1 })?;
-            let span = lhs.span.to(rhs.span);
-            lhs = if op.is_comparison() {
-                if let ExprKind::Binary(prev, _, mid) = &lhs.kind {
-                    if prev.is_comparison() {
-                        let mid = (**mid).clone();
-                        let right = Expr {
-                            span: mid.span.to(rhs.span),
-                            kind: ExprKind::Binary(op, Box::new(mid), Box::new(rhs)),
-                        };
-                        Expr { kind: ExprKind::Binary(BinOp::And, Box::new(lhs), Box::new(right)), span }
-                    } else {
-                        Expr { kind: ExprKind::Binary(op, Box::new(lhs), Box::new(rhs)), span }
-                    }
-                } else {
-                    Expr { kind: ExprKind::Binary(op, Box::new(lhs), Box::new(rhs)), span }
-                }
-            } else {
-                Expr { kind: ExprKind::Binary(op, Box::new(lhs), Box::new(rhs)), span }
+            let rhs = match stacker::maybe_grow(STACK_RED_ZONE, STACK_GROWTH, || {
+                self.expr_bp(if right_assoc { prec } else { prec + 1 })
+            }) {
+                Ok(rhs) => rhs,
+                Err(()) => break Err(()),
             };
+            let span = lhs.span.to(rhs.span);
+            let next_chain = op.is_comparison().then(|| rhs.clone());
+            lhs = match chain.take() {
+                Some(mid) if op.is_comparison() => {
+                    let right =
+                        Expr { span: mid.span.to(rhs.span), kind: ExprKind::Binary(op, Box::new(mid), Box::new(rhs)) };
+                    Expr { kind: ExprKind::Binary(BinOp::And, Box::new(lhs), Box::new(right)), span }
+                }
+                _ => Expr { kind: ExprKind::Binary(op, Box::new(lhs), Box::new(rhs)), span },
+            };
+            chain = next_chain;
+        };
+        for _ in 0..levels {
+            self.leave();
         }
-        Ok(lhs)
+        res
     }
 
     fn expr_unary(&mut self) -> PResult<Expr> {
@@ -1069,12 +1152,28 @@ impl Parser {
             return Ok(Expr { span: start.to(inner.span), kind: ExprKind::Unary(op, Box::new(inner)) });
         }
         let mut e = self.expr_atom()?;
+        // `a.b.c` is a tree as deep as the chain is long: each `.` is a level.
+        let mut levels = 0;
+        let mut res = Ok(());
         while self.is_punct(".") && matches!(self.peek_at(1), Tok::Ident(_)) {
+            res = self.enter();
+            if res.is_err() {
+                break;
+            }
+            levels += 1;
             self.bump();
-            let field = self.ident("a field name")?;
-            e = Expr { span: e.span.to(field.span), kind: ExprKind::Dot(Box::new(e), field) };
+            match self.ident("a field name") {
+                Ok(field) => e = Expr { span: e.span.to(field.span), kind: ExprKind::Dot(Box::new(e), field) },
+                Err(()) => {
+                    res = Err(());
+                    break;
+                }
+            }
         }
-        Ok(e)
+        for _ in 0..levels {
+            self.leave();
+        }
+        res.map(|()| e)
     }
 
     fn expr_atom(&mut self) -> PResult<Expr> {
@@ -1175,6 +1274,45 @@ mod tests {
     }
 
     #[test]
+    fn comparison_chains_of_any_length_are_conjunctions_of_neighbours() {
+        let (e, d) = parse_expr(FileId(0), "1 < 2 < 3 < 4");
+        assert!(d.is_empty(), "{d:?}");
+        // ((1 < 2 && 2 < 3) && 3 < 4)
+        let ExprKind::Binary(BinOp::And, l, r) = e.unwrap().kind else { panic!("expected &&") };
+        assert!(matches!(l.kind, ExprKind::Binary(BinOp::And, _, _)));
+        let ExprKind::Binary(BinOp::Lt, a, b) = r.kind else { panic!("expected 3 < 4") };
+        assert!(matches!((a.kind, b.kind), (ExprKind::Int(3), ExprKind::Int(4))));
+        // A parenthesised comparison is an operand, not the start of a chain.
+        let (e, _) = parse_expr(FileId(0), "(x < y) == b");
+        assert!(matches!(e.unwrap().kind, ExprKind::Binary(BinOp::Eq, _, _)));
+    }
+
+    #[test]
+    fn operator_chains_count_as_nesting() {
+        for src in [format!("{}1", "2 ^ ".repeat(10_000)), format!("1{}", " + 1".repeat(10_000))] {
+            let (_, d) = parse_expr(FileId(0), &src);
+            assert_eq!(d.len(), 1, "{d:?}");
+            assert_eq!(d[0].code, Code::TooDeep);
+        }
+        let (_, d) = parse_expr(FileId(0), &format!("1{}", " + 1".repeat(900)));
+        assert!(d.is_empty(), "{d:?}");
+    }
+
+    #[test]
+    fn sorts_and_field_chains_count_as_nesting() {
+        // Before: a sort nested a million deep overflowed the stack (a crash, not an error).
+        on_big_stack(|| {
+            let deep_sort = format!("const a: {}int{} = 1;", "(".repeat(1_000_000), ")".repeat(1_000_000));
+            let dots = format!("const a = x{};", ".y".repeat(100_000));
+            for src in [deep_sort, dots] {
+                let (_, d) = parse(FileId(0), &src);
+                assert_eq!(d.len(), 1, "{d:?}");
+                assert_eq!(d[0].code, Code::TooDeep);
+            }
+        });
+    }
+
+    #[test]
     fn process_sum_of_inputs_with_default_motion() {
         let (f, d) = parse(FileId(0), "process A = p?a(x).dt<m>.X + p?b.end + dt<idle>.X;");
         assert!(d.is_empty(), "{d:?}");
@@ -1192,6 +1330,39 @@ mod tests {
         assert!(matches!(t, Some(Local::Recv { default: Some(_), .. })));
     }
 
+    /// Runs `f` on a thread with a large stack: dropping (and later stages walking) a
+    /// 100,000-step process recurses once per step, beyond a test thread's 2 MiB.
+    fn on_big_stack(f: impl FnOnce() + Send + 'static) {
+        std::thread::Builder::new().stack_size(256 << 20).spawn(f).expect("thread").join().expect("no panic");
+    }
+
+    #[test]
+    fn long_sequences_are_not_nesting() {
+        on_big_stack(|| {
+            let n = 100_000;
+            let src = format!(
+                "choreography C = {}end;\nprocess A = {}end;\nlocal A = {}end;\nlocal B = {}end;",
+                "A -> B : m.\n".repeat(n),
+                "dt<w>.B!m(1).B?r(x).".repeat(n / 2),
+                "dt<w>.B!m.".repeat(n / 2),
+                "A?m(x: real).".repeat(n)
+            );
+            let (f, d) = parse(FileId(0), &src);
+            assert!(d.is_empty(), "{:?}", &d[..d.len().min(3)]);
+            let Item::Process(p) = &f.items[1] else { panic!("a process") };
+            let (mut steps, mut cur) = (0, &p.body);
+            while let Process::Motion { cont, .. } | Process::Send { cont, .. } | Process::Recv { cont, .. } = cur {
+                steps += 1;
+                cur = cont;
+            }
+            assert_eq!(steps, 3 * n / 2);
+            assert!(matches!(cur, Process::End(_)));
+            let Item::Local(l) = &f.items[2] else { panic!("a local type") };
+            let Local::Motion { span, .. } = &l.body else { panic!("a motion") };
+            assert_eq!(span.end, l.span.end - 1, "the span covers the sequence up to its `end`");
+        });
+    }
+
     #[test]
     fn errors_recover_at_the_next_item() {
         let (f, d) = parse(FileId(0), "const a = ;\nconst b = 2;\nrobot R { state x: real; bogus; }\nconst c = 3;");
@@ -1204,6 +1375,6 @@ mod tests {
     fn deep_nesting_is_an_error_not_a_crash() {
         let src = format!("const a = {}1{};", "(".repeat(5000), ")".repeat(5000));
         let (_, d) = parse(FileId(0), &src);
-        assert!(d.iter().any(|d| d.message.contains("nesting deeper")));
+        assert!(d.iter().any(|d| d.message.contains("nesting deeper") && d.code == Code::TooDeep));
     }
 }
