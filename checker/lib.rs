@@ -20,6 +20,7 @@
 pub mod bounds;
 pub mod diag;
 pub mod driver;
+pub mod exact;
 pub mod hir;
 pub mod lanes;
 pub mod lower;
