@@ -96,16 +96,16 @@ impl Num {
     pub fn to_f64(&self) -> f64 {
         self.mid().to_f64().unwrap_or(f64::NAN)
     }
-    fn neg(&self) -> Num {
+    pub fn neg(&self) -> Num {
         Num { lo: -&self.hi, hi: -&self.lo }
     }
-    fn add(&self, o: &Num) -> Num {
+    pub fn add(&self, o: &Num) -> Num {
         Num { lo: &self.lo + &o.lo, hi: &self.hi + &o.hi }
     }
-    fn sub(&self, o: &Num) -> Num {
+    pub fn sub(&self, o: &Num) -> Num {
         self.add(&o.neg())
     }
-    fn mul(&self, o: &Num) -> Num {
+    pub fn mul(&self, o: &Num) -> Num {
         if self.is_exact() && o.is_exact() {
             return Num::exact(&self.lo * &o.lo);
         }
@@ -121,7 +121,7 @@ impl Num {
         let inv = Num::range(o.hi.recip(), o.lo.recip());
         Ok(self.mul(&inv))
     }
-    fn hull(&self, o: &Num) -> Num {
+    pub fn hull(&self, o: &Num) -> Num {
         Num { lo: self.lo.clone().min(o.lo.clone()), hi: self.hi.clone().max(o.hi.clone()) }
     }
     fn lt(&self, o: &Num) -> Tri {
@@ -490,7 +490,7 @@ fn root_bound(v: &Rat, upper: bool) -> Result<Rat, String> {
 /// `sin`/`cos` of an interval: exact at 0, otherwise the double-precision value widened
 /// by a margin (1e-9 plus the interval's width: both functions are 1-Lipschitz), and all
 /// of `[-1, 1]` for wide or huge arguments.
-fn trig(f: Builtin, x: &Num) -> Num {
+pub fn trig(f: Builtin, x: &Num) -> Num {
     let full = Num::range(Rat::from_integer(BigInt::from(-1)), Rat::one());
     if x.value().is_some_and(Zero::is_zero) {
         return Num::int(if f == Builtin::Sin { 0 } else { 1 });

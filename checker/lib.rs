@@ -28,6 +28,7 @@ pub mod obligation;
 pub mod project;
 pub mod render;
 pub mod sigma;
+pub mod simulate;
 pub mod smt;
 pub mod source;
 pub mod subtype;

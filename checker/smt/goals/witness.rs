@@ -15,7 +15,7 @@ use num_bigint::BigInt;
 use std::cell::Cell;
 use std::str::FromStr;
 use std::time::Duration;
-use z3::ast::{Ast, Bool, Int, Real};
+use z3::ast::{Bool, Int, Real};
 
 /// A Z3 context on this thread with a watchdog (see [`Watchdog`]); every query of a
 /// simulation runs in one.
@@ -131,11 +131,20 @@ impl Session<'_> {
     /// time `T` in every duration, states at `f * T` for each fraction `f` in `fracs`
     /// (the last must be 1, the end) satisfying each guarantee, assumption (inputs
     /// connected as in [AGCOMP]) and invariant, and each postcondition at `T`.
-    /// `None` if the contracts admit no such trajectory.
-    pub fn trajectory(&self, prog: &Program, movers: &[Mover], fracs: &[Rat]) -> Result<Option<Trajectory>, Why> {
+    /// `None` if the contracts admit no such trajectory. `end_at` fixes the end time.
+    pub fn trajectory(
+        &self,
+        prog: &Program,
+        movers: &[Mover],
+        fracs: &[Rat],
+        end_at: Option<&Rat>,
+    ) -> Result<Option<Trajectory>, Why> {
         let mut q = query(prog);
         let end = q.enc.named_real("end time");
         q.assertions.push(end.ge(zero()));
+        if let Some(e) = end_at {
+            q.assertions.push(end.eq(real(e).ok_or_else(unreadable)?));
+        }
         let mut samples: Vec<(Real, Vec<Inst>)> = Vec::new();
         for (k, f) in fracs.iter().enumerate() {
             let fr = real(f).ok_or_else(unreadable)?;
