@@ -743,6 +743,16 @@ impl<'a, 'p> Runner<'a, 'p> {
                 return Flow::Stop;
             }
         }
+        // An interruptible motion lasts until its participant's next event ([INTERRUPT]):
+        // a side that finishes early keeps moving until the `*` ends.
+        let end = ranges.iter().flat_map(|r| self.segments[r.clone()].iter().map(|s| s.to.clone())).max();
+        if let Some(end) = end {
+            for i in ranges.iter().flat_map(|r| r.clone()) {
+                if !self.extend(i, &end) {
+                    return Flow::Stop;
+                }
+            }
+        }
         for a in 0..ranges.len() {
             for b in a + 1..ranges.len() {
                 for i in ranges[a].clone() {
@@ -759,6 +769,44 @@ impl<'a, 'p> Runner<'a, 'p> {
         }
         // The continuation synchronises: it starts when every side has finished.
         Flow::Next
+    }
+
+    /// Extends segment `i` to `end` when its motion is interruptible and is its
+    /// participant's latest: a new witness ending then, if the contract allows one
+    /// (otherwise it ends as first chosen). False when the run must stop.
+    fn extend(&mut self, i: usize, end: &Rat) -> bool {
+        let s = self.segments[i].clone();
+        if !self.prog.prim(s.app.prim).interruptible || s.to >= *end || self.clock[s.role.idx()] != s.to {
+            return true;
+        }
+        let len = end - &s.from;
+        let mover = Mover { role: s.role, app: s.app.clone(), start: s.start.clone(), inputs: s.inputs.clone() };
+        let one = [Rat::from_integer(BigInt::from(1))];
+        match self.sess.trajectory(self.prog, std::slice::from_ref(&mover), &one, Some(&len)) {
+            Ok(Some(tr)) => {
+                if let Some(state) = tr.samples.first().and_then(|x| x.states.first()) {
+                    self.state[s.role.idx()] = state.clone();
+                    self.clock[s.role.idx()] = end.clone();
+                    let seg = &mut self.segments[i];
+                    seg.end = state.clone();
+                    seg.to = end.clone();
+                    let line = format!(
+                        "t = {}: `{}` ({}) kept running until then (interruptible); {}",
+                        exact::decimal(end),
+                        self.prog.prim(s.app.prim).name,
+                        self.prog.role_name(s.role),
+                        self.show_state(s.role)
+                    );
+                    self.trace.push(line);
+                }
+                true
+            }
+            Ok(None) => true,
+            Err(why) => {
+                self.undecided(end, "extending an interruptible motion", why);
+                false
+            }
+        }
     }
 
     /// Two motions of different sides of `*`: at a few times where both run, a state of

@@ -177,6 +177,11 @@ impl<'p> Encoder<'p> {
         self.named(&name, &s.clone())
     }
 
+    /// The query's named variables (for replaying a model exactly).
+    pub fn terms(&self) -> impl Iterator<Item = (&String, &Term)> {
+        self.vars.iter()
+    }
+
     /// The values of the query's variables in `model`, by name. Variables the query
     /// does not constrain (absent from the model) are left out.
     pub fn assignments(&self, model: &z3::Model) -> Vec<super::Assignment> {

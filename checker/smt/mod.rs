@@ -18,6 +18,7 @@
 
 mod encode;
 pub mod goals;
+pub mod replay;
 
 use crate::hir::{Expr, Program};
 use crate::obligation::{Goal, Obligation};
@@ -314,7 +315,8 @@ fn progress_bar(cfg: &SmtConfig, n: usize) -> Option<indicatif::ProgressBar> {
 #[derive(Clone)]
 enum Answer {
     Unsat,
-    Sat { values: Vec<Assignment>, overlap: Option<Overlap> },
+    /// `exact`: the model's values as rationals, for [`replay`].
+    Sat { values: Vec<Assignment>, overlap: Option<Overlap>, exact: replay::Valuation },
     Unknown(Why),
 }
 
@@ -392,7 +394,14 @@ impl Worker<'_> {
             }
             match answer {
                 Answer::Unsat => {}
-                Answer::Sat { values, overlap } => {
+                Answer::Sat { values, overlap, exact } => {
+                    // A counterexample is shown only if it replays in exact arithmetic;
+                    // one that does not is a bug of the encoding, never a failure.
+                    if let Some(why) = replay::refutes(self.prog, ob, part, &exact) {
+                        let why = Why::Incomplete(format!("its model did not replay in exact arithmetic ({why}); please report this as a bug in mochi"));
+                        unknown.get_or_insert((describe(self.prog, ob, part), why));
+                        continue;
+                    }
                     let which = Some(part.clone());
                     let part = describe(self.prog, ob, part);
                     return (Decision::Fails(Failure { part, which, values, overlap }), stats);
@@ -458,9 +467,9 @@ impl Worker<'_> {
                         point: [0, 1, 2].map(|i| encode::Encoder::value_of(&m, &p[i]).unwrap_or(f64::NAN)),
                         times: q.times.iter().map(|t| encode::Encoder::value_of(&m, t).unwrap_or(f64::NAN)).collect(),
                     });
-                    Answer::Sat { values: q.enc.assignments(&m), overlap }
+                    Answer::Sat { values: q.enc.assignments(&m), overlap, exact: replay::valuation(&q.enc, &m) }
                 }
-                None => Answer::Sat { values: Vec::new(), overlap: None },
+                None => Answer::Sat { values: Vec::new(), overlap: None, exact: Default::default() },
             },
             z3::SatResult::Unknown if timed_out => Answer::Unknown(Why::Timeout(self.cfg.timeout)),
             z3::SatResult::Unknown => {

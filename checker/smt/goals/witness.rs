@@ -285,7 +285,7 @@ fn pin(t: &Term, v: &Value) -> Option<Bool> {
 }
 
 /// The exact value of a term in a model.
-fn value_of(m: &z3::Model, t: &Term) -> Option<Value> {
+pub(crate) fn value_of(m: &z3::Model, t: &Term) -> Option<Value> {
     Some(match t {
         Term::B(b) => Value::Bool(match m.eval(b, true)?.as_bool() {
             Some(x) => Tri::of(x),
@@ -347,6 +347,7 @@ fn numeral(s: &str) -> Option<Rat> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use z3::ast::Ast;
 
     #[test]
     fn numerals_read_back_exactly() {
