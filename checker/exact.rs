@@ -39,6 +39,7 @@ impl Tri {
             Tri::False
         }
     }
+    #[allow(clippy::should_implement_trait)]
     pub fn not(self) -> Tri {
         match self {
             Tri::True => Tri::False,
@@ -181,6 +182,7 @@ pub fn decimal(r: &Rat) -> String {
 
 /// A value of the language.
 #[derive(Clone, Debug, PartialEq)]
+#[allow(clippy::large_enum_variant)]
 pub enum Value {
     Bool(Tri),
     Num(Num),
@@ -261,7 +263,11 @@ pub fn literal(r: &Rat, loc: Loc) -> Expr {
     if r.is_integer() {
         return lit(r.numer());
     }
-    Expr { kind: ExprKind::Binary(BinOp::Div, Box::new(lit(r.numer())), Box::new(lit(r.denom()))), sort: Sort::Real, loc }
+    Expr {
+        kind: ExprKind::Binary(BinOp::Div, Box::new(lit(r.numer())), Box::new(lit(r.denom()))),
+        sort: Sort::Real,
+        loc,
+    }
 }
 
 /// The values of variables.
@@ -497,7 +503,7 @@ pub fn trig(f: Builtin, x: &Num) -> Num {
     }
     let width = (&x.hi - &x.lo).to_f64().unwrap_or(f64::INFINITY);
     let m = x.mid().to_f64().unwrap_or(f64::INFINITY);
-    if !(width < 1e-3) || !(m.abs() < 1e6) {
+    if width.is_nan() || width >= 1e-3 || m.is_nan() || m.abs() >= 1e6 {
         return full;
     }
     let v = if f == Builtin::Sin { m.sin() } else { m.cos() };
@@ -549,7 +555,10 @@ mod tests {
         assert_eq!(eval_guard("", "x^2 == 4 && abs(0 - x) == 2 && min(x, 1) == 1", "2"), Tri::True);
         assert_eq!(eval_guard("", "x > 1 => x > 2", "1.5"), Tri::False);
         assert_eq!(eval_guard("", "(if x > 0 then x else 0 - x) == 3", "-3"), Tri::True);
-        assert_eq!(eval_guard("", "norm2(vector(x, 0, 1)) == 5 && dot(point(1,2,3), vector(x,x,x)) == 12", "2"), Tri::True);
+        assert_eq!(
+            eval_guard("", "norm2(vector(x, 0, 1)) == 5 && dot(point(1,2,3), vector(x,x,x)) == 12", "2"),
+            Tri::True
+        );
     }
 
     #[test]

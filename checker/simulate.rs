@@ -276,7 +276,10 @@ impl<'a, 'p> Runner<'a, 'p> {
                     self.report(
                         Kind::Stuck,
                         &Rat::zero(),
-                        format!("`{}` has no initial state: its init contradicts its kind's invariant", prog.role_name(r)),
+                        format!(
+                            "`{}` has no initial state: its init contradicts its kind's invariant",
+                            prog.role_name(r)
+                        ),
                     );
                     return false;
                 }
@@ -400,7 +403,11 @@ impl<'a, 'p> Runner<'a, 'p> {
                     if undecided {
                         self.report(Kind::Undecided, &now, "the guards of a choice cannot be evaluated exactly".into());
                     } else {
-                        self.report(Kind::Stuck, &now, "no branch of the choice is enabled: every guard is false".into());
+                        self.report(
+                            Kind::Stuck,
+                            &now,
+                            "no branch of the choice is enabled: every guard is false".into(),
+                        );
                     }
                     return Flow::Stop;
                 }
@@ -500,8 +507,11 @@ impl<'a, 'p> Runner<'a, 'p> {
         self.steps += 1;
         let prog = self.prog;
         let t0 = m.parts.iter().map(|(r, _)| self.clock[r.idx()].clone()).max().unwrap_or_default();
-        let names: Vec<String> =
-            m.parts.iter().map(|(r, app)| format!("{}: {}", prog.role_name(*r), crate::hir::print::prim_app(prog, app))).collect();
+        let names: Vec<String> = m
+            .parts
+            .iter()
+            .map(|(r, app)| format!("{}: {}", prog.role_name(*r), crate::hir::print::prim_app(prog, app)))
+            .collect();
         let who = format!("dt<{}>", names.join(", "));
         // Arguments evaluated now, preconditions checked exactly ([TRAJ-BASE]).
         let mut movers = Vec::new();
@@ -520,15 +530,19 @@ impl<'a, 'p> Runner<'a, 'p> {
             let start = self.state[r.idx()].clone();
             let vals: Vec<Value> = args.iter().map(|(v, _)| v.clone()).collect();
             let zero = Num::int(0);
-            let now_inputs: Vec<Option<Value>> = (0..prog.kind_of(*r).inputs.len())
-                .map(|i| self.lookup(&Var::Role(*r, Slot::Input(i))))
-                .collect();
+            let now_inputs: Vec<Option<Value>> =
+                (0..prog.kind_of(*r).inputs.len()).map(|i| self.lookup(&Var::Role(*r, Slot::Input(i)))).collect();
             let pre = exact::holds(prog, &prim.pre, &frame_env(&start, &start, &vals, &zero, &now_inputs));
             if pre == Tri::False {
                 self.report(
                     Kind::Stuck,
                     &t0,
-                    format!("{who}: the precondition of `{}` ({}) is false; {}", prim.name, prog.role_name(*r), self.show_state(*r)),
+                    format!(
+                        "{who}: the precondition of `{}` ({}) is false; {}",
+                        prim.name,
+                        prog.role_name(*r),
+                        self.show_state(*r)
+                    ),
                 );
                 return Flow::Stop;
             }
@@ -976,7 +990,11 @@ fn value_expr(v: &Value, sort: &Sort, loc: Loc) -> Option<Expr> {
         Value::Vec3(c) => {
             let f = if *sort == Sort::Vector { Builtin::Vector } else { Builtin::Point };
             let args = vec![num(&c[0])?, num(&c[1])?, num(&c[2])?];
-            Expr { kind: ExprKind::Call(f, args), sort: if *sort == Sort::Vector { Sort::Vector } else { Sort::Point }, loc }
+            Expr {
+                kind: ExprKind::Call(f, args),
+                sort: if *sort == Sort::Vector { Sort::Vector } else { Sort::Point },
+                loc,
+            }
         }
     })
 }

@@ -29,7 +29,10 @@ fn verdict(path: &str) -> Verdict {
 /// No collision, stuck state, violation or replay failure; and at least some steps ran
 /// (a simulation that stops at once would pass vacuously).
 fn assert_clean(what: &str, r: &SimReport) {
-    let bad: Vec<String> = r.failures().map(|f| format!("{:?} at step {}: {}\n  {}", f.kind, f.step, f.message, f.trace.join("\n  "))).collect();
+    let bad: Vec<String> = r
+        .failures()
+        .map(|f| format!("{:?} at step {}: {}\n  {}", f.kind, f.step, f.message, f.trace.join("\n  ")))
+        .collect();
     assert!(bad.is_empty(), "{what}: the simulation of a verified choreography found:\n{}", bad.join("\n"));
     let undecided: Vec<&str> = r.findings.iter().map(|f| f.message.as_str()).collect();
     assert!(undecided.is_empty(), "{what}: runs stopped undecided: {undecided:?}");
@@ -93,7 +96,10 @@ fn generated_lanes_agree_with_the_verdict() {
                 assert_clean(&what, &r);
             }
             Verdict::Rejected => {
-                assert!(r.findings.iter().any(|f| f.kind == Kind::Collision), "{what}: rejected, but no collision found: {r:?}");
+                assert!(
+                    r.findings.iter().any(|f| f.kind == Kind::Collision),
+                    "{what}: rejected, but no collision found: {r:?}"
+                );
             }
             Verdict::Unknown => {}
         }
@@ -104,10 +110,9 @@ fn generated_lanes_agree_with_the_verdict() {
 /// The simulator can fail: rejected examples whose collision is real.
 #[test]
 fn the_simulator_finds_the_collisions_of_rejected_examples() {
-    for path in [
-        "choreographies/rejected/E0406-two-carts-one-lane.chor",
-        "choreographies/rejected/E0404-target-too-close.chor",
-    ] {
+    for path in
+        ["choreographies/rejected/E0406-two-carts-one-lane.chor", "choreographies/rejected/E0404-target-too-close.chor"]
+    {
         assert_eq!(verdict(path), Verdict::Rejected, "{path}");
         let r = simulate_path(path, &cfg(2, 10, 7));
         let c = r.findings.iter().find(|f| f.kind == Kind::Collision);
@@ -147,4 +152,22 @@ fn counterexamples_of_the_corpus_replay() {
         n += 1;
     }
     assert!(n >= 5, "the corpus has SMT-decided examples");
+}
+
+/// `mochi simulate`: exit 0 when nothing is found, 1 on a collision, with the trace.
+#[test]
+fn the_command_line_reports_findings_and_exit_codes() {
+    let run = |path: &str| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_mochi"))
+            .args(["simulate", path, "--runs", "1", "--steps", "8", "--seed", "3"])
+            .output()
+            .expect("mochi runs")
+    };
+    let ok = run("choreographies/pgcd/fetch.chor");
+    assert_eq!(ok.status.code(), Some(0), "{}", String::from_utf8_lossy(&ok.stdout));
+    assert!(String::from_utf8_lossy(&ok.stdout).contains("no collision, no stuck state"));
+    let bad = run("choreographies/rejected/E0406-two-carts-one-lane.chor");
+    let out = String::from_utf8_lossy(&bad.stdout);
+    assert_eq!(bad.status.code(), Some(1), "{out}");
+    assert!(out.contains("collision in run 0") && out.contains("t = 0: start"), "{out}");
 }

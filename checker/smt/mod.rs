@@ -316,7 +316,11 @@ fn progress_bar(cfg: &SmtConfig, n: usize) -> Option<indicatif::ProgressBar> {
 enum Answer {
     Unsat,
     /// `exact`: the model's values as rationals, for [`replay`].
-    Sat { values: Vec<Assignment>, overlap: Option<Overlap>, exact: replay::Valuation },
+    Sat {
+        values: Vec<Assignment>,
+        overlap: Option<Overlap>,
+        exact: replay::Valuation,
+    },
     Unknown(Why),
 }
 

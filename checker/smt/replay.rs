@@ -30,9 +30,9 @@ pub fn valuation(enc: &Encoder, model: &z3::Model) -> Valuation {
 pub fn refutes(prog: &Program, ob: &Obligation, part: &Part, m: &Valuation) -> Option<String> {
     let shared = |v: &Var| shared_var(prog, v, m);
     let false_hyp = |hs: &[Expr]| {
-        hs.iter().find(|h| exact::holds(prog, h, &shared) == Tri::False).map(|h| {
-            format!("the hypothesis `{}` is false under it", crate::hir::print::expr(prog, None, h))
-        })
+        hs.iter()
+            .find(|h| exact::holds(prog, h, &shared) == Tri::False)
+            .map(|h| format!("the hypothesis `{}` is false under it", crate::hir::print::expr(prog, None, h)))
     };
     match (&ob.goal, part) {
         (Goal::Valid(g), Part::Valid | Part::Conjunct(_)) => {
@@ -41,9 +41,8 @@ pub fn refutes(prog: &Program, ob: &Obligation, part: &Part, m: &Valuation) -> O
                 _ => g,
             };
             false_hyp(&ob.hyps).or_else(|| {
-                (exact::holds(prog, goal, &shared) == Tri::True).then(|| {
-                    format!("the goal `{}` holds under it", crate::hir::print::expr(prog, None, goal))
-                })
+                (exact::holds(prog, goal, &shared) == Tri::True)
+                    .then(|| format!("the goal `{}` holds under it", crate::hir::print::expr(prog, None, goal)))
             })
         }
         (Goal::Compatible { parts }, Part::Pre(i)) => false_hyp(&ob.hyps).or_else(|| {
@@ -79,9 +78,7 @@ pub fn refutes(prog: &Program, ob: &Obligation, part: &Part, m: &Valuation) -> O
                 .collect();
             false_hyp(&hs)
         }
-        (Goal::Separated { sides }, Part::InRegion { a, ra }) => {
-            false_hyp(&sides.get(*a)?.runs.get(*ra)?.hyps)
-        }
+        (Goal::Separated { sides }, Part::InRegion { a, ra }) => false_hyp(&sides.get(*a)?.runs.get(*ra)?.hyps),
         _ => false_hyp(&ob.hyps),
     }
 }

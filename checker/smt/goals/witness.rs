@@ -279,7 +279,9 @@ fn pin(t: &Term, v: &Value) -> Option<Bool> {
             _ => in_range(&i.to_real(), n),
         },
         (Term::R(r), Value::Num(n)) => in_range(r, n),
-        (Term::V(c), Value::Vec3(n)) => Some(Bool::and(&[in_range(&c[0], &n[0])?, in_range(&c[1], &n[1])?, in_range(&c[2], &n[2])?])),
+        (Term::V(c), Value::Vec3(n)) => {
+            Some(Bool::and(&[in_range(&c[0], &n[0])?, in_range(&c[1], &n[1])?, in_range(&c[2], &n[2])?]))
+        }
         _ => None,
     }
 }
@@ -293,10 +295,16 @@ pub(crate) fn value_of(m: &z3::Model, t: &Term) -> Option<Value> {
         }),
         Term::I(i) => {
             let v = m.eval(i, true)?;
-            Value::rat(Rat::from_integer(BigInt::from_str(&v.to_string()).ok().or_else(|| v.as_i64().map(BigInt::from))?))
+            Value::rat(Rat::from_integer(
+                BigInt::from_str(&v.to_string()).ok().or_else(|| v.as_i64().map(BigInt::from))?,
+            ))
         }
         Term::R(r) => Value::Num(num_of(&m.eval(r, true)?)?),
-        Term::V(c) => Value::Vec3([num_of(&m.eval(&c[0], true)?)?, num_of(&m.eval(&c[1], true)?)?, num_of(&m.eval(&c[2], true)?)?]),
+        Term::V(c) => Value::Vec3([
+            num_of(&m.eval(&c[0], true)?)?,
+            num_of(&m.eval(&c[1], true)?)?,
+            num_of(&m.eval(&c[2], true)?)?,
+        ]),
     })
 }
 
