@@ -188,6 +188,9 @@ struct Segment {
     /// Global start and end time.
     /// The state at the end.
     end: Vec<Value>,
+    /// The duration as the witness chose it (an enclosure when irrational); `to - from`
+    /// is its midpoint.
+    len: Num,
     from: Rat,
     to: Rat,
     inputs: Vec<Option<Value>>,
@@ -376,9 +379,19 @@ impl<'a, 'p> Runner<'a, 'p> {
                             }
                         }
                     }
+                    let before = self.steps;
                     match self.walk(body) {
                         Flow::Jump(v, new) if v == *var => {
                             if self.steps >= self.cfg.steps {
+                                return Flow::Stop;
+                            }
+                            if self.steps == before {
+                                let now = self.now();
+                                self.report(
+                                    Kind::Stuck,
+                                    &now,
+                                    format!("the recursion `{var}` loops without a message or a motion"),
+                                );
                                 return Flow::Stop;
                             }
                             args = new;
@@ -561,7 +574,19 @@ impl<'a, 'p> Runner<'a, 'p> {
         fracs.sort();
         fracs.dedup();
         fracs.push(Rat::from_integer(BigInt::from(1)));
-        let traj = match self.sess.trajectory(prog, &movers, &fracs, None) {
+        // With a non-interruptible part, its end is aimed at the start or the end of its
+        // duration now and then (where durations that do not nest show).
+        let lead = movers.iter().position(|mv| !prog.prim(mv.app.prim).interruptible);
+        let aimed = match (lead, self.rng.below(4)) {
+            (Some(_), 0 | 1) => self.sess.trajectory_aimed(prog, &movers, &fracs, None, Some(true)),
+            (Some(_), 2) => self.sess.trajectory_aimed(prog, &movers, &fracs, None, Some(false)),
+            _ => Ok(None),
+        };
+        let traj = match aimed {
+            Ok(Some(t)) => Ok(Some(t)),
+            _ => self.sess.trajectory(prog, &movers, &fracs, None),
+        };
+        let traj = match traj {
             Ok(Some(t)) => t,
             Ok(None) => {
                 self.report(
@@ -578,6 +603,80 @@ impl<'a, 'p> Runner<'a, 'p> {
                 return Flow::Stop;
             }
         };
+        // The others must be able to end when the non-interruptible part does.
+        if let Some(n) = lead {
+            for (j, mv) in movers.iter().enumerate() {
+                let prim = prog.prim(mv.app.prim);
+                let args = self.arg_values(&mv.app);
+                let zero = Num::int(0);
+                let env = frame_env(&mv.start, &mv.start, &args, &zero, &[]);
+                let lo = exact::eval(prog, &prim.duration.lo, &env).ok().and_then(|v| v.num().ok().cloned());
+                let hi = prim
+                    .duration
+                    .hi
+                    .as_ref()
+                    .map(|h| exact::eval(prog, h, &env).ok().and_then(|v| v.num().ok().cloned()));
+                let early = lo.is_some_and(|lo| traj.end.hi < lo.lo);
+                let late = matches!(hi, Some(Some(hi)) if traj.end.lo > hi.hi);
+                if j != n && (early || late) {
+                    let t = &t0 + traj.end.mid();
+                    self.report(
+                        Kind::Stuck,
+                        &t,
+                        format!(
+                            "{who}: the non-interruptible `{}` ({}) ends after {} s, outside the duration of `{}` ({})",
+                            prog.prim(movers[n].app.prim).name,
+                            prog.role_name(movers[n].role),
+                            traj.end,
+                            prim.name,
+                            prog.role_name(mv.role)
+                        ),
+                    );
+                    return Flow::Stop;
+                }
+            }
+        }
+        // Assumptions: could the others' guarantees break one at a sampled time?
+        for (i, mv) in movers.iter().enumerate() {
+            if prog.prim(mv.app.prim).assume.is_true() {
+                continue;
+            }
+            for s in &traj.samples {
+                let c = s.time.mid();
+                match self.sess.assumption_breaks(prog, &movers, i, &s.time) {
+                    Ok(None) => {}
+                    Ok(Some(inputs)) => {
+                        let kind = prog.kind_of(mv.role);
+                        let shown: Vec<String> = kind
+                            .inputs
+                            .iter()
+                            .zip(&inputs)
+                            .map(|((n, _), v)| format!("{}.{n} = {v}", prog.role_name(mv.role)))
+                            .collect();
+                        let t = &t0 + &c;
+                        self.report(
+                            Kind::Violation,
+                            &t,
+                            format!(
+                                "{who}: the others' guarantees allow inputs that break the assumption of `{}` ({}): {}",
+                                prog.prim(mv.app.prim).name,
+                                prog.role_name(mv.role),
+                                shown.join(", ")
+                            ),
+                        );
+                        return Flow::Stop;
+                    }
+                    Err(why) => {
+                        self.undecided(
+                            &(&t0 + &c),
+                            &format!("{who}: the assumption of `{}`", prog.prim(mv.app.prim).name),
+                            why,
+                        );
+                        return Flow::Stop;
+                    }
+                }
+            }
+        }
         // Replay the witness exactly, then compare footprints at each sample.
         for s in &traj.samples {
             for (i, mv) in movers.iter().enumerate() {
@@ -623,6 +722,7 @@ impl<'a, 'p> Runner<'a, 'p> {
                 app: mv.app.clone(),
                 start: mv.start.clone(),
                 end: last.get(i).cloned().unwrap_or_else(|| mv.start.clone()),
+                len: traj.end.clone(),
                 from: t0.clone(),
                 to: t1.clone(),
                 inputs: mv.inputs.clone(),
@@ -796,7 +896,7 @@ impl<'a, 'p> Runner<'a, 'p> {
         let len = end - &s.from;
         let mover = Mover { role: s.role, app: s.app.clone(), start: s.start.clone(), inputs: s.inputs.clone() };
         let one = [Rat::from_integer(BigInt::from(1))];
-        match self.sess.trajectory(self.prog, std::slice::from_ref(&mover), &one, Some(&len)) {
+        match self.sess.trajectory(self.prog, std::slice::from_ref(&mover), &one, Some(&Num::exact(len.clone()))) {
             Ok(Some(tr)) => {
                 if let Some(state) = tr.samples.first().and_then(|x| x.states.first()) {
                     self.state[s.role.idx()] = state.clone();
@@ -804,6 +904,7 @@ impl<'a, 'p> Runner<'a, 'p> {
                     let seg = &mut self.segments[i];
                     seg.end = state.clone();
                     seg.to = end.clone();
+                    seg.len = Num::exact(len);
                     let line = format!(
                         "t = {}: `{}` ({}) kept running until then (interruptible); {}",
                         exact::decimal(end),
@@ -867,13 +968,13 @@ impl<'a, 'p> Runner<'a, 'p> {
             return Some(occupant(&mover, &s.start, &Num::int(0)));
         }
         if clock >= len {
-            return Some(occupant(&mover, &s.end, &Num::exact(len)));
+            return Some(occupant(&mover, &s.end, &s.len));
         }
         let fracs = vec![&clock / &len, Rat::from_integer(BigInt::from(1))];
-        match self.sess.trajectory(self.prog, std::slice::from_ref(&mover), &fracs, Some(&len)) {
+        match self.sess.trajectory(self.prog, std::slice::from_ref(&mover), &fracs, Some(&s.len)) {
             Ok(Some(tr)) => {
-                let state = tr.samples.first()?.states.first()?.clone();
-                Some(occupant(&mover, &state, &Num::exact(clock)))
+                let sample = tr.samples.first()?;
+                Some(occupant(&mover, &sample.states.first()?.clone(), &sample.time))
             }
             Ok(None) => {
                 self.report(

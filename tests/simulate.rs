@@ -123,6 +123,26 @@ fn the_simulator_finds_the_collisions_of_rejected_examples() {
     }
 }
 
+/// The simulator finds what the other rejected [AGCOMP] examples get wrong: an
+/// environment allowed to break the cart's assumption (E0403), a non-interruptible pick
+/// outlasting the brake the cart waits on (E0405), a motion that cannot end (E0408).
+#[test]
+fn the_simulator_finds_broken_assumptions_durations_and_endless_motions() {
+    for (path, kind, text) in [
+        ("choreographies/rejected/E0403-gusty-environment.chor", Kind::Violation, "break the assumption"),
+        ("choreographies/rejected/E0405-brake-releases-during-pick.chor", Kind::Stuck, "outside the duration"),
+        ("choreographies/rejected/E0408-beyond-the-lane.chor", Kind::Stuck, "no trajectory"),
+    ] {
+        assert_eq!(verdict(path), Verdict::Rejected, "{path}");
+        let r = simulate_path(path, &cfg(4, 24, 9));
+        assert!(
+            r.findings.iter().any(|f| f.kind == kind && f.message.contains(text)),
+            "{path}: expected a {kind:?} finding about `{text}`: {:?}",
+            r.findings
+        );
+    }
+}
+
 /// Runs are reproducible from the seed.
 #[test]
 fn a_seed_fixes_the_run() {

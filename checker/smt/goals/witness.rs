@@ -131,19 +131,38 @@ impl Session<'_> {
     /// time `T` in every duration, states at `f * T` for each fraction `f` in `fracs`
     /// (the last must be 1, the end) satisfying each guarantee, assumption (inputs
     /// connected as in [AGCOMP]) and invariant, and each postcondition at `T`.
-    /// `None` if the contracts admit no such trajectory. `end_at` fixes the end time.
+    /// `None` if the contracts admit no such trajectory. `end_at` fixes the end time
+    /// (within an enclosure).
+    ///
+    /// With a non-interruptible mover, only its duration bounds `T` ([NON-INTERRUPT]: it
+    /// ends by itself when its duration and post allow), so that the caller can check
+    /// the others' durations at `T` exactly; `target` then asks for `T` at the start
+    /// (`Some(false)`) or the end (`Some(true)`) of that duration.
     pub fn trajectory(
         &self,
         prog: &Program,
         movers: &[Mover],
         fracs: &[Rat],
-        end_at: Option<&Rat>,
+        end_at: Option<&Num>,
     ) -> Result<Option<Trajectory>, Why> {
+        self.trajectory_aimed(prog, movers, fracs, end_at, None)
+    }
+
+    /// [`Session::trajectory`] with a target for the end time (see there).
+    pub fn trajectory_aimed(
+        &self,
+        prog: &Program,
+        movers: &[Mover],
+        fracs: &[Rat],
+        end_at: Option<&Num>,
+        target: Option<bool>,
+    ) -> Result<Option<Trajectory>, Why> {
+        let lead = movers.iter().position(|m| !prog.prim(m.app.prim).interruptible);
         let mut q = query(prog);
         let end = q.enc.named_real("end time");
         q.assertions.push(end.ge(zero()));
         if let Some(e) = end_at {
-            q.assertions.push(end.eq(real(e).ok_or_else(unreadable)?));
+            q.assertions.push(in_range(&end, e).ok_or_else(unreadable)?);
         }
         let mut samples: Vec<(Real, Vec<Inst>)> = Vec::new();
         for (k, f) in fracs.iter().enumerate() {
@@ -162,17 +181,24 @@ impl Session<'_> {
             pin_start(&mut q, m.role, &m.start)?;
             let inst = &last[i];
             inst.started(&mut q).map_err(unsupported)?;
-            let (lo, hi) = inst.duration(&mut q.enc).map_err(unsupported)?;
-            q.assertions.push(lo.le(&end));
-            if let Some(hi) = hi {
-                q.assertions.push(end.le(&hi));
+            if lead.is_none_or(|n| n == i) {
+                let (lo, hi) = inst.duration(&mut q.enc).map_err(unsupported)?;
+                q.assertions.push(lo.le(&end));
+                match (target, &hi) {
+                    (Some(false), _) if lead.is_some() => q.assertions.push(end.eq(&lo)),
+                    (Some(true), Some(hi)) if lead.is_some() => q.assertions.push(end.eq(hi)),
+                    _ => {}
+                }
+                if let Some(hi) = hi {
+                    q.assertions.push(end.le(&hi));
+                }
             }
             let post = inst.pred(&mut q.enc, &inst.prim.post, &inst.frame).map_err(unsupported)?;
             q.assertions.push(post);
         }
         for (_, insts) in &samples {
             for (i, inst) in insts.iter().enumerate() {
-                inst.running(&mut q).map_err(unsupported)?;
+                running(&mut q, inst)?;
                 let a = inst.pred(&mut q.enc, &inst.prim.assume, &inst.frame).map_err(unsupported)?;
                 q.assertions.push(a);
                 for (k, v) in movers[i].inputs.iter().enumerate() {
@@ -204,13 +230,53 @@ impl Session<'_> {
         Ok(Some(Trajectory { end, samples: out }))
     }
 
+    /// Inputs of mover `i` at time `clock` of the joint motion that the other movers'
+    /// guarantees allow but `i`'s assumption does not ([AGCOMP]'s assumption
+    /// discharge at a concrete start): the values of `i`'s inputs then, or `None`.
+    pub fn assumption_breaks(
+        &self,
+        prog: &Program,
+        movers: &[Mover],
+        i: usize,
+        clock: &Num,
+    ) -> Result<Option<Vec<Value>>, Why> {
+        let mut q = query(prog);
+        let c = q.enc.named_real("time");
+        q.assertions.push(in_range(&c, clock).ok_or_else(unreadable)?);
+        let mut insts = Vec::new();
+        for m in movers {
+            insts.push(Inst::new(&mut q.enc, m.role, &m.app, c.clone(), "t").map_err(unsupported)?);
+        }
+        connect(&mut q, &mut insts);
+        for (j, (m, inst)) in movers.iter().zip(&insts).enumerate() {
+            pin_start(&mut q, m.role, &m.start)?;
+            inst.started(&mut q).map_err(unsupported)?;
+            if j != i {
+                inst.running(&mut q).map_err(unsupported)?;
+            }
+        }
+        for (k, v) in movers[i].inputs.iter().enumerate() {
+            if let (Some(v), Some(t)) = (v, insts[i].frame.own.get(&Slot::Input(k))) {
+                let b = pin(t, v).ok_or_else(unreadable)?;
+                q.assertions.push(b);
+            }
+        }
+        let a = insts[i].pred(&mut q.enc, &insts[i].prim.assume, &insts[i].frame).map_err(unsupported)?;
+        q.assertions.push(a.not());
+        let Some(m) = self.solve(&q)? else { return Ok(None) };
+        let n = prog.kind_of(movers[i].role).inputs.len();
+        let vals: Option<Vec<Value>> = (0..n).map(|k| value_of(&m, insts[i].frame.own.get(&Slot::Input(k))?)).collect();
+        vals.map(Some).ok_or_else(unreadable)
+    }
+
     /// A world point in the footprints of both occupants at their states and clocks, or
     /// `None` if they are disjoint. A primitive without a footprint fills all space.
     pub fn overlap(&self, prog: &Program, a: &Occupant, b: &Occupant) -> Result<Option<[Num; 3]>, Why> {
         let mut q = query(prog);
         let p = world_point(&mut q);
         for (o, tag) in [(a, "a"), (b, "b")] {
-            let clock = real(o.clock.value().ok_or_else(unreadable)?).ok_or_else(unreadable)?;
+            let clock = q.enc.named_real(&format!("clock {tag}"));
+            q.assertions.push(in_range(&clock, &o.clock).ok_or_else(unreadable)?);
             let inst = Inst::new(&mut q.enc, o.role, &o.app, clock, tag).map_err(unsupported)?;
             pin_start(&mut q, o.role, &o.start)?;
             for (i, v) in o.now.iter().enumerate() {
@@ -228,6 +294,21 @@ impl Session<'_> {
         };
         Ok(Some([c(&p[0]).ok_or_else(unreadable)?, c(&p[1]).ok_or_else(unreadable)?, c(&p[2]).ok_or_else(unreadable)?]))
     }
+}
+
+/// The motion is running at its clock: `t >= 0`, its guarantee and the invariant hold
+/// now ([TRAJ-STEP]). Unlike [`Inst::running`], `t` is not bounded by the duration here:
+/// the end time carries the durations (and the caller checks the others' at it).
+fn running(q: &mut Query, inst: &Inst) -> Result<(), Why> {
+    let t = inst.frame.clock.clone().unwrap_or_else(zero);
+    q.assertions.push(t.ge(zero()));
+    let g = inst.pred(&mut q.enc, &inst.prim.guarantee, &inst.frame).map_err(unsupported)?;
+    q.assertions.push(g);
+    if let Some(inv) = &q.enc.prog().kind(inst.prim.kind).invariant.clone() {
+        let b = inst.pred(&mut q.enc, inv, &inst.frame).map_err(unsupported)?;
+        q.assertions.push(b);
+    }
+    Ok(())
 }
 
 fn query(prog: &Program) -> Query<'_> {
