@@ -677,6 +677,17 @@ impl<'a, 'p> Runner<'a, 'p> {
                 }
             }
         }
+        // At time 0 every participant is at its start state ([TRAJ-BASE]).
+        for i in 0..movers.len() {
+            for j in i + 1..movers.len() {
+                let zero = Num::int(0);
+                let a = occupant(&movers[i], &movers[i].start, &zero);
+                let b = occupant(&movers[j], &movers[j].start, &zero);
+                if !self.collide(&a, &b, &t0, &who) {
+                    return Flow::Stop;
+                }
+            }
+        }
         // Replay the witness exactly, then compare footprints at each sample.
         for s in &traj.samples {
             for (i, mv) in movers.iter().enumerate() {
@@ -754,7 +765,7 @@ impl<'a, 'p> Runner<'a, 'p> {
         let kind = prog.kind_of(r);
         (0..kind.inputs.len())
             .map(|k| {
-                if let Some(v) = &movers[i].inputs[k] {
+                if let Some(Some(v)) = movers[i].inputs.get(k) {
                     return Some(v.clone());
                 }
                 let src = prog.role(r).input_sources.get(k).copied().flatten()?;
