@@ -836,7 +836,7 @@ impl<'a, 'p> Runner<'a, 'p> {
     fn in_footprint(&self, o: &Occupant, p: &[Num; 3]) -> Tri {
         let prog = self.prog;
         let Some(fp) = &prog.prim(o.app.prim).footprint else { return Tri::True };
-        let Some(local) = to_local(prog, o.role, p) else { return Tri::Unknown };
+        let Some(local) = crate::smt::replay::to_local(prog, o.role, p) else { return Tri::Unknown };
         let args = self.arg_values(&o.app);
         let env = frame_env(&o.now, &o.start, &args, &o.clock, &[]);
         let env = |v: &Var| match v {
@@ -1034,33 +1034,6 @@ fn frame_env<'v>(
         Var::Clock => Some(Value::Num(clock.clone())),
         _ => None,
     }
-}
-
-/// The world point moved into `role`'s frame (`R^T (p - o)`), by interval arithmetic
-/// with enclosures of the pose's sines and cosines.
-fn to_local(prog: &Program, role: RoleId, p: &[Num; 3]) -> Option<[Num; 3]> {
-    let pose = &prog.role(role).pose;
-    let num = |i: usize| -> Option<Num> {
-        match pose.get(i) {
-            Some(e) => exact::eval(prog, e, &|_: &Var| None).ok()?.num().ok().cloned(),
-            None => Some(Num::int(0)),
-        }
-    };
-    let mut v = p.clone();
-    for (k, c) in v.iter_mut().enumerate() {
-        *c = c.sub(&num(k)?);
-    }
-    for (idx, (a, b)) in [(5usize, (0usize, 1usize)), (4, (2, 0)), (3, (1, 2))] {
-        let angle = num(idx)?;
-        if angle.value().is_some_and(Zero::is_zero) {
-            continue;
-        }
-        let (c, s) = (exact::trig(Builtin::Cos, &angle), exact::trig(Builtin::Sin, &angle));
-        let (x, y) = (v[a].clone(), v[b].clone());
-        v[a] = c.mul(&x).add(&s.mul(&y));
-        v[b] = c.mul(&y).sub(&s.mul(&x));
-    }
-    Some(v)
 }
 
 /// The first message of a branch of a choice.
