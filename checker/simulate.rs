@@ -892,7 +892,8 @@ impl<'a, 'p> Runner<'a, 'p> {
         if stop {
             return Flow::Stop;
         }
-        // The continuation synchronises: it starts when every side has finished.
+        // The continuation goes on with each participant's own clock: a message waits
+        // only for its sender and receiver.
         Flow::Next
     }
 
@@ -927,6 +928,9 @@ impl<'a, 'p> Runner<'a, 'p> {
                 }
                 true
             }
+            // Not a stuck state: the participant's next message need not wait for the
+            // other sides (happens-before orders it after its own side only), so running
+            // this long is one possible execution, not a forced one.
             Ok(None) => true,
             Err(why) => {
                 self.undecided(end, "extending an interruptible motion", why);
