@@ -235,6 +235,18 @@ impl<'a, 'p> Runner<'a, 'p> {
         }
     }
 
+    /// Half the time, a variable to move off Z3's first model and by how much (up or
+    /// down by up to 1, 0.1 or 0.01).
+    fn nudge(&mut self, n: usize) -> Option<(usize, Rat)> {
+        if n == 0 || self.rng.below(2) == 0 {
+            return None;
+        }
+        let k = self.rng.below(n);
+        let scale = [1, 10, 100][self.rng.below(3)];
+        let d = self.rng.fraction() / Rat::from_integer(BigInt::from(scale));
+        Some((k, if self.rng.below(2) == 0 { d } else { -d }))
+    }
+
     fn report(&mut self, kind: Kind, time: &Rat, message: String) {
         self.findings.push(Finding {
             kind,
@@ -273,8 +285,23 @@ impl<'a, 'p> Runner<'a, 'p> {
             let want: Vec<Expr> = (0..kind.state.len())
                 .map(|i| var_expr(Var::Role(r, Slot::State(i)), kind.state[i].1.clone()))
                 .collect();
-            match self.sess.values(prog, &facts, &want) {
-                Ok(Some(vs)) => self.state.push(vs),
+            let nudge = self.nudge(want.len());
+            match self.sess.values_nudged(prog, &facts, &want, nudge) {
+                Ok(Some(vs)) => {
+                    self.state.push(vs);
+                    // Replayed exactly, as every model is.
+                    if facts.iter().any(|f| self.holds(f) == Tri::False) {
+                        self.report(
+                            Kind::Replay,
+                            &Rat::zero(),
+                            format!(
+                                "Z3's initial state of `{}` breaks its init or invariant exactly",
+                                prog.role_name(r)
+                            ),
+                        );
+                        return false;
+                    }
+                }
                 Ok(None) => {
                     self.report(
                         Kind::Stuck,
@@ -469,7 +496,8 @@ impl<'a, 'p> Runner<'a, 'p> {
                 .collect();
             let want: Vec<Expr> =
                 m.payload.iter().map(|f| var_expr(Var::Value(f.value, f.name.clone()), f.sort.clone())).collect();
-            match self.sess.values(prog, &facts, &want) {
+            let nudge = self.nudge(want.len());
+            match self.sess.values_nudged(prog, &facts, &want, nudge) {
                 Ok(Some(vs)) => {
                     for (f, v) in m.payload.iter().zip(vs) {
                         shown.push(format!("{} = {v}", f.name));

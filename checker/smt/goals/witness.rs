@@ -117,6 +117,19 @@ impl Session<'_> {
     /// Values of `want` (terms over free value variables) satisfying `facts` (closed
     /// except for those variables), or `None` if there are none.
     pub fn values(&self, prog: &Program, facts: &[Expr], want: &[Expr]) -> Result<Option<Vec<Value>>, Why> {
+        self.values_nudged(prog, facts, want, None)
+    }
+
+    /// [`Session::values`], then, with `nudge = Some((k, d))`, a second model with
+    /// `want[k]` at least `d` above (or, `d < 0`, below) the first one's value, if there is
+    /// one: Z3's first models sit on boundaries; this moves off them.
+    pub fn values_nudged(
+        &self,
+        prog: &Program,
+        facts: &[Expr],
+        want: &[Expr],
+        nudge: Option<(usize, Rat)>,
+    ) -> Result<Option<Vec<Value>>, Why> {
         let mut q = query(prog);
         for f in facts {
             let b = q.enc.boolean(f).map_err(unsupported)?;
@@ -124,7 +137,17 @@ impl Session<'_> {
         }
         let terms: Vec<Term> = want.iter().map(|w| q.enc.any(w)).collect::<Result<_, _>>().map_err(unsupported)?;
         let Some(m) = self.solve(&q)? else { return Ok(None) };
-        terms.iter().map(|t| value_of(&m, t)).collect::<Option<Vec<_>>>().map(Some).ok_or_else(unreadable)
+        let first: Vec<Value> =
+            terms.iter().map(|t| value_of(&m, t)).collect::<Option<Vec<_>>>().ok_or_else(unreadable)?;
+        let Some((k, d)) = nudge else { return Ok(Some(first)) };
+        let (Some(Term::R(t)), Some(Value::Num(v))) = (terms.get(k), first.get(k)) else { return Ok(Some(first)) };
+        let Some(v) = v.value() else { return Ok(Some(first)) };
+        let Some(bound) = real(&(v + &d)) else { return Ok(Some(first)) };
+        q.assertions.push(if d >= Rat::from_integer(BigInt::from(0)) { t.ge(&bound) } else { t.le(&bound) });
+        match self.solve(&q) {
+            Ok(Some(m)) => Ok(terms.iter().map(|t| value_of(&m, t)).collect::<Option<Vec<_>>>().or(Some(first))),
+            _ => Ok(Some(first)),
+        }
     }
 
     /// A trajectory of the joint motion of `movers` from their start states: an end
