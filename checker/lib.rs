@@ -20,6 +20,7 @@
 pub mod bounds;
 pub mod diag;
 pub mod driver;
+pub mod exact;
 pub mod hir;
 pub mod lanes;
 pub mod lower;
@@ -27,6 +28,7 @@ pub mod obligation;
 pub mod project;
 pub mod render;
 pub mod sigma;
+pub mod simulate;
 pub mod smt;
 pub mod source;
 pub mod subtype;

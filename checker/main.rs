@@ -1,4 +1,4 @@
-//! The `mochi` command line: `check`, `project` and `explain`.
+//! The `mochi` command line: `check`, `project`, `explain` and `simulate`.
 //!
 //! This is the only place that does IO: it reads arguments, hands each file to
 //! [`mochi::driver`], prints what [`mochi::render`] makes of the report, and turns the
@@ -54,6 +54,25 @@ enum Command {
     Project(ProjectArgs),
     /// Explain a diagnostic code, e.g. `mochi explain E0301`
     Explain(ExplainArgs),
+    /// Run the choreography on concrete trajectories and report collisions and stuck states
+    Simulate(SimulateArgs),
+}
+
+#[derive(Args)]
+struct SimulateArgs {
+    #[arg(value_name = "FILE")]
+    file: PathBuf,
+    /// How many runs
+    #[arg(long, default_value_t = 10)]
+    runs: usize,
+    /// Seed of the random choices (runs are reproducible)
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Messages and motions per run
+    #[arg(long, default_value_t = 40)]
+    steps: usize,
+    #[arg(long, value_enum, default_value_t = Format::Text)]
+    format: Format,
 }
 
 #[derive(Args)]
@@ -162,6 +181,46 @@ fn run(cli: Cli) -> u8 {
         Command::Check(args) => check(&args, cli.color).exit_code(),
         Command::Project(args) => project(&args, cli.color).exit_code(),
         Command::Explain(args) => explain(&args),
+        Command::Simulate(args) => simulate(&args, cli.color).exit_code(),
+    }
+}
+
+/// `mochi simulate`: 0 when nothing was found, 1 for a finding (or invalid input), 3
+/// when some run stopped undecided and nothing was found.
+fn simulate(args: &SimulateArgs, color: ColorChoice) -> Outcome {
+    use mochi::simulate::{simulate_file, SimConfig};
+    let cfg = SimConfig { runs: args.runs, seed: args.seed, steps: args.steps, ..SimConfig::default() };
+    let mut db = SourceDb::new();
+    let report = match panic::catch_unwind(AssertUnwindSafe(|| simulate_file(&mut db, &args.file, &cfg))) {
+        Ok(Ok(Ok(r))) => r,
+        Ok(Ok(Err(diags))) => {
+            let color = use_color(color, std::io::stderr().is_terminal());
+            eprint_safe(&diags.iter().map(|d| render::text(&db, d, color)).collect::<String>());
+            return Outcome::Invalid;
+        }
+        Ok(Err(e)) => {
+            eprintln_safe(&format!("error: cannot read {}: {e}", args.file.display()));
+            return Outcome::Invalid;
+        }
+        Err(_) => return Outcome::Crashed,
+    };
+    let name = args.file.display().to_string();
+    match args.format {
+        Format::Text => print_safe(&render::simulation_text(&name, &report)),
+        Format::Json => match serde_json::to_string_pretty(&report) {
+            Ok(s) => print_safe(&(s + "\n")),
+            Err(e) => {
+                eprintln_safe(&format!("error: cannot write the simulation as JSON: {e}"));
+                return Outcome::Crashed;
+            }
+        },
+    }
+    if report.failures().next().is_some() {
+        Outcome::Rejected
+    } else if report.findings.is_empty() {
+        Outcome::Verified
+    } else {
+        Outcome::Unknown
     }
 }
 

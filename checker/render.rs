@@ -15,6 +15,7 @@ use codespan_reporting::term::termcolor::{Buffer, Color, ColorSpec, WriteColor};
 use codespan_reporting::term::{self, Chars};
 use serde_json::{json, Value};
 use std::borrow::Cow;
+use std::fmt::Write as _;
 use std::io::Write;
 use std::ops::Range;
 
@@ -444,6 +445,41 @@ fn paint(out: &mut Buffer, colour: Color, text: &str) -> std::io::Result<()> {
 
 fn into_string(out: Buffer) -> String {
     String::from_utf8_lossy(out.as_slice()).into_owned()
+}
+
+/// The report of `mochi simulate` as text: a summary line, then each finding with the
+/// trace of its run.
+pub fn simulation_text(file_name: &str, r: &crate::simulate::SimReport) -> String {
+    use crate::simulate::Kind;
+    let mut out = String::new();
+    let failures = r.failures().count();
+    let undecided = r.findings.len() - failures;
+    let _ = writeln!(
+        out,
+        "{file_name}: {} runs, {} steps, {} queries: {}",
+        r.runs,
+        r.steps,
+        r.queries,
+        match (failures, undecided) {
+            (0, 0) => "no collision, no stuck state".to_string(),
+            (0, u) => format!("no collision, no stuck state; {u} run(s) stopped undecided"),
+            (f, _) => format!("{f} finding(s)"),
+        }
+    );
+    for f in &r.findings {
+        let kind = match f.kind {
+            Kind::Collision => "collision",
+            Kind::Stuck => "stuck",
+            Kind::Violation => "violation",
+            Kind::Replay => "bug (a model did not replay)",
+            Kind::Undecided => "undecided",
+        };
+        let _ = writeln!(out, "\n{kind} in run {}, step {}, at time {}: {}", f.run, f.step, f.time, f.message);
+        for line in &f.trace {
+            let _ = writeln!(out, "  {line}");
+        }
+    }
+    out
 }
 
 #[cfg(test)]

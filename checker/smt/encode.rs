@@ -216,6 +216,17 @@ impl<'p> Encoder<'p> {
         self.named(&name, &s.clone())
     }
 
+    /// The query's named variables (for replaying a model exactly).
+    pub fn terms(&self) -> impl Iterator<Item = (&String, &Term)> {
+        self.vars.iter()
+    }
+
+    /// The symbol each value variable of the query got (`v`, or `v#2` for a second value
+    /// named `v`): values are told apart by their binding site, not their name.
+    pub fn value_symbols(&self) -> impl Iterator<Item = (&crate::hir::ValueId, &String)> {
+        self.value_names.iter()
+    }
+
     /// The values of the query's variables in `model`, by name. Variables the query
     /// does not constrain (absent from the model) are left out.
     pub fn assignments(&self, model: &z3::Model) -> Vec<super::Assignment> {

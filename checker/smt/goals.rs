@@ -19,6 +19,8 @@ use crate::obligation::{Goal, Obligation, Run, Side};
 use std::collections::HashSet;
 use z3::ast::{Bool, Real};
 
+pub mod witness;
+
 /// One question about an obligation.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Part {

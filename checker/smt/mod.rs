@@ -18,6 +18,7 @@
 
 mod encode;
 pub mod goals;
+pub mod replay;
 
 use crate::hir::{Expr, Program};
 use crate::obligation::{Goal, Obligation};
@@ -318,7 +319,14 @@ fn progress_bar(cfg: &SmtConfig, n: usize) -> Option<indicatif::ProgressBar> {
 #[derive(Clone)]
 enum Answer {
     Unsat,
-    Sat { values: Vec<Assignment>, overlap: Option<Overlap>, bound: Vec<(String, String, crate::source::Span)> },
+    /// `exact`: the model's values as rationals, for [`replay`]; `bound`: where each of
+    /// two same-named values in the model is bound.
+    Sat {
+        values: Vec<Assignment>,
+        overlap: Option<Overlap>,
+        bound: Vec<(String, String, crate::source::Span)>,
+        exact: replay::Valuation,
+    },
     Unknown(Why),
 }
 
@@ -411,7 +419,14 @@ impl Worker<'_> {
             }
             match answer {
                 Answer::Unsat => {}
-                Answer::Sat { values, overlap, bound } => {
+                Answer::Sat { values, overlap, bound, exact } => {
+                    // A counterexample is shown only if it replays in exact arithmetic;
+                    // one that does not is a bug of the encoding, never a failure.
+                    if let Some(why) = replay::refutes(self.prog, ob, part, &exact) {
+                        let why = Why::Incomplete(format!("its model did not replay in exact arithmetic ({why}); please report this as a bug in mochi"));
+                        unknown.get_or_insert((describe(self.prog, ob, part), why));
+                        continue;
+                    }
                     let which = Some(part.clone());
                     let part = describe(self.prog, ob, part);
                     return (Decision::Fails(Failure { part, which, values, overlap, bound }), stats);
@@ -457,7 +472,7 @@ impl Worker<'_> {
             // The same text may come from other values of the same names: where this
             // query's values are bound is this query's.
             return match a {
-                Answer::Sat { values, overlap, .. } => Answer::Sat { values, overlap, bound: q.enc.shared_names() },
+                Answer::Sat { values, overlap, exact, .. } => Answer::Sat { values, overlap, bound: q.enc.shared_names(), exact },
                 other => other,
             };
         }
@@ -482,9 +497,14 @@ impl Worker<'_> {
                         point: [0, 1, 2].map(|i| encode::Encoder::value_of(&m, &p[i]).unwrap_or(f64::NAN)),
                         times: q.times.iter().map(|t| encode::Encoder::value_of(&m, t).unwrap_or(f64::NAN)).collect(),
                     });
-                    Answer::Sat { values: q.enc.assignments(&m), overlap, bound: q.enc.shared_names() }
+                    Answer::Sat {
+                        values: q.enc.assignments(&m),
+                        overlap,
+                        bound: q.enc.shared_names(),
+                        exact: replay::valuation(&q.enc, &m),
+                    }
                 }
-                None => Answer::Sat { values: Vec::new(), overlap: None, bound: Vec::new() },
+                None => Answer::Sat { values: Vec::new(), overlap: None, bound: Vec::new(), exact: Default::default() },
             },
             z3::SatResult::Unknown if timed_out => Answer::Unknown(Why::Timeout(self.cfg.timeout)),
             z3::SatResult::Unknown => {
