@@ -233,8 +233,10 @@ codes! {
          on the other side of `*`, or a later motion) may come at any time, so mochi requires the \
          interrupted primitive to be ready at any time: D = [0, inf] (with a literal lower bound) \
          and an assumption that reads no input (after its partners have moved on, their guarantees \
-         no longer discharge it). Send the message in the burst that ends the motion, or change the \
-         primitive.";
+         no longer discharge it). An interruptible motion that nothing interrupts before `end` runs \
+         on forever: its duration needs no upper bound, and if its assumption reads inputs, its \
+         partners in the dt must run on too. Send the message in the burst that ends the motion, or \
+         change the primitive.";
     PreconditionAtMotion = "E0402", "a primitive's precondition may not hold when the joint motion starts",
         "[AGCOMP] composes primitives from their preconditions (Sec 3.4, \"compatible from Pre\"): \
          at the `dt<...>` each participant's precondition must follow from what is known there \

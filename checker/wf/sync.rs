@@ -49,6 +49,7 @@ pub fn check(prog: &Program, g: &Global) -> Vec<Diagnostic> {
         next_node: 0,
         pars: Vec::new(),
         branches: HashMap::new(),
+        ends: Vec::new(),
     };
     let mut path = Vec::new();
     b.walk(g, &mut path);
@@ -58,7 +59,7 @@ pub fn check(prog: &Program, g: &Global) -> Vec<Diagnostic> {
     // The timing checks rely on the three conditions above (each motion's end is decided
     // by one sender, who is ready): run them only on a synchronisable type.
     if c.diags.is_empty() {
-        c.timing(&b.branches);
+        c.timing(&b.branches, &b.ends);
     }
     c.diags
 }
@@ -130,6 +131,8 @@ struct Builder<'g> {
     pars: Vec<(usize, u32)>,
     /// Number of branches of each choice node.
     branches: HashMap<u32, u32>,
+    /// The internal nodes above each `end` (as [`Event::path`]).
+    ends: Vec<Vec<(u32, u32, bool)>>,
 }
 
 impl<'g> Builder<'g> {
@@ -205,7 +208,7 @@ impl<'g> Builder<'g> {
                     }
                 }
             }
-            Global::End(_) => {}
+            Global::End(_) => self.ends.push(path.clone()),
         }
         start..self.events.len()
     }
@@ -402,10 +405,14 @@ impl Checker<'_, '_> {
 /// Past this many paths through choices the timing checks give up with an error.
 const MAX_PATHS: usize = 4096;
 
-/// The paths of the once-unfolded tree: for each, the events on it in tree order.
+/// A path: its events in tree order, and the branch taken at each choice node.
+type SchedulePath = (Vec<usize>, HashMap<u32, u32>);
+
+/// The paths of the once-unfolded tree: for each, the events on it in tree order and the
+/// branch it takes at each choice it meets.
 /// `None` if there are more than [`MAX_PATHS`].
-fn paths(ev: &[Event], branches: &HashMap<u32, u32>) -> Option<Vec<Vec<usize>>> {
-    let mut done: Vec<Vec<usize>> = Vec::new();
+fn paths(ev: &[Event], branches: &HashMap<u32, u32>) -> Option<Vec<SchedulePath>> {
+    let mut done: Vec<SchedulePath> = Vec::new();
     let mut work: Vec<(HashMap<u32, u32>, Vec<usize>, usize)> = vec![(HashMap::new(), Vec::new(), 0)];
     while let Some((mut assign, mut list, mut i)) = work.pop() {
         'ev: while i < ev.len() {
@@ -437,7 +444,7 @@ fn paths(ev: &[Event], branches: &HashMap<u32, u32>) -> Option<Vec<Vec<usize>>> 
             list.push(i);
             i += 1;
         }
-        done.push(list);
+        done.push((list, assign));
     }
     Some(done)
 }
@@ -517,13 +524,18 @@ fn open_ended(prim: &Primitive) -> bool {
         crate::hir::expr::ExprKind::Real(r) => r.parse::<f64>().is_ok_and(|v| v <= 0.0),
         _ => false,
     };
-    let mut reads_input = false;
-    prim.assume.visit_vars(&mut |v, _| reads_input |= matches!(v, Var::Own(Slot::Input(_))));
-    lo_zero && prim.duration.hi.is_none() && !reads_input
+    lo_zero && prim.duration.hi.is_none() && !reads_input(prim)
+}
+
+/// Whether the assumption of `prim` reads an input (a partner's guarantee discharges it).
+fn reads_input(prim: &Primitive) -> bool {
+    let mut reads = false;
+    prim.assume.visit_vars(&mut |v, _| reads |= matches!(v, Var::Own(Slot::Input(_))));
+    reads
 }
 
 impl<'g> Checker<'_, 'g> {
-    fn timing(&mut self, branches: &HashMap<u32, u32>) {
+    fn timing(&mut self, branches: &HashMap<u32, u32>, ends: &[Vec<(u32, u32, bool)>]) {
         let Some(paths) = paths(self.ev, branches) else {
             let loc = self.ev.first().map(Event::loc).unwrap_or_default();
             self.push(
@@ -537,8 +549,12 @@ impl<'g> Checker<'_, 'g> {
             );
             return;
         };
-        for path in &paths {
-            self.timing_path(path);
+        for (path, assign) in &paths {
+            // Whether the path reaches an `end` (rather than only a recursion variable,
+            // whose next round the unfolded copy already shows).
+            let ends_here =
+                ends.iter().any(|e| e.iter().filter(|n| n.2).all(|(node, b, _)| assign.get(node) == Some(b)));
+            self.timing_path(path, ends_here);
         }
     }
 
@@ -546,7 +562,7 @@ impl<'g> Checker<'_, 'g> {
         format!("{}: {}", self.prog.role_name(p.role), self.prog.prim(p.app.prim).name)
     }
 
-    fn timing_path(&mut self, path: &[usize]) {
+    fn timing_path(&mut self, path: &[usize], ends_here: bool) {
         let ev = self.ev;
         let mut inst = Instants::new(path.len() + 1);
         let mut parts: Vec<Part<'g>> = Vec::new();
@@ -612,7 +628,45 @@ impl<'g> Checker<'_, 'g> {
                 }
             }
         }
+        if ends_here {
+            // An interruptible motion that nothing interrupts runs on after `end`.
+            // It needs `hi = inf`, and if its assumption reads inputs, partners that keep
+            // guaranteeing: every other part of its dt left running too ([AGCOMP] checked
+            // the assumption at every time from their guarantees).
+            for p in parts.iter().filter(|p| p.left.is_none()) {
+                let prim = self.prog.prim(p.app.prim);
+                let partners_left = parts.iter().any(|q| q.ev == p.ev && q.left.is_some());
+                if prim.interruptible && (prim.duration.hi.is_some() || (reads_input(prim) && partners_left)) {
+                    self.never_interrupted(p);
+                }
+            }
+        }
         self.overlaps(&parts, &inst);
+    }
+
+    fn never_interrupted(&mut self, p: &Part) {
+        let prim = self.prog.prim(p.app.prim);
+        let (lo, hi) = self.duration_text(prim);
+        let d = Diagnostic::error(
+            Code::InterruptOutsideDuration,
+            p.app.loc.0,
+            format!(
+                "nothing interrupts `{}` before `end`, so it runs on past its duration [{lo}, {hi}]",
+                self.part_name(p)
+            ),
+        )
+        .with_note("Fig 3 [INTERRUPT] and Def 4.11 (5): an interruptible motion is consumed only while t ∈ D; its contract (and every check of its footprint) says nothing after D. Sec 4.1 reads `end` as idling forever")
+        .with_help(format!(
+            "end with a primitive whose duration has no upper bound (and whose assumption reads no input, if its partners stop first), or interrupt `{}` with a message before `end`",
+            self.prog.role_name(p.role)
+        ));
+        self.push(d);
+    }
+
+    fn duration_text(&self, prim: &Primitive) -> (String, String) {
+        let lo = print::expr(self.prog, None, &prim.duration.lo);
+        let hi = prim.duration.hi.as_ref().map(|h| print::expr(self.prog, None, h)).unwrap_or_else(|| "inf".into());
+        (lo, hi)
     }
 
     fn unsynchronised_start(&mut self, e: usize, starts: &[(RoleId, usize, Option<usize>)]) {
@@ -644,8 +698,7 @@ impl<'g> Checker<'_, 'g> {
 
     fn interrupted_untied(&mut self, msg: usize, p: &Part) {
         let prim = self.prog.prim(p.app.prim);
-        let lo = print::expr(self.prog, None, &prim.duration.lo);
-        let hi = prim.duration.hi.as_ref().map(|h| print::expr(self.prog, None, h)).unwrap_or_else(|| "inf".into());
+        let (lo, hi) = self.duration_text(prim);
         let d = Diagnostic::error(
             Code::InterruptOutsideDuration,
             self.ev[msg].loc().0,
@@ -914,5 +967,21 @@ mod tests {
         );
         let choices = "(P -> Q : a + P -> Q : b). ".repeat(3);
         assert_eq!(codes4(&format!("{choices}dt<P: go, Q: wait, V: wait, W: wait>. end")), vec![]);
+    }
+
+    #[test]
+    fn an_interruptible_motion_left_running_at_end_needs_no_bound() {
+        assert_eq!(codes4("dt<P: go, Q: brief, V: wait, W: wait>. end"), vec![Code::InterruptOutsideDuration]);
+        assert_eq!(codes4("dt<P: go, Q: wait, V: wait, W: wait>. end"), vec![]);
+        // At the tail of a loop the next round interrupts it (checked in the unfolded copy).
+        assert_eq!(
+            codes4("mu t. dt<P: go, Q: brief, V: wait, W: wait>. P -> Q : a. P -> V : b. P -> W : c. t"),
+            vec![]
+        );
+        // Only the path that reaches `end` is concerned.
+        assert_eq!(
+            codes4("mu t. dt<P: go, Q: brief, V: wait, W: wait>. (P -> Q : a. P -> V : b. P -> W : c. t + P -> Q : d. P -> V : e. P -> W : f. dt<P: go, Q: brief, V: wait, W: wait>. end)"),
+            vec![Code::InterruptOutsideDuration]
+        );
     }
 }
