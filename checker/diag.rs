@@ -221,7 +221,9 @@ codes! {
          overlap, for example the motions of two `*` in a row when one side of the first may still \
          be moving while the other has started the second. Sec 4.1 accepts this (a gap in the \
          paper); mochi rejects it. Order the two motions with a message, or put them on the two \
-         sides of one `*`. The check reads each path through the choices of the once-unfolded \
+         sides of one `*`. Likewise two interruptible primitives of one dt that run on after the \
+         dt ends (interrupted later, or never before `end`) while a third primitive's contract \
+         bounded the times [AGCOMP] compared them. The check reads each path through the choices of the once-unfolded \
          type; beyond 4096 paths it gives up with this code rather than pass unchecked.";
     InterruptOutsideDuration = "E0319", "a message may interrupt a motion outside its duration",
         "Fig 3 [INTERRUPT] consumes an interruptible motion only while its clock t is in its \

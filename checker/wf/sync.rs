@@ -641,7 +641,7 @@ impl<'g> Checker<'_, 'g> {
                 }
             }
         }
-        self.overlaps(&parts, &inst);
+        self.overlaps(&parts, &inst, ends_here);
     }
 
     fn never_interrupted(&mut self, p: &Part) {
@@ -720,7 +720,56 @@ impl<'g> Checker<'_, 'g> {
 
     /// E0318: two parts of different participants that may run at the same time and that
     /// neither [AGCOMP] (one dt) nor a separation obligation (two sides of one `*`) covers.
-    fn overlaps(&mut self, parts: &[Part], inst: &Instants) {
+    fn overlaps(&mut self, parts: &[Part], inst: &Instants, ends_here: bool) {
+        // Parts of one dt are compared by [AGCOMP] while all of them run (its query bounds
+        // the time by every part's duration and assumes every guarantee). Two interruptible
+        // parts that run on after the motion ends (left later, or never before `end`) are
+        // not compared after that when a third part bounds the query.
+        let overruns = |p: &Part| {
+            self.prog.prim(p.app.prim).interruptible
+                && match p.left {
+                    Some(l) => l != p.end_of_motion,
+                    None => ends_here,
+                }
+        };
+        // A part bounds the query in time when its duration has an upper bound or its
+        // guarantee reads the clock (its other variables are its own, fresh at each time).
+        let bounds_time = |p: &Part| {
+            let prim = self.prog.prim(p.app.prim);
+            let mut clock = false;
+            prim.guarantee.visit_vars(&mut |v, _| clock |= matches!(v, Var::Clock));
+            prim.duration.hi.is_some() || clock
+        };
+        let mut together: std::collections::BTreeMap<usize, Vec<String>> = std::collections::BTreeMap::new();
+        for (i, x) in parts.iter().enumerate() {
+            if !overruns(x) {
+                continue;
+            }
+            for (j, y) in parts.iter().enumerate().skip(i + 1).filter(|(_, y)| y.ev == x.ev && overruns(y)) {
+                let bounded = parts.iter().enumerate().any(|(k, q)| q.ev == x.ev && k != i && k != j && bounds_time(q));
+                if bounded {
+                    together.entry(x.ev).or_default().push(format!(
+                        "`{}` with `{}`",
+                        self.part_name(x),
+                        self.part_name(y)
+                    ));
+                }
+            }
+        }
+        for (e, pairs) in together {
+            let d = Diagnostic::error(
+                Code::UncheckedOverlap,
+                self.ev[e].loc().0,
+                format!(
+                    "some primitives of this motion may run on together after the others stop, and no check compares them then: {}",
+                    pairs.join(", ")
+                ),
+            )
+            .with_note("they are interrupted later than the motion ends (or not before `end`); [AGCOMP] compares the footprints of a dt only while all its primitives run")
+            .with_help("interrupt them in the burst of messages that ends the motion, or give them a dt (or `*` sides) of their own");
+            self.push(d);
+        }
+
         // Group by enclosing `*` sides: whether a pair is covered depends only on them.
         let mut groups: Vec<(Sides, Vec<usize>)> = Vec::new();
         let mut index: HashMap<&[(usize, u32)], usize> = HashMap::new();
@@ -971,7 +1020,9 @@ mod tests {
 
     #[test]
     fn an_interruptible_motion_left_running_at_end_needs_no_bound() {
-        assert_eq!(codes4("dt<P: go, Q: brief, V: wait, W: wait>. end"), vec![Code::InterruptOutsideDuration]);
+        // (V and W, running on, are then compared only for brief's 2 s: E0318 as well.)
+        let c = codes4("dt<P: go, Q: brief, V: wait, W: wait>. end");
+        assert!(c.contains(&Code::InterruptOutsideDuration), "{c:?}");
         assert_eq!(codes4("dt<P: go, Q: wait, V: wait, W: wait>. end"), vec![]);
         // At the tail of a loop the next round interrupts it (checked in the unfolded copy).
         assert_eq!(
@@ -979,9 +1030,35 @@ mod tests {
             vec![]
         );
         // Only the path that reaches `end` is concerned.
-        assert_eq!(
-            codes4("mu t. dt<P: go, Q: brief, V: wait, W: wait>. (P -> Q : a. P -> V : b. P -> W : c. t + P -> Q : d. P -> V : e. P -> W : f. dt<P: go, Q: brief, V: wait, W: wait>. end)"),
-            vec![Code::InterruptOutsideDuration]
-        );
+        let c = codes4("mu t. dt<P: go, Q: wait, V: wait, W: wait>. (P -> Q : a. P -> V : b. P -> W : c. t + P -> Q : d. P -> V : e. P -> W : f. dt<P: go, Q: brief, V: wait, W: wait>. end)");
+        assert!(c.contains(&Code::InterruptOutsideDuration), "{c:?}");
+    }
+
+    /// Five participants, for a motion two of whose parts run on after it ends.
+    const SYS5: &str = "
+        robot R { state x: real; }
+        motion R.go { interruptible: false; }
+        motion R.wait { interruptible: true; }
+        motion R.step { interruptible: false; duration: [1, 2]; }
+        system S { participant P: R; participant Q: R; participant V: R; participant W: R; participant X: R; }
+    ";
+
+    #[test]
+    fn parts_of_one_dt_running_on_together_after_it_ends() {
+        let codes5 = |chor: &str| {
+            let (p, d) = lower_src(&format!("{SYS5} choreography G = {chor};"));
+            assert!(d.is_empty(), "{d:?}");
+            let c = p.choreography.as_ref().expect("choreography");
+            super::check(&p, &c.body).into_iter().map(|d| d.code).collect::<Vec<_>>()
+        };
+        // P's step ends; P is then held up by X (busy on the other side), so Q and V wait on
+        // together past the end of the dt, where [AGCOMP] no longer compares them.
+        let late = "(dt<P: step, Q: wait, V: wait> * (dt<W: go, X: wait>. W -> X : m. (dt<W: wait> * dt<X: wait>))). P -> X : a. P -> Q : b. P -> V : c. P -> W : e. dt<P: go, Q: wait, V: wait, W: wait, X: wait>. end";
+        assert_eq!(codes5(late), vec![Code::UncheckedOverlap]);
+        // Told in the burst that ends the dt, they stop with it.
+        let burst = "(dt<P: step, Q: wait, V: wait> * (dt<W: go, X: wait>. W -> X : m. (dt<W: wait> * dt<X: wait>))). P -> Q : b. P -> V : c. P -> X : a. P -> W : e. end";
+        assert_eq!(codes5(burst), vec![]);
+        // With a leader whose contract does not bound the time, [AGCOMP] compared them always.
+        assert_eq!(codes5(&late.replace("P: step", "P: go")), vec![]);
     }
 }
