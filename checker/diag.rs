@@ -223,6 +223,44 @@ codes! {
          guard must hold, or the choreography could get stuck there. Z3 found a state (shown as the \
          counterexample: the values of the variables the guards read, under what is known at that \
          point) where every guard is false. Add a branch for that case, or weaken a guard.";
+    UnsynchronisedStart = "E0317", "participants of a joint motion may start it at different times",
+        "A joint motion dt<p: a, q: b> is checked by [AGCOMP] (Sec 3.4) as if all its primitives \
+         started together, and Def 4.11 (6) consumes it at one time for all. Each participant starts \
+         its part when its previous message happens (or its lone non-interruptible motion ends). \
+         After `g1 * g2` the sides run at independent times (Sec 4.1), so participants released by \
+         messages on different sides may start at different times: one runs its new primitive while \
+         another is still in its old one, and nothing checks that. Sec 4.1's rules accept this shape \
+         (a gap in the paper). mochi requires every participant of a joint motion to be released at \
+         the same instant: by the same burst of messages, which happens when one sender becomes ready \
+         (its motion ends) and every receiver is in an interruptible motion or already in the burst. \
+         Fix: end the other sides in interruptible motions and let one side's last sender tell each of \
+         them, as Example 4.2 (4) does, or keep the joint motion on one side of the `*`.";
+    UncheckedOverlap = "E0318", "two motions may run at the same time with nothing checking them together",
+        "Footprints are compared only for motions known to run together: the primitives of one dt \
+         ([AGCOMP], Sec 3.4) and the motions of the two sides of one `*` (full separation, Sec 4.1, at \
+         independent times). Two motions of different participants that nothing orders in time (no \
+         chain of messages and motions from the end of one to the start of the other) may also \
+         overlap, for example the motions of two `*` in a row when one side of the first may still \
+         be moving while the other has started the second. Sec 4.1 accepts this (a gap in the \
+         paper); mochi rejects it. Order the two motions with a message, or put them on the two \
+         sides of one `*`. Likewise two interruptible primitives of one dt that run on after the \
+         dt ends (interrupted later, or never before `end`) while a third primitive's contract \
+         bounded the times [AGCOMP] compared them. The check reads each path through the choices of the once-unfolded \
+         type; beyond 4096 paths it gives up with this code rather than pass unchecked.";
+    InterruptOutsideDuration = "E0319", "a message may interrupt a motion outside its duration",
+        "Fig 3 [INTERRUPT] consumes an interruptible motion only while its clock t is in its \
+         duration D (Def 4.11 (5), (8b)); its contract, and every check of its footprint, speaks of \
+         D only. A message ending an interruptible motion is on time when it comes in the burst \
+         that ends that same motion: its non-interruptible partner ends within D ([AGCOMP], E0405), \
+         or, with all primitives interruptible, its unique minimal sender sends within the shared \
+         duration (Def 4.11 (8b)). A message timed by anything else (a motion of arbitrary length \
+         on the other side of `*`, or a later motion) may come at any time, so mochi requires the \
+         interrupted primitive to be ready at any time: D = [0, inf] (with a literal lower bound) \
+         and an assumption that reads no input (after its partners have moved on, their guarantees \
+         no longer discharge it). An interruptible motion that nothing interrupts before `end` runs \
+         on forever: its duration needs no upper bound, and if its assumption reads inputs, its \
+         partners in the dt must run on too. Send the message in the burst that ends the motion, or \
+         change the primitive.";
     PreconditionAtMotion = "E0402", "a primitive's precondition may not hold when the joint motion starts",
         "[AGCOMP] composes primitives from their preconditions (Sec 3.4, \"compatible from Pre\"): \
          at the `dt<...>` each participant's precondition must follow from what is known there \
