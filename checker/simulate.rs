@@ -33,6 +33,7 @@ use crate::hir::{
 };
 use crate::smt::goals::witness::{self, Mover, Occupant, Session};
 use crate::smt::Why;
+use crate::subtype::map_vars;
 use num_bigint::BigInt;
 use num_traits::{ToPrimitive, Zero};
 use serde::Serialize;
@@ -484,12 +485,8 @@ impl<'a, 'p> Runner<'a, 'p> {
         if !m.payload.is_empty() {
             // The refinements, with everything but this message's fields made concrete.
             let fields: Vec<ValueId> = m.payload.iter().map(|f| f.value).collect();
-            let facts: Vec<Expr> = m
-                .payload
-                .iter()
-                .filter_map(|f| f.refinement.as_ref())
-                .map(|e| self.close(e, &fields))
-                .collect();
+            let facts: Vec<Expr> =
+                m.payload.iter().filter_map(|f| f.refinement.as_ref()).map(|e| self.close(e, &fields)).collect();
             let want: Vec<Expr> =
                 m.payload.iter().map(|f| var_expr(Var::Value(f.value, f.name.clone()), f.sort.clone())).collect();
             let nudge = self.nudge(want.len());
@@ -529,9 +526,9 @@ impl<'a, 'p> Runner<'a, 'p> {
     /// `e` with every participant variable and known value replaced by its value,
     /// except the value variables `keep`.
     fn close(&self, e: &Expr, keep: &[ValueId]) -> Expr {
-        map_vars(e, &mut |v, sort, loc| match v {
+        map_vars(e, &mut |v, sort| match v {
             Var::Value(id, _) if keep.contains(id) => None,
-            Var::Role(..) | Var::Value(..) => self.lookup(v).and_then(|val| value_expr(&val, sort, loc)),
+            Var::Role(..) | Var::Value(..) => self.lookup(v).and_then(|val| value_expr(&val, sort, Loc::default())),
             _ => None,
         })
     }
@@ -1078,8 +1075,10 @@ fn var_expr(v: Var, sort: Sort) -> Expr {
 
 /// `Var::Own(slot)` as participant `r`'s variable (for the kind's invariant at `init`).
 fn own_to_role(e: &Expr, r: RoleId) -> Expr {
-    map_vars(e, &mut |v, sort, loc| match v {
-        Var::Own(slot) => Some(Expr { kind: ExprKind::Var(Var::Role(r, *slot)), sort: sort.clone(), loc }),
+    map_vars(e, &mut |v, sort| match v {
+        Var::Own(slot) => {
+            Some(Expr { kind: ExprKind::Var(Var::Role(r, *slot)), sort: sort.clone(), loc: Loc::default() })
+        }
         _ => None,
     })
 }
@@ -1109,24 +1108,4 @@ fn value_expr(v: &Value, sort: &Sort, loc: Loc) -> Option<Expr> {
             }
         }
     })
-}
-
-/// Rebuilds `e` with each variable `f` maps to `Some` replaced.
-fn map_vars(e: &Expr, f: &mut dyn FnMut(&Var, &Sort, Loc) -> Option<Expr>) -> Expr {
-    let kind = match &e.kind {
-        ExprKind::Var(v) => match f(v, &e.sort, e.loc) {
-            Some(r) => return r,
-            None => ExprKind::Var(v.clone()),
-        },
-        ExprKind::Int(_) | ExprKind::Real(_) | ExprKind::Bool(_) => e.kind.clone(),
-        ExprKind::Unary(op, a) => ExprKind::Unary(*op, Box::new(map_vars(a, f))),
-        ExprKind::Component(a, i) => ExprKind::Component(Box::new(map_vars(a, f)), *i),
-        ExprKind::Binary(op, a, b) => ExprKind::Binary(*op, Box::new(map_vars(a, f)), Box::new(map_vars(b, f))),
-        ExprKind::If(a, b, c) => {
-            ExprKind::If(Box::new(map_vars(a, f)), Box::new(map_vars(b, f)), Box::new(map_vars(c, f)))
-        }
-        ExprKind::Call(g, args) => ExprKind::Call(*g, args.iter().map(|a| map_vars(a, f)).collect()),
-        ExprKind::Tuple(args) => ExprKind::Tuple(args.iter().map(|a| map_vars(a, f)).collect()),
-    };
-    Expr { kind, sort: e.sort.clone(), loc: e.loc }
 }

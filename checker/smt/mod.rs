@@ -472,7 +472,9 @@ impl Worker<'_> {
             // The same text may come from other values of the same names: where this
             // query's values are bound is this query's.
             return match a {
-                Answer::Sat { values, overlap, exact, .. } => Answer::Sat { values, overlap, bound: q.enc.shared_names(), exact },
+                Answer::Sat { values, overlap, exact, .. } => {
+                    Answer::Sat { values, overlap, bound: q.enc.shared_names(), exact }
+                }
                 other => other,
             };
         }
