@@ -143,6 +143,16 @@ impl Interval {
     /// The tightest interval of doubles around the rational `q`: a point exactly when
     /// `q` is a double. Checked against `q` exactly, whatever `to_f64` rounds to.
     pub fn of_rational(q: &BigRational) -> Interval {
+        // Fast path: numerator and denominator are doubles, so `n / d` is the correctly
+        // rounded quotient, exact iff the remainder `n - v d` is 0.
+        const EXACT: i64 = 1 << 53;
+        if let (Some(n), Some(d)) = (q.numer().to_i64(), q.denom().to_i64()) {
+            if n.abs() <= EXACT && (1..=EXACT).contains(&d) {
+                let (n, d) = (n as f64, d as f64);
+                let (lo, hi) = div_out(n, d);
+                return Interval { lo, hi };
+            }
+        }
         let Some(v) = q.to_f64().filter(|v| !v.is_nan()) else { return ALL };
         let v = v.clamp(-f64::MAX, f64::MAX);
         let above = |f: f64| BigRational::from_float(f).is_some_and(|r| r > *q);

@@ -830,11 +830,11 @@ fn separation_plan(prog: &Program, sides: &[Side]) -> Plan {
     if let Some(i) = sides.iter().position(|s| s.runs.is_empty()) {
         return Plan::Unknown(Unsupported(format!("a side of `*` (side {}) whose motions were not recorded", i + 1)));
     }
-    let boxes: Vec<Option<[Interval; 3]>> = sides.iter().map(|s| side_box(prog, s)).collect();
     // Per run too: two runs whose boxes are disjoint need no query even when their
     // sides' boxes meet (the boxes are sound enclosures, rotations included).
     let run_boxes: Vec<Vec<Option<[Interval; 3]>>> =
         sides.iter().map(|s| s.runs.iter().map(|r| run_box(prog, r)).collect()).collect();
+    let boxes: Vec<Option<[Interval; 3]>> = run_boxes.iter().map(|rs| hull_all(rs)).collect();
     let apart = |x: &Option<[Interval; 3]>, y: &Option<[Interval; 3]>| match (x, y) {
         (Some(x), Some(y)) => (0..3).any(|k| x[k].disjoint(y[k])),
         _ => false,
@@ -880,9 +880,14 @@ fn separation_plan(prog: &Program, sides: &[Side]) -> Plan {
 
 /// A world box around every footprint of a side, if each can be bounded.
 fn side_box(prog: &Program, side: &Side) -> Option<[Interval; 3]> {
+    hull_all(&side.runs.iter().map(|r| run_box(prog, r)).collect::<Vec<_>>())
+}
+
+/// The hull of boxes, if each is bounded (`None` for none).
+fn hull_all(boxes: &[Option<[Interval; 3]>]) -> Option<[Interval; 3]> {
     let mut acc: Option<[Interval; 3]> = None;
-    for run in &side.runs {
-        let b = run_box(prog, run)?;
+    for b in boxes {
+        let b = (*b)?;
         acc = Some(match acc {
             None => b,
             Some(a) => [a[0].hull(b[0]), a[1].hull(b[1]), a[2].hull(b[2])],
