@@ -116,14 +116,19 @@ fn sqrt_out(a: f64) -> (f64, f64) {
     around(r, r >= 1e-140 && r.mul_add(r, -a) == 0.0)
 }
 
-/// `a^n` (n >= 1, a >= 0) rounded down (`up == false`) or up.
+/// `a^n` (n >= 1, a >= 0) rounded down (`up == false`) or up, by repeated squaring
+/// (O(log n) products): for non-negative factors, products of lower (upper) bounds
+/// rounded down (up) stay lower (upper) bounds.
 fn pow_nonneg(a: f64, n: i64, up: bool) -> f64 {
-    let mut acc = a;
-    for _ in 1..n {
-        let (lo, hi) = mul_out(acc, a);
-        acc = if up { hi } else { lo.max(0.0) };
-        if (acc == 0.0 && !up) || acc.is_infinite() {
-            break;
+    let pick = |(lo, hi): (f64, f64)| if up { hi } else { lo.max(0.0) };
+    let (mut base, mut n, mut acc) = (a, n, 1.0f64);
+    while n > 0 {
+        if n & 1 == 1 {
+            acc = pick(mul_out(acc, base));
+        }
+        n >>= 1;
+        if n > 0 {
+            base = pick(mul_out(base, base));
         }
     }
     acc
@@ -734,6 +739,14 @@ mod tests {
             assert!(contains(iv, &want), "{t}: {iv:?}");
             assert_eq!(iv.is_exactly(0.0), want.is_zero(), "{t}: {iv:?}");
         }
+        // Powers (the language allows exponents up to 64) stay exact and enclosed.
+        let (q, iv) = closed_term("(1 - 1e-30) ^ 64");
+        let want = num_traits::pow(decimal("0.999999999999999999999999999999").unwrap(), 64);
+        assert_eq!(q, Some(want.clone()));
+        assert!(contains(iv, &want) && iv.lo < 1.0 && iv.hi <= 1.0, "{iv:?}");
+        // Interval powers take O(log n) products and overflow soundly.
+        let big = Interval::point(1.5).pow(1_000_000_000);
+        assert!(big.lo == f64::MAX && big.hi == f64::INFINITY, "{big:?}");
         // sin of a tiny constant is not 0.
         let (_, iv) = closed_term("sin(1e-400)");
         assert!(!iv.is_exactly(0.0), "{iv:?}");
