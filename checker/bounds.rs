@@ -2,16 +2,44 @@
 //! boxes around the points a footprint may occupy. The SMT stage uses them to settle
 //! the separation of `g1 * ... * gn` without a solver when each side's footprints fit
 //! in a box and the boxes are pairwise disjoint (the boxes are then the partition
-//! `∃ FP1, FP2` of [AGCOMP], inferred), and to bound `sin`/`cos` of constants.
+//! `∃ FP1, FP2` of [AGCOMP], inferred), to bound `sin`/`cos` of constants, and to
+//! enclose the cosines and sines of pose angles.
 //!
-//! Everything here over-approximates: an interval contains every value the term can
-//! take when the variables range over their intervals. Floating-point results are
-//! widened outward by a relative 1e-12 (far above f64's rounding error of about 1e-16
-//! per operation for the short terms of contracts), so no rounding can make an interval
-//! too small. `None` means "unbounded or unknown".
+//! **The rule: every enclosure contains the exact real value, in every case.**
+//! - *Rational values are computed exactly.* A literal is a decimal, i.e. an exact
+//!   rational (`0.1` is 1/10, `1e-400` is 10^-400, neither is a double), and sums,
+//!   differences, products, quotients, integer powers, `min`, `max` and `abs` of rationals
+//!   are rational: [`eval`] computes them as [`BigRational`]s and encloses the result in
+//!   the tightest pair of doubles around it ([`Interval::of_rational`], checked against
+//!   the rational exactly). So `1 - 1e-20 - 1` is the interval just around -1e-20, never
+//!   the point 0, and an interval is a single point only when that point *is* the value.
+//! - *Everything else is rounded outward.* Where a variable's range, `sqrt`, `sin` or
+//!   `cos` enters, the ends are doubles, and each operation rounds its lower end down and
+//!   its upper end up: the round-to-nearest result is kept only when an error-free
+//!   transformation shows it exact (TwoSum for `+`, a fused multiply-add for `*`, `/`
+//!   and `sqrt`), otherwise it moves one ulp outward (`f64::next_down`/`next_up`), which
+//!   contains the exact result because round-to-nearest is within half an ulp.
+//!   `sin`/`cos` are not correctly rounded by libm: their values are widened by 2^-50
+//!   (eight ulps of 1) beyond the argument's half-width (both are 1-Lipschitz).
+//!
+//! **Why these crates and not an interval library.** inari (IEEE 1788 interval arithmetic)
+//! would give directed rounding directly, but it needs a nightly toolchain (`asm`,
+//! `stdsimd`), a Haswell target CPU set at build time, and GMP/MPFR for its transcendental
+//! functions; mochi builds on stable Rust for any x86-64 or ARM machine. The values the
+//! checker meets are mostly rational constants, for which exact arithmetic is both simpler
+//! and tighter than any rounding: num-rational's `BigRational` (num-bigint underneath) is
+//! the long-standing pure-Rust choice, with no native dependency (malachite is faster on
+//! huge numbers, which contracts do not have, and is a much larger dependency). Outward
+//! rounding of doubles is then only needed where values are irrational or unknown, and
+//! four small functions with error-free transformations do it on stable Rust.
+//!
+//! `None` means "unbounded or unknown".
 
 use crate::hir::expr::{BinOp, UnOp};
 use crate::hir::{Builtin, Expr, ExprKind, Program, Var};
+use num_bigint::BigInt;
+use num_rational::BigRational;
+use num_traits::{Signed, ToPrimitive, Zero};
 use std::collections::HashMap;
 
 /// A closed interval `[lo, hi]`, possibly with infinite ends.
@@ -23,33 +51,148 @@ pub struct Interval {
 
 const ALL: Interval = Interval { lo: f64::NEG_INFINITY, hi: f64::INFINITY };
 
+/// Below this magnitude a product or quotient may have lost bits to underflow, so the
+/// error-free checks are not trusted and the result is widened both ways.
+const TINY: f64 = 1e-280;
+
+/// `v` (a round-to-nearest result) as an interval: itself when `exact`, otherwise one
+/// ulp either way, which contains every real that rounds to `v`.
+fn around(v: f64, exact: bool) -> (f64, f64) {
+    if v.is_nan() {
+        (f64::NEG_INFINITY, f64::INFINITY)
+    } else if exact {
+        (v, v)
+    } else {
+        (v.next_down(), v.next_up())
+    }
+}
+
+/// `a + b` rounded outward.
+fn add_out(a: f64, b: f64) -> (f64, f64) {
+    let s = a + b;
+    if !s.is_finite() {
+        // Infinite operands give exact infinities; finite ones that overflow round out.
+        return around(s, a.is_infinite() || b.is_infinite());
+    }
+    // TwoSum (Knuth): a + b == s + err exactly, for finite a, b, s.
+    let bb = s - a;
+    let err = (a - (s - bb)) + (b - bb);
+    around(s, err == 0.0)
+}
+
+/// `a * b` rounded outward.
+fn mul_out(a: f64, b: f64) -> (f64, f64) {
+    if a == 0.0 || b == 0.0 {
+        return if a.is_finite() && b.is_finite() { (0.0, 0.0) } else { around(f64::NAN, false) };
+    }
+    let p = a * b;
+    if !p.is_finite() {
+        return around(p, a.is_infinite() || b.is_infinite());
+    }
+    // With no underflow, a * b - p is a double and the fused multiply-add computes it.
+    around(p, p.abs() >= TINY && a.mul_add(b, -p) == 0.0)
+}
+
+/// `a / b` (b nonzero) rounded outward.
+fn div_out(a: f64, b: f64) -> (f64, f64) {
+    if a == 0.0 && b != 0.0 {
+        return (0.0, 0.0);
+    }
+    let q = a / b;
+    if !q.is_finite() || a.is_infinite() || b.is_infinite() {
+        // inf / x is an exact infinity; x / inf is exactly 0; overflow rounds out.
+        return around(q, a.is_infinite() || b.is_infinite());
+    }
+    // With no underflow, a - q * b is a double (the remainder) and is 0 iff q is exact.
+    around(q, q.abs() >= TINY && a.abs() >= TINY && (-q).mul_add(b, a) == 0.0)
+}
+
+/// `sqrt(a)` (a >= 0) rounded outward.
+fn sqrt_out(a: f64) -> (f64, f64) {
+    let r = a.sqrt();
+    if a == 0.0 || a.is_infinite() {
+        return (r, r);
+    }
+    around(r, r >= 1e-140 && r.mul_add(r, -a) == 0.0)
+}
+
+/// `a^n` (n >= 1, a >= 0) rounded down (`up == false`) or up, by repeated squaring
+/// (O(log n) products): for non-negative factors, products of lower (upper) bounds
+/// rounded down (up) stay lower (upper) bounds.
+fn pow_nonneg(a: f64, n: i64, up: bool) -> f64 {
+    let pick = |(lo, hi): (f64, f64)| if up { hi } else { lo.max(0.0) };
+    let (mut base, mut n, mut acc) = (a, n, 1.0f64);
+    while n > 0 {
+        if n & 1 == 1 {
+            acc = pick(mul_out(acc, base));
+        }
+        n >>= 1;
+        if n > 0 {
+            base = pick(mul_out(base, base));
+        }
+    }
+    acc
+}
+
 impl Interval {
+    /// The interval holding exactly the double `v`.
     pub fn point(v: f64) -> Interval {
-        Interval { lo: v, hi: v }.widen()
+        Interval { lo: v, hi: v }
     }
 
+    /// `[lo, hi]` as given: the caller vouches that the ends are sound.
     pub fn new(lo: f64, hi: f64) -> Interval {
-        Interval { lo, hi }.widen()
+        Interval { lo, hi }
+    }
+
+    /// The tightest interval of doubles around the rational `q`: a point exactly when
+    /// `q` is a double. Checked against `q` exactly, whatever `to_f64` rounds to.
+    pub fn of_rational(q: &BigRational) -> Interval {
+        // Fast path: numerator and denominator are doubles, so `n / d` is the correctly
+        // rounded quotient, exact iff the remainder `n - v d` is 0.
+        const EXACT: i64 = 1 << 53;
+        if let (Some(n), Some(d)) = (q.numer().to_i64(), q.denom().to_i64()) {
+            if n.abs() <= EXACT && (1..=EXACT).contains(&d) {
+                let (n, d) = (n as f64, d as f64);
+                let (lo, hi) = div_out(n, d);
+                return Interval { lo, hi };
+            }
+        }
+        let Some(v) = q.to_f64().filter(|v| !v.is_nan()) else { return ALL };
+        let v = v.clamp(-f64::MAX, f64::MAX);
+        let above = |f: f64| BigRational::from_float(f).is_some_and(|r| r > *q);
+        let below = |f: f64| BigRational::from_float(f).is_some_and(|r| r < *q);
+        let (mut lo, mut hi) = (v, v);
+        for _ in 0..4 {
+            if !above(lo) {
+                break;
+            }
+            lo = lo.next_down();
+        }
+        for _ in 0..4 {
+            if !below(hi) {
+                break;
+            }
+            hi = hi.next_up();
+        }
+        // `to_f64` is within an ulp; should it ever be further off, give up soundly.
+        if above(lo) {
+            lo = f64::NEG_INFINITY;
+        }
+        if below(hi) {
+            hi = f64::INFINITY;
+        }
+        Interval { lo, hi }
     }
 
     pub fn is_finite(&self) -> bool {
         self.lo.is_finite() && self.hi.is_finite()
     }
 
-    /// Whether the interval is exactly the number `v` (no widening happened).
+    /// Whether the interval is exactly the number `v`: since every enclosure contains
+    /// the exact value, the value is then `v`.
     pub fn is_exactly(&self, v: f64) -> bool {
         self.lo == v && self.hi == v
-    }
-
-    /// Moves both ends outward by a relative 1e-12 (and an absolute 1e-300), so that
-    /// floating-point rounding cannot leave the true value outside.
-    fn widen(self) -> Interval {
-        if self.lo == self.hi && self.lo.fract() == 0.0 && self.lo.abs() < 1e15 {
-            return self; // small integers are exact in f64
-        }
-        let down = |x: f64| if x.is_finite() { x - x.abs() * 1e-12 - 1e-300 } else { x };
-        let up = |x: f64| if x.is_finite() { x + x.abs() * 1e-12 + 1e-300 } else { x };
-        Interval { lo: down(self.lo), hi: up(self.hi) }
     }
 
     pub fn hull(self, o: Interval) -> Interval {
@@ -68,22 +211,49 @@ impl Interval {
         if o.lo <= 0.0 && o.hi >= 0.0 {
             return None; // the divisor may be zero
         }
-        let inv = Interval { lo: 1.0 / o.hi, hi: 1.0 / o.lo }.widen();
-        Some(self * inv)
+        let qs = [div_out(self.lo, o.lo), div_out(self.lo, o.hi), div_out(self.hi, o.lo), div_out(self.hi, o.hi)];
+        Some(Interval::spanning(&qs))
+    }
+
+    /// The smallest interval holding every `(lo, hi)` pair; unbounded if one is NaN.
+    fn spanning(ps: &[(f64, f64)]) -> Interval {
+        if ps.iter().any(|(l, h)| l.is_nan() || h.is_nan()) {
+            return ALL;
+        }
+        let lo = ps.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
+        let hi = ps.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
+        Interval { lo, hi }
     }
 
     fn pow(self, n: i64) -> Interval {
-        match n {
-            0 => Interval::point(1.0),
-            1 => self,
-            _ if n % 2 == 0 && self.lo <= 0.0 && self.hi >= 0.0 => {
-                Interval { lo: 0.0, hi: self.lo.abs().max(self.hi.abs()).powi(n as i32) }.widen()
-            }
-            _ if n % 2 == 0 && self.hi < 0.0 => {
-                Interval { lo: self.hi.powi(n as i32), hi: self.lo.powi(n as i32) }.widen()
-            }
-            _ => Interval { lo: self.lo.powi(n as i32), hi: self.hi.powi(n as i32) }.widen(),
+        if n == 0 {
+            return Interval::point(1.0);
         }
+        if n % 2 == 0 {
+            // |x|^n: from the smallest to the largest magnitude.
+            let (small, large) = if self.lo <= 0.0 && self.hi >= 0.0 {
+                (0.0, self.lo.abs().max(self.hi.abs()))
+            } else {
+                (self.lo.abs().min(self.hi.abs()), self.lo.abs().max(self.hi.abs()))
+            };
+            return Interval { lo: pow_nonneg(small, n, false), hi: pow_nonneg(large, n, true) };
+        }
+        // Odd powers are increasing: x^n = sign(x) |x|^n.
+        let odd = |x: f64, up: bool| {
+            if x >= 0.0 {
+                pow_nonneg(x, n, up)
+            } else {
+                -pow_nonneg(-x, n, !up)
+            }
+        };
+        Interval { lo: odd(self.lo, false), hi: odd(self.hi, true) }
+    }
+
+    fn sqrt(self) -> Option<Interval> {
+        if self.lo < 0.0 {
+            return None;
+        }
+        Some(Interval { lo: sqrt_out(self.lo).0, hi: sqrt_out(self.hi).1 })
     }
 }
 
@@ -91,7 +261,11 @@ impl Interval {
 impl std::ops::Add for Interval {
     type Output = Interval;
     fn add(self, o: Interval) -> Interval {
-        Interval { lo: self.lo + o.lo, hi: self.hi + o.hi }.widen()
+        let (lo, hi) = (add_out(self.lo, o.lo).0, add_out(self.hi, o.hi).1);
+        if lo.is_nan() || hi.is_nan() {
+            return ALL;
+        }
+        Interval { lo, hi }
     }
 }
 
@@ -105,14 +279,72 @@ impl std::ops::Neg for Interval {
 impl std::ops::Mul for Interval {
     type Output = Interval;
     fn mul(self, o: Interval) -> Interval {
-        let ps = [self.lo * o.lo, self.lo * o.hi, self.hi * o.lo, self.hi * o.hi];
-        if ps.iter().any(|p| p.is_nan()) {
-            // 0 * inf: the product is unbounded on the side of the infinite factor.
-            return ALL;
+        // 0 * inf is NaN in each product: the product is then unbounded (`spanning`).
+        let ps = [mul_out(self.lo, o.lo), mul_out(self.lo, o.hi), mul_out(self.hi, o.lo), mul_out(self.hi, o.hi)];
+        Interval::spanning(&ps)
+    }
+}
+
+/// A decimal literal (`0.65`, `1e-3`, `12`, `-2.5E+4`) as an exact rational; `None` for
+/// a malformed one or an exponent beyond ±100000 (the caller then rounds outward).
+pub fn decimal(lit: &str) -> Option<BigRational> {
+    let (mant, exp) = match lit.split_once(['e', 'E']) {
+        Some((m, e)) => (m, e.parse::<i64>().ok()?),
+        None => (lit, 0),
+    };
+    let (neg, mant) = match mant.strip_prefix('-') {
+        Some(m) => (true, m),
+        None => (false, mant),
+    };
+    let (int, frac) = mant.split_once('.').unwrap_or((mant, ""));
+    let digits = format!("{int}{frac}");
+    if digits.is_empty() || !digits.chars().all(|c| c.is_ascii_digit()) || exp.abs() > 100_000 {
+        return None;
+    }
+    let n: BigInt = digits.parse().ok()?;
+    let scale = exp - frac.len() as i64;
+    let ten = BigInt::from(10);
+    let p = num_traits::pow(ten, scale.unsigned_abs() as usize);
+    let q = if scale >= 0 { BigRational::from_integer(n * p) } else { BigRational::new(n, p) };
+    Some(if neg { -q } else { q })
+}
+
+/// A term's value: an enclosure, and the exact rational when the term is a rational
+/// constant (then `iv` is the tightest enclosure of it).
+#[derive(Clone)]
+struct Val {
+    iv: Interval,
+    exact: Option<BigRational>,
+}
+
+/// Rationals beyond this many bits (numerator or denominator) are only enclosed, so
+/// that `10^1000^1000` cannot exhaust memory.
+const MAX_BITS: u64 = 1 << 14;
+
+impl Val {
+    fn interval(iv: Interval) -> Val {
+        Val { iv, exact: None }
+    }
+
+    fn rational(q: BigRational) -> Val {
+        let iv = Interval::of_rational(&q);
+        let small = q.numer().bits() <= MAX_BITS && q.denom().bits() <= MAX_BITS;
+        Val { iv, exact: small.then_some(q) }
+    }
+
+    /// `f` on the exact values when both are known, else `g` on the enclosures.
+    fn lift2(
+        self,
+        o: Val,
+        f: impl FnOnce(&BigRational, &BigRational) -> Option<BigRational>,
+        g: impl FnOnce(Interval, Interval) -> Option<Interval>,
+    ) -> Option<Val> {
+        if let (Some(a), Some(b)) = (&self.exact, &o.exact) {
+            if let Some(q) = f(a, b) {
+                return Some(Val::rational(q));
+            }
         }
-        let lo = ps.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = ps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        Interval { lo, hi }.widen()
+        g(self.iv, o.iv).map(Val::interval)
     }
 }
 
@@ -134,71 +366,123 @@ pub fn closed(_: &Var) -> Option<Interval> {
 
 /// An enclosure of the numeric term `e`, or `None` when it cannot be bounded.
 pub fn eval(prog: &Program, e: &Expr, ranges: &dyn Ranges) -> Option<Interval> {
-    stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || eval_inner(prog, e, ranges))
+    value(prog, e, ranges).map(|v| v.iv)
 }
 
-fn eval_inner(prog: &Program, e: &Expr, ranges: &dyn Ranges) -> Option<Interval> {
-    let iv = match &e.kind {
-        ExprKind::Int(i) => Interval::point(*i as f64),
-        ExprKind::Real(r) => Interval::point(r.parse().ok()?),
-        ExprKind::Var(Var::Const(c)) => eval(prog, &prog.consts[c.idx()].value, ranges)?,
-        ExprKind::Var(v) => ranges.range(v)?,
-        ExprKind::Unary(UnOp::Neg, a) => -eval(prog, a, ranges)?,
+/// The exact value of `e` when it is a rational constant (literals and constants under
+/// `+ - * /`, integer powers, `min`, `max`, `abs`, `sqrt` of a rational square).
+pub fn exact(prog: &Program, e: &Expr) -> Option<BigRational> {
+    value(prog, e, &closed).and_then(|v| v.exact)
+}
+
+fn value(prog: &Program, e: &Expr, ranges: &dyn Ranges) -> Option<Val> {
+    stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || value_inner(prog, e, ranges))
+}
+
+fn value_inner(prog: &Program, e: &Expr, ranges: &dyn Ranges) -> Option<Val> {
+    let v = match &e.kind {
+        ExprKind::Int(i) => Val::rational(BigRational::from_integer(BigInt::from(*i))),
+        ExprKind::Real(r) => match decimal(r) {
+            Some(q) => Val::rational(q),
+            // Beyond the exponents `decimal` takes: Rust's parse rounds to nearest.
+            None => {
+                let (lo, hi) = around(r.parse().ok()?, false);
+                Val::interval(Interval { lo, hi })
+            }
+        },
+        ExprKind::Var(Var::Const(c)) => value(prog, &prog.consts[c.idx()].value, ranges)?,
+        ExprKind::Var(v) => Val::interval(ranges.range(v)?),
+        ExprKind::Unary(UnOp::Neg, a) => {
+            let x = value(prog, a, ranges)?;
+            Val { iv: -x.iv, exact: x.exact.map(|q| -q) }
+        }
         ExprKind::Binary(op, a, b) => {
-            let x = eval(prog, a, ranges)?;
+            let x = value(prog, a, ranges)?;
             if *op == BinOp::Pow {
                 let ExprKind::Int(n) = b.kind else { return None };
-                return (n >= 0).then(|| x.pow(n));
+                if n < 0 {
+                    return None;
+                }
+                if let Some(q) = &x.exact {
+                    let bits = q.numer().bits().max(q.denom().bits());
+                    if bits.saturating_mul(n as u64) <= MAX_BITS {
+                        return Some(Val::rational(num_traits::pow(q.clone(), n as usize)));
+                    }
+                }
+                return Some(Val::interval(x.iv.pow(n)));
             }
-            let y = eval(prog, b, ranges)?;
+            let y = value(prog, b, ranges)?;
             match op {
-                BinOp::Add => x + y,
-                BinOp::Sub => x + -y,
-                BinOp::Mul => x * y,
-                BinOp::Div => x.div(y)?,
+                BinOp::Add => x.lift2(y, |a, b| Some(a + b), |a, b| Some(a + b))?,
+                BinOp::Sub => x.lift2(y, |a, b| Some(a - b), |a, b| Some(a + -b))?,
+                BinOp::Mul => x.lift2(y, |a, b| Some(a * b), |a, b| Some(a * b))?,
+                BinOp::Div => x.lift2(y, |a, b| (!b.is_zero()).then(|| a / b), |a, b| a.div(b))?,
                 _ => return None,
             }
         }
-        ExprKind::If(_, a, b) => eval(prog, a, ranges)?.hull(eval(prog, b, ranges)?),
+        ExprKind::If(_, a, b) => {
+            let (x, y) = (value(prog, a, ranges)?, value(prog, b, ranges)?);
+            match (&x.exact, &y.exact) {
+                (Some(p), Some(q)) if p == q => x,
+                _ => Val::interval(x.iv.hull(y.iv)),
+            }
+        }
         ExprKind::Call(f, args) => {
-            let arg = |i: usize| args.get(i).and_then(|a| eval(prog, a, ranges));
+            let arg = |i: usize| args.get(i).and_then(|a| value(prog, a, ranges));
             match f {
-                Builtin::Min => {
-                    let (x, y) = (arg(0)?, arg(1)?);
-                    Interval { lo: x.lo.min(y.lo), hi: x.hi.min(y.hi) }
-                }
-                Builtin::Max => {
-                    let (x, y) = (arg(0)?, arg(1)?);
-                    Interval { lo: x.lo.max(y.lo), hi: x.hi.max(y.hi) }
-                }
+                Builtin::Min => arg(0)?.lift2(
+                    arg(1)?,
+                    |a, b| Some(a.min(b).clone()),
+                    |x, y| Some(Interval { lo: x.lo.min(y.lo), hi: x.hi.min(y.hi) }),
+                )?,
+                Builtin::Max => arg(0)?.lift2(
+                    arg(1)?,
+                    |a, b| Some(a.max(b).clone()),
+                    |x, y| Some(Interval { lo: x.lo.max(y.lo), hi: x.hi.max(y.hi) }),
+                )?,
                 Builtin::Abs => {
                     let x = arg(0)?;
-                    if x.lo >= 0.0 {
+                    if let Some(q) = &x.exact {
+                        return Some(Val::rational(q.abs()));
+                    }
+                    let x = x.iv;
+                    Val::interval(if x.lo >= 0.0 {
                         x
                     } else if x.hi <= 0.0 {
                         -x
                     } else {
                         Interval { lo: 0.0, hi: x.hi.max(-x.lo) }
-                    }
+                    })
                 }
                 Builtin::Sqrt => {
                     let x = arg(0)?;
-                    if x.lo < 0.0 {
-                        return None;
+                    if let Some(q) = x.exact.as_ref().and_then(rational_sqrt) {
+                        return Some(Val::rational(q));
                     }
-                    Interval::new(x.lo.sqrt(), x.hi.sqrt())
+                    Val::interval(x.iv.sqrt()?)
                 }
-                Builtin::Sin | Builtin::Cos => trig(*f, arg(0)),
+                Builtin::Sin | Builtin::Cos => Val::interval(trig(*f, arg(0).map(|v| v.iv))),
                 _ => return None,
             }
         }
         _ => return None,
     };
-    Some(iv)
+    Some(v)
 }
 
-/// An enclosure of `sin` or `cos` over `arg`: Lipschitz 1 around the midpoint, capped
-/// to [-1, 1]; [-1, 1] when the argument is unbounded.
+/// `sqrt(q)` when it is rational (numerator and denominator perfect squares).
+fn rational_sqrt(q: &BigRational) -> Option<BigRational> {
+    if q.is_negative() {
+        return None;
+    }
+    let (n, d) = (q.numer().sqrt(), q.denom().sqrt());
+    (&n * &n == *q.numer() && &d * &d == *q.denom()).then(|| BigRational::new(n, d))
+}
+
+/// An enclosure of `sin` or `cos` over `arg`, capped to [-1, 1]; [-1, 1] when the
+/// argument is unbounded. Both functions are 1-Lipschitz, so over `[mid - h, mid + h]`
+/// they stay within `h` of their value at `mid`; libm's value at `mid` is within an ulp
+/// or two (not correctly rounded), so 2^-50 (eight ulps of 1) more is added.
 pub fn trig(f: Builtin, arg: Option<Interval>) -> Interval {
     let unit = Interval { lo: -1.0, hi: 1.0 };
     let Some(x) = arg.filter(Interval::is_finite) else { return unit };
@@ -207,11 +491,11 @@ pub fn trig(f: Builtin, arg: Option<Interval>) -> Interval {
         let v = if f == Builtin::Sin { 0.0 } else { 1.0 };
         return Interval { lo: v, hi: v };
     }
-    let mid = (x.lo + x.hi) / 2.0;
-    let half = (x.hi - x.lo) / 2.0;
+    let mid = (x.lo + (x.hi - x.lo) / 2.0).clamp(x.lo, x.hi);
+    let half = add_out(x.hi, -mid).1.max(add_out(mid, -x.lo).1);
     let v = if f == Builtin::Sin { mid.sin() } else { mid.cos() };
-    // libm's sin and cos are within an ulp; 1e-12 absolute covers it with room.
-    Interval { lo: v - half - 1e-12, hi: v + half + 1e-12 }.meet(unit)
+    let err = add_out(half, 2f64.powi(-50)).1;
+    Interval { lo: add_out(v, -err).0, hi: add_out(v, err).1 }.meet(unit)
 }
 
 /// A box around the points `(x, y, z)` satisfying `pred`, where `point(v)` says which
@@ -273,7 +557,7 @@ fn point_box_inner(
                 // A sum of even powers of coordinates below a bound: `px^2 + py^2 <= r^2`.
                 if let (Some(squares), Some(r)) = (even_powers(lhs, &coord), eval(prog, rhs, ranges)) {
                     for (k, n) in squares {
-                        let m = r.hi.max(0.0).powf(1.0 / n as f64) * (1.0 + 1e-12) + 1e-300;
+                        let m = root_up(r.hi.max(0.0), n);
                         out[k] = out[k].meet(Interval { lo: -m, hi: m });
                     }
                 }
@@ -282,6 +566,22 @@ fn point_box_inner(
         _ => {}
     }
     out
+}
+
+/// An upper bound of the `n`-th root of `r >= 0`: `powf`'s guess, raised until its
+/// `n`-th power (rounded down) reaches `r`.
+fn root_up(r: f64, n: i64) -> f64 {
+    if r == 0.0 || r.is_infinite() {
+        return r;
+    }
+    let mut m = if n == 2 { sqrt_out(r).1 } else { r.powf(1.0 / n as f64) };
+    for _ in 0..64 {
+        if pow_nonneg(m, n, false) >= r {
+            return m;
+        }
+        m = m * (1.0 + 1e-15) + f64::MIN_POSITIVE;
+    }
+    f64::INFINITY
 }
 
 /// `e` as a sum of terms `p_k ^ n` with even `n`, each coordinate at most once.
@@ -406,6 +706,98 @@ mod tests {
         assert!(iv.lo <= v && v <= iv.hi && iv.hi - iv.lo < 1e-9, "{iv:?}");
         let s = trig(Builtin::Sin, Some(Interval::point(1.2)));
         assert!(s.lo <= 1.2f64.sin() && 1.2f64.sin() <= s.hi && s.hi <= 1.0);
+    }
+
+    /// The value of a closed term: exact rational and enclosure.
+    fn closed_term(t: &str) -> (Option<BigRational>, Interval) {
+        let (prog, e) = guard(&format!("x == {t}"));
+        let ExprKind::Binary(_, _, rhs) = &e.kind else { panic!() };
+        (exact(&prog, rhs), eval(&prog, rhs, &closed).expect("closed term"))
+    }
+
+    fn contains(iv: Interval, q: &BigRational) -> bool {
+        let le =
+            |f: f64, q: &BigRational| f == f64::NEG_INFINITY || BigRational::from_float(f).is_some_and(|r| r <= *q);
+        let ge = |f: f64, q: &BigRational| f == f64::INFINITY || BigRational::from_float(f).is_some_and(|r| r >= *q);
+        le(iv.lo, q) && ge(iv.hi, q)
+    }
+
+    #[test]
+    fn literals_and_sums_that_round_to_integers_stay_exact() {
+        // Each failed before: the double nearest the value is an integer (or 0), and it
+        // was taken as exact.
+        for (t, num, den) in [
+            ("1e-400", "1", &format!("1{}", "0".repeat(400))[..]),
+            ("3.0000000000000001", "30000000000000001", "10000000000000000"),
+            ("1 - 1e-20 - 1", "-1", "100000000000000000000"),
+            ("0.1 + 0.2 - 0.3", "0", "1"),
+            ("(1 + 1e-17) * (1 - 1e-17) - 1", "-1", &format!("1{}", "0".repeat(34))[..]),
+        ] {
+            let want = BigRational::new(num.parse().unwrap(), den.parse().unwrap());
+            let (q, iv) = closed_term(t);
+            assert_eq!(q.as_ref(), Some(&want), "{t}");
+            assert!(contains(iv, &want), "{t}: {iv:?}");
+            assert_eq!(iv.is_exactly(0.0), want.is_zero(), "{t}: {iv:?}");
+        }
+        // Powers (the language allows exponents up to 64) stay exact and enclosed.
+        let (q, iv) = closed_term("(1 - 1e-30) ^ 64");
+        let want = num_traits::pow(decimal("0.999999999999999999999999999999").unwrap(), 64);
+        assert_eq!(q, Some(want.clone()));
+        assert!(contains(iv, &want) && iv.lo < 1.0 && iv.hi <= 1.0, "{iv:?}");
+        // Interval powers take O(log n) products and overflow soundly.
+        let big = Interval::point(1.5).pow(1_000_000_000);
+        assert!(big.lo == f64::MAX && big.hi == f64::INFINITY, "{big:?}");
+        // sin of a tiny constant is not 0.
+        let (_, iv) = closed_term("sin(1e-400)");
+        assert!(!iv.is_exactly(0.0), "{iv:?}");
+    }
+
+    #[test]
+    fn variable_sums_are_widened_when_inexact() {
+        // x in [1, 1], y in [1e-20, 1e-20]: x + y must not be the point 1.
+        let x = Interval::point(1.0);
+        let y = Interval::of_rational(&decimal("1e-20").unwrap());
+        let s = x + y;
+        assert!(s.lo <= 1.0 && s.hi > 1.0, "{s:?}");
+        let want = decimal("1.00000000000000000001").unwrap();
+        assert!(contains(s, &want), "{s:?}");
+        let p = Interval::point(0.1) * Interval::point(3.0);
+        assert!(contains(p, &(BigRational::from_float(0.1).unwrap() * BigRational::from_integer(3.into()))), "{p:?}");
+    }
+
+    use proptest::prelude::*;
+
+    /// A decimal literal with up to 17 digits and an exponent in [-30, 30].
+    fn lit() -> impl Strategy<Value = String> {
+        (any::<bool>(), 0u64..100_000_000_000_000_000, -30i32..30)
+            .prop_map(|(neg, m, e)| format!("{}{m}e{e}", if neg { "-" } else { "" }))
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(200))]
+
+        #[test]
+        fn enclosures_contain_the_exact_rational(a in lit(), b in lit(), c in lit()) {
+            let (qa, qb, qc) = (decimal(&a).unwrap(), decimal(&b).unwrap(), decimal(&c).unwrap());
+            let cases = [
+                (format!("({a}) + ({b}) - ({c})"), &qa + &qb - &qc),
+                (format!("({a}) * ({b}) + ({c})"), &qa * &qb + &qc),
+                (format!("({a}) ^ 2 - {b}"), &qa * &qa - &qb),
+            ];
+            for (t, want) in cases {
+                let (q, iv) = closed_term(&t);
+                prop_assert_eq!(q.as_ref(), Some(&want), "{}", t);
+                prop_assert!(contains(iv, &want), "{}: {:?}", t, iv);
+            }
+            // The same through double-ended intervals (variables), without the rationals.
+            let (ia, ib, ic) = (Interval::of_rational(&qa), Interval::of_rational(&qb), Interval::of_rational(&qc));
+            prop_assert!(contains(ia + ib + -ic, &(&qa + &qb - &qc)));
+            prop_assert!(contains(ia * ib + ic, &(&qa * &qb + &qc)));
+            prop_assert!(contains(ia.pow(3), &(&qa * &qa * &qa)));
+            if !qb.is_zero() {
+                prop_assert!(contains(ia.div(ib).unwrap(), &(&qa / &qb)));
+            }
+        }
     }
 
     #[test]

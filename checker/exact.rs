@@ -230,31 +230,8 @@ impl fmt::Display for Value {
 
 /// A decimal literal (`0.65`, `1e-3`, `-12`) as an exact rational.
 pub fn parse_decimal(lit: &str) -> Option<Rat> {
-    let lit = lit.trim();
-    let (mant, exp) = match lit.split_once(['e', 'E']) {
-        Some((m, e)) => (m, e.parse::<i32>().ok()?),
-        None => (lit, 0),
-    };
-    let (neg, mant) = match mant.strip_prefix('-') {
-        Some(m) => (true, m),
-        None => (false, mant),
-    };
-    let (int, frac) = mant.split_once('.').unwrap_or((mant, ""));
-    if int.is_empty() && frac.is_empty()
-        || !int.chars().chain(frac.chars()).all(|c| c.is_ascii_digit())
-        || exp.abs() > 400
-    {
-        return None;
-    }
-    let digits: BigInt = format!("0{int}{frac}").parse().ok()?;
-    let scale = exp - frac.len() as i32;
-    let ten = BigInt::from(10);
-    let r = if scale >= 0 {
-        Rat::from_integer(digits * num_traits::pow(ten, scale as usize))
-    } else {
-        Rat::new(digits, num_traits::pow(ten, (-scale) as usize))
-    };
-    Some(if neg { -r } else { r })
+    // One reader of decimals for the whole checker: the interval stage's.
+    crate::bounds::decimal(lit.trim())
 }
 
 /// An exact rational as an expression (`n` or `n / d`), sort `real`.

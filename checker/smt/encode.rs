@@ -8,8 +8,10 @@
 //! - `sin(e)`, `cos(e)` are fresh `s`, `c` (one pair per argument) with side conditions
 //!   that hold of the real functions for every real argument: `s^2 + c^2 == 1`,
 //!   `1 - e^2/2 <= c <= 1 - e^2/2 + e^4/24`, and `e - e^3/6 <= s <= e` for `e >= 0`
-//!   (mirrored for `e <= 0`); for a constant argument, its enclosure from
-//!   [`crate::bounds::trig`]. These over-approximate: a proof with them is a proof, but
+//!   (mirrored for `e <= 0`); for a constant argument (written as one, or a parameter
+//!   bound to one: its numeral is read back exactly, [`rational_value`]), its enclosure
+//!   from [`crate::bounds::trig`], whose ends enter as the exact rationals of the doubles
+//!   ([`real_of_f64`]). These over-approximate: a proof with them is a proof, but
 //!   a counterexample may not be real, so [`Encoder::spurious_trig`] checks a model's
 //!   trigonometric values against `f64::sin`/`cos` before it is reported as one.
 //! - A motion primitive's contract is encoded under a [`Frame`] that says what its own
@@ -21,6 +23,8 @@
 use crate::bounds;
 use crate::hir::expr::{BinOp, UnOp};
 use crate::hir::{Builtin, Expr, ExprKind, Program, RoleId, Slot, Sort, ValueId, Var};
+use num_rational::BigRational;
+use num_traits::Zero;
 use std::collections::{BTreeMap, HashMap};
 use z3::ast::{Ast, Bool, Int, Real};
 
@@ -457,18 +461,12 @@ impl<'p> Encoder<'p> {
             return Ok((self.trig[i].sin.clone(), self.trig[i].cos.clone()));
         }
         let (s, c) = (Real::fresh_const("sin"), Real::fresh_const("cos"));
-        let num = |v: f64| real_of_f64(v);
         let unit = Real::add(&[Real::mul(&[s.clone(), s.clone()]), Real::mul(&[c.clone(), c.clone()])]).eq(one());
         self.side.push(unit);
-        // A constant argument, written as one or bound to a parameter: enclose its value.
-        let constant = match a.simplify().as_rational() {
-            Some((n, d)) if d != 0 && n.unsigned_abs() < 1 << 53 && d < 1 << 53 => Some(if n == 0 {
-                bounds::Interval { lo: 0.0, hi: 0.0 }
-            } else {
-                bounds::Interval::new(n as f64 / d as f64, n as f64 / d as f64)
-            }),
-            _ => None,
-        };
+        // A constant argument, written as one or bound to a parameter (the encoding of
+        // `go(0.7853981633974483)`'s parameter simplifies to that rational): enclose its
+        // value. The rational is read exactly, whatever its size.
+        let constant = rational_value(&a.simplify()).map(|q| bounds::Interval::of_rational(&q));
         let closed = !mentions_free(e);
         let bound = constant
             .or_else(|| closed.then(|| bounds::eval(self.prog, e, &bounds::closed)).flatten())
@@ -476,7 +474,7 @@ impl<'p> Encoder<'p> {
         if let Some(iv) = bound {
             for (f, t) in [(Builtin::Sin, &s), (Builtin::Cos, &c)] {
                 let b = bounds::trig(f, Some(iv));
-                if let (Some(lo), Some(hi)) = (num(b.lo), num(b.hi)) {
+                if let (Some(lo), Some(hi)) = (real_of_f64(b.lo), real_of_f64(b.hi)) {
                     self.side.push(if b.lo == b.hi { t.eq(&lo) } else { Bool::and(&[t.ge(&lo), t.le(&hi)]) });
                 }
             }
@@ -632,12 +630,42 @@ pub fn rational(lit: &str) -> Option<Real> {
     Real::from_rational_str(&num, &den)
 }
 
-/// An f64 as an exact rational (its shortest round-trip decimal).
+/// An f64 as the exact rational it is (not its shortest round-trip decimal, which may
+/// lie on either side of it: an enclosure's end must not move inward).
 pub fn real_of_f64(v: f64) -> Option<Real> {
-    if !v.is_finite() {
-        return None;
+    real_of_rational(&BigRational::from_float(v)?)
+}
+
+/// An exact rational as a Z3 real.
+pub fn real_of_rational(q: &BigRational) -> Option<Real> {
+    Real::from_rational_str(&q.numer().to_string(), &q.denom().to_string())
+}
+
+/// The exact value of a Z3 numeral (`3.0`, `(/ 1.0 3.0)`, `(- (/ 7.0 2.0))`), of any
+/// size; `None` for anything that is not a rational numeral.
+pub fn rational_value(r: &Real) -> Option<BigRational> {
+    if let Some((n, d)) = r.as_rational().filter(|&(_, d)| d != 0) {
+        return Some(BigRational::new(n.into(), d.into()));
     }
-    rational(&format!("{v:e}"))
+    let text = r.to_string().replace(['(', ')'], " ");
+    let mut toks: Vec<&str> = text.split_whitespace().collect();
+    let mut neg = false;
+    while let Some(i) = toks.iter().position(|t| *t == "-") {
+        toks.remove(i);
+        neg = !neg;
+    }
+    let q = match toks.as_slice() {
+        [n] => bounds::decimal(n)?,
+        ["/", n, d] => {
+            let d = bounds::decimal(d)?;
+            if d.is_zero() {
+                return None;
+            }
+            bounds::decimal(n)? / d
+        }
+        _ => return None,
+    };
+    Some(if neg { -q } else { q })
 }
 
 /// Z3 prints rationals as `(/ 13.0 20.0)`; users read `0.65` (rounded to 1e-6 m or s,

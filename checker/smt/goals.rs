@@ -12,10 +12,11 @@
 //! - footprints are in the participant's frame: the world point `(x, y, z)` is moved
 //!   into it by the inverse of the participant's `pose`.
 
-use super::encode::{real_of_f64, Encoder, Frame, Term, Unsupported};
+use super::encode::{real_of_rational, Encoder, Frame, Term, Unsupported};
 use crate::bounds::{self, Interval};
 use crate::hir::{Builtin, Expr, PrimApp, Primitive, Program, RoleId, Slot, Var};
 use crate::obligation::{Goal, Obligation, Run, Side};
+use num_rational::BigRational;
 use std::collections::HashSet;
 use z3::ast::{Bool, Real};
 
@@ -510,16 +511,34 @@ impl<'a> Inst<'a> {
 }
 
 /// The world point moved into `role`'s frame: `R^T (p - o)` for `pose(o, roll, pitch,
-/// yaw)`, `R = Rz(yaw) Ry(pitch) Rx(roll)`. Angles that are literally zero are skipped.
+/// yaw)`, `R = Rz(yaw) Ry(pitch) Rx(roll)`. Offsets and angles that are exactly zero
+/// (exact rational arithmetic, [`bounds::exact`]) are skipped.
 ///
-/// **Tolerance (documented in ARCHITECTURE.md):** a pose's angles are constants, and
-/// their cosines and sines enter as the exact rationals of their double-precision values
-/// (`f64::cos`, `f64::sin`, within an ulp). The rotation used thus differs from the
-/// exact one by under 1e-15 (values within 1e-15 of 0 or ±1 are
-/// taken as exact), which moves a point 10 m from the pose's origin by under
-/// 1e-14 m; a pose written in decimals is itself no closer to the physical angle. Using
-/// exact enclosures instead makes every footprint query nonlinear in the rotation and
-/// slowed separation checks from milliseconds to timeouts.
+/// **No rounding can turn an overlap into a pass.** A pose's angles are constants, but
+/// their cosines and sines are irrational (but for angle 0). Each is enclosed
+/// ([`bounds::trig`]: `c ∈ [c_lo, c_hi]`, `s ∈ [s_lo, s_hi]`, a few ulps wide), and the
+/// query ranges over *every* rotation in the enclosure, so an unsat answer holds for the
+/// true one. To keep the query linear (an exact `c * x` with a variable `c` made
+/// Handover's separation queries time out), the rotation by `(c, s)` of `(x, y)` is
+/// written around a rational centre `(c0, s0)` of the enclosure (0 or ±1 when the
+/// enclosure holds it, the simplest coefficients for the solver):
+///
+/// `x' = c0 x + s0 y + e1`, `y' = c0 y - s0 x + e2`,
+/// `|e1|, |e2| <= u`, `u = d (|x| + |y|)` (`abs` as `ite`),
+///
+/// with `d = max(dc, ds)`, `dc = max(c_hi - c0, c0 - c_lo)` and `ds` likewise (computed
+/// exactly). The true rotation `c x + s y = c0 x + s0 y + (c - c0) x + (s - s0) y`
+/// satisfies these (take the slacks to be the error terms: `|(c - c0) x + (s - s0) y|
+/// <= dc |x| + ds |y| <= u`), so the set of local points queried contains the true one;
+/// chained rotations compose the same way, each on the exactly rotated coordinates of
+/// the one before. A counterexample may then be one of the neighbouring rotations: a
+/// false alarm only for footprints within `2 d |p - o|` (about 1e-15 of the distance
+/// from the pose's origin) of each other, never a false proof.
+///
+/// Measured alternatives (sorting.chor): a constant slack `(dc + ds) R` from a bound
+/// `R` on the footprint's size, and fresh rotated coordinates within the slack, both
+/// made two separation queries time out (nlsat), so this form stays; one shared bound
+/// `u` for both slacks was faster than two (Handover).
 fn to_local(enc: &mut Encoder, role: RoleId, p: &[Real; 3]) -> Result<[Real; 3], Unsupported> {
     let prog = enc.prog();
     let pose = prog.role(role).pose.clone();
@@ -534,31 +553,46 @@ fn to_local(enc: &mut Encoder, role: RoleId, p: &[Real; 3]) -> Result<[Real; 3],
     // Undo yaw (about z), then pitch (about y), then roll (about x).
     for (idx, axes) in [(5usize, (0usize, 1usize)), (4, (2, 0)), (3, (1, 2))] {
         let Some(angle) = pose.get(idx) else { continue };
-        if is_zero(prog, angle) {
+        let iv = bounds::eval(prog, angle, &bounds::closed)
+            .filter(|i| i.is_finite())
+            .ok_or_else(|| Unsupported("a pose angle that is not a constant".into()))?;
+        if iv.is_exactly(0.0) {
             continue;
         }
-        let iv = bounds::eval(prog, angle, &bounds::closed)
-            .filter(|i| i.is_finite() && i.hi - i.lo < 1e-9)
-            .ok_or_else(|| Unsupported("a pose angle that is not a constant".into()))?;
-        let a = (iv.lo + iv.hi) / 2.0;
-        let exact = |v: f64| real_of_f64(v).ok_or_else(|| Unsupported("a pose angle".into()));
-        // Within the tolerance, quarter turns are exact (sin(pi) is 1.2e-16 in f64).
-        let snap = |v: f64| {
-            if (v.abs() - 1.0).abs() < 1e-15 {
-                v.signum()
-            } else if v.abs() < 1e-15 {
-                0.0
-            } else {
-                v
-            }
-        };
-        let (c, s) = (exact(snap(a.cos()))?, exact(snap(a.sin()))?);
         let (x, y) = (v[axes.0].clone(), v[axes.1].clone());
-        // Rotation by -angle in the (x, y) plane of these axes.
-        v[axes.0] = Real::add(&[Real::mul(&[c.clone(), x.clone()]), Real::mul(&[s.clone(), y.clone()])]);
-        v[axes.1] = Real::sub(&[Real::mul(&[c, y]), Real::mul(&[s, x])]);
+        let bad = || Unsupported("a pose angle whose cosine or sine cannot be enclosed".into());
+        let (c0, dc) = centre(bounds::trig(Builtin::Cos, Some(iv))).ok_or_else(bad)?;
+        let (s0, ds) = centre(bounds::trig(Builtin::Sin, Some(iv))).ok_or_else(bad)?;
+        let r = |q: &BigRational| real_of_rational(q).ok_or_else(bad);
+        let d = r(&std::cmp::max(dc, ds))?;
+        let (c0, s0) = (r(&c0)?, r(&s0)?);
+        let zero = Real::from_rational_str("0", "1").expect("literal");
+        let abs = |r: &Real| r.ge(&zero).ite(r, &r.unary_minus());
+        let bound = Real::mul(&[d, Real::add(&[abs(&x), abs(&y)])]);
+        let u = Real::fresh_const("rot_bound");
+        enc.require(u.eq(&bound));
+        // Rotation by -angle in the (x, y) plane of these axes, with its slack.
+        let mut slack = || {
+            let e = Real::fresh_const("rot_slack");
+            enc.require(Bool::and(&[e.le(&u), e.ge(u.unary_minus())]));
+            e
+        };
+        let (e1, e2) = (slack(), slack());
+        v[axes.0] = Real::add(&[Real::mul(&[c0.clone(), x.clone()]), Real::mul(&[s0.clone(), y.clone()]), e1]);
+        v[axes.1] = Real::add(&[Real::mul(&[c0, y]), Real::mul(&[s0, x]).unary_minus(), e2]);
     }
     Ok(v)
+}
+
+/// A rational centre `m` of the enclosure `iv` and the exact radius around it,
+/// `max(hi - m, m - lo)`; `m` is 0, 1 or -1 when `iv` holds it, else the double nearest
+/// the midpoint.
+fn centre(iv: Interval) -> Option<(BigRational, BigRational)> {
+    let m = [0.0, 1.0, -1.0].into_iter().find(|m| iv.lo <= *m && *m <= iv.hi).unwrap_or(iv.lo / 2.0 + iv.hi / 2.0);
+    let q = BigRational::from_float;
+    let (lo, hi, mid) = (q(iv.lo)?, q(iv.hi)?, q(m)?);
+    let r = std::cmp::max(&hi - &mid, &mid - &lo);
+    Some((mid, r))
 }
 
 fn is_zero(prog: &Program, e: &Expr) -> bool {
@@ -798,18 +832,26 @@ fn separation_plan(prog: &Program, sides: &[Side]) -> Plan {
     if let Some(i) = sides.iter().position(|s| s.runs.is_empty()) {
         return Plan::Unknown(Unsupported(format!("a side of `*` (side {}) whose motions were not recorded", i + 1)));
     }
-    let boxes: Vec<Option<[Interval; 3]>> = sides.iter().map(|s| side_box(prog, s)).collect();
+    // Per run too: two runs whose boxes are disjoint need no query even when their
+    // sides' boxes meet (the boxes are sound enclosures, rotations included).
+    let run_boxes: Vec<Vec<Option<[Interval; 3]>>> =
+        sides.iter().map(|s| s.runs.iter().map(|r| run_box(prog, r)).collect()).collect();
+    let boxes: Vec<Option<[Interval; 3]>> = run_boxes.iter().map(|rs| hull_all(rs)).collect();
+    let apart = |x: &Option<[Interval; 3]>, y: &Option<[Interval; 3]>| match (x, y) {
+        (Some(x), Some(y)) => (0..3).any(|k| x[k].disjoint(y[k])),
+        _ => false,
+    };
     let mut parts = Vec::new();
     for a in 0..sides.len() {
         for b in a + 1..sides.len() {
-            if let (Some(x), Some(y)) = (&boxes[a], &boxes[b]) {
-                if (0..3).any(|k| x[k].disjoint(y[k])) {
-                    continue;
-                }
+            if apart(&boxes[a], &boxes[b]) {
+                continue;
             }
             for ra in 0..sides[a].runs.len() {
                 for rb in 0..sides[b].runs.len() {
-                    parts.push(Part::Apart { a, ra, b, rb });
+                    if !apart(&run_boxes[a][ra], &run_boxes[b][rb]) {
+                        parts.push(Part::Apart { a, ra, b, rb });
+                    }
                 }
             }
         }
@@ -846,9 +888,14 @@ pub fn side_boxes(prog: &Program, sides: &[Side]) -> Vec<Option<[Interval; 3]>> 
 
 /// A world box around every footprint of a side, if each can be bounded.
 fn side_box(prog: &Program, side: &Side) -> Option<[Interval; 3]> {
+    hull_all(&side.runs.iter().map(|r| run_box(prog, r)).collect::<Vec<_>>())
+}
+
+/// The hull of boxes, if each is bounded (`None` for none).
+fn hull_all(boxes: &[Option<[Interval; 3]>]) -> Option<[Interval; 3]> {
     let mut acc: Option<[Interval; 3]> = None;
-    for run in &side.runs {
-        let b = run_box(prog, run)?;
+    for b in boxes {
+        let b = (*b)?;
         acc = Some(match acc {
             None => b,
             Some(a) => [a[0].hull(b[0]), a[1].hull(b[1]), a[2].hull(b[2])],

@@ -761,6 +761,20 @@ mod tests {
     }
 
     #[test]
+    fn trig_of_a_constant_that_is_not_written_as_one_is_enclosed() {
+        // The argument mentions `x` but simplifies to the rational 0.7853981633974483,
+        // whose denominator (10^16) exceeds 2^53: before, only the Taylor bounds applied
+        // (cos <= 0.70745) and this was not proved; now the numeral is read exactly.
+        assert_eq!(valid("", "cos(x - x + 0.7853981633974483) <= 0.7072"), Verdict::Holds);
+        assert_eq!(valid("", "sin(x - x + 0.7853981633974483) >= 0.7071"), Verdict::Holds);
+        // The enclosure stays sound: cos(pi/4) is 0.70710678..., not below 0.70710678.
+        assert!(matches!(
+            valid("", "cos(x - x + 0.7853981633974483) < 0.70710678"),
+            Verdict::Fails(_) | Verdict::Unknown(_)
+        ));
+    }
+
+    #[test]
     fn points_and_vectors_are_triples() {
         assert_eq!(valid("", "norm2(vector(x, 0, 0)) == x^2"), Verdict::Holds);
         assert_eq!(valid("", "dot(point(1, 2, 3), vector(x, x, x)) == 6 * x"), Verdict::Holds);
