@@ -4,7 +4,7 @@
 //! [`Obligation::trivially_holds`] settles the syntactically trivial ones and the rest
 //! are reported as undecided, never as passed.
 
-use crate::hir::{Expr, ExprKind, PrimApp, RoleId};
+use crate::hir::{Expr, ExprKind, PrimApp, PrimId, RoleId};
 use crate::source::Span;
 use serde::Serialize;
 
@@ -29,6 +29,12 @@ pub enum Rule {
     Subtype,
     /// Table 1 [T-SESS]: initial states are collision free.
     TSess,
+    /// Fig 3 [NON-INTERRUPT]/[INTERRUPT]: a declared primitive admits a run that ends.
+    Contract,
+    /// The vacuity guard: the context of a point the protocol reaches is satisfiable.
+    Reachable,
+    /// [T-SESS]: a participant's `init` implies its kind's invariant.
+    InitInvariant,
 }
 
 impl Rule {
@@ -43,6 +49,9 @@ impl Rule {
             Rule::TCond => "[T-COND]",
             Rule::Subtype => "[SUB-OUT]/[SUB-IN]",
             Rule::TSess => "[T-SESS]",
+            Rule::Contract => "a primitive can end (Fig 3 [NON-INTERRUPT], [INTERRUPT])",
+            Rule::Reachable => "a reachable context is satisfiable (vacuity guard)",
+            Rule::InitInvariant => "[T-SESS]: init allows a state within the invariant",
         }
     }
 
@@ -55,6 +64,8 @@ impl Rule {
             Rule::Refinement | Rule::TMotion | Rule::TOut | Rule::TCond | Rule::Subtype | Rule::TSess => {
                 "typing-obligations"
             }
+            Rule::Contract => "contracts",
+            Rule::Reachable | Rule::InitInvariant => "reachability",
         }
     }
 }
@@ -76,6 +87,15 @@ pub enum Goal {
     /// each participant that moves, the primitives it may run first (one per path); the
     /// footprints of all of them at time 0 contain it in its initial state.
     InitiallyDisjoint { firsts: Vec<(RoleId, Vec<PrimApp>)> },
+    /// A primitive's contract admits a run that ends, for some arguments and start state
+    /// (a satisfiability question; the obligation's `hyps` are empty).
+    CanEnd { prim: PrimId },
+    /// The obligation's `hyps` (Σ after a step) are satisfiable. When they are not, the
+    /// step is where the protocol gets stuck, provided every context in `before` (Σ
+    /// before the step) is satisfiable; otherwise an earlier step is to blame. With
+    /// `dead_branch`, the step is the guard of one branch among several: an unsatisfiable
+    /// context there is a dead branch (a warning), not a stuck protocol.
+    Reachable { before: Vec<Vec<Expr>>, dead_branch: bool },
 }
 
 /// One side of a `*`: its participants and the primitives they may run on it.

@@ -95,7 +95,8 @@ fn write_summary(
 ///                     "counterexample": null | { "values": [{ "name", "value" }],
 ///                                                "overlap": null | { "point": [x, y, z], "times": [t] } } }],
 ///   "checks": [{ "name", "status": "pass" | "fail" | "unknown", "millis", "queries" }],
-///   "partitions": ["file:line:col: partition inferred: ..."] }
+///   "partitions": ["file:line:col: partition inferred: ..."],
+///   "vacuous": number of obligations that held only because their context is unsatisfiable }
 /// ```
 ///
 /// Lines and columns are 1-based (columns count characters). A location in a file the
@@ -126,6 +127,7 @@ pub fn report_json(db: &SourceDb, file_name: &str, report: &Report) -> Value {
         "diagnostics": report.diagnostics.iter().map(|d| diagnostic_json(db, d)).collect::<Vec<_>>(),
         "checks": checks,
         "partitions": report.partitions,
+        "vacuous": report.vacuous,
     })
 }
 
@@ -431,6 +433,6 @@ mod tests {
         assert_eq!(v["checks"], json!([{ "name": "parse", "status": "fail", "millis": 0.25, "queries": 0 }]));
         let mut keys: Vec<&String> = v.as_object().map(|o| o.keys().collect()).unwrap_or_default();
         keys.sort();
-        assert_eq!(keys, ["checks", "diagnostics", "file", "partitions", "verdict"]);
+        assert_eq!(keys, ["checks", "diagnostics", "file", "partitions", "vacuous", "verdict"]);
     }
 }

@@ -311,3 +311,30 @@ fn dump_smt_writes_one_smt_lib_file_per_query() {
     }
     assert!(files.iter().any(|f| f.file_name().to_string_lossy().contains("-agcomp-")), "no [AGCOMP] query dumped");
 }
+
+#[test]
+fn a_dead_branch_is_a_warning_and_its_vacuous_checks_are_counted() {
+    let o = mochi(&["check", "tests/data/dead-branch.chor", "--format", "json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
+    assert_eq!(v["verdict"], "verified");
+    let diags = v["diagnostics"].as_array().expect("diagnostics");
+    assert!(
+        diags.iter().any(|d| d["code"] == "E0410" && d["severity"] == "warning" && d["line"] == 13),
+        "the dead branch at line 13 is reported: {v}"
+    );
+    // The [AGCOMP] check of the dead branch's joint motion held only vacuously.
+    assert!(v["vacuous"].as_u64().is_some_and(|n| n >= 1), "{v}");
+    let text = stdout(&mochi(&["check", "--color", "never", "tests/data/dead-branch.chor"]));
+    assert!(text.contains("held only because their context is unsatisfiable"), "{text}");
+}
+
+#[test]
+fn an_input_is_its_source_state_when_a_motion_starts() {
+    // Rejected before (E0402 and E0708): the input at the start was a fresh variable, and
+    // the process did not know its source's initial state.
+    let o = mochi(&["check", "tests/data/input-precondition.chor", "--format", "json"]);
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
+    assert_eq!(v["verdict"], "verified", "{v}");
+    assert_eq!(v["vacuous"], 0, "{v}");
+}
