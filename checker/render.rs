@@ -315,6 +315,7 @@ mod tests {
             }],
             projections: BTreeMap::new(),
             partitions: Vec::new(),
+            vacuous: 0,
         }
     }
 

@@ -358,8 +358,7 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
             let app = PrimApp { prim: *prim, args: Vec::new(), loc: Default::default() };
             let t = q.enc.named_real("time");
             let mut inst = Inst::new(&mut q.enc, role, &app, t.clone(), "t")?;
-            inst.frame.params =
-                p.params.iter().map(|(n, sort)| q.enc.named(n, sort)).collect::<Result<_, _>>()?;
+            inst.frame.params = p.params.iter().map(|(n, sort)| q.enc.named(n, sort)).collect::<Result<_, _>>()?;
             ends(&mut q, std::slice::from_ref(&inst), &t)?;
         }
         _ => return Err(Unsupported("an obligation split into a part of another kind".into())),

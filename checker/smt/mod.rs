@@ -181,7 +181,8 @@ pub fn discharge(
         let handle = ctx.handle();
         std::thread::scope(|s| {
             s.spawn(|| watchdog.run(handle));
-            let w = Worker { prog, cfg, cache: &cache, contexts: &contexts, labels, dumped: &dumped, watchdog: &watchdog };
+            let w =
+                Worker { prog, cfg, cache: &cache, contexts: &contexts, labels, dumped: &dumped, watchdog: &watchdog };
             loop {
                 let i = next.fetch_add(1, Ordering::Relaxed);
                 let Some(ob) = obligations.get(i) else { break };
@@ -546,7 +547,8 @@ impl Worker<'_> {
         // A sat question needs a genuine witness: when the model's sin/cos values are
         // only the enclosure's, look for one with every trigonometric argument 0, where
         // the enclosure is exact. (Counterexamples keep the stricter "unknown".)
-        if !model && matches!(result, z3::SatResult::Sat) && solver.get_model().is_some_and(|m| q.enc.spurious_trig(&m)) {
+        if !model && matches!(result, z3::SatResult::Sat) && solver.get_model().is_some_and(|m| q.enc.spurious_trig(&m))
+        {
             for pin in q.enc.trig_at_zero() {
                 solver.assert(&pin);
             }

@@ -450,7 +450,14 @@ impl<'a> Contexts<'a> {
 
     /// The vacuity guard at a step: Σ after it (`sigma`) is satisfiable, or the step is
     /// where the protocol gets stuck (when every context in `before` is satisfiable).
-    fn reachable(&mut self, span: crate::source::Span, what: String, sigma: &Sigma, before: Vec<Vec<Expr>>, dead_branch: bool) {
+    fn reachable(
+        &mut self,
+        span: crate::source::Span,
+        what: String,
+        sigma: &Sigma,
+        before: Vec<Vec<Expr>>,
+        dead_branch: bool,
+    ) {
         self.obligations.push(Obligation {
             rule: Rule::Reachable,
             span,
