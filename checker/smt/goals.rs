@@ -405,13 +405,14 @@ pub fn context_of(prog: &Program, ob: &Obligation) -> Vec<Expr> {
     }
 }
 
-/// A cheap, sufficient test that `facts` are satisfiable, without Z3: a candidate box,
-/// made of the values equalities define and otherwise a point read off the ranges the
-/// facts give their variables (a point range's value, a finite range's midpoint, a bound
-/// plus or minus one, else 0; integers rounded), in which outward-rounded interval
-/// arithmetic shows every other fact true. `false` means only "not
-/// shown". Facts over inputs (their sources' variables under another name), booleans,
-/// points or anything the interval evaluator does not read are left to Z3.
+/// A cheap, sufficient test that `facts` are satisfiable, without Z3: a candidate point
+/// in exact rational arithmetic. Equalities `v == e` define `v` as `e`'s exact value, in
+/// order, once `e`'s variables have values; every other variable takes a simple value read
+/// off the ranges the facts give it (a point range's value, a finite range's midpoint, a
+/// bound plus or minus one, else 0; integers rounded); then every fact is evaluated
+/// exactly at that point. `false` means only "not shown": facts over inputs (their
+/// sources' variables under another name), booleans, points, `sqrt`, `sin`, `cos`, or
+/// numbers beyond 128-bit rationals are left to Z3.
 pub fn witnessed(prog: &Program, facts: &[Expr]) -> bool {
     // Only real and integer state, snapshot and value variables.
     let mut simple = true;
@@ -441,10 +442,7 @@ pub fn witnessed(prog: &Program, facts: &[Expr]) -> bool {
     if !simple {
         return false;
     }
-    // Equalities `v == e` define v as e's value, in order, once e's variables are
-    // defined: the box gets e's enclosure, and the exact point (v exactly e) lies in
-    // it. Every other fact must then hold at every point of the box.
-    let mut box_: HashMap<Var, Interval> = HashMap::new();
+    let mut at: HashMap<Var, Rat> = HashMap::new();
     let mut defining = vec![false; facts.len()];
     loop {
         let mut grew = false;
@@ -455,18 +453,17 @@ pub fn witnessed(prog: &Program, facts: &[Expr]) -> bool {
             let ExprKind::Binary(crate::hir::expr::BinOp::Eq, a, b) = &f.kind else { continue };
             for (lhs, rhs) in [(a, b), (b, a)] {
                 let ExprKind::Var(v) = &lhs.kind else { continue };
-                if matches!(v, Var::Const(_)) || ints.contains(v) || box_.contains_key(v) {
+                if matches!(v, Var::Const(_)) || at.contains_key(v) {
                     continue;
                 }
-                let mut closed = true;
-                rhs.visit_vars(&mut |w, _| closed &= matches!(w, Var::Const(_)) || box_.contains_key(w));
-                let known = |w: &Var| box_.get(w).copied();
-                if let Some(iv) = closed.then(|| bounds::eval(prog, rhs, &known)).flatten() {
-                    box_.insert(v.clone(), iv);
-                    defining[i] = true;
-                    grew = true;
-                    break;
+                let Some(x) = Rat::eval(prog, rhs, &at) else { continue };
+                if ints.contains(v) && x.1 != 1 {
+                    continue;
                 }
+                at.insert(v.clone(), x);
+                defining[i] = true;
+                grew = true;
+                break;
             }
         }
         if !grew {
@@ -474,50 +471,178 @@ pub fn witnessed(prog: &Program, facts: &[Expr]) -> bool {
         }
     }
     let rest: Vec<&Expr> = facts.iter().zip(&defining).filter(|(_, d)| !**d).map(|(f, _)| f).collect();
-    let ranges = bounds::ranges_from(prog, &rest, &bounds::closed);
-    let pick = |v: &Var| -> Option<Interval> {
-        if matches!(v, Var::Const(_)) {
-            return None;
-        }
-        if let Some(iv) = box_.get(v) {
-            return Some(*iv);
-        }
-        let i = ranges.get(v).copied().unwrap_or(Interval { lo: f64::NEG_INFINITY, hi: f64::INFINITY });
+    // Ranges only guide the choice of values (every fact is then checked exactly).
+    let known = |v: &Var| at.get(v).map(|r| Interval::new(r.0 as f64 / r.1 as f64, r.0 as f64 / r.1 as f64));
+    let ranges = bounds::ranges_from(prog, &rest, &known);
+    let mut free = Vec::new();
+    for f in &rest {
+        f.visit_vars(&mut |v, _| {
+            if !matches!(v, Var::Const(_)) && !at.contains_key(v) {
+                free.push(v.clone());
+            }
+        });
+    }
+    for v in free {
+        let i = ranges.get(&v).copied().unwrap_or(Interval { lo: f64::NEG_INFINITY, hi: f64::INFINITY });
         let x = if i.lo == i.hi {
             i.lo
         } else if i.lo.is_finite() && i.hi.is_finite() {
             i.lo / 2.0 + i.hi / 2.0
         } else if i.lo.is_finite() {
-            i.lo + 1.0
+            i.lo.floor() + 1.0
         } else if i.hi.is_finite() {
-            i.hi - 1.0
+            i.hi.ceil() - 1.0
         } else {
             0.0
         };
-        let x = if ints.contains(v) { x.round() } else { x };
-        x.is_finite().then_some(Interval::point(x))
-    };
-    rest.iter().all(|f| holds_at(prog, f, &pick))
+        let x = if ints.contains(&v) { x.round() } else { x };
+        let Some(x) = Rat::of_f64(x) else { return false };
+        at.entry(v).or_insert(x);
+    }
+    rest.iter().all(|f| Rat::truth(prog, f, &at) == Some(true))
 }
 
-/// `e` is certainly true where every variable has the (point) value `at` gives.
-fn holds_at(prog: &Program, e: &Expr, at: &dyn bounds::Ranges) -> bool {
-    use crate::hir::expr::BinOp;
-    let ExprKind::Binary(op, a, b) = &e.kind else {
-        return matches!(e.kind, ExprKind::Bool(true));
-    };
-    let both = || Some((bounds::eval(prog, a, at)?, bounds::eval(prog, b, at)?));
-    match op {
-        BinOp::And => holds_at(prog, a, at) && holds_at(prog, b, at),
-        BinOp::Or => holds_at(prog, a, at) || holds_at(prog, b, at),
-        BinOp::Le => both().is_some_and(|(x, y)| x.hi <= y.lo),
-        BinOp::Lt => both().is_some_and(|(x, y)| x.hi < y.lo),
-        BinOp::Ge => both().is_some_and(|(x, y)| x.lo >= y.hi),
-        BinOp::Gt => both().is_some_and(|(x, y)| x.lo > y.hi),
-        BinOp::Eq => both().is_some_and(|(x, y)| x.lo == x.hi && y.lo == y.hi && x.lo == y.lo),
-        BinOp::Ne => both().is_some_and(|(x, y)| x.disjoint(y)),
-        _ => false,
+/// An exact rational `(numerator, denominator)`, denominator positive, in lowest terms.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Rat(i128, i128);
+
+impl Rat {
+    fn new(n: i128, d: i128) -> Option<Rat> {
+        if d == 0 {
+            return None;
+        }
+        let g = gcd(n.unsigned_abs(), d.unsigned_abs()).max(1) as i128;
+        let (n, d) = (n / g, d / g);
+        Some(if d < 0 { Rat(n.checked_neg()?, d.checked_neg()?) } else { Rat(n, d) })
     }
+
+    /// The exact value of a double (dyadic), when it fits.
+    fn of_f64(x: f64) -> Option<Rat> {
+        if !x.is_finite() {
+            return None;
+        }
+        let mut d: i128 = 1;
+        let mut y = x;
+        while y.fract() != 0.0 {
+            y *= 2.0;
+            d = d.checked_mul(2)?;
+        }
+        if y.abs() >= 1e30 {
+            return None;
+        }
+        Rat::new(y as i128, d)
+    }
+
+    /// The exact value of a decimal literal such as `0.65` or `1e-3`.
+    fn of_decimal(s: &str) -> Option<Rat> {
+        let (mant, exp) = match s.find(['e', 'E']) {
+            Some(i) => (&s[..i], s[i + 1..].parse::<i32>().ok()?),
+            None => (s, 0),
+        };
+        let (int, frac) = mant.split_once('.').unwrap_or((mant, ""));
+        let digits: i128 = format!("{int}{frac}").parse().ok()?;
+        let scale = exp.checked_sub(i32::try_from(frac.len()).ok()?)?;
+        let pow = 10i128.checked_pow(scale.unsigned_abs())?;
+        if scale >= 0 {
+            Rat::new(digits.checked_mul(pow)?, 1)
+        } else {
+            Rat::new(digits, pow)
+        }
+    }
+
+    fn add(self, o: Rat) -> Option<Rat> {
+        Rat::new(self.0.checked_mul(o.1)?.checked_add(o.0.checked_mul(self.1)?)?, self.1.checked_mul(o.1)?)
+    }
+
+    fn mul(self, o: Rat) -> Option<Rat> {
+        Rat::new(self.0.checked_mul(o.0)?, self.1.checked_mul(o.1)?)
+    }
+
+    fn neg(self) -> Option<Rat> {
+        Some(Rat(self.0.checked_neg()?, self.1))
+    }
+
+    fn cmp(self, o: Rat) -> Option<std::cmp::Ordering> {
+        Some(self.0.checked_mul(o.1)?.cmp(&o.0.checked_mul(self.1)?))
+    }
+
+    /// The exact value of a numeric term at `at`, when it has one.
+    fn eval(prog: &Program, e: &Expr, at: &HashMap<Var, Rat>) -> Option<Rat> {
+        use crate::hir::expr::{BinOp, UnOp};
+        match &e.kind {
+            ExprKind::Int(i) => Rat::new(*i as i128, 1),
+            ExprKind::Real(r) => Rat::of_decimal(r),
+            ExprKind::Var(Var::Const(c)) => Rat::eval(prog, &prog.consts[c.idx()].value, at),
+            ExprKind::Var(v) => at.get(v).copied(),
+            ExprKind::Unary(UnOp::Neg, a) => Rat::eval(prog, a, at)?.neg(),
+            ExprKind::Binary(op, a, b) => {
+                let x = Rat::eval(prog, a, at)?;
+                if *op == BinOp::Pow {
+                    let ExprKind::Int(n) = b.kind else { return None };
+                    let mut r = Rat(1, 1);
+                    for _ in 0..u32::try_from(n).ok().filter(|n| *n <= 64)? {
+                        r = r.mul(x)?;
+                    }
+                    return Some(r);
+                }
+                let y = Rat::eval(prog, b, at)?;
+                match op {
+                    BinOp::Add => x.add(y),
+                    BinOp::Sub => x.add(y.neg()?),
+                    BinOp::Mul => x.mul(y),
+                    BinOp::Div => x.mul(Rat::new(y.1, y.0)?),
+                    _ => None,
+                }
+            }
+            ExprKind::If(c, a, b) => match Rat::truth(prog, c, at)? {
+                true => Rat::eval(prog, a, at),
+                false => Rat::eval(prog, b, at),
+            },
+            ExprKind::Call(f, args) => {
+                let x = Rat::eval(prog, args.first()?, at)?;
+                let y = || Rat::eval(prog, args.get(1)?, at);
+                match f {
+                    Builtin::Min => Some(if x.cmp(y()?)?.is_le() { x } else { y()? }),
+                    Builtin::Max => Some(if x.cmp(y()?)?.is_ge() { x } else { y()? }),
+                    Builtin::Abs => Some(if x.0 < 0 { x.neg()? } else { x }),
+                    _ => None,
+                }
+            }
+            _ => None,
+        }
+    }
+
+    /// The exact truth of a predicate at `at`, when it can be computed.
+    fn truth(prog: &Program, e: &Expr, at: &HashMap<Var, Rat>) -> Option<bool> {
+        use crate::hir::expr::{BinOp, UnOp};
+        match &e.kind {
+            ExprKind::Bool(b) => Some(*b),
+            ExprKind::Unary(UnOp::Not, a) => Some(!Rat::truth(prog, a, at)?),
+            ExprKind::Binary(BinOp::And, a, b) => Some(Rat::truth(prog, a, at)? && Rat::truth(prog, b, at)?),
+            ExprKind::Binary(BinOp::Or, a, b) => Some(Rat::truth(prog, a, at)? || Rat::truth(prog, b, at)?),
+            ExprKind::Binary(BinOp::Implies, a, b) => Some(!Rat::truth(prog, a, at)? || Rat::truth(prog, b, at)?),
+            ExprKind::Binary(op, a, b) => {
+                let o = Rat::eval(prog, a, at)?.cmp(Rat::eval(prog, b, at)?)?;
+                match op {
+                    BinOp::Eq => Some(o.is_eq()),
+                    BinOp::Ne => Some(o.is_ne()),
+                    BinOp::Lt => Some(o.is_lt()),
+                    BinOp::Le => Some(o.is_le()),
+                    BinOp::Gt => Some(o.is_gt()),
+                    BinOp::Ge => Some(o.is_ge()),
+                    _ => None,
+                }
+            }
+            _ => None,
+        }
+    }
+}
+
+fn gcd(mut a: u128, mut b: u128) -> u128 {
+    while b != 0 {
+        (a, b) = (b, a % b);
+    }
+    a
 }
 
 fn zero() -> Real {

@@ -454,7 +454,13 @@ impl Worker<'_> {
         // The vacuity guard: an obligation proved from hypotheses proved nothing if the
         // hypotheses are unsatisfiable. One query per distinct context (cached by its
         // text, up to renaming); the obligations that ask about Σ itself need none.
-        if !vacuous && !sat && !ob.hyps.is_empty() && !matches!(ob.goal, Goal::Reachable { .. } | Goal::CanEnd { .. }) {
+        // Separation's queries use the contexts of its runs' `dt`s (whose can-end witness
+        // shows them satisfiable), [T-SESS]'s the initial states (checked on their own).
+        let covered = matches!(
+            ob.goal,
+            Goal::Reachable { .. } | Goal::CanEnd { .. } | Goal::Separated { .. } | Goal::InitiallyDisjoint { .. }
+        );
+        if !vacuous && !sat && !covered && !ob.hyps.is_empty() {
             // Obligations with the same hypotheses share the answer.
             let context = goals::context_of(self.prog, ob);
             let known = self.contexts.lock().ok().and_then(|c| c.get(&context).cloned());
@@ -857,6 +863,34 @@ mod tests {
         let (car_d, env_d) = (guard(0), guard(1));
         assert_eq!(check_valid(&prog, std::slice::from_ref(&car_d), &env_d, &SmtConfig::default()), Verdict::Holds);
         assert_eq!(check_valid(&prog, &[env_d], &car_d, &SmtConfig::default()), Verdict::Holds);
+    }
+
+    /// The vacuity guard's witness point never calls an unsatisfiable context
+    /// satisfiable, and finds the common satisfiable ones without Z3.
+    #[test]
+    fn witness_boxes_are_models() {
+        let cases = [
+            ("const dy = 0.65;", "x == dy * 3.0 && 0 <= x <= 10 && n == 2 && m >= n + 1", true),
+            ("", "x == 0.1 + 0.2 && x > 0.29", true),
+            ("", "x == 0 && x == 1", false),
+            ("", "x >= 1 && x <= 0", false),
+            ("", "x == 0.1 + 0.2 && x == 0.3", true), // exact rationals, not doubles
+            ("", "x == 0.1 && x >= 0.1000000000000000001", false), // equal as doubles only
+            ("", "x == 1.0 / 3 && 3 * x == 1 && (x < 0 => n >= 1)", true),
+            ("", "x > 1 && x < 1.5 && n > 0 && n < 1", false),
+            ("", "x * x == 2 && x > 0", false),
+        ];
+        for (consts, p, expected) in cases {
+            let (prog, e) = pred(consts, p);
+            let facts: Vec<Expr> = e.conjuncts().into_iter().cloned().collect();
+            let shown = goals::witnessed(&prog, &facts);
+            assert_eq!(shown, expected, "{p}");
+            if shown {
+                // A witness is a model: Z3 agrees the facts are satisfiable.
+                let none = Expr::bool(false, crate::hir::Loc::default());
+                assert!(matches!(check_valid(&prog, &facts, &none, &SmtConfig::default()), Verdict::Fails(_)), "{p}");
+            }
+        }
     }
 
     #[test]
