@@ -442,7 +442,7 @@ impl<'a> Contexts<'a> {
         }
         if shared && !all.is_empty() {
             let span = prog.system.as_ref().map(|(_, s)| *s).unwrap_or_default();
-            let what = "the participants' initial states together".to_string();
+            let what = "the conjunction of the participants' initial states".to_string();
             self.reachable(span, what, &all, each, false);
         }
         all
