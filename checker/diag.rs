@@ -306,6 +306,34 @@ codes! {
          kind's invariant. When none does (for example `m_move(12)` for a cart whose invariant \
          keeps it within 10 m), everything after the motion would hold vacuously, so this is an \
          error. Change the motion's arguments, or its postcondition or the invariant.";
+    VacuousContract = "E0409", "a motion primitive can never end",
+        "A primitive's contract must admit at least one run that ends ([NON-INTERRUPT] and \
+         [INTERRUPT], Fig 3: the elapsed time t lies in the duration D, the guarantee held over \
+         [0, t] and the postcondition holds at t). mochi asks, for every declared primitive \
+         whether used or not, whether some start state allowed by the precondition and the kind's \
+         invariant, some arguments and some t in D admit an end state satisfying the guarantee at \
+         t, the postcondition and the invariant. When none does (an empty duration such as \
+         `[2, 1]` or `[-2, -1]`, a postcondition that contradicts the guarantee), any motion using \
+         it deadlocks and everything after it would hold vacuously. Fix the duration's bounds, or \
+         make the guarantee and the postcondition agree at the end.";
+    StuckContext = "E0410", "a reachable point of the protocol has an unsatisfiable context",
+        "The logical context Σ (what holds at a point: the initial states, the guards and \
+         refinements of the messages so far, the postconditions of the motions so far) became \
+         unsatisfiable through a step the protocol takes: an `init` no state satisfies, a \
+         message's refinement or guard that contradicts what holds. No execution gets past that \
+         step, so the protocol is stuck there, and every check after it would hold vacuously. The \
+         error points at the step that made Σ unsatisfiable. As a warning, the same code marks a \
+         branch of a choice whose guard can never hold where it is offered (a dead branch: its \
+         checks hold vacuously and are not evidence of anything).";
+    InitOutsideInvariant = "E0411", "no initial state lies within its robot's invariant",
+        "A robot's state satisfies its kind's `invariant` at every time, the first included, so \
+         the initial context of a participant is its `init` together with the invariant ([T-SESS] \
+         assumes both). mochi asks that some state satisfies both: an `init` whose every state \
+         the invariant excludes describes a robot that cannot exist, and were it accepted the \
+         initial context would be false and everything after it hold vacuously. (An `init` may \
+         leave the invariant's bounds implicit, as `ze >= clear_z` does for an arm whose \
+         invariant caps `ze`: the first state is then any state satisfying both.) Fix `init` or \
+         the invariant so that they have a state in common.";
     RecInitRefinement = "E0414", "a recursion parameter's initial value breaks its refinement",
         "Parameterised recursion (DATUM's `mu T(n : S {P}) <n = e>`, mochi's \
          `mu t(n: S {P} = e). G`): the refinement P is what every iteration of the loop may assume \

@@ -7,7 +7,7 @@
 
 use crate::diag::{self, Code, Counterexample, Diagnostic};
 use crate::hir::print;
-use crate::obligation::{Obligation, Rule};
+use crate::obligation::{Goal, Obligation, Rule};
 use crate::smt::{self, goals::Part, Decision, SmtConfig};
 use crate::source::{FileId, SourceDb};
 use crate::{lower, project, syntax, typeck, wf};
@@ -68,6 +68,9 @@ pub struct Report {
     /// The same, structured, for every `*` found separated (written partitions too), for
     /// `--format json`.
     pub separations: Vec<Separation>,
+    /// Obligations that held only because their hypotheses are unsatisfiable (the
+    /// vacuity guard's count; each such point is unreachable or reported).
+    pub vacuous: usize,
 }
 
 /// How one `*` was found separated.
@@ -193,6 +196,7 @@ struct Run {
     partitions: Vec<String>,
     separations: Vec<Separation>,
     last_millis: f64,
+    vacuous: usize,
 }
 
 impl Run {
@@ -225,9 +229,62 @@ impl Run {
         // One pool of workers for everything; the time of each check is the time its
         // obligations took on the workers.
         let labels: Vec<String> = obligations.iter().map(|o| label(db, o)).collect();
-        let results = smt::discharge(prog, obligations, &labels, cfg);
+        let mut results = smt::discharge(prog, obligations, &labels, cfg);
+        // Then the contracts (E0409) of the primitives no use has shown able to end: a
+        // `dt` whose can-end question had a witness, or a refinement whose concrete
+        // primitive was realisable, is a witness for the primitive's contract too.
+        let mut shown: Vec<crate::hir::PrimId> = Vec::new();
+        for (ob, (d, st)) in obligations.iter().zip(&results) {
+            if !matches!(d, Decision::Holds(_)) || st.vacuous > 0 {
+                continue;
+            }
+            match &ob.goal {
+                Goal::Compatible { parts } => shown.extend(parts.iter().map(|(_, a)| a.prim)),
+                // Not a primitive refining itself: that holds without the question.
+                Goal::Refines { concrete, abstract_, .. } if abstract_.as_slice() != std::slice::from_ref(concrete) => {
+                    shown.push(concrete.prim)
+                }
+                _ => {}
+            }
+        }
+        let extra: Vec<Obligation> = contracts(prog)
+            .into_iter()
+            .filter(|o| !matches!(o.goal, Goal::CanEnd { prim } if shown.contains(&prim)))
+            .collect();
+        if !extra.is_empty() {
+            let labels: Vec<String> = extra.iter().map(|o| label(db, o)).collect();
+            results.extend(smt::discharge(prog, &extra, &labels, cfg));
+        }
+        let obligations: Vec<&Obligation> = obligations.iter().chain(&extra).collect();
+        // A primitive that can never end (E0409) makes every motion using it unable to
+        // end too; that is said once, at its declaration.
+        let never_ends: Vec<crate::hir::PrimId> = obligations
+            .iter()
+            .copied()
+            .zip(&results)
+            .filter_map(|(ob, (d, _))| match (&ob.goal, d) {
+                (Goal::CanEnd { prim }, Decision::Fails(_)) => Some(*prim),
+                _ => None,
+            })
+            .collect();
+        let explained = |ob: &Obligation, f: &smt::Failure| match (&ob.goal, &f.which) {
+            (Goal::Compatible { parts }, Some(Part::CanEnd)) => parts.iter().any(|(_, a)| never_ends.contains(&a.prim)),
+            (Goal::Refines { concrete, .. }, Some(Part::Refine(smt::goals::RefineItem::Realisable))) => {
+                never_ends.contains(&concrete.prim)
+            }
+            _ => false,
+        };
         let mut groups: BTreeMap<&'static str, Vec<(&Obligation, Decision, smt::Stats)>> = BTreeMap::new();
+        let mut vacuous: Vec<&Obligation> = Vec::new();
+        let (mut proved, mut unsure) = (0, 0);
         for (ob, (d, st)) in obligations.iter().zip(results) {
+            if matches!(d, Decision::Holds(_)) && !ob.hyps.is_empty() {
+                proved += 1;
+            }
+            if st.vacuous > 0 {
+                vacuous.push(ob);
+            }
+            unsure += st.unsure;
             groups.entry(ob.rule.check()).or_default().push((ob, d, st));
         }
         for (name, obs) in groups {
@@ -242,9 +299,16 @@ impl Run {
                         self.separations.extend(separation(db, prog, ob, note.is_some()));
                         self.partitions.extend(note.map(|n| format!("{}: {n}", where_(db, ob))));
                     }
+                    // A guard that cannot hold where it is offered: a dead branch, a
+                    // warning (its checks hold vacuously and prove nothing).
+                    Decision::Fails(f) if matches!(ob.goal, Goal::Reachable { dead_branch: true, .. }) => {
+                        self.diagnostics.push(dead_branch(ob, f));
+                    }
                     Decision::Fails(f) => {
                         failed += 1;
-                        self.diagnostics.push(failure(ob, f));
+                        if !explained(ob, &f) {
+                            self.diagnostics.push(failure(ob, f));
+                        }
                     }
                     Decision::Unknown { part, why } => {
                         unknown += 1;
@@ -303,8 +367,51 @@ impl Run {
             if unknown > 0 {
                 detail.push_str(&format!(", {unknown} undecided"));
             }
+            if stats.vacuous > 0 {
+                detail.push_str(&format!(", {} held vacuously", stats.vacuous));
+            }
             self.checks.push(CheckResult { name, status, millis, detail, queries: stats.queries });
         }
+        self.vacuity(db, vacuous, proved, unsure);
+    }
+
+    /// The vacuity guard's line: how many obligations held only because their context
+    /// is unsatisfiable. Each such context is unreachable: the step that made it so is
+    /// an error (E0410, a stuck protocol) or a dead branch (E0410 as a warning). An
+    /// obligation held vacuously with neither reported (a process's own dead code, say)
+    /// gets a warning of its own, so that no vacuous proof goes unmentioned.
+    fn vacuity(&mut self, db: &SourceDb, vacuous: Vec<&Obligation>, proved: usize, unsure: usize) {
+        self.vacuous = vacuous.len();
+        // Any error explains them (the verdict is `rejected` anyway).
+        let explained = self.diagnostics.iter().any(|d| d.code == Code::StuckContext || d.is_error());
+        if let (false, Some(first)) = (explained, vacuous.first()) {
+            self.diagnostics.push(
+                Diagnostic {
+                    severity: diag::Severity::Warning,
+                    ..Diagnostic::error(
+                        Code::StuckContext,
+                        first.span,
+                        format!(
+                            "{} obligation(s) held only because their context is unsatisfiable, first {} ({})",
+                            vacuous.len(),
+                            first.what,
+                            where_(db, first)
+                        ),
+                    )
+                }
+                .with_note("no execution reaches these points, so their checks prove nothing")
+                .with_help("remove the unreachable code, or fix the condition that makes its context false"),
+            );
+        }
+        let mut detail = format!(
+            "{} of {} proved obligation(s) held only because their context is unsatisfiable",
+            vacuous.len(),
+            proved
+        );
+        if unsure > 0 {
+            detail.push_str(&format!(", {unsure} context(s) undecided"));
+        }
+        self.checks.push(CheckResult { name: "vacuity", status: Status::Pass, millis: 0.0, detail, queries: 0 });
     }
 
     fn finish(mut self) -> Report {
@@ -325,6 +432,7 @@ impl Run {
             projections: self.projections,
             partitions: self.partitions,
             separations: self.separations,
+            vacuous: self.vacuous,
         }
     }
 }
@@ -384,7 +492,7 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
     let code = match (ob.rule, &f.which) {
         (Rule::TotalChoice, _) => Code::ChoiceNotTotal,
         (Rule::AgComp, Some(Part::Pre(_))) => Code::PreconditionAtMotion,
-        (Rule::AgComp, Some(Part::CanEnd(_) | Part::CanStart(_))) => Code::MotionCannotEnd,
+        (Rule::AgComp, Some(Part::CanEnd)) => Code::MotionCannotEnd,
         (Rule::AgComp, Some(Part::Assume(_))) => Code::AssumptionNotDischarged,
         (Rule::AgComp, Some(Part::Within(..) | Part::Meet)) => Code::DurationsIncompatible,
         (Rule::AgComp, _) => Code::FootprintsOverlap,
@@ -399,6 +507,10 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
         (Rule::TRecInit, _) => Code::ProcessRecInit,
         (Rule::TRecJump, _) => Code::ProcessRecJump,
         (Rule::TRecArgs, _) => Code::ProcessRecArgs,
+        (Rule::Contract, _) => Code::VacuousContract,
+        (Rule::Reachable, _) => Code::StuckContext,
+        (Rule::InitInvariant, Some(Part::Before(_))) => Code::StuckContext,
+        (Rule::InitInvariant, _) => Code::InitOutsideInvariant,
     };
     let help = match code {
         Code::ChoiceNotTotal => "add a branch whose guard covers the counterexample's state, or weaken a guard",
@@ -415,6 +527,9 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
         Code::RecInitRefinement | Code::ProcessRecInit => "start the parameter at a value that satisfies its refinement, or weaken the refinement",
         Code::RecJumpRefinement | Code::ProcessRecJump => "guard the branch that jumps back (e.g. `[n > 0]` before `t(n - 1)`), or pass arguments that satisfy the refinement",
         Code::ProcessRecArgs => "pass the loop the same values as the local type's recursion (its initial values and the arguments of its jump), computed from what the process sent and received",
+        Code::VacuousContract => "fix the duration's bounds (lo <= hi, hi >= 0), or make the guarantee and the postcondition agree at the end of the motion",
+        Code::StuckContext => "fix the step named above (an `init` no state satisfies, a refinement or guard that contradicts what holds there): no execution gets past it",
+        Code::InitOutsideInvariant => "make `init` and the robot kind's invariant agree on at least one state (fix `init`, or widen the invariant)",
         _ => "make the process's predicate imply the type's",
     };
     let mut d = Diagnostic::error(code, ob.span, format!("{} ({})", code.title(), ob.what))
@@ -429,6 +544,35 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
         d = d.with_note(text);
     }
     d.with_help(help).with_counterexample(cx)
+}
+
+/// A branch whose guard cannot hold where the choice is made: a warning (the branch is
+/// unreachable; its obligations hold vacuously).
+fn dead_branch(ob: &Obligation, f: smt::Failure) -> Diagnostic {
+    let _ = f;
+    Diagnostic {
+        severity: diag::Severity::Warning,
+        ..Diagnostic::error(Code::StuckContext, ob.span, format!("dead branch: {} can never hold", ob.what))
+    }
+    .with_note("the context at the choice and this branch's guard contradict each other, so no execution takes it; its checks hold vacuously")
+    .with_help("remove the branch, or fix its guard")
+}
+
+/// One obligation per declared primitive (whether used or not): its contract admits a
+/// run that ends (Fig 3 [NON-INTERRUPT], [INTERRUPT]). Primitives of kinds no
+/// participant has cannot run and are not asked about.
+fn contracts(prog: &crate::hir::Program) -> Vec<Obligation> {
+    (0..prog.prims.len())
+        .map(|i| crate::hir::PrimId(i as u32))
+        .filter(|&p| prog.role_ids().any(|r| prog.role(r).kind == prog.prim(p).kind))
+        .map(|p| Obligation {
+            rule: Rule::Contract,
+            span: prog.prim(p).span,
+            what: format!("the contract of `{}`", prog.prim(p).name),
+            hyps: Vec::new(),
+            goal: Goal::CanEnd { prim: p },
+        })
+        .collect()
 }
 
 /// `counterexample: at time 2.1 s, the point (1.02, 0.2, 0.05) is in both footprints;

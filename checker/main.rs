@@ -403,6 +403,7 @@ fn past_deadline(seconds: f64) -> Report {
         projections: Default::default(),
         partitions: Vec::new(),
         separations: Vec::new(),
+        vacuous: 0,
     }
 }
 

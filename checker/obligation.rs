@@ -4,7 +4,7 @@
 //! [`Obligation::trivially_holds`] settles the syntactically trivial ones and the rest
 //! are reported as undecided, never as passed.
 
-use crate::hir::{Expr, ExprKind, PrimApp, RoleId};
+use crate::hir::{Expr, ExprKind, PrimApp, PrimId, RoleId};
 use crate::source::Span;
 use serde::Serialize;
 
@@ -40,6 +40,12 @@ pub enum Rule {
     TRecJump,
     /// [T-REC]/[T-VAR] with parameters: the process's loop arguments equal its type's.
     TRecArgs,
+    /// Fig 3 [NON-INTERRUPT]/[INTERRUPT]: a declared primitive admits a run that ends.
+    Contract,
+    /// The vacuity guard: the context of a point the protocol reaches is satisfiable.
+    Reachable,
+    /// [T-SESS]: a participant's `init` and its kind's invariant have a state in common.
+    InitInvariant,
 }
 
 impl Rule {
@@ -59,6 +65,9 @@ impl Rule {
             Rule::TRecInit => "[T-REC] with parameters",
             Rule::TRecJump => "[T-VAR] with parameters",
             Rule::TRecArgs => "[T-REC]/[T-VAR]: parameters as the type's",
+            Rule::Contract => "a primitive can end (Fig 3 [NON-INTERRUPT], [INTERRUPT])",
+            Rule::Reachable => "a reachable context is satisfiable (vacuity guard)",
+            Rule::InitInvariant => "[T-SESS]: init allows a state within the invariant",
         }
     }
 
@@ -78,6 +87,8 @@ impl Rule {
             | Rule::TRecInit
             | Rule::TRecJump
             | Rule::TRecArgs => "typing-obligations",
+            Rule::Contract => "contracts",
+            Rule::Reachable | Rule::InitInvariant => "reachability",
         }
     }
 }
@@ -99,6 +110,15 @@ pub enum Goal {
     /// each participant that moves, the primitives it may run first (one per path); the
     /// footprints of all of them at time 0 contain it in its initial state.
     InitiallyDisjoint { firsts: Vec<(RoleId, Vec<PrimApp>)> },
+    /// A primitive's contract admits a run that ends, for some arguments and start state
+    /// (a satisfiability question; the obligation's `hyps` are empty).
+    CanEnd { prim: PrimId },
+    /// The obligation's `hyps` (Σ after a step) are satisfiable. When they are not, the
+    /// step is where the protocol gets stuck, provided every context in `before` (Σ
+    /// before the step) is satisfiable; otherwise an earlier step is to blame. With
+    /// `dead_branch`, the step is the guard of one branch among several: an unsatisfiable
+    /// context there is a dead branch (a warning), not a stuck protocol.
+    Reachable { before: Vec<Vec<Expr>>, dead_branch: bool },
 }
 
 /// One side of a `*`: its participants and the primitives they may run on it.

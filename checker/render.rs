@@ -137,7 +137,8 @@ fn write_summary(
 ///   "partitions": [{ "file", "line", "column", "how": "written" | "inferred" | "queries",
 ///                    "point": null | [x, y, z],
 ///                    "sides": [{ "roles": [..], "region": null | "predicate",
-///                                "box": null | [[x_lo, x_hi], [y_lo, y_hi], [z_lo, z_hi]] }] }] }
+///                                "box": null | [[x_lo, x_hi], [y_lo, y_hi], [z_lo, z_hi]] }] }],
+///   "vacuous": number of obligations that held only because their context is unsatisfiable }
 /// ```
 ///
 /// Lines and columns are 1-based (columns count characters). A location in a file the
@@ -168,6 +169,7 @@ pub fn report_json(db: &SourceDb, file_name: &str, report: &Report) -> Value {
         "diagnostics": report.diagnostics.iter().map(|d| diagnostic_json(db, d)).collect::<Vec<_>>(),
         "checks": checks,
         "partitions": report.separations,
+        "vacuous": report.vacuous,
     })
 }
 
@@ -510,6 +512,7 @@ mod tests {
             projections: BTreeMap::new(),
             partitions: Vec::new(),
             separations: Vec::new(),
+            vacuous: 0,
         }
     }
 
@@ -669,6 +672,6 @@ mod tests {
         assert_eq!(v["checks"], json!([{ "name": "parse", "status": "fail", "millis": 0.25, "queries": 0 }]));
         let mut keys: Vec<&String> = v.as_object().map(|o| o.keys().collect()).unwrap_or_default();
         keys.sort();
-        assert_eq!(keys, ["checks", "diagnostics", "file", "partitions", "verdict"]);
+        assert_eq!(keys, ["checks", "diagnostics", "file", "partitions", "vacuous", "verdict"]);
     }
 }

@@ -177,10 +177,20 @@ impl<'a> Checker<'a> {
         }
     }
 
-    /// The initial context: `init` and the invariant.
+    /// The initial context: `init` and the invariant, and those of the participants
+    /// feeding this one's inputs ([T-SESS] assumes every participant starts in its
+    /// `init`, and an input *is* its source's state): a precondition over an input that
+    /// the source's initial state proves holds.
     fn initial(&self) -> Vec<Expr> {
         let mut out = sigma::init(self.prog, self.role);
         out.extend(self.invariant.iter().cloned());
+        let mut sources: Vec<RoleId> = self.prog.role(self.role).input_sources.iter().flatten().copied().collect();
+        sources.sort();
+        sources.dedup();
+        for src in sources.into_iter().filter(|s| *s != self.role) {
+            out.extend(sigma::init(self.prog, src));
+            out.extend(sigma::invariant(self.prog, src));
+        }
         out
     }
 

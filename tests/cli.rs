@@ -335,7 +335,10 @@ fn dump_smt_writes_one_smt_lib_file_per_query() {
     assert!(files.len() >= 10, "{} files", files.len());
     for f in &files {
         let name = f.file_name().to_string_lossy().into_owned();
-        assert!(name.ends_with(".smt2") && name.contains("cart-and-arms-chor-"), "{name}");
+        // Named after the obligation's file: the choreography, or for a primitive's
+        // contract (E0409) the library that declares it.
+        let file = name.contains("cart-and-arms-chor-") || (name.contains("-contract-") && name.contains("-mochi-"));
+        assert!(name.ends_with(".smt2") && file, "{name}");
         let text = std::fs::read_to_string(f.path()).expect("readable");
         assert!(text.starts_with("; mochi: ") && text.trim_end().ends_with("(check-sat)"), "{name}: {text}");
     }
@@ -552,4 +555,31 @@ fn explain_list_is_sorted_by_code() {
     sorted.sort();
     assert_eq!(codes, sorted);
     assert!(codes.contains(&"E0108") && codes.contains(&"E0213"));
+}
+
+#[test]
+fn a_dead_branch_is_a_warning_and_its_vacuous_checks_are_counted() {
+    let o = mochi(&["check", "tests/data/dead-branch.chor", "--format", "json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
+    assert_eq!(v["verdict"], "verified");
+    let diags = v["diagnostics"].as_array().expect("diagnostics");
+    assert!(
+        diags.iter().any(|d| d["code"] == "E0410" && d["severity"] == "warning" && d["line"] == 13),
+        "the dead branch at line 13 is reported: {v}"
+    );
+    // The [AGCOMP] check of the dead branch's joint motion held only vacuously.
+    assert!(v["vacuous"].as_u64().is_some_and(|n| n >= 1), "{v}");
+    let text = stdout(&mochi(&["check", "--color", "never", "tests/data/dead-branch.chor"]));
+    assert!(text.contains("held only because their context is unsatisfiable"), "{text}");
+}
+
+#[test]
+fn an_input_is_its_source_state_when_a_motion_starts() {
+    // Rejected before (E0402 and E0708): the input at the start was a fresh variable, and
+    // the process did not know its source's initial state.
+    let o = mochi(&["check", "tests/data/input-precondition.chor", "--format", "json"]);
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
+    assert_eq!(v["verdict"], "verified", "{v}");
+    assert_eq!(v["vacuous"], 0, "{v}");
 }

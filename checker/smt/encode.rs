@@ -285,6 +285,13 @@ impl<'p> Encoder<'p> {
         })
     }
 
+    /// Every argument of `sin`/`cos` equals 0, where the encoding's enclosure is exact
+    /// (`sin 0 = 0`, `cos 0 = 1`): a model with these added is a genuine one.
+    pub fn trig_at_zero(&self) -> Vec<Bool> {
+        let zero = Int::from_i64(0).to_real();
+        self.trig.iter().map(|t| t.arg.eq(&zero)).collect()
+    }
+
     fn term(&mut self, e: &Expr) -> Result<Term, Unsupported> {
         stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.term_inner(e))
     }

@@ -14,10 +14,10 @@
 
 use super::encode::{real_of_rational, Encoder, Frame, Term, Unsupported};
 use crate::bounds::{self, Interval};
-use crate::hir::{Builtin, Expr, PrimApp, Primitive, Program, RoleId, Slot, Var};
+use crate::hir::{Builtin, Expr, ExprKind, PrimApp, Primitive, Program, RoleId, Slot, Var};
 use crate::obligation::{Goal, Obligation, Run, Side};
 use num_rational::BigRational;
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use z3::ast::{Bool, Real};
 
 pub mod witness;
@@ -29,12 +29,25 @@ pub enum Part {
     Valid,
     /// [AGCOMP] "compatible from Pre": part `i`'s precondition holds at the `dt`.
     Pre(usize),
-    /// Part `i` can end: its postcondition and its kind's invariant are consistent with
-    /// the context (a **sat** question; see [`Part::is_sat_question`]).
-    CanEnd(usize),
-    /// Part `i` can start: Σ, its precondition and invariant are consistent (asked when
-    /// it cannot end, to tell a contradictory motion from an unreachable point).
-    CanStart(usize),
+    /// The joint motion can end (a **sat** question; see [`Part::is_sat_question`]):
+    /// from Σ and every part's precondition, some time `t` in every part's duration and
+    /// an end state of every part at which its guarantee (at 0 and at `t`), its
+    /// postcondition and its kind's invariant hold together, inputs reading their
+    /// sources' end states ([M-PAR], [NON-INTERRUPT], [INTERRUPT], Def 4.11 (5), (8)).
+    CanEnd,
+    /// The joint motion can start: Σ and every part's precondition and invariant are
+    /// consistent (a sat question, asked when it cannot end: a precondition that
+    /// contradicts a satisfiable context is [AGCOMP]'s pre part's or [T-MOTION]'s to
+    /// report).
+    CanStart,
+    /// The obligation's hypotheses alone are satisfiable (a sat question): asked when a
+    /// joint motion cannot end, to tell a stuck motion from an unreachable point, and
+    /// for [`Goal::Reachable`].
+    Context,
+    /// [`Goal::Reachable`]: the context before the step (its `k`-th) is satisfiable.
+    Before(usize),
+    /// [`Goal::CanEnd`]: the declared primitive admits a run that ends.
+    Realisable,
     /// Conjunct `k` of a `Valid` goal.
     Conjunct(usize),
     /// [AGCOMP]: the others' guarantees discharge part `i`'s assumption.
@@ -60,7 +73,15 @@ pub enum Part {
 impl Part {
     /// Parts that must be satisfiable (a model is the witness) rather than unsat.
     pub fn is_sat_question(&self) -> bool {
-        matches!(self, Part::CanEnd(_) | Part::CanStart(_))
+        matches!(
+            self,
+            Part::CanEnd
+                | Part::CanStart
+                | Part::Context
+                | Part::Before(_)
+                | Part::Realisable
+                | Part::Refine(RefineItem::Realisable)
+        )
     }
 }
 
@@ -72,6 +93,9 @@ pub enum RefineItem {
     Post,
     Footprint,
     Duration,
+    /// The concrete primitive admits a run that ends from a start the abstract one
+    /// allows (a sat question): otherwise the other items hold vacuously.
+    Realisable,
 }
 
 impl RefineItem {
@@ -83,6 +107,9 @@ impl RefineItem {
             RefineItem::Post => "the concrete postcondition implies the abstract one",
             RefineItem::Footprint => "the concrete footprint lies within the abstract one",
             RefineItem::Duration => "the durations nest (Def 3.4, corrected)",
+            RefineItem::Realisable => {
+                "the concrete primitive can end (some time in its duration, an end state meeting its guarantee, postcondition and invariant) from a start the abstract precondition allows; otherwise every other item holds vacuously"
+            }
         }
     }
 }
@@ -122,7 +149,6 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
                 if !p.pre.is_true() && !lone {
                     out.push(Part::Pre(i));
                 }
-                out.push(Part::CanEnd(i));
                 if !p.assume.is_true() {
                     out.push(Part::Assume(i));
                 }
@@ -141,6 +167,8 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
                     out.push(Part::Disjoint(i, j));
                 }
             }
+            // One can-end question for the whole `dt`: the parts end together.
+            out.push(Part::CanEnd);
             let non: Vec<usize> = (0..parts.len()).filter(|&i| !prog.prim(parts[i].1.prim).interruptible).collect();
             match non.first() {
                 Some(&n) => out.extend((0..parts.len()).filter(|&j| j != n).map(|j| Part::Within(n, j))),
@@ -178,7 +206,9 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
                 ));
             }
             use RefineItem::*;
-            Plan::Parts([Pre, Assume, Guarantee, Post, Footprint, Duration].into_iter().map(Part::Refine).collect())
+            Plan::Parts(
+                [Realisable, Pre, Assume, Guarantee, Post, Footprint, Duration].into_iter().map(Part::Refine).collect(),
+            )
         }
         Goal::InitiallyDisjoint { firsts } => {
             // Boxes first, as for separation: only participants whose boxes meet need Z3.
@@ -215,6 +245,8 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
             }
             Plan::Parts(out)
         }
+        Goal::CanEnd { .. } => Plan::Parts(vec![Part::Realisable]),
+        Goal::Reachable { .. } => Plan::Parts(vec![Part::Context]),
     }
 }
 
@@ -242,6 +274,8 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
             let g = q.enc.boolean(c)?;
             q.assertions.push(g.not());
         }
+        // Σ alone, whatever the goal (the vacuity guard; a stuck motion).
+        (_, Part::Context) => hyps(&mut q, &context_of(prog, ob))?,
         (Goal::Compatible { parts }, _) => compat(&mut q, &ob.hyps, parts, part)?,
         (Goal::Separated { sides }, Part::Apart { a, ra, b, rb }) => {
             let (x, y) = (&sides[*a].runs[*ra], &sides[*b].runs[*rb]);
@@ -313,9 +347,305 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
             q.assertions.extend(any);
             q.point = Some(p);
         }
+        (Goal::Reachable { before, .. }, Part::Before(k)) => {
+            hyps(&mut q, before.get(*k).map(Vec::as_slice).unwrap_or_default())?
+        }
+        (Goal::CanEnd { prim }, Part::Realisable) => {
+            // Some arguments, start state and time: every parameter is free.
+            let prog = q.enc.prog();
+            let p = prog.prim(*prim);
+            // Read in the frame of some participant of the kind (the driver asks only
+            // about kinds that have one): its name shows in the counterexample.
+            let role = prog.role_ids().find(|r| prog.role(*r).kind == p.kind);
+            let Some(role) = role else { return Err(Unsupported("a primitive of a kind no participant has".into())) };
+            let app = PrimApp { prim: *prim, args: Vec::new(), loc: Default::default() };
+            let t = q.enc.named_real("time");
+            let mut inst = Inst::new(&mut q.enc, role, &app, t.clone(), "t")?;
+            inst.frame.params = p.params.iter().map(|(n, sort)| q.enc.named(n, sort)).collect::<Result<_, _>>()?;
+            ends(&mut q, std::slice::from_ref(&inst), &t)?;
+        }
         _ => return Err(Unsupported("an obligation split into a part of another kind".into())),
     }
     Ok(q)
+}
+
+/// The parts end together at time `t` ([M-PAR]: one elapsed time for all): every part
+/// started (precondition, invariant), `t` lies in every part's duration (Def 4.11 (5):
+/// `t <= ⌈D⌉`; (8)(a), (b) and [NON-INTERRUPT]/[INTERRUPT]: `t ∈ D`), the guarantee
+/// held at time 0 of the start state and at `t` of the end state (the two ends of
+/// [TRAJ-STEP]'s `[0, t]`), and the postcondition and invariant hold of the end state.
+/// The state at `t` is each instance's frame, so `connect` already makes an input its
+/// source's end state when the source is a part.
+fn ends(q: &mut Query, insts: &[Inst], t: &Real) -> Result<(), Unsupported> {
+    q.assertions.push(t.ge(zero()));
+    for inst in insts {
+        inst.started(q)?;
+        let (lo, hi) = inst.duration(&mut q.enc)?;
+        q.assertions.push(t.ge(&lo));
+        if let Some(hi) = hi {
+            q.assertions.push(t.le(&hi));
+        }
+        let at_zero = Frame { clock: Some(zero()), ..inst.start_frame() };
+        let g0 = inst.pred(&mut q.enc, &inst.prim.guarantee, &at_zero)?;
+        let gt = inst.pred(&mut q.enc, &inst.prim.guarantee, &inst.frame)?;
+        let post = inst.pred(&mut q.enc, &inst.prim.post, &inst.frame)?;
+        q.assertions.extend([g0, gt, post]);
+        if let Some(inv) = q.enc.prog().kind(inst.prim.kind).invariant.clone() {
+            let b = inst.pred(&mut q.enc, &inv, &inst.frame)?;
+            q.assertions.push(b);
+        }
+    }
+    Ok(())
+}
+
+/// The hypotheses a proof of `ob` rests on, for the vacuity guard: for a validity goal
+/// the slice its parts use (each conjunct's cone of influence lies within the goal's),
+/// otherwise all of them. The proof is vacuous iff these are unsatisfiable.
+pub fn context_of(prog: &Program, ob: &Obligation) -> Vec<Expr> {
+    match &ob.goal {
+        Goal::Valid(goal) => slice(prog, &ob.hyps, vars_of(prog, [goal])),
+        _ => ob.hyps.clone(),
+    }
+}
+
+/// A cheap, sufficient test that `facts` are satisfiable, without Z3: a candidate point
+/// in exact rational arithmetic. Equalities `v == e` define `v` as `e`'s exact value, in
+/// order, once `e`'s variables have values; every other variable takes a simple value read
+/// off the ranges the facts give it (a point range's value, a finite range's midpoint, a
+/// bound plus or minus one, else 0; integers rounded); then every fact is evaluated
+/// exactly at that point. `false` means only "not shown": facts over inputs (their
+/// sources' variables under another name), booleans, points, `sqrt`, `sin`, `cos`, or
+/// numbers beyond 128-bit rationals are left to Z3.
+pub fn witnessed(prog: &Program, facts: &[Expr]) -> bool {
+    // Only real and integer state, snapshot and value variables.
+    let mut simple = true;
+    let mut ints = HashSet::new();
+    for f in facts {
+        f.visit_vars(&mut |v, _| {
+            let sort = match v {
+                Var::Const(_) => return,
+                Var::Role(r, slot @ Slot::State(_)) | Var::Snap(r, slot @ Slot::State(_)) => {
+                    prog.kind_of(*r).var(*slot).1.clone()
+                }
+                Var::Value(id, _) => prog.value(*id).sort.clone(),
+                _ => {
+                    simple = false;
+                    return;
+                }
+            };
+            match sort {
+                crate::hir::Sort::Int => {
+                    ints.insert(v.clone());
+                }
+                crate::hir::Sort::Real => {}
+                _ => simple = false,
+            }
+        });
+    }
+    if !simple {
+        return false;
+    }
+    let mut at: HashMap<Var, Rat> = HashMap::new();
+    let mut defining = vec![false; facts.len()];
+    loop {
+        let mut grew = false;
+        for (i, f) in facts.iter().enumerate() {
+            if defining[i] {
+                continue;
+            }
+            let ExprKind::Binary(crate::hir::expr::BinOp::Eq, a, b) = &f.kind else { continue };
+            for (lhs, rhs) in [(a, b), (b, a)] {
+                let ExprKind::Var(v) = &lhs.kind else { continue };
+                if matches!(v, Var::Const(_)) || at.contains_key(v) {
+                    continue;
+                }
+                let Some(x) = Rat::eval(prog, rhs, &at) else { continue };
+                if ints.contains(v) && x.1 != 1 {
+                    continue;
+                }
+                at.insert(v.clone(), x);
+                defining[i] = true;
+                grew = true;
+                break;
+            }
+        }
+        if !grew {
+            break;
+        }
+    }
+    let rest: Vec<&Expr> = facts.iter().zip(&defining).filter(|(_, d)| !**d).map(|(f, _)| f).collect();
+    // Ranges only guide the choice of values (every fact is then checked exactly).
+    let known = |v: &Var| at.get(v).map(|r| Interval::new(r.0 as f64 / r.1 as f64, r.0 as f64 / r.1 as f64));
+    let ranges = bounds::ranges_from(prog, &rest, &known);
+    let mut free = Vec::new();
+    for f in &rest {
+        f.visit_vars(&mut |v, _| {
+            if !matches!(v, Var::Const(_)) && !at.contains_key(v) {
+                free.push(v.clone());
+            }
+        });
+    }
+    for v in free {
+        let i = ranges.get(&v).copied().unwrap_or(Interval { lo: f64::NEG_INFINITY, hi: f64::INFINITY });
+        let x = if i.lo == i.hi {
+            i.lo
+        } else if i.lo.is_finite() && i.hi.is_finite() {
+            i.lo / 2.0 + i.hi / 2.0
+        } else if i.lo.is_finite() {
+            i.lo.floor() + 1.0
+        } else if i.hi.is_finite() {
+            i.hi.ceil() - 1.0
+        } else {
+            0.0
+        };
+        let x = if ints.contains(&v) { x.round() } else { x };
+        let Some(x) = Rat::of_f64(x) else { return false };
+        at.entry(v).or_insert(x);
+    }
+    rest.iter().all(|f| Rat::truth(prog, f, &at) == Some(true))
+}
+
+/// An exact rational `(numerator, denominator)`, denominator positive, in lowest terms.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Rat(i128, i128);
+
+impl Rat {
+    fn new(n: i128, d: i128) -> Option<Rat> {
+        if d == 0 {
+            return None;
+        }
+        let g = gcd(n.unsigned_abs(), d.unsigned_abs()).max(1) as i128;
+        let (n, d) = (n / g, d / g);
+        Some(if d < 0 { Rat(n.checked_neg()?, d.checked_neg()?) } else { Rat(n, d) })
+    }
+
+    /// The exact value of a double (dyadic), when it fits.
+    fn of_f64(x: f64) -> Option<Rat> {
+        if !x.is_finite() {
+            return None;
+        }
+        let mut d: i128 = 1;
+        let mut y = x;
+        while y.fract() != 0.0 {
+            y *= 2.0;
+            d = d.checked_mul(2)?;
+        }
+        if y.abs() >= 1e30 {
+            return None;
+        }
+        Rat::new(y as i128, d)
+    }
+
+    /// The exact value of a decimal literal such as `0.65` or `1e-3`.
+    fn of_decimal(s: &str) -> Option<Rat> {
+        let (mant, exp) = match s.find(['e', 'E']) {
+            Some(i) => (&s[..i], s[i + 1..].parse::<i32>().ok()?),
+            None => (s, 0),
+        };
+        let (int, frac) = mant.split_once('.').unwrap_or((mant, ""));
+        let digits: i128 = format!("{int}{frac}").parse().ok()?;
+        let scale = exp.checked_sub(i32::try_from(frac.len()).ok()?)?;
+        let pow = 10i128.checked_pow(scale.unsigned_abs())?;
+        if scale >= 0 {
+            Rat::new(digits.checked_mul(pow)?, 1)
+        } else {
+            Rat::new(digits, pow)
+        }
+    }
+
+    fn add(self, o: Rat) -> Option<Rat> {
+        Rat::new(self.0.checked_mul(o.1)?.checked_add(o.0.checked_mul(self.1)?)?, self.1.checked_mul(o.1)?)
+    }
+
+    fn mul(self, o: Rat) -> Option<Rat> {
+        Rat::new(self.0.checked_mul(o.0)?, self.1.checked_mul(o.1)?)
+    }
+
+    fn neg(self) -> Option<Rat> {
+        Some(Rat(self.0.checked_neg()?, self.1))
+    }
+
+    fn cmp(self, o: Rat) -> Option<std::cmp::Ordering> {
+        Some(self.0.checked_mul(o.1)?.cmp(&o.0.checked_mul(self.1)?))
+    }
+
+    /// The exact value of a numeric term at `at`, when it has one.
+    fn eval(prog: &Program, e: &Expr, at: &HashMap<Var, Rat>) -> Option<Rat> {
+        use crate::hir::expr::{BinOp, UnOp};
+        match &e.kind {
+            ExprKind::Int(i) => Rat::new(*i as i128, 1),
+            ExprKind::Real(r) => Rat::of_decimal(r),
+            ExprKind::Var(Var::Const(c)) => Rat::eval(prog, &prog.consts[c.idx()].value, at),
+            ExprKind::Var(v) => at.get(v).copied(),
+            ExprKind::Unary(UnOp::Neg, a) => Rat::eval(prog, a, at)?.neg(),
+            ExprKind::Binary(op, a, b) => {
+                let x = Rat::eval(prog, a, at)?;
+                if *op == BinOp::Pow {
+                    let ExprKind::Int(n) = b.kind else { return None };
+                    let mut r = Rat(1, 1);
+                    for _ in 0..u32::try_from(n).ok().filter(|n| *n <= 64)? {
+                        r = r.mul(x)?;
+                    }
+                    return Some(r);
+                }
+                let y = Rat::eval(prog, b, at)?;
+                match op {
+                    BinOp::Add => x.add(y),
+                    BinOp::Sub => x.add(y.neg()?),
+                    BinOp::Mul => x.mul(y),
+                    BinOp::Div => x.mul(Rat::new(y.1, y.0)?),
+                    _ => None,
+                }
+            }
+            ExprKind::If(c, a, b) => match Rat::truth(prog, c, at)? {
+                true => Rat::eval(prog, a, at),
+                false => Rat::eval(prog, b, at),
+            },
+            ExprKind::Call(f, args) => {
+                let x = Rat::eval(prog, args.first()?, at)?;
+                let y = || Rat::eval(prog, args.get(1)?, at);
+                match f {
+                    Builtin::Min => Some(if x.cmp(y()?)?.is_le() { x } else { y()? }),
+                    Builtin::Max => Some(if x.cmp(y()?)?.is_ge() { x } else { y()? }),
+                    Builtin::Abs => Some(if x.0 < 0 { x.neg()? } else { x }),
+                    _ => None,
+                }
+            }
+            _ => None,
+        }
+    }
+
+    /// The exact truth of a predicate at `at`, when it can be computed.
+    fn truth(prog: &Program, e: &Expr, at: &HashMap<Var, Rat>) -> Option<bool> {
+        use crate::hir::expr::{BinOp, UnOp};
+        match &e.kind {
+            ExprKind::Bool(b) => Some(*b),
+            ExprKind::Unary(UnOp::Not, a) => Some(!Rat::truth(prog, a, at)?),
+            ExprKind::Binary(BinOp::And, a, b) => Some(Rat::truth(prog, a, at)? && Rat::truth(prog, b, at)?),
+            ExprKind::Binary(BinOp::Or, a, b) => Some(Rat::truth(prog, a, at)? || Rat::truth(prog, b, at)?),
+            ExprKind::Binary(BinOp::Implies, a, b) => Some(!Rat::truth(prog, a, at)? || Rat::truth(prog, b, at)?),
+            ExprKind::Binary(op, a, b) => {
+                let o = Rat::eval(prog, a, at)?.cmp(Rat::eval(prog, b, at)?)?;
+                match op {
+                    BinOp::Eq => Some(o.is_eq()),
+                    BinOp::Ne => Some(o.is_ne()),
+                    BinOp::Lt => Some(o.is_lt()),
+                    BinOp::Le => Some(o.is_le()),
+                    BinOp::Gt => Some(o.is_gt()),
+                    BinOp::Ge => Some(o.is_ge()),
+                    _ => None,
+                }
+            }
+            _ => None,
+        }
+    }
+}
+
+fn gcd(mut a: u128, mut b: u128) -> u128 {
+    while b != 0 {
+        (a, b) = (b, a % b);
+    }
+    a
 }
 
 fn zero() -> Real {
@@ -428,10 +758,12 @@ impl<'a> Inst<'a> {
         for i in 0..kind.inputs.len() {
             let slot = Slot::Input(i);
             let (n, sort) = kind.var(slot).clone();
-            // Connected later by `connect` when the source moves in the same motion.
+            // At time t: connected later by `connect` when the source moves in the same motion.
             let now = enc.named(&format!("{}.{n}({tag})", prog.role_name(role)), &sort)?;
             frame.own.insert(slot, now.clone());
-            let s = enc.named(&format!("{}.{n}", prog.role_name(role)), &sort)?;
+            // At the start the input *is* its source's state (the variable Σ speaks
+            // of), not a fresh value: a precondition the source's state proves holds.
+            let s = enc.role_var(role, slot)?;
             start.insert(slot, s);
         }
         frame.params = app.args.iter().map(|a| enc.any(a)).collect::<Result<_, _>>()?;
@@ -600,7 +932,7 @@ fn is_zero(prog: &Program, e: &Expr) -> bool {
 }
 
 fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], part: &Part) -> Result<(), Unsupported> {
-    if part.is_sat_question() {
+    if matches!(part, Part::CanEnd | Part::CanStart) {
         hyps(q, hs)?;
     } else {
         hyps(q, &slice(q.enc.prog(), hs, seeds_of(q.enc.prog(), parts)))?;
@@ -612,19 +944,11 @@ fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], part: &Part) 
     }
     connect(q, &mut insts);
     match part {
-        Part::CanStart(i) => insts[*i].started(q)?,
-        Part::CanEnd(i) => {
-            // Satisfiable iff some end state satisfies Post and the invariant from a start
-            // allowed by Σ and the precondition (no hypotheses sliced away: a
-            // contradiction anywhere in Σ must show).
-            let inst = &insts[*i];
-            inst.started(q)?;
-            let end = end_frame(&mut q.enc, inst)?;
-            let post = inst.pred(&mut q.enc, &inst.prim.post, &end)?;
-            q.assertions.push(post);
-            if let Some(inv) = q.enc.prog().kind(inst.prim.kind).invariant.clone() {
-                let b = inst.pred(&mut q.enc, &inv, &end)?;
-                q.assertions.push(b);
+        // No hypotheses sliced away: a contradiction anywhere in Σ must show.
+        Part::CanEnd => ends(q, &insts, &t)?,
+        Part::CanStart => {
+            for inst in &insts {
+                inst.started(q)?;
             }
         }
         Part::Pre(i) => {
@@ -747,6 +1071,10 @@ fn refine(q: &mut Query, role: RoleId, c: &PrimApp, ss: &[PrimApp], item: Refine
         q.assertions.push(b);
     }
     match item {
+        RefineItem::Realisable => {
+            q.assertions.push(pre_s);
+            ends(q, std::slice::from_ref(&ci), &t)?;
+        }
         RefineItem::Pre => {
             let pc = ci.pred(&mut q.enc, &ci.prim.pre, &sf)?;
             q.assertions.extend([pre_s, pc.not()]);

@@ -127,6 +127,10 @@ pub struct Stats {
     pub folded: usize,
     /// Time spent deciding (on the worker thread that did it).
     pub millis: f64,
+    /// Obligations that held only because their hypotheses are unsatisfiable.
+    pub vacuous: usize,
+    /// Obligations that held but whose hypotheses could not be shown satisfiable.
+    pub unsure: usize,
 }
 
 impl Stats {
@@ -135,6 +139,8 @@ impl Stats {
         self.cached += o.cached;
         self.folded += o.folded;
         self.millis += o.millis;
+        self.vacuous += o.vacuous;
+        self.unsure += o.unsure;
     }
 }
 
@@ -163,6 +169,7 @@ pub fn discharge(
     cfg: &SmtConfig,
 ) -> Vec<(Decision, Stats)> {
     let cache = Mutex::new(HashMap::new());
+    let contexts = Mutex::new(HashMap::new());
     let dumped = AtomicUsize::new(0);
     if let Some(dir) = &cfg.dump_dir {
         let _ = std::fs::create_dir_all(dir);
@@ -179,7 +186,8 @@ pub fn discharge(
         let handle = ctx.handle();
         std::thread::scope(|s| {
             s.spawn(|| watchdog.run(handle));
-            let w = Worker { prog, cfg, cache: &cache, labels, dumped: &dumped, watchdog: &watchdog };
+            let w =
+                Worker { prog, cfg, cache: &cache, contexts: &contexts, labels, dumped: &dumped, watchdog: &watchdog };
             loop {
                 let i = next.fetch_add(1, Ordering::Relaxed);
                 let Some(ob) = obligations.get(i) else { break };
@@ -334,6 +342,8 @@ struct Worker<'a> {
     prog: &'a Program,
     cfg: &'a SmtConfig,
     cache: &'a Mutex<HashMap<String, Answer>>,
+    /// The vacuity guard's answers, by hypotheses.
+    contexts: &'a Mutex<HashMap<Vec<Expr>, Answer>>,
     labels: &'a [String],
     dumped: &'a AtomicUsize,
     watchdog: &'a Watchdog,
@@ -371,49 +381,88 @@ impl Worker<'_> {
             Plan::Parts(parts) => parts,
         };
         let mut unknown = None;
+        // Set when a part held only because Σ is unsatisfiable; `sat` when a part's
+        // witness showed Σ satisfiable (a sat question asked with all of Σ).
+        let mut vacuous = false;
+        let mut sat = false;
         for (k, part) in parts.iter().enumerate() {
-            stats.queries += 1;
-            let answer = match goals::build(self.prog, ob, part) {
-                Err(Unsupported(what)) => Answer::Unknown(Why::Unsupported(what)),
-                Ok(q) => self.solve(q, index, k, &mut stats),
-            };
+            let answer = self.ask(ob, index, k, part, &mut stats);
             if part.is_sat_question() {
-                // Satisfiable means it holds (a witness exists). Unsat fails, unless the
-                // point itself cannot be reached (then everything there holds vacuously,
-                // as for any dead branch).
-                match answer {
-                    Answer::Sat { .. } => {}
-                    Answer::Unknown(why) => {
-                        unknown.get_or_insert((describe(self.prog, ob, part), why));
+                // Satisfiable means it holds (a witness exists); unsat fails, unless the
+                // point itself cannot be reached (an earlier step is to blame).
+                let fails = match (answer, part) {
+                    (Answer::Sat { .. }, _) => {
+                        sat |= matches!(part, Part::CanEnd | Part::CanStart | Part::Context);
+                        continue;
                     }
-                    Answer::Unsat => {
-                        let Part::CanEnd(i) = part else { continue };
-                        stats.queries += 1;
-                        let reachable = match goals::build(self.prog, ob, &Part::CanStart(*i)) {
-                            Err(Unsupported(what)) => Answer::Unknown(Why::Unsupported(what)),
-                            Ok(q) => self.solve(q, index, k, &mut stats),
-                        };
-                        match reachable {
-                            Answer::Unsat => {}
-                            Answer::Unknown(why) => {
-                                unknown.get_or_insert((describe(self.prog, ob, part), why));
-                            }
-                            Answer::Sat { .. } => {
-                                let which = Some(part.clone());
-                                let part = describe(self.prog, ob, part);
-                                return (
-                                    Decision::Fails(Failure {
-                                        part,
-                                        which,
-                                        values: Vec::new(),
-                                        overlap: None,
-                                        bound: Vec::new(),
-                                    }),
-                                    stats,
-                                );
+                    (Answer::Unknown(why), _) => {
+                        unknown.get_or_insert((describe(self.prog, ob, part), why));
+                        continue;
+                    }
+                    // A joint motion that cannot end: stuck if it can start. If it cannot,
+                    // a precondition contradicts the context (the pre part's or
+                    // [T-MOTION]'s to report), or Σ itself is unsatisfiable.
+                    (Answer::Unsat, Part::CanEnd) => {
+                        let mut fails = false;
+                        for next in [Part::CanStart, Part::Context] {
+                            match self.ask(ob, index, k, &next, &mut stats) {
+                                Answer::Sat { .. } => {
+                                    fails = next == Part::CanStart;
+                                    break;
+                                }
+                                Answer::Unsat => vacuous = next == Part::Context,
+                                Answer::Unknown(why) => {
+                                    unknown.get_or_insert((describe(self.prog, ob, part), why));
+                                    break;
+                                }
                             }
                         }
+                        fails
                     }
+                    // Σ after a step is unsatisfiable: the step is to blame when every
+                    // context before it is satisfiable.
+                    (Answer::Unsat, Part::Context) => {
+                        let Goal::Reachable { before, .. } = &ob.goal else { continue };
+                        let mut blame = true;
+                        for b in 0..before.len() {
+                            match self.ask(ob, index, k, &Part::Before(b), &mut stats) {
+                                Answer::Sat { .. } => {}
+                                // An `init` that no state satisfies, invariant or not.
+                                Answer::Unsat if ob.rule == crate::obligation::Rule::InitInvariant => {
+                                    let which = Some(Part::Before(b));
+                                    let part = format!("some state satisfies {}", ob.what);
+                                    return (
+                                        Decision::Fails(Failure {
+                                            part,
+                                            which,
+                                            values: Vec::new(),
+                                            overlap: None,
+                                            bound: Vec::new(),
+                                        }),
+                                        stats,
+                                    );
+                                }
+                                Answer::Unsat => blame = false,
+                                Answer::Unknown(why) => {
+                                    unknown.get_or_insert((describe(self.prog, ob, part), why));
+                                    blame = false;
+                                }
+                            }
+                        }
+                        if !blame {
+                            vacuous = true;
+                        }
+                        blame
+                    }
+                    (Answer::Unsat, _) => true,
+                };
+                if fails {
+                    let which = Some(part.clone());
+                    let part = describe(self.prog, ob, part);
+                    return (
+                        Decision::Fails(Failure { part, which, values: Vec::new(), overlap: None, bound: Vec::new() }),
+                        stats,
+                    );
                 }
                 continue;
             }
@@ -436,13 +485,71 @@ impl Worker<'_> {
                 }
             }
         }
-        match unknown {
-            Some((part, why)) => (Decision::Unknown { part, why }, stats),
-            None => (Decision::Holds(None), stats),
+        if let Some((part, why)) = unknown {
+            return (Decision::Unknown { part, why }, stats);
+        }
+        // The vacuity guard: an obligation proved from hypotheses proved nothing if the
+        // hypotheses are unsatisfiable. One query per distinct context (cached by its
+        // text, up to renaming); the obligations that ask about Σ itself need none.
+        // Separation's queries use the contexts of its runs' `dt`s (whose can-end witness
+        // shows them satisfiable), [T-SESS]'s the initial states (checked on their own).
+        let covered = matches!(
+            ob.goal,
+            Goal::Reachable { .. } | Goal::CanEnd { .. } | Goal::Separated { .. } | Goal::InitiallyDisjoint { .. }
+        );
+        if !vacuous && !sat && !covered && !ob.hyps.is_empty() {
+            // Obligations with the same hypotheses share the answer.
+            let context = goals::context_of(self.prog, ob);
+            let known = self.contexts.lock().ok().and_then(|c| c.get(&context).cloned());
+            let answer = match known {
+                Some(a) => {
+                    stats.cached += 1;
+                    a
+                }
+                None => {
+                    let a = self.ask(ob, index, parts.len(), &Part::Context, &mut stats);
+                    if !matches!(a, Answer::Unknown(Why::Timeout(_))) {
+                        if let Ok(mut c) = self.contexts.lock() {
+                            c.insert(context, a.clone());
+                        }
+                    }
+                    a
+                }
+            };
+            match answer {
+                Answer::Unsat => vacuous = true,
+                Answer::Sat { .. } => {}
+                // Undecided: the obligation's proof stands; only the count is unsure.
+                Answer::Unknown(_) => stats.unsure += 1,
+            }
+        }
+        if vacuous {
+            stats.vacuous += 1;
+        }
+        (Decision::Holds(None), stats)
+    }
+
+    /// Builds and solves one part's query.
+    fn ask(&self, ob: &Obligation, index: usize, k: usize, part: &Part, stats: &mut Stats) -> Answer {
+        // A context is often shown satisfiable without Z3, by a point that satisfies it.
+        let context = match (part, &ob.goal) {
+            (Part::Context, _) => Some(goals::context_of(self.prog, ob)),
+            (Part::Before(b), Goal::Reachable { before, .. }) => before.get(*b).cloned(),
+            _ => None,
+        };
+        if context.is_some_and(|c| goals::witnessed(self.prog, &c)) {
+            return Answer::Sat { values: Vec::new(), overlap: None, bound: Vec::new(), exact: Default::default() };
+        }
+        stats.queries += 1;
+        match goals::build(self.prog, ob, part) {
+            Err(Unsupported(what)) => Answer::Unknown(Why::Unsupported(what)),
+            Ok(q) => self.solve(q, index, k, !part.is_sat_question() && *part != Part::Context, stats),
         }
     }
 
-    fn solve(&self, q: Query, index: usize, k: usize, stats: &mut Stats) -> Answer {
+    /// Solves `q`. Without `model`, a satisfiable answer found under other names serves
+    /// (sat questions need the verdict, not the witness).
+    fn solve(&self, q: Query, index: usize, k: usize, model: bool, stats: &mut Stats) -> Answer {
         let assert_all = |solver: &z3::Solver| {
             for a in q.assertions.iter().chain(q.enc.side_conditions()) {
                 solver.assert(a);
@@ -479,14 +586,30 @@ impl Worker<'_> {
             };
         }
         if let Some(a) = self.cache.lock().ok().and_then(|c| c.get(&canonical).cloned()) {
-            if !matches!(a, Answer::Sat { .. }) {
+            if !model || !matches!(a, Answer::Sat { .. }) {
                 stats.cached += 1;
                 return a;
             }
         }
         let seq = self.watchdog.arm(self.cfg.timeout);
-        let result = solver.check();
-        let timed_out = self.watchdog.disarm(seq);
+        let mut result = solver.check();
+        let mut timed_out = self.watchdog.disarm(seq);
+        // A sat question needs a genuine witness: when the model's sin/cos values are
+        // only the enclosure's, look for one with every trigonometric argument 0, where
+        // the enclosure is exact. (Counterexamples keep the stricter "unknown".)
+        if !model && matches!(result, z3::SatResult::Sat) && solver.get_model().is_some_and(|m| q.enc.spurious_trig(&m))
+        {
+            for pin in q.enc.trig_at_zero() {
+                solver.assert(&pin);
+            }
+            let seq = self.watchdog.arm(self.cfg.timeout);
+            result = match solver.check() {
+                z3::SatResult::Sat => z3::SatResult::Sat,
+                // No witness at 0: the original question stays open.
+                _ => z3::SatResult::Unknown,
+            };
+            timed_out = self.watchdog.disarm(seq);
+        }
         let answer = match result {
             z3::SatResult::Unsat => Answer::Unsat,
             z3::SatResult::Sat => match solver.get_model() {
@@ -581,11 +704,30 @@ fn describe(prog: &Program, ob: &Obligation, part: &Part) -> String {
                 prog.role_name(parts[*i].0)
             )
         }
-        (Goal::Compatible { parts }, Part::CanEnd(i) | Part::CanStart(i)) => format!(
-            "`{}` ({}) can end: its postcondition and the kind's invariant are consistent with what is known when it starts",
-            prim(&parts[*i].1),
-            prog.role_name(parts[*i].0)
-        ),
+        (Goal::Compatible { parts }, Part::CanEnd) => {
+            let all: Vec<String> =
+                parts.iter().map(|(r, a)| format!("`{}` ({})", prim(a), prog.role_name(*r))).collect();
+            format!(
+                "{} can end{}: from what is known when {} and the precondition{}, some time t in {} duration at which {} guarantee (at 0 and at t), postcondition and robot invariant hold together",
+                all.join(", "),
+                if parts.len() > 1 { " together" } else { "" },
+                if parts.len() > 1 { "they start" } else { "it starts" },
+                if parts.len() > 1 { "s" } else { "" },
+                if parts.len() > 1 { "every part's" } else { "its" },
+                if parts.len() > 1 { "every part's" } else { "its" },
+            )
+        }
+        (Goal::CanEnd { prim: p }, _) => {
+            let p = prog.prim(*p);
+            format!(
+                "`{}` can end: for some arguments and some start state allowed by its precondition and the invariant, some time t in its duration and an end state at which its guarantee (at 0 and at t), postcondition and invariant hold",
+                p.name
+            )
+        }
+        (Goal::Reachable { .. }, _) if ob.rule == crate::obligation::Rule::InitInvariant => {
+            format!("some state satisfies both {} and the kind's invariant", ob.what)
+        }
+        (Goal::Reachable { .. }, _) => format!("{} is satisfiable", ob.what),
         (Goal::Valid(goal), Part::Conjunct(k)) => {
             format!("{}: `{}`", ob.what, crate::hir::print::expr(prog, None, goal.conjuncts()[*k]))
         }
@@ -828,6 +970,34 @@ mod tests {
         let (car_d, env_d) = (guard(0), guard(1));
         assert_eq!(check_valid(&prog, std::slice::from_ref(&car_d), &env_d, &SmtConfig::default()), Verdict::Holds);
         assert_eq!(check_valid(&prog, &[env_d], &car_d, &SmtConfig::default()), Verdict::Holds);
+    }
+
+    /// The vacuity guard's witness point never calls an unsatisfiable context
+    /// satisfiable, and finds the common satisfiable ones without Z3.
+    #[test]
+    fn witness_boxes_are_models() {
+        let cases = [
+            ("const dy = 0.65;", "x == dy * 3.0 && 0 <= x <= 10 && n == 2 && m >= n + 1", true),
+            ("", "x == 0.1 + 0.2 && x > 0.29", true),
+            ("", "x == 0 && x == 1", false),
+            ("", "x >= 1 && x <= 0", false),
+            ("", "x == 0.1 + 0.2 && x == 0.3", true), // exact rationals, not doubles
+            ("", "x == 0.1 && x >= 0.1000000000000000001", false), // equal as doubles only
+            ("", "x == 1.0 / 3 && 3 * x == 1 && (x < 0 => n >= 1)", true),
+            ("", "x > 1 && x < 1.5 && n > 0 && n < 1", false),
+            ("", "x * x == 2 && x > 0", false),
+        ];
+        for (consts, p, expected) in cases {
+            let (prog, e) = pred(consts, p);
+            let facts: Vec<Expr> = e.conjuncts().into_iter().cloned().collect();
+            let shown = goals::witnessed(&prog, &facts);
+            assert_eq!(shown, expected, "{p}");
+            if shown {
+                // A witness is a model: Z3 agrees the facts are satisfiable.
+                let none = Expr::bool(false, crate::hir::Loc::default());
+                assert!(matches!(check_valid(&prog, &facts, &none, &SmtConfig::default()), Verdict::Fails(_)), "{p}");
+            }
+        }
     }
 
     #[test]

@@ -72,7 +72,8 @@ pub fn check(prog: &Program, g: &Global) -> (Vec<Diagnostic>, Vec<Obligation>) {
         in_par: 0,
         steps: 0,
     };
-    c.walk(g, Sigma::initial(prog, prog.role_ids()));
+    let start = c.initial();
+    c.walk(g, start);
     (s.diags, c.obligations)
 }
 
@@ -345,6 +346,9 @@ impl<'a> Contexts<'a> {
         self.steps += 1;
         match g {
             Global::Msg(m) => {
+                // No vacuity check here: [T-OUT] makes the sender establish the guard and
+                // the refinements, so a context they make unsatisfiable is one no
+                // execution reaches (or [T-OUT] fails, E0709).
                 sigma.assume_message(m);
                 Some(sigma)
             }
@@ -365,8 +369,18 @@ impl<'a> Contexts<'a> {
                 let mut out: Option<Sigma> = None;
                 for b in branches {
                     let mut s = sigma.clone();
-                    if let Some(guard) = super::side::first_message(b).and_then(|m| m.guard.as_ref()) {
+                    let first = super::side::first_message(b);
+                    if let (Some(m), Some(guard)) = (first, first.and_then(|m| m.guard.as_ref())) {
                         s.assume(guard);
+                        if branches.len() > 1 && s.facts() != sigma.facts() {
+                            let what = format!(
+                                "the guard of branch `{}` ({} -> {})",
+                                m.label,
+                                self.prog.role_name(m.from),
+                                self.prog.role_name(m.to)
+                            );
+                            self.reachable(m.loc.0, what, &s, vec![sigma.facts().to_vec()], true);
+                        }
                     }
                     if let Some(end) = self.walk(b, s) {
                         out = Some(match out {
@@ -410,6 +424,78 @@ impl<'a> Contexts<'a> {
             }
             Global::End(_) => None,
         }
+    }
+
+    /// [T-SESS]'s assumption, checked: each participant's `init` is satisfiable and
+    /// implies its kind's invariant, and all of them are jointly satisfiable. The
+    /// initial context Σ (every `init` and invariant) is returned.
+    fn initial(&mut self) -> Sigma {
+        let prog = self.prog;
+        let mut each = Vec::new();
+        for r in prog.role_ids() {
+            let init = crate::sigma::init(prog, r);
+            let span = prog.role(r).init.as_ref().map(|e| e.loc.0).unwrap_or(prog.role(r).span);
+            let name = prog.role_name(r);
+            // The robot's first state satisfies `init` and, as every state of the kind,
+            // the invariant: `init` need not repeat the invariant, but must allow a
+            // state within it (E0411). One query when it does; when it does not, an
+            // `init` no state satisfies at all is E0410 instead.
+            let both = Sigma::initial(prog, [r]).into_facts();
+            if crate::sigma::invariant(prog, r).is_empty() {
+                if !init.is_empty() {
+                    let what = format!("the initial state of `{name}`");
+                    self.reachable(span, what, &Sigma::from_facts(&init), Vec::new(), false);
+                }
+            } else {
+                self.obligations.push(Obligation {
+                    rule: Rule::InitInvariant,
+                    span,
+                    what: format!("the `init` of `{name}`"),
+                    hyps: both.clone(),
+                    goal: Goal::Reachable { before: vec![init], dead_branch: false },
+                });
+            }
+            each.push(both);
+        }
+        let all = Sigma::initial(prog, prog.role_ids());
+        // Contexts over disjoint variables (each participant's own, an input being its
+        // source's) are jointly satisfiable when each is: ask only when some share.
+        let mut owner: HashMap<Var, usize> = HashMap::new();
+        let mut shared = false;
+        for (i, facts) in each.iter().enumerate() {
+            for f in facts {
+                f.visit_vars(&mut |v, _| {
+                    if !matches!(v, Var::Const(_)) {
+                        shared |= *owner.entry(prog.source_of(v)).or_insert(i) != i;
+                    }
+                });
+            }
+        }
+        if shared && !all.is_empty() {
+            let span = prog.system.as_ref().map(|(_, s)| *s).unwrap_or_default();
+            let what = "the conjunction of the participants' initial states".to_string();
+            self.reachable(span, what, &all, each, false);
+        }
+        all
+    }
+
+    /// The vacuity guard at a step: Σ after it (`sigma`) is satisfiable, or the step is
+    /// where the protocol gets stuck (when every context in `before` is satisfiable).
+    fn reachable(
+        &mut self,
+        span: crate::source::Span,
+        what: String,
+        sigma: &Sigma,
+        before: Vec<Vec<Expr>>,
+        dead_branch: bool,
+    ) {
+        self.obligations.push(Obligation {
+            rule: Rule::Reachable,
+            span,
+            what,
+            hyps: sigma.facts().to_vec(),
+            goal: Goal::Reachable { before, dead_branch },
+        });
     }
 
     /// [AGCOMP] under Σ, the runs for enclosing `*`s, then the motion's effect.
@@ -484,6 +570,7 @@ impl<'a> Contexts<'a> {
             let from = self.runs.len();
             let end = self.walk(side, start);
             done.push(Side { roles, runs: self.runs[from..].to_vec() });
+
             out = match (out, end) {
                 (Some(mut o), Some(e)) => {
                     o.meet(e);
@@ -496,6 +583,7 @@ impl<'a> Contexts<'a> {
         if self.in_par == 0 {
             self.runs.clear();
         }
+
         if let Some(i) = slot {
             if let Some(Obligation { goal: Goal::Separated { sides }, .. }) = self.obligations.get_mut(i) {
                 *sides = done;
@@ -866,7 +954,8 @@ mod context_tests {
         let h = hyps(&p, &o, Rule::AgComp);
         assert_eq!(h, vec![sorted(["0 <= P.x"])]);
         let (_, o) = free_obligations("mu t. P -> Q : a. dt<P: hold, Q: go(x - 1)>. Q -> P : b. t");
-        assert_eq!(o.len(), 1, "one obligation per motion, from the last walk only");
+        let motions = o.iter().filter(|ob| ob.rule == Rule::AgComp).count();
+        assert_eq!(motions, 1, "one obligation per motion, from the last walk only");
     }
 
     #[test]
