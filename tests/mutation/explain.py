@@ -114,7 +114,19 @@ def classify(eid, d):
         return None
     return None
 
+INTERRUPT_EARLY = ('an interruptible primitive now claims it can be interrupted only after 1 s ({d}), and the protocol interrupts it earlier: {how}. No rule checks the time at which a message ends an interruptible motion of another participant against that motion\'s duration ([AGCOMP] compares durations only within one dt). Either the seed\'s semantics of interruption (Sec 3.4, Fig 3) needs this obligation, or durations of interruptible primitives must not have a positive lower bound; the lead should decide.')
+SPECIAL_BUGS = {
+ 'pgcd/handover.chor@motion-primitives/omnicart.mochi:79:13:dur-lo+1': INTERRUPT_EARLY.format(d='OmniCart.idle [1, inf]', how='the Cart starts idle when its 5 s move_cart ends, and the Carrier, whose move_cart also takes exactly 5 s from time 0, sends OK at once, so the Cart\'s idle may last 0 s'),
+ 'pgcd/fetch.chor@motion-primitives/omnicart.mochi:79:13:dur-lo+1': INTERRUPT_EARLY.format(d='OmniCart.idle [1, inf]', how='C idles while A runs retract_arm, grab and fold, whose durations are [0, inf]; A may answer folded/grabbed at once'),
+ 'pgcd/fetch.chor@motion-primitives/arm3.mochi:103:13:dur-lo+1': INTERRUPT_EARLY.format(d='Arm3.idle [1, inf]', how='A idles while C runs move_from_to, whose duration is [0, inf]; C may send grab (or done) at once'),
+}
 SPECIAL = {
+ 'cart-and-arms.chor@motion-primitives/cart.mochi:68:13:dur-lo+1': ('equivalent', 'Cart.m_idle [1, inf]: the cart idles only beside a pick, which is non-interruptible with duration [2, 4], and its idle ends with the arm\'s ok after the pick: never interrupted before 1 s.'),
+ 'sorting.chor@motion-primitives/cart.mochi:68:13:dur-lo+1': ('equivalent', 'Cart.m_idle [1, inf]: the cart idles only beside a pick or place, non-interruptible with duration [2, 4], and its idle ends with the arm\'s ok/green/red after it: never interrupted before 1 s.'),
+ 'cart-and-arms.chor@motion-primitives/arm.mochi:47:13:dur-lo+1': ('equivalent', 'Arm.work [1, inf]: every work is ended by a message the cart sends after a whole m_move or m_move_back of 1.6 m (at least 2 sqrt(1.6 / 0.25) = 5.06 s) or after a round of the other branch: never interrupted before 1 s.'),
+ 'sorting.chor@motion-primitives/arm.mochi:47:13:dur-lo+1': ('equivalent', 'Arm.work [1, inf]: every work is ended by a message the cart sends after a whole m_move or m_move_back (at least 2 sqrt(1.6 / 0.25) = 5.06 s) and, for the consumers, after Prod\'s place [2, 4]: never interrupted before 1 s.'),
+ 'pgcd/handover.chor@motion-primitives/arm3.mochi:103:13:dur-lo+1': ('equivalent', 'Arm3.idle [1, inf]: the Arm idles first until Cart -> Arm: OK, which the Cart sends after its 5 s move_cart, and last until the protocol ends; never interrupted before 1 s.'),
+ 'pgcd/handover.chor@motion-primitives/omnicart.mochi:111:13:dur-lo+1': ('equivalent', 'SquareCart.idle [1, inf]: the Carrier idles from the end of its move until Cart -> Carrier: OK, which comes after the Arm\'s four motions including grip [2, 2]: at least 2 s; never interrupted before 1 s.'),
  'pgcd/fetch.chor:137:14:shadow(ty->tz)': ('equivalent', 'A receives grab(tx, tz, tz): the two binders named tz carry obj_y and obj_z, both 0, so grab runs with (2.29, 0, 0) either way: same motion.'),
  'pgcd/fetch.chor:137:18:shadow(tz->ty)': ('equivalent', 'A receives grab(tx, ty, ty): the two binders named ty carry obj_y and obj_z, both 0, so grab runs with (2.29, 0, 0) either way: same motion.'),
  'pgcd/fetch.chor:137:10:shadow(tx->arm3_fold_c)': ('equivalent', 'The receive binder named arm3_fold_c shadows the constant in the rest of the process (checked: a later use of a shadowed constant takes the payload), and the constant is not used after the receive in A, so grab runs with the received 2.29: same motion.'),
@@ -139,6 +151,10 @@ for b in blocks[1:]:
     for l in lines:
         mm = re.match(r'(id|status|why) = (".*")$', l)
         if mm: kv[mm.group(1)] = uq(mm.group(2))
+    if kv['id'] in SPECIAL_BUGS:
+        kv['status'], kv['why'] = 'bug', SPECIAL_BUGS[kv['id']]
+    elif kv['id'] in SPECIAL:
+        kv['status'], kv['why'] = SPECIAL[kv['id']]
     if not kv.get('why'):
         r = SPECIAL.get(kv['id']) or classify(kv['id'], desc.get(kv['id'], ''))
         if r:
