@@ -174,6 +174,10 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config) -> Report {
         }
     }
     if !run.checks.iter().any(|c| c.status == Status::Fail) && !cfg.structural_only {
+        // Every declared primitive's contract (E0409), decided in the same worker pool as
+        // the rest: a second pool would cost a Z3 context per worker (~15 ms), more than
+        // the few contract questions themselves.
+        obligations.extend(contracts(&prog));
         run.obligations(db, &prog, &obligations, &cfg.smt);
     } else if !obligations.is_empty() && !run.checks.iter().any(|c| c.status == Status::Fail) {
         run.checks.push(CheckResult {
@@ -229,38 +233,11 @@ impl Run {
         // One pool of workers for everything; the time of each check is the time its
         // obligations took on the workers.
         let labels: Vec<String> = obligations.iter().map(|o| label(db, o)).collect();
-        let mut results = smt::discharge(prog, obligations, &labels, cfg);
-        // Then the contracts (E0409) of the primitives no use has shown able to end: a
-        // `dt` whose can-end question had a witness, or a refinement whose concrete
-        // primitive was realisable, is a witness for the primitive's contract too.
-        let mut shown: Vec<crate::hir::PrimId> = Vec::new();
-        for (ob, (d, st)) in obligations.iter().zip(&results) {
-            if !matches!(d, Decision::Holds(_)) || st.vacuous > 0 {
-                continue;
-            }
-            match &ob.goal {
-                Goal::Compatible { parts } => shown.extend(parts.iter().map(|(_, a)| a.prim)),
-                // Not a primitive refining itself: that holds without the question.
-                Goal::Refines { concrete, abstract_, .. } if abstract_.as_slice() != std::slice::from_ref(concrete) => {
-                    shown.push(concrete.prim)
-                }
-                _ => {}
-            }
-        }
-        let extra: Vec<Obligation> = contracts(prog)
-            .into_iter()
-            .filter(|o| !matches!(o.goal, Goal::CanEnd { prim } if shown.contains(&prim)))
-            .collect();
-        if !extra.is_empty() {
-            let labels: Vec<String> = extra.iter().map(|o| label(db, o)).collect();
-            results.extend(smt::discharge(prog, &extra, &labels, cfg));
-        }
-        let obligations: Vec<&Obligation> = obligations.iter().chain(&extra).collect();
+        let results = smt::discharge(prog, obligations, &labels, cfg);
         // A primitive that can never end (E0409) makes every motion using it unable to
         // end too; that is said once, at its declaration.
         let never_ends: Vec<crate::hir::PrimId> = obligations
             .iter()
-            .copied()
             .zip(&results)
             .filter_map(|(ob, (d, _))| match (&ob.goal, d) {
                 (Goal::CanEnd { prim }, Decision::Fails(_)) => Some(*prim),
