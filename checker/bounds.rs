@@ -39,7 +39,7 @@ use crate::hir::expr::{BinOp, UnOp};
 use crate::hir::{Builtin, Expr, ExprKind, Program, Var};
 use num_bigint::BigInt;
 use num_rational::BigRational;
-use num_traits::{Signed, ToPrimitive, Zero};
+use num_traits::{One, Signed, ToPrimitive, Zero};
 use std::collections::HashMap;
 
 /// A closed interval `[lo, hi]`, possibly with infinite ends.
@@ -461,13 +461,73 @@ fn value_inner(prog: &Program, e: &Expr, ranges: &dyn Ranges) -> Option<Val> {
                     }
                     Val::interval(x.iv.sqrt()?)
                 }
-                Builtin::Sin | Builtin::Cos => Val::interval(trig(*f, arg(0).map(|v| v.iv))),
+                Builtin::Sin | Builtin::Cos => match args.first().and_then(|a| quarter_turn(prog, a)) {
+                    // An exact quarter turn: sine and cosine are 0 or ±1, exactly.
+                    Some((c, s)) => {
+                        Val::rational(BigRational::from_integer(BigInt::from(if *f == Builtin::Sin { s } else { c })))
+                    }
+                    None => Val::interval(trig(*f, arg(0).map(|v| v.iv))),
+                },
+                // π is irrational: the tightest double interval around it, never exact.
+                Builtin::Pi => Val::interval(PI),
                 _ => return None,
             }
         }
         _ => return None,
     };
     Some(v)
+}
+
+/// The tightest interval of doubles around π: `f64::consts::PI` is the double just
+/// below π (π = 3.14159265358979323846..., the double 3.141592653589793115997...), its
+/// successor 3.141592653589793560087... is just above.
+pub const PI: Interval = Interval { lo: std::f64::consts::PI, hi: 3.1415926535897936 };
+
+/// The rational `q` with `e == q·π` exactly, when `e` is a constant expression that is
+/// visibly such a multiple: `pi`, constants, unary minus, sums and differences of
+/// multiples, products and quotients of a multiple by an exact rational
+/// ([`exact`]; a nonzero divisor), and an exact 0 (`0·π`). Anything else (a decimal
+/// such as 1.5708, a variable, `sqrt(pi)`) is `None`: never a guess from digits.
+pub fn pi_multiple(prog: &Program, e: &Expr) -> Option<BigRational> {
+    stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || pi_multiple_inner(prog, e))
+}
+
+fn pi_multiple_inner(prog: &Program, e: &Expr) -> Option<BigRational> {
+    match &e.kind {
+        ExprKind::Call(Builtin::Pi, _) => Some(BigRational::one()),
+        ExprKind::Var(Var::Const(c)) => pi_multiple(prog, &prog.consts.get(c.idx())?.value),
+        ExprKind::Unary(UnOp::Neg, a) => pi_multiple(prog, a).map(|q| -q),
+        ExprKind::Binary(op @ (BinOp::Add | BinOp::Sub), a, b) => {
+            let (x, y) = (pi_multiple(prog, a)?, pi_multiple(prog, b)?);
+            Some(if *op == BinOp::Add { x + y } else { x - y })
+        }
+        ExprKind::Binary(BinOp::Mul, a, b) => {
+            let times = |m: &Expr, r: &Expr| Some(pi_multiple(prog, m)? * exact(prog, r)?);
+            times(a, b).or_else(|| times(b, a))
+        }
+        ExprKind::Binary(BinOp::Div, a, b) => {
+            let d = exact(prog, b).filter(|d| !d.is_zero())?;
+            Some(pi_multiple(prog, a)? / d)
+        }
+        _ => exact(prog, e).filter(|q| q.is_zero()),
+    }
+}
+
+/// `(cos e, sin e)` when the constant angle `e` is an exact multiple of π/2
+/// ([`pi_multiple`] `q` with `2q` an integer): each is 0, 1 or -1, exactly.
+pub fn quarter_turn(prog: &Program, e: &Expr) -> Option<(i64, i64)> {
+    let q = pi_multiple(prog, e)?;
+    let n = q * BigRational::from_integer(BigInt::from(2));
+    if !n.is_integer() {
+        return None;
+    }
+    let k = (n.to_integer() % BigInt::from(4) + BigInt::from(4)) % BigInt::from(4);
+    Some(match k.to_u8()? {
+        0 => (1, 0),
+        1 => (0, 1),
+        2 => (-1, 0),
+        _ => (0, -1),
+    })
 }
 
 /// `sqrt(q)` when it is rational (numerator and denominator perfect squares).
@@ -674,6 +734,50 @@ mod tests {
             Var::Role(_, crate::hir::Slot::State(i)) => Some(*i),
             _ => None,
         }
+    }
+
+    #[test]
+    fn pi_is_enclosed_never_exact() {
+        let (prog, e) = guard("x == pi");
+        let ExprKind::Binary(_, _, p) = &e.kind else { panic!("a comparison") };
+        let i = eval(&prog, p, &closed).expect("bounded");
+        // π = 3.14159265358979323846...: strictly inside, one ulp wide.
+        let pi = BigRational::new(BigInt::from(314159265358979323846u128), BigInt::from(10u128.pow(20)));
+        assert!(BigRational::from_float(i.lo).unwrap() < pi && pi < BigRational::from_float(i.hi).unwrap(), "{i:?}");
+        assert_eq!(i.hi, i.lo.next_up());
+        assert_eq!(exact(&prog, p), None);
+    }
+
+    #[test]
+    fn quarter_turns_are_recognised_exactly() {
+        let angle = |src: &str| {
+            let (p, e) = guard(&format!("x == {src}"));
+            let ExprKind::Binary(_, _, a) = e.kind else { panic!("a comparison") };
+            (quarter_turn(&p, &a), pi_multiple(&p, &a))
+        };
+        let q = |n: i64, d: i64| Some(BigRational::new(n.into(), d.into()));
+        assert_eq!(angle("pi / 2"), (Some((0, 1)), q(1, 2)));
+        assert_eq!(angle("pi"), (Some((-1, 0)), q(1, 1)));
+        assert_eq!(angle("-pi / 2"), (Some((0, -1)), q(-1, 2)));
+        assert_eq!(angle("3 * pi / 2 + 2 * pi"), (Some((0, -1)), q(7, 2)));
+        assert_eq!(angle("r * pi"), (Some((0, 1)), q(1, 2))); // r = 0.5, a constant
+        assert_eq!(angle("pi - pi"), (Some((1, 0)), q(0, 1)));
+        assert_eq!(angle("0 * pi"), (Some((1, 0)), q(0, 1)));
+        // Not quarter turns, or not multiples of π at all.
+        assert_eq!(angle("pi / 4"), (None, q(1, 4)));
+        assert_eq!(angle("1.5708"), (None, None));
+        assert_eq!(angle("1.5707963267948966"), (None, None));
+        assert_eq!(angle("pi * pi"), (None, None));
+        assert_eq!(angle("pi / 0"), (None, None));
+        assert_eq!(angle("x * pi"), (None, None));
+        assert_eq!(angle("pi + 1"), (None, None));
+        // sin and cos of a quarter turn are exact rationals; of anything else, enclosed.
+        let (p, e) = guard("x == sin(pi / 2) + cos(-pi)");
+        let ExprKind::Binary(_, _, a) = e.kind else { panic!("a comparison") };
+        assert_eq!(exact(&p, &a), Some(BigRational::zero()));
+        let (p, e) = guard("x == cos(1.5708)");
+        let ExprKind::Binary(_, _, a) = e.kind else { panic!("a comparison") };
+        assert_eq!(exact(&p, &a), None);
     }
 
     #[test]

@@ -8,6 +8,8 @@
 //! - `sqrt` of a perfect square is exact; otherwise, and for `sin`/`cos`, the result is an
 //!   enclosure: a double-precision value widened outward and checked (for `sqrt`, by
 //!   squaring the bounds exactly; for `sin`/`cos`, by a margin far above `libm`'s error).
+//! - `pi` is a rational enclosure 20 decimals wide ([`pi`]); `sin`/`cos` of an exact
+//!   multiple of π/2 ([`crate::bounds::quarter_turn`]) are exact.
 //! - Comparisons and connectives are three-valued ([`Tri`]): `Unknown` when an enclosure
 //!   straddles the answer. Never `True` or `False` unless that is the exact answer.
 //! - Division by an interval that contains 0, `sqrt` of a possibly negative number, an
@@ -307,7 +309,12 @@ fn eval_inner(prog: &Program, e: &Expr, env: &dyn Env, depth: usize) -> Result<V
             let arg = |i: usize| args.get(i).ok_or_else(|| format!("`{}` without arguments", f.name()));
             match f {
                 Builtin::Sqrt => Value::Num(sqrt(&num(arg(0)?)?)?),
-                Builtin::Sin | Builtin::Cos => Value::Num(trig(*f, &num(arg(0)?)?)),
+                Builtin::Sin | Builtin::Cos => match crate::bounds::quarter_turn(prog, arg(0)?) {
+                    // An exact multiple of π/2: 0 or ±1, exactly.
+                    Some((c, s)) => Value::Num(Num::int(if *f == Builtin::Sin { s } else { c })),
+                    None => Value::Num(trig(*f, &num(arg(0)?)?)),
+                },
+                Builtin::Pi => Value::Num(pi()),
                 Builtin::Abs => {
                     let n = num(arg(0)?)?;
                     Value::Num(if !n.lo.is_negative() {
@@ -470,6 +477,16 @@ fn root_bound(v: &Rat, upper: bool) -> Result<Rat, String> {
     Err("a square root that could not be enclosed".into())
 }
 
+/// π as the interval `[3.14159265358979323846, 3.14159265358979323847]` (20 decimals:
+/// π = 3.14159265358979323846264...): never a point, so no comparison whose answer
+/// depends on π's further digits is decided.
+pub fn pi() -> Num {
+    let d = BigInt::from(10u8).pow(20);
+    let lo = BigInt::parse_bytes(b"314159265358979323846", 10).expect("literal");
+    let hi = &lo + BigInt::one();
+    Num::range(Rat::new(lo, d.clone()), Rat::new(hi, d))
+}
+
 /// `sin`/`cos` of an interval: exact at 0, otherwise the double-precision value widened
 /// by a margin (1e-9 plus the interval's width: both functions are 1-Lipschitz), and all
 /// of `[-1, 1]` for wide or huge arguments.
@@ -536,6 +553,23 @@ mod tests {
             eval_guard("", "norm2(vector(x, 0, 1)) == 5 && dot(point(1,2,3), vector(x,x,x)) == 12", "2"),
             Tri::True
         );
+    }
+
+    #[test]
+    fn pi_is_an_enclosure_and_quarter_turns_are_exact() {
+        // x = 3.14159265358979323846 is below π by 2.6e-21: no answer depending on those
+        // digits is given, either way.
+        assert_eq!(eval_guard("", "x == pi", "3.14159265358979323846"), Tri::Unknown);
+        assert_eq!(eval_guard("", "x < pi", "3.14159265358979323846"), Tri::Unknown);
+        assert_eq!(eval_guard("", "x < pi", "3.1415926535897932384"), Tri::True);
+        assert_eq!(eval_guard("", "x > pi", "3.1415926535897932385"), Tri::True);
+        assert_eq!(eval_guard("", "x == pi", "3.141592653589793"), Tri::False);
+        let p = pi();
+        assert!(p.lo < p.hi && p.hi.clone() - p.lo.clone() <= parse_decimal("1e-20").unwrap());
+        // Quarter turns: exact 0 and ±1, so equalities decide.
+        assert_eq!(eval_guard("const q = pi / 2;", "cos(q) == 0 && sin(q) == x && cos(-pi) == -x", "1"), Tri::True);
+        // A decimal near π/2 is enclosed: cos(1.5708) is not 0.
+        assert_eq!(eval_guard("", "cos(1.5708) == x", "0"), Tri::False);
     }
 
     #[test]

@@ -1103,6 +1103,8 @@ impl Lowerer {
                         self.expect_sort(&args[0], &Sort::Real, &format!("the argument of `{}`", f.name));
                         Sort::Real
                     }
+                    // Only the parser makes this call (`pi` is reserved, `pi()` does not parse).
+                    Builtin::Pi => Sort::Real,
                 };
                 mk(ExprKind::Call(b, args), sort)
             }
@@ -1584,6 +1586,40 @@ pub(crate) mod tests {
         let d: Vec<_> = d.into_iter().filter(|d| d.code != Code::MissingItem).collect();
         assert_eq!(codes(&d), vec![Code::VariableNotAllowed; 3], "{d:?}");
         assert!(d[0].message.contains("assumption"));
+    }
+
+    #[test]
+    fn pi_is_a_reserved_real_constant_that_prints_back() {
+        let src = "const half_pi: real = pi / 2; robot R { state a: real; }
+                   system S { participant A: R { init: a == -pi + half_pi; } } choreography G = end;";
+        let (p, d) = lower_src(src);
+        assert!(d.is_empty(), "{d:?}");
+        let half = &p.consts[0].value;
+        assert_eq!(half.sort, Sort::Real);
+        assert!(matches!(&half.kind, ExprKind::Binary(_, a, _) if matches!(a.kind, ExprKind::Call(Builtin::Pi, _))));
+        let init = p.roles[0].init.as_ref().expect("init");
+        let text = crate::hir::print::expr(&p, None, init);
+        assert_eq!(text, "A.a == -pi + half_pi");
+        // The printed text reads back to the same term.
+        let again = format!(
+            "const half_pi: real = pi / 2; robot R {{ state a: real; }}
+             system S {{ participant A: R {{ init: {}; }} }} choreography G = end;",
+            text.replace("A.a", "a")
+        );
+        let (q, d) = lower_src(&again);
+        assert!(d.is_empty(), "{d:?}");
+        assert_eq!(q.roles[0].init.as_ref().map(|e| crate::hir::print::expr(&q, None, e)), Some(text));
+        // `pi` cannot be redefined or called.
+        for bad in ["const pi: real = 3;", "const x = pi();", "robot R { state pi: real; }"] {
+            let mut db = SourceDb::new();
+            let id = db.add("t.chor", bad);
+            let (_, d) = crate::syntax::parser::parse(id, bad);
+            assert_eq!(codes(&d), vec![Code::UnexpectedToken], "{bad}: {d:?}");
+        }
+        let mut db = SourceDb::new();
+        let id = db.add("t.chor", "const pi: real = 3;");
+        let (_, d) = crate::syntax::parser::parse(id, "const pi: real = 3;");
+        assert!(d[0].help.as_deref().is_some_and(|h| h.contains("built-in constant")), "{d:?}");
     }
 
     #[test]

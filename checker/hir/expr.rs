@@ -107,6 +107,10 @@ pub enum Builtin {
     Vector,
     Dot,
     Norm2,
+    /// The constant π (exactly; written `pi`, a reserved word, and held as a call with
+    /// no arguments). Being irrational, it is never a rational value anywhere: bounds
+    /// enclose it, the solver sees a fresh real inside a rational enclosure.
+    Pi,
 }
 
 impl Builtin {
@@ -122,6 +126,7 @@ impl Builtin {
             "vector" => Builtin::Vector,
             "dot" => Builtin::Dot,
             "norm2" => Builtin::Norm2,
+            "pi" => Builtin::Pi,
             _ => return None,
         })
     }
@@ -137,6 +142,7 @@ impl Builtin {
             Builtin::Vector => "vector",
             Builtin::Dot => "dot",
             Builtin::Norm2 => "norm2",
+            Builtin::Pi => "pi",
         }
     }
     pub fn arity(self) -> usize {
@@ -144,6 +150,7 @@ impl Builtin {
             Builtin::Sqrt | Builtin::Abs | Builtin::Sin | Builtin::Cos | Builtin::Norm2 => 1,
             Builtin::Min | Builtin::Max | Builtin::Dot => 2,
             Builtin::Point | Builtin::Vector => 3,
+            Builtin::Pi => 0,
         }
     }
 }

@@ -348,6 +348,7 @@ impl Printer<'_> {
                     self.out.push(')');
                 }
             }
+            ExprKind::Call(Builtin::Pi, _) => self.out.push_str("pi"),
             ExprKind::Call(f, args) => {
                 self.out.push_str(f.name());
                 self.out.push('(');

@@ -14,6 +14,9 @@
 //!   ([`real_of_f64`]). These over-approximate: a proof with them is a proof, but
 //!   a counterexample may not be real, so [`Encoder::spurious_trig`] checks a model's
 //!   trigonometric values against `f64::sin`/`cos` before it is reported as one.
+//! - `pi` is one fresh real per query inside a rational enclosure 1e-20 wide
+//!   ([`Encoder::pi`]); `sin`/`cos` of an exact multiple of π/2
+//!   ([`crate::bounds::quarter_turn`]) are the exact 0 or ±1.
 //! - A motion primitive's contract is encoded under a [`Frame`] that says what its own
 //!   variables, `old(x)`, parameters, `clock` and footprint point stand for.
 //!
@@ -68,6 +71,11 @@ pub struct Frame {
     pub point: Option<[Real; 3]>,
 }
 
+/// π's enclosure in the solver, as numerator and denominator strings:
+/// 3.14159265358979323846 < π < 3.14159265358979323847.
+const PI_LO: (&str, &str) = ("314159265358979323846", "100000000000000000000");
+const PI_HI: (&str, &str) = ("314159265358979323847", "100000000000000000000");
+
 struct TrigPair {
     arg: Real,
     sin: Real,
@@ -82,6 +90,8 @@ pub struct Encoder<'p> {
     frame: Option<Frame>,
     trig: Vec<TrigPair>,
     trig_by_arg: HashMap<String, usize>,
+    /// The query's `pi` ([`Encoder::pi`]), once met.
+    pi: Option<Real>,
     /// The symbol of each value variable met so far. A value is its binding site: two
     /// values of one name (shadowing) are two symbols, `v` and `v#2`, in order of first
     /// appearance (so equal queries still have equal text).
@@ -97,6 +107,7 @@ impl<'p> Encoder<'p> {
             frame: None,
             trig: Vec::new(),
             trig_by_arg: HashMap::new(),
+            pi: None,
             value_names: HashMap::new(),
         }
     }
@@ -442,6 +453,10 @@ impl<'p> Encoder<'p> {
             }
             Builtin::Sin | Builtin::Cos => {
                 let e = args.first().ok_or_else(|| Unsupported(format!("`{}` without arguments", f.name())))?;
+                if let Some((c, s)) = bounds::quarter_turn(self.prog, e) {
+                    // An exact multiple of π/2: 0 or ±1, exactly (no fresh pair).
+                    return Ok(Term::R(Int::from_i64(if f == Builtin::Sin { s } else { c }).to_real()));
+                }
                 let (s, c) = self.trig_pair(e)?;
                 Term::R(if f == Builtin::Sin { s } else { c })
             }
@@ -457,7 +472,24 @@ impl<'p> Encoder<'p> {
                 Term::V(v) => Term::R(dot(&v, &v)),
                 _ => return Err(Unsupported("`norm2` of something that is not a vector".into())),
             },
+            Builtin::Pi => Term::R(self.pi()),
         })
+    }
+
+    /// π: one fresh real per query, constrained to `[PI_LO, PI_HI]` (a rational enclosure
+    /// 2e-20 wide). Sound: an unsat answer holds for every value in the enclosure, π
+    /// among them; a model's value for it is merely near π, so a counterexample that
+    /// depends on it is replayed ([`crate::exact`] encloses π too) before it is shown.
+    fn pi(&mut self) -> Real {
+        if let Some(p) = &self.pi {
+            return p.clone();
+        }
+        let p = Real::fresh_const("pi");
+        let lo = Real::from_rational_str(PI_LO.0, PI_LO.1).expect("literal");
+        let hi = Real::from_rational_str(PI_HI.0, PI_HI.1).expect("literal");
+        self.side.push(Bool::and(&[p.ge(&lo), p.le(&hi)]));
+        self.pi = Some(p.clone());
+        p
     }
 
     /// The fresh `(sin e, cos e)` pair for `e`, with its enclosing side conditions.

@@ -885,6 +885,27 @@ fn to_local(enc: &mut Encoder, role: RoleId, p: &[Real; 3]) -> Result<[Real; 3],
     // Undo yaw (about z), then pitch (about y), then roll (about x).
     for (idx, axes) in [(5usize, (0usize, 1usize)), (4, (2, 0)), (3, (1, 2))] {
         let Some(angle) = pose.get(idx) else { continue };
+        if let Some((c, s)) = bounds::quarter_turn(prog, angle) {
+            // An exact multiple of π/2 (`pi / 2`, `-pi`, ...): cos and sin are exactly 0
+            // or ±1, so the rotation is exact, with no slack (0 is no rotation at all).
+            if (c, s) != (1, 0) {
+                let (x, y) = (v[axes.0].clone(), v[axes.1].clone());
+                let turn = |k: i64, r: &Real| match k {
+                    0 => None,
+                    1 => Some(r.clone()),
+                    _ => Some(r.unary_minus()),
+                };
+                // x' = c x + s y, y' = c y - s x.
+                let sum = |p: Option<Real>, q: Option<Real>| match (p, q) {
+                    (Some(p), Some(q)) => Real::add(&[p, q]),
+                    (Some(p), None) | (None, Some(p)) => p,
+                    (None, None) => Real::from_rational_str("0", "1").expect("literal"),
+                };
+                v[axes.0] = sum(turn(c, &x), turn(s, &y));
+                v[axes.1] = sum(turn(c, &y), turn(-s, &x));
+            }
+            continue;
+        }
         let iv = bounds::eval(prog, angle, &bounds::closed)
             .filter(|i| i.is_finite())
             .ok_or_else(|| Unsupported("a pose angle that is not a constant".into()))?;
@@ -1292,7 +1313,11 @@ fn to_world(prog: &Program, role: RoleId, b: [Interval; 3]) -> Option<[Interval;
         if angle.is_exactly(0.0) {
             continue;
         }
-        let (cs, sn) = (bounds::trig(Builtin::Cos, Some(angle)), bounds::trig(Builtin::Sin, Some(angle)));
+        // An exact quarter turn rotates the box exactly (0 and ±1 are exact doubles).
+        let (cs, sn) = match pose.get(idx).and_then(|e| bounds::quarter_turn(prog, e)) {
+            Some((cs, sn)) => (Interval::point(cs as f64), Interval::point(sn as f64)),
+            None => (bounds::trig(Builtin::Cos, Some(angle)), bounds::trig(Builtin::Sin, Some(angle))),
+        };
         let (x, y) = (v[a], v[c]);
         v[a] = cs * x + -(sn * y);
         v[c] = sn * x + cs * y;
@@ -1301,4 +1326,59 @@ fn to_world(prog: &Program, role: RoleId, b: [Interval; 3]) -> Option<[Interval;
         *c = *c + num(k)?;
     }
     Some(v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{discharge, Decision, SmtConfig};
+    use crate::lower::tests::lower_src;
+    use crate::obligation::{Goal, Obligation, Rule};
+
+    /// [T-SESS] on two bodies: A's footprint the corner `0 <= x <= 1, 0 <= y <= 0.1,
+    /// x + y <= cut` at the origin; B's the bar `1 <= x <= 2, |y| <= 0.1` turned by
+    /// `yaw` at `(0.5, -0.9)`. A quarter turn puts B's near corner exactly at
+    /// `(0.4, 0.1)`: the bodies touch when `cut` is 0.5, and are apart when it is less.
+    fn corner_and_bar(yaw: &str, cut: &str) -> Decision {
+        let src = format!(
+            "robot BotA {{ state s: real; }} robot BotB {{ state s: real; }}
+             motion BotA.hold {{ interruptible: true; footprint(x, y, z): 0 <= x <= 1 && 0 <= y <= 0.1 && x + y <= {cut} && -0.1 <= z <= 0.1; }}
+             motion BotB.hold {{ interruptible: true; footprint(x, y, z): 1 <= x <= 2 && -0.1 <= y <= 0.1 && -0.1 <= z <= 0.1; }}
+             system S {{ participant A: BotA {{ init: s == 0; }} participant B: BotB {{ init: s == 0; at: pose(0.5, -0.9, 0, 0, 0, {yaw}); }} }}
+             choreography G = dt<A: hold> * dt<B: hold>;"
+        );
+        let (prog, d) = lower_src(&src);
+        assert!(d.is_empty(), "{d:?}");
+        let hyps = prog.roles.iter().filter_map(|r| r.init.clone()).collect();
+        let ob = Obligation {
+            rule: Rule::TSess,
+            span: Default::default(),
+            what: "initial states".into(),
+            hyps,
+            goal: Goal::InitiallyDisjoint { firsts: prog.first_motions() },
+        };
+        discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0
+    }
+
+    #[test]
+    fn a_quarter_turn_of_pi_rotates_exactly() {
+        // Touching at one rotated corner: an overlap, found (and replayed) exactly.
+        let Decision::Fails(f) = corner_and_bar("pi / 2", "0.5") else { panic!("the corner touches the bar") };
+        let o = f.overlap.expect("a point");
+        assert!((o.point[0] - 0.4).abs() < 1e-9 && (o.point[1] - 0.1).abs() < 1e-9, "{o:?}");
+        // A gap of 1e-20 is proved: no slack, no rounding (the slack of an enclosed
+        // rotation is about 1e-15 here).
+        assert_eq!(corner_and_bar("pi / 2", "0.49999999999999999999"), Decision::Holds(None));
+        assert_eq!(corner_and_bar("-3 * pi / 2", "0.49999999999999999999"), Decision::Holds(None));
+        assert_eq!(corner_and_bar("pi - pi / 2", "0.49999999999999999999"), Decision::Holds(None));
+    }
+
+    #[test]
+    fn a_decimal_quarter_turn_is_not_exact() {
+        // 1.5707963267948966 is not π/2: its rotation is enclosed with a slack, so a gap
+        // of 1e-20 cannot be proved (it is not a quarter turn's gap to begin with).
+        assert!(!matches!(corner_and_bar("1.5707963267948966", "0.49999999999999999999"), Decision::Holds(_)));
+        // 1.5708 turns B's corner about 4e-6 past the exact one, into A: a genuine
+        // overlap that treating 1.5708 as a quarter turn would miss.
+        assert!(matches!(corner_and_bar("1.5708", "0.499999999999"), Decision::Fails(_)));
+    }
 }

@@ -157,7 +157,11 @@ pub fn to_local(prog: &Program, role: RoleId, p: &[Num; 3]) -> Option<[Num; 3]> 
         if angle.value().is_some_and(num_traits::Zero::is_zero) {
             continue;
         }
-        let (c, s) = (exact::trig(Builtin::Cos, &angle), exact::trig(Builtin::Sin, &angle));
+        // An exact quarter turn (`pi / 2`) is exact here as in the encoding.
+        let (c, s) = match pose.get(idx).and_then(|e| crate::bounds::quarter_turn(prog, e)) {
+            Some((c, s)) => (Num::int(c), Num::int(s)),
+            None => (exact::trig(Builtin::Cos, &angle), exact::trig(Builtin::Sin, &angle)),
+        };
         let (x, y) = (v[a].clone(), v[b].clone());
         v[a] = c.mul(&x).add(&s.mul(&y));
         v[b] = c.mul(&y).sub(&s.mul(&x));

@@ -38,6 +38,8 @@ const RESERVED: &[&str] = &[
     "else",
     "true",
     "false",
+    // The constant π (LANGUAGE.md, Expressions): reserved so that no binding can shadow it.
+    "pi",
 ];
 
 /// Parses one file.
@@ -190,8 +192,13 @@ impl Parser {
         // A lexer error already explains an Error token; do not pile a second one on it.
         if !matches!(self.peek(), Tok::Error) {
             let found = Self::describe(self.peek());
+            let help = if matches!(self.peek(), Tok::Ident(s) if s == "pi") {
+                "`pi` is the built-in constant π and cannot be redefined or bound: choose another name".to_string()
+            } else {
+                format!("write {what} here; LANGUAGE.md gives the grammar")
+            };
             let d = Diagnostic::error(Code::UnexpectedToken, self.span(), format!("expected {what}, found {found}"))
-                .with_help(format!("write {what} here; LANGUAGE.md gives the grammar"));
+                .with_help(help);
             self.diags.push(d);
         }
         Err(())
@@ -1206,6 +1213,10 @@ impl Parser {
             Tok::Ident(k) if k == "true" || k == "false" => {
                 self.bump();
                 Ok(Expr { kind: ExprKind::Bool(k == "true"), span: start })
+            }
+            Tok::Ident(k) if k == "pi" => {
+                let span = self.bump().span;
+                Ok(Expr { kind: ExprKind::Call(Ident { name: k, span }, Vec::new()), span: start })
             }
             Tok::Ident(k) if k == "if" => {
                 self.bump();
