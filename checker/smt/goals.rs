@@ -615,6 +615,55 @@ impl Rat {
         }
     }
 
+    /// Rational bounds `(lo, hi)` on a numeric term at `at` that mentions `pi` (enclosed
+    /// in `[3.141592653589793, 3.141592653589794]`): sums, differences, negation,
+    /// products and quotients by a nonzero rational. `None` otherwise.
+    fn enclose(prog: &Program, e: &Expr, at: &HashMap<Var, Rat>) -> Option<(Rat, Rat)> {
+        use crate::hir::expr::{BinOp, UnOp};
+        if let Some(x) = Rat::eval(prog, e, at) {
+            return Some((x, x));
+        }
+        match &e.kind {
+            ExprKind::Call(Builtin::Pi, _) => {
+                Some((Rat::new(3_141_592_653_589_793, 10i128.pow(15))?, Rat::new(3_141_592_653_589_794, 10i128.pow(15))?))
+            }
+            ExprKind::Var(Var::Const(c)) => Rat::enclose(prog, &prog.consts[c.idx()].value, at),
+            ExprKind::Unary(UnOp::Neg, a) => {
+                let (lo, hi) = Rat::enclose(prog, a, at)?;
+                Some((hi.neg()?, lo.neg()?))
+            }
+            ExprKind::Binary(op @ (BinOp::Add | BinOp::Sub | BinOp::Mul | BinOp::Div), a, b) => {
+                let (alo, ahi) = Rat::enclose(prog, a, at)?;
+                let (blo, bhi) = Rat::enclose(prog, b, at)?;
+                let ends = match op {
+                    BinOp::Add => return Some((alo.add(blo)?, ahi.add(bhi)?)),
+                    BinOp::Sub => return Some((alo.add(bhi.neg()?)?, ahi.add(blo.neg()?)?)),
+                    BinOp::Mul => [alo.mul(blo)?, alo.mul(bhi)?, ahi.mul(blo)?, ahi.mul(bhi)?],
+                    _ => {
+                        // Only by a nonzero rational (a point).
+                        if blo != bhi || blo.0 == 0 {
+                            return None;
+                        }
+                        let inv = Rat::new(blo.1, blo.0)?;
+                        [alo.mul(inv)?, ahi.mul(inv)?, alo.mul(inv)?, ahi.mul(inv)?]
+                    }
+                };
+                let mut lo = ends[0];
+                let mut hi = ends[0];
+                for x in &ends[1..] {
+                    if x.cmp(lo)?.is_lt() {
+                        lo = *x;
+                    }
+                    if x.cmp(hi)?.is_gt() {
+                        hi = *x;
+                    }
+                }
+                Some((lo, hi))
+            }
+            _ => None,
+        }
+    }
+
     /// The exact truth of a predicate at `at`, when it can be computed.
     fn truth(prog: &Program, e: &Expr, at: &HashMap<Var, Rat>) -> Option<bool> {
         use crate::hir::expr::{BinOp, UnOp};
@@ -625,7 +674,25 @@ impl Rat {
             ExprKind::Binary(BinOp::Or, a, b) => Some(Rat::truth(prog, a, at)? || Rat::truth(prog, b, at)?),
             ExprKind::Binary(BinOp::Implies, a, b) => Some(!Rat::truth(prog, a, at)? || Rat::truth(prog, b, at)?),
             ExprKind::Binary(op, a, b) => {
-                let o = Rat::eval(prog, a, at)?.cmp(Rat::eval(prog, b, at)?)?;
+                let (Some(x), Some(y)) = (Rat::eval(prog, a, at), Rat::eval(prog, b, at)) else {
+                    // A side that is no rational (it mentions `pi`): decided only when the
+                    // enclosures of the two sides are apart.
+                    let ((alo, ahi), (blo, bhi)) = (Rat::enclose(prog, a, at)?, Rat::enclose(prog, b, at)?);
+                    let below = ahi.cmp(blo)?.is_lt();
+                    let above = alo.cmp(bhi)?.is_gt();
+                    let (le, ge) = (ahi.cmp(blo)?.is_le(), alo.cmp(bhi)?.is_ge());
+                    return match op {
+                        BinOp::Lt | BinOp::Le if below => Some(true),
+                        BinOp::Le if le => Some(true),
+                        BinOp::Lt | BinOp::Le if ge && (above || *op == BinOp::Lt) => Some(false),
+                        BinOp::Gt | BinOp::Ge if above => Some(true),
+                        BinOp::Ge if ge => Some(true),
+                        BinOp::Gt | BinOp::Ge if le && (below || *op == BinOp::Gt) => Some(false),
+                        BinOp::Eq | BinOp::Ne if below || above => Some(*op == BinOp::Ne),
+                        _ => None,
+                    };
+                };
+                let o = x.cmp(y)?;
                 match op {
                     BinOp::Eq => Some(o.is_eq()),
                     BinOp::Ne => Some(o.is_ne()),
@@ -1370,6 +1437,35 @@ mod tests {
         assert_eq!(corner_and_bar("pi / 2", "0.49999999999999999999"), Decision::Holds(None));
         assert_eq!(corner_and_bar("-3 * pi / 2", "0.49999999999999999999"), Decision::Holds(None));
         assert_eq!(corner_and_bar("pi - pi / 2", "0.49999999999999999999"), Decision::Holds(None));
+    }
+
+    #[test]
+    fn witnesses_compare_with_pi_through_its_enclosure() {
+        let facts = |p: &str| {
+            let src = format!(
+                "robot R {{ state x: real, c: real; }} system S {{ participant A: R; participant B: R; }}
+                 choreography G = A -> B : [{p}] go. end;"
+            );
+            let (prog, d) = lower_src(&src);
+            assert!(d.is_empty(), "{d:?}");
+            let Some(crate::hir::Global::Seq(items, _)) = prog.choreography.as_ref().map(|c| c.body.clone()) else {
+                panic!("a sequence")
+            };
+            let crate::hir::Global::Msg(m) = &items[0] else { panic!("a message") };
+            let g = m.guard.clone().expect("guard");
+            let fs: Vec<crate::hir::Expr> = g.conjuncts().into_iter().cloned().collect();
+            (prog, fs)
+        };
+        let shown = |p: &str| {
+            let (prog, fs) = facts(p);
+            super::witnessed(&prog, &fs)
+        };
+        assert!(shown("x == 0 && -pi <= c && c <= pi"));
+        assert!(shown("x == 3.1415926535897 && x < pi && 2 * x - pi > 0"));
+        // Never a witness that depends on π's digits, and never one for an empty set.
+        assert!(!shown("x == 3.14159265358979323846 && x < pi"));
+        assert!(!shown("x == 3.2 && x < pi"));
+        assert!(!shown("c > pi && c < 3.14"));
     }
 
     #[test]
