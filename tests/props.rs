@@ -48,6 +48,7 @@ const TOKENS: &[&str] = &[
     "pose",
     "old",
     "sqrt",
+    "pi",
     "P",
     "Q",
     "R",

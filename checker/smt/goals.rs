@@ -624,9 +624,10 @@ impl Rat {
             return Some((x, x));
         }
         match &e.kind {
-            ExprKind::Call(Builtin::Pi, _) => {
-                Some((Rat::new(3_141_592_653_589_793, 10i128.pow(15))?, Rat::new(3_141_592_653_589_794, 10i128.pow(15))?))
-            }
+            ExprKind::Call(Builtin::Pi, _) => Some((
+                Rat::new(3_141_592_653_589_793, 10i128.pow(15))?,
+                Rat::new(3_141_592_653_589_794, 10i128.pow(15))?,
+            )),
             ExprKind::Var(Var::Const(c)) => Rat::enclose(prog, &prog.consts[c.idx()].value, at),
             ExprKind::Unary(UnOp::Neg, a) => {
                 let (lo, hi) = Rat::enclose(prog, a, at)?;
