@@ -20,13 +20,14 @@
 //! - `MOCHI_MUTATION_ONLY=substring` runs only the mutants whose id contains it (no blessing,
 //!   no stale report).
 //! - `MOCHI_MUTATION_JOBS=n` mutants checked in parallel (default 2, one SMT thread each).
-//! - Which mutants run: all of them on CI (`CI=true`) or with `MOCHI_MUTATION_FULL=1` (about
-//!   3,800, some ten minutes in a debug build on two cores); otherwise a fixed sample, one mutant
-//!   in [`SAMPLE`] chosen by a hash of its id (the same every run), so that a plain `cargo test`
+//! - Which mutants run: all of them with `MOCHI_MUTATION_FULL=1` (about 4,400; some twenty
+//!   minutes in a release build on two cores); otherwise, and so on CI, a fixed sample: one
+//!   mutant in [`SAMPLE`], chosen by a hash of its id (the same every run), so that `cargo test`
 //!   stays quick. The sample is a subset of the full set, so one survivors list serves both.
-//! - Blessing always runs every mutant, and checks again with a long timeout ([`BLESS_TIMEOUT`])
-//!   every mutant that came back unknown: a mutant that times out here but verifies on a faster
-//!   machine must already be in the list, or CI would fail on it.
+//! - Blessing updates the entries of the mutants that ran and keeps the others (a sampled bless
+//!   does not forget the full run's survivors; entries whose mutant no longer exists go). It
+//!   checks again with a long timeout ([`BLESS_TIMEOUT`]) every mutant that came back unknown: a
+//!   mutant that times out here but verifies on a faster machine must already be in the list.
 //!
 //! The table of every mutant (id, verdict, codes, description) is written to
 //! `target/mutation/table.tsv`.
@@ -50,10 +51,9 @@ const BLESS_TIMEOUT: Duration = Duration::from_secs(30);
 /// Outside CI, one mutant in this many runs (chosen by a hash of its id).
 const SAMPLE: u64 = 7;
 
-/// Whether every mutant runs (CI, `MOCHI_MUTATION_FULL=1` or blessing) or only the sample.
+/// Whether every mutant runs (`MOCHI_MUTATION_FULL=1`) or only the sample.
 fn full_run() -> bool {
-    let on = |v: &str| std::env::var(v).is_ok_and(|x| x == "1" || x == "true");
-    on("CI") || on("MOCHI_MUTATION_FULL") || on("MOCHI_MUTATION_BLESS")
+    std::env::var("MOCHI_MUTATION_FULL").is_ok_and(|x| x == "1" || x == "true")
 }
 
 /// A stable hash of a mutant's id (FNV-1a), for the sample.
@@ -143,6 +143,11 @@ fn closure(example: &str) -> Vec<String> {
 }
 
 fn jobs(filter: Option<&str>) -> Vec<Job> {
+    jobs_of(filter, full_run())
+}
+
+/// Every mutant (`all`), or the sample, of the ids containing `filter`.
+fn jobs_of(filter: Option<&str>, all: bool) -> Vec<Job> {
     let mut out = Vec::new();
     for ex in verified_examples() {
         let files = closure(&ex);
@@ -159,7 +164,7 @@ fn jobs(filter: Option<&str>) -> Vec<Job> {
             let prefix = if f == &format!("choreographies/{ex}") { ex.clone() } else { format!("{ex}@{f}") };
             for m in ops::mutants(&text, &states, &consts) {
                 let id = format!("{prefix}:{}", m.id);
-                if filter.is_some_and(|s| !id.contains(s)) || (filter.is_none() && !full_run() && !in_sample(&id)) {
+                if filter.is_some_and(|s| !id.contains(s)) || (filter.is_none() && !all && !in_sample(&id)) {
                     continue;
                 }
                 out.push(Job { id, desc: m.desc.clone(), example: ex.clone(), file: f.clone(), text: m.apply(&text) });
@@ -406,7 +411,14 @@ fn every_survivor_is_explained() {
         }
     }
     if bless {
-        let entries: Vec<(Entry, String)> = survivors
+        // The mutants that did not run keep their entries, if they still exist.
+        let ran: std::collections::HashSet<&str> = outcomes.iter().map(|o| o.id.as_str()).collect();
+        let every: BTreeMap<String, String> = jobs_of(None, true).into_iter().map(|j| (j.id, j.desc)).collect();
+        let kept = list
+            .iter()
+            .filter(|e| !ran.contains(e.id.as_str()))
+            .filter_map(|e| every.get(&e.id).map(|d| (e.clone(), d.clone())));
+        let mut entries: Vec<(Entry, String)> = survivors
             .iter()
             .map(|o| {
                 let e = by_id.get(o.id.as_str()).map(|e| (*e).clone()).unwrap_or(Entry {
@@ -416,7 +428,9 @@ fn every_survivor_is_explained() {
                 });
                 (e, o.desc.clone())
             })
+            .chain(kept)
             .collect();
+        entries.sort_by(|a, b| a.0.id.cmp(&b.0.id));
         std::fs::write(root().join(LIST), write_list(&entries)).unwrap();
         eprintln!("mutation: wrote {} survivors to {LIST}", entries.len());
     }
