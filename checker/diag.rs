@@ -309,8 +309,8 @@ codes! {
     VacuousContract = "E0409", "a motion primitive can never end",
         "A primitive's contract must admit at least one run that ends ([NON-INTERRUPT] and \
          [INTERRUPT], Fig 3: the elapsed time t lies in the duration D, the guarantee held over \
-         [0, t] and the postcondition holds at t). mochi asks, for every declared primitive \
-         whether used or not, whether some start state allowed by the precondition and the kind's \
+         [0, t] and the postcondition holds at t). mochi asks, for every primitive the \
+         protocol runs, whether some start state allowed by the precondition and the kind's \
          invariant, some arguments and some t in D admit an end state satisfying the guarantee at \
          t, the postcondition and the invariant. When none does (an empty duration such as \
          `[2, 1]` or `[-2, -1]`, a postcondition that contradicts the guarantee), any motion using \

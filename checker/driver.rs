@@ -12,7 +12,7 @@ use crate::smt::{self, goals::Part, Decision, SmtConfig};
 use crate::source::{FileId, SourceDb};
 use crate::{lower, project, syntax, typeck, wf};
 use serde::Serialize;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashSet};
 use std::path::Path;
 use std::time::Instant;
 
@@ -174,10 +174,11 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config) -> Report {
         }
     }
     if !run.checks.iter().any(|c| c.status == Status::Fail) && !cfg.structural_only {
-        // Every declared primitive's contract (E0409), decided in the same worker pool as
-        // the rest: a second pool would cost a Z3 context per worker (~15 ms), more than
-        // the few contract questions themselves.
-        obligations.extend(contracts(&prog));
+        // The contract (E0409) of every primitive the protocol runs, decided last in the same worker pool
+        // as the rest (a second pool would cost a Z3 context per worker, ~15 ms): a contract
+        // that some use has already shown able to end needs no question of its own.
+        let used = used_primitives(&obligations);
+        obligations.extend(contracts(&prog, &used));
         run.obligations(db, &prog, &obligations, &cfg.smt);
     } else if !obligations.is_empty() && !run.checks.iter().any(|c| c.status == Status::Fail) {
         run.checks.push(CheckResult {
@@ -535,13 +536,13 @@ fn dead_branch(ob: &Obligation, f: smt::Failure) -> Diagnostic {
     .with_help("remove the branch, or fix its guard")
 }
 
-/// One obligation per declared primitive (whether used or not): its contract admits a
-/// run that ends (Fig 3 [NON-INTERRUPT], [INTERRUPT]). Primitives of kinds no
-/// participant has cannot run and are not asked about.
-fn contracts(prog: &crate::hir::Program) -> Vec<Obligation> {
+/// One obligation per primitive the protocol runs (`used`): its contract admits a run
+/// that ends (Fig 3 [NON-INTERRUPT], [INTERRUPT]). A primitive nothing runs cannot make
+/// this protocol deadlock; checking a library on its own is a separate question.
+fn contracts(prog: &crate::hir::Program, used: &HashSet<crate::hir::PrimId>) -> Vec<Obligation> {
     (0..prog.prims.len())
         .map(|i| crate::hir::PrimId(i as u32))
-        .filter(|&p| prog.role_ids().any(|r| prog.role(r).kind == prog.prim(p).kind))
+        .filter(|p| used.contains(p))
         .map(|p| Obligation {
             rule: Rule::Contract,
             span: prog.prim(p).span,
@@ -550,6 +551,23 @@ fn contracts(prog: &crate::hir::Program) -> Vec<Obligation> {
             goal: Goal::CanEnd { prim: p },
         })
         .collect()
+}
+
+/// The primitives the protocol runs: every part of a `dt` and both sides of every
+/// refinement. A primitive nothing runs cannot make a run of this protocol deadlock.
+fn used_primitives(obligations: &[Obligation]) -> HashSet<crate::hir::PrimId> {
+    let mut used = HashSet::new();
+    for ob in obligations {
+        match &ob.goal {
+            Goal::Compatible { parts } => used.extend(parts.iter().map(|(_, a)| a.prim)),
+            Goal::Refines { concrete, abstract_, .. } => {
+                used.insert(concrete.prim);
+                used.extend(abstract_.iter().map(|a| a.prim));
+            }
+            _ => {}
+        }
+    }
+    used
 }
 
 /// `counterexample: at time 2.1 s, the point (1.02, 0.2, 0.05) is in both footprints;

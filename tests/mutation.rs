@@ -109,7 +109,9 @@ fn verified_examples() -> Vec<String> {
     all.into_iter()
         .filter(|p| {
             let mut db = SourceDb::new();
-            check_file(&mut db, p, &cfg(Duration::from_secs(10))).map(|r| r.verdict == Verdict::Verified).unwrap_or(false)
+            check_file(&mut db, p, &cfg(Duration::from_secs(10)))
+                .map(|r| r.verdict == Verdict::Verified)
+                .unwrap_or(false)
         })
         .map(|p| p.strip_prefix(root().join("choreographies")).unwrap().display().to_string())
         .collect()

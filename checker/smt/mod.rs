@@ -24,7 +24,7 @@ use crate::hir::{Expr, Program};
 use crate::obligation::{Goal, Obligation};
 use goals::{Part, Plan, Query};
 use serde::Serialize;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -180,6 +180,9 @@ pub fn discharge(
     // A thread and its Z3 context cost milliseconds to start: no more workers than
     // there is work for.
     let jobs = cfg.jobs.clamp(1, obligations.len().div_ceil(4).max(1));
+    // Primitives some obligation has shown able to end: a `dt` whose can-end question had a
+    // witness, or a refinement whose concrete primitive was realisable.
+    let witnessed: Mutex<HashSet<crate::hir::PrimId>> = Mutex::new(HashSet::new());
     let work = || {
         let watchdog = Watchdog::default();
         let ctx = z3::Context::thread_local();
@@ -192,7 +195,22 @@ pub fn discharge(
                 let i = next.fetch_add(1, Ordering::Relaxed);
                 let Some(ob) = obligations.get(i) else { break };
                 let t = std::time::Instant::now();
-                let (d, mut st) = w.decide(i, ob);
+                let (d, mut st) = match &ob.goal {
+                    // A primitive's contract (E0409) is witnessed by any use of it that
+                    // could end (the driver puts these obligations last).
+                    Goal::CanEnd { prim } if witnessed.lock().is_ok_and(|w| w.contains(prim)) => {
+                        (Decision::Holds(None), Stats { folded: 1, ..Stats::default() })
+                    }
+                    _ => w.decide(i, ob),
+                };
+                if matches!(d, Decision::Holds(_)) && st.vacuous == 0 {
+                    let shown = witnesses(ob);
+                    if !shown.is_empty() {
+                        if let Ok(mut w) = witnessed.lock() {
+                            w.extend(shown);
+                        }
+                    }
+                }
                 st.millis = t.elapsed().as_secs_f64() * 1000.0;
                 if let Ok(mut rs) = results.lock() {
                     rs[i] = Some((d, st));
@@ -227,6 +245,20 @@ pub fn discharge(
             ))
         })
         .collect()
+}
+
+/// The primitives whose contracts an obligation that held non-vacuously has shown able to
+/// end: every part of a `dt` (its joint can-end question had a witness), and the concrete
+/// primitive of a refinement (its realisability question had one). Not a primitive refining
+/// itself: that holds without the question.
+fn witnesses(ob: &Obligation) -> Vec<crate::hir::PrimId> {
+    match &ob.goal {
+        Goal::Compatible { parts } => parts.iter().map(|(_, a)| a.prim).collect(),
+        Goal::Refines { concrete, abstract_, .. } if abstract_.as_slice() != std::slice::from_ref(concrete) => {
+            vec![concrete.prim]
+        }
+        _ => Vec::new(),
+    }
 }
 
 /// Interrupts the worker's Z3 context when a query runs past its deadline.
