@@ -364,6 +364,7 @@ impl Lowerer {
                     prim.post = self.pred(e, &env, "a postcondition");
                 }
                 ("footprint", ast::FieldValue::Footprint { point, pred }) => {
+                    self.distinct_coordinates(point);
                     let names = [point[0].name.clone(), point[1].name.clone(), point[2].name.clone()];
                     let env = Env {
                         state: true,
@@ -575,6 +576,7 @@ impl Lowerer {
         let body = self.global(&c.body, &mut cx);
         self.prog.choreography = Some(Choreography { name: c.name.name.clone(), body, span: c.name.span });
         for p in &c.partitions {
+            self.distinct_coordinates(&p.point);
             let names = [p.point[0].name.clone(), p.point[1].name.clone(), p.point[2].name.clone()];
             let env = Env { point: Some(&names), part: Some("a partition"), ..Env::consts_only() };
             let regions = p.regions.iter().map(|r| self.pred(r, &env, "a partition's region")).collect();
@@ -584,6 +586,16 @@ impl Lowerer {
                 regions,
                 span: p.span,
             });
+        }
+    }
+
+    /// The three coordinates of a footprint's or partition's point are three names:
+    /// `partition(py, py, pz)` would read both `py`s as the first coordinate (x).
+    fn distinct_coordinates(&mut self, point: &[ast::Ident]) {
+        for (i, b) in point.iter().enumerate() {
+            if let Some(first) = point[..i].iter().find(|f| f.name == b.name) {
+                self.diags.push(dup(b.span, "coordinate", &b.name, first.span));
+            }
         }
     }
 
