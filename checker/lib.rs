@@ -4,9 +4,12 @@
 //! source text → [`syntax`] (tokens, AST) → [`lower`] (names resolved, [`hir`]) →
 //! [`wf`] (Def 4.1 side conditions, well-scopedness, synchronisability) →
 //! [`project`] (local types, Defs 4.7-4.8) → [`typeck`] (processes, Table 1) →
-//! [`driver`] (the verdict). Predicates met on the way become [`obligation`]s for the
-//! SMT stage of a later part; until it lands they are reported as undecided.
-//! [`render`] turns diagnostics and reports into text or JSON.
+//! [`smt`] (every predicate met on the way is an [`obligation`]: Z3 decides it, with the
+//! vacuity guard; [`bounds`] settles what intervals can) → [`driver`] (the verdict).
+//! [`render`] turns diagnostics and reports into text or JSON. Beside the pipeline,
+//! [`simulate`] runs a choreography on concrete trajectories (an independent check of the
+//! verdicts) and [`exact`] evaluates expressions in exact arithmetic for it and for the
+//! replay of counterexamples.
 //!
 //! ```
 //! use mochi::driver::{check_source, Config, Verdict};
