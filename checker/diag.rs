@@ -334,6 +334,17 @@ codes! {
          leave the invariant's bounds implicit, as `ze >= clear_z` does for an arm whose \
          invariant caps `ze`: the first state is then any state satisfying both.) Fix `init` or \
          the invariant so that they have a state in common.";
+    EmptyFootprint = "E0412", "a primitive's footprint holds no point",
+        "A footprint is the space the robot may occupy while the primitive runs, so it contains the \
+         robot's geometry at every state the guarantee allows (Sec 3.1: FP contains geom(p)); mochi \
+         trusts that it does (until geometry is checked) and proves collision freedom from \
+         footprints. A footprint that no point satisfies (`false`, or bounds that contradict each \
+         other) would make every collision check about the primitive hold vacuously: two such \
+         robots on top of each other would be verified. mochi asks, for each primitive the \
+         protocol runs, whether some start state its precondition and the kind's invariant allow \
+         has a point in the footprint at time 0. A kind with no `geometry:` whose every footprint is literally `false` is \
+         bodiless (an environment, a sensor) and is not asked. Fix the footprint so that it \
+         contains the robot.";
     RecInitRefinement = "E0414", "a recursion parameter's initial value breaks its refinement",
         "Parameterised recursion (DATUM's `mu T(n : S {P}) <n = e>`, mochi's \
          `mu t(n: S {P} = e). G`): the refinement P is what every iteration of the loop may assume \

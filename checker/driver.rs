@@ -486,6 +486,7 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
         (Rule::TRecJump, _) => Code::ProcessRecJump,
         (Rule::TRecArgs, _) => Code::ProcessRecArgs,
         (Rule::Contract, _) => Code::VacuousContract,
+        (Rule::Occupies, _) => Code::EmptyFootprint,
         (Rule::Reachable, _) => Code::StuckContext,
         (Rule::InitInvariant, Some(Part::Before(_))) => Code::StuckContext,
         (Rule::InitInvariant, _) => Code::InitOutsideInvariant,
@@ -505,6 +506,7 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
         Code::RecInitRefinement | Code::ProcessRecInit => "start the parameter at a value that satisfies its refinement, or weaken the refinement",
         Code::RecJumpRefinement | Code::ProcessRecJump => "guard the branch that jumps back (e.g. `[n > 0]` before `t(n - 1)`), or pass arguments that satisfy the refinement",
         Code::ProcessRecArgs => "pass the loop the same values as the local type's recursion (its initial values and the arguments of its jump), computed from what the process sent and received",
+        Code::EmptyFootprint => "write a footprint that contains the robot at every state its guarantee allows (a footprint no point satisfies, such as `false`, hides every collision)",
         Code::VacuousContract => "fix the duration's bounds (lo <= hi, hi >= 0), or make the guarantee and the postcondition agree at the end of the motion",
         Code::StuckContext => "fix the step named above (an `init` no state satisfies, a refinement or guard that contradicts what holds there): no execution gets past it",
         Code::InitOutsideInvariant => "make `init` and the robot kind's invariant agree on at least one state (fix `init`, or widen the invariant)",
@@ -540,17 +542,36 @@ fn dead_branch(ob: &Obligation, f: smt::Failure) -> Diagnostic {
 /// that ends (Fig 3 [NON-INTERRUPT], [INTERRUPT]). A primitive nothing runs cannot make
 /// this protocol deadlock; checking a library on its own is a separate question.
 fn contracts(prog: &crate::hir::Program, used: &HashSet<crate::hir::PrimId>) -> Vec<Obligation> {
-    (0..prog.prims.len())
-        .map(|i| crate::hir::PrimId(i as u32))
-        .filter(|p| used.contains(p))
-        .map(|p| Obligation {
-            rule: Rule::Contract,
-            span: prog.prim(p).span,
-            what: format!("the contract of `{}`", prog.prim(p).name),
-            hyps: Vec::new(),
-            goal: Goal::CanEnd { prim: p },
-        })
-        .collect()
+    let used: Vec<crate::hir::PrimId> =
+        (0..prog.prims.len()).map(|i| crate::hir::PrimId(i as u32)).filter(|p| used.contains(p)).collect();
+    // Its footprint holds some point (E0412): asked of every primitive of a kind with a
+    // body, witnessed or not. A kind is bodiless (an environment, a sensor) when it declares
+    // no `geometry:` and every footprint of it is literally `false`: it occupies no space.
+    let is_false = |p: crate::hir::PrimId| {
+        prog.prim(p).footprint.as_ref().is_some_and(|f| matches!(f.pred.kind, crate::hir::ExprKind::Bool(false)))
+    };
+    let has_body = |k: crate::hir::KindId| {
+        prog.kind(k).geometry.is_some()
+            || (0..prog.prims.len())
+                .map(|i| crate::hir::PrimId(i as u32))
+                .any(|p| prog.prim(p).kind == k && prog.prim(p).footprint.is_some() && !is_false(p))
+    };
+    let occupies = used.iter().filter(|p| prog.prim(**p).footprint.is_some() && has_body(prog.prim(**p).kind));
+    let occupies = occupies.map(|&p| Obligation {
+        rule: Rule::Occupies,
+        span: prog.prim(p).footprint.as_ref().map_or(prog.prim(p).span, |f| f.pred.loc.0),
+        what: format!("the footprint of `{}`", prog.prim(p).name),
+        hyps: Vec::new(),
+        goal: Goal::CanEnd { prim: p },
+    });
+    let contracts = used.iter().map(|&p| Obligation {
+        rule: Rule::Contract,
+        span: prog.prim(p).span,
+        what: format!("the contract of `{}`", prog.prim(p).name),
+        hyps: Vec::new(),
+        goal: Goal::CanEnd { prim: p },
+    });
+    occupies.chain(contracts).collect()
 }
 
 /// The primitives the protocol runs: every part of a `dt` and both sides of every

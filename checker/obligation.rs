@@ -42,6 +42,9 @@ pub enum Rule {
     TRecArgs,
     /// Fig 3 [NON-INTERRUPT]/[INTERRUPT]: a declared primitive admits a run that ends.
     Contract,
+    /// Sec 3.1 (a footprint contains the robot's geometry): a primitive's footprint holds
+    /// some point when it starts.
+    Occupies,
     /// The vacuity guard: the context of a point the protocol reaches is satisfiable.
     Reachable,
     /// [T-SESS]: a participant's `init` and its kind's invariant have a state in common.
@@ -66,6 +69,7 @@ impl Rule {
             Rule::TRecJump => "[T-VAR] with parameters",
             Rule::TRecArgs => "[T-REC]/[T-VAR]: parameters as the type's",
             Rule::Contract => "a primitive can end (Fig 3 [NON-INTERRUPT], [INTERRUPT])",
+            Rule::Occupies => "a footprint holds a point (Sec 3.1, FP contains geom(p))",
             Rule::Reachable => "a reachable context is satisfiable (vacuity guard)",
             Rule::InitInvariant => "[T-SESS]: init allows a state within the invariant",
         }
@@ -87,7 +91,7 @@ impl Rule {
             | Rule::TRecInit
             | Rule::TRecJump
             | Rule::TRecArgs => "typing-obligations",
-            Rule::Contract => "contracts",
+            Rule::Contract | Rule::Occupies => "contracts",
             Rule::Reachable | Rule::InitInvariant => "reachability",
         }
     }

@@ -336,8 +336,9 @@ fn dump_smt_writes_one_smt_lib_file_per_query() {
     for f in &files {
         let name = f.file_name().to_string_lossy().into_owned();
         // Named after the obligation's file: the choreography, or for a primitive's
-        // contract (E0409) the library that declares it.
-        let file = name.contains("cart-and-arms-chor-") || (name.contains("-contract-") && name.contains("-mochi-"));
+        // contract (E0409) or footprint (E0412) the library that declares it.
+        let library = name.contains("-contract-") || name.contains("-occupies-");
+        let file = name.contains("cart-and-arms-chor-") || (library && name.contains("-mochi-"));
         assert!(name.ends_with(".smt2") && file, "{name}");
         let text = std::fs::read_to_string(f.path()).expect("readable");
         assert!(text.starts_with("; mochi: ") && text.trim_end().ends_with("(check-sat)"), "{name}: {text}");

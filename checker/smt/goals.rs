@@ -48,6 +48,10 @@ pub enum Part {
     Before(usize),
     /// [`Goal::CanEnd`]: the declared primitive admits a run that ends.
     Realisable,
+    /// [`Goal::CanEnd`] under [`crate::obligation::Rule::Occupies`]: the primitive's
+    /// footprint holds some point when it starts (a footprint no point satisfies would make
+    /// every collision check about it hold vacuously).
+    Occupies,
     /// Conjunct `k` of a `Valid` goal.
     Conjunct(usize),
     /// [AGCOMP]: the others' guarantees discharge part `i`'s assumption.
@@ -80,6 +84,7 @@ impl Part {
                 | Part::Context
                 | Part::Before(_)
                 | Part::Realisable
+                | Part::Occupies
                 | Part::Refine(RefineItem::Realisable)
         )
     }
@@ -245,6 +250,7 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
             }
             Plan::Parts(out)
         }
+        Goal::CanEnd { .. } if ob.rule == crate::obligation::Rule::Occupies => Plan::Parts(vec![Part::Occupies]),
         Goal::CanEnd { .. } => Plan::Parts(vec![Part::Realisable]),
         Goal::Reachable { .. } => Plan::Parts(vec![Part::Context]),
     }
@@ -363,6 +369,23 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
             let mut inst = Inst::new(&mut q.enc, role, &app, t.clone(), "t")?;
             inst.frame.params = p.params.iter().map(|(n, sort)| q.enc.named(n, sort)).collect::<Result<_, _>>()?;
             ends(&mut q, std::slice::from_ref(&inst), &t)?;
+        }
+        (Goal::CanEnd { prim }, Part::Occupies) => {
+            // Some arguments, state and point (in the robot's own frame: a pose only moves
+            // it) satisfy the footprint's predicate at time 0. Deliberately weak and cheap:
+            // it catches footprints no point satisfies (`false`, contradictory bounds).
+            let prog = q.enc.prog();
+            let p = prog.prim(*prim);
+            let role = prog.role_ids().find(|r| prog.role(*r).kind == p.kind);
+            let Some(role) = role else { return Err(Unsupported("a primitive of a kind no participant has".into())) };
+            let Some(fp) = p.footprint.clone() else { return Ok(q) };
+            let app = PrimApp { prim: *prim, args: Vec::new(), loc: Default::default() };
+            let mut inst = Inst::new(&mut q.enc, role, &app, zero(), "t")?;
+            inst.frame.params = p.params.iter().map(|(n, sort)| q.enc.named(n, sort)).collect::<Result<_, _>>()?;
+            let local = [q.enc.named_real("point.x"), q.enc.named_real("point.y"), q.enc.named_real("point.z")];
+            let frame = Frame { point: Some(local.clone()), ..inst.frame.clone() };
+            let holds = inst.pred(&mut q.enc, &fp.pred, &frame)?;
+            q.assertions.push(holds);
         }
         _ => return Err(Unsupported("an obligation split into a part of another kind".into())),
     }

@@ -198,7 +198,10 @@ pub fn discharge(
                 let (d, mut st) = match &ob.goal {
                     // A primitive's contract (E0409) is witnessed by any use of it that
                     // could end (the driver puts these obligations last).
-                    Goal::CanEnd { prim } if witnessed.lock().is_ok_and(|w| w.contains(prim)) => {
+                    Goal::CanEnd { prim }
+                        if ob.rule == crate::obligation::Rule::Contract
+                            && witnessed.lock().is_ok_and(|w| w.contains(prim)) =>
+                    {
                         (Decision::Holds(None), Stats { folded: 1, ..Stats::default() })
                     }
                     _ => w.decide(i, ob),
@@ -747,6 +750,12 @@ fn describe(prog: &Program, ob: &Obligation, part: &Part) -> String {
                 if parts.len() > 1 { "s" } else { "" },
                 if parts.len() > 1 { "every part's" } else { "its" },
                 if parts.len() > 1 { "every part's" } else { "its" },
+            )
+        }
+        (Goal::CanEnd { prim: p }, Part::Occupies) => {
+            format!(
+                "the footprint of `{}` holds some point when it starts, for some arguments and start state its precondition and the invariant allow",
+                prog.prim(*p).name
             )
         }
         (Goal::CanEnd { prim: p }, _) => {
