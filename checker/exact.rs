@@ -509,7 +509,7 @@ pub fn trig(f: Builtin, x: &Num) -> Num {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lower::tests::lower_src;
+    use crate::lower::tests::first_guard;
 
     /// The guard of `A -> B : [p] go`, lowered, with `A.x` bound to `x`.
     fn eval_guard(consts: &str, p: &str, x: &str) -> Tri {
@@ -518,13 +518,7 @@ mod tests {
              system S {{ participant A: R; participant B: R; }}
              choreography G = A -> B : [{p}] go. end;"
         );
-        let (prog, d) = lower_src(&src);
-        assert!(d.is_empty(), "{d:?}");
-        let Some(crate::hir::Global::Seq(items, _)) = prog.choreography.as_ref().map(|c| c.body.clone()) else {
-            panic!("a sequence")
-        };
-        let crate::hir::Global::Msg(m) = &items[0] else { panic!("a message") };
-        let g = m.guard.clone().expect("guard");
+        let (prog, g) = first_guard(&src);
         let xv = parse_decimal(x).expect("number");
         let env = |v: &Var| match v {
             Var::Role(r, _) if r.0 == 0 => Some(Value::rat(xv.clone())),

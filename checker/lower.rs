@@ -1542,6 +1542,19 @@ pub(crate) mod tests {
     use crate::source::{FileId, SourceDb};
 
     /// Parses and lowers one source text; for tests of later stages too.
+    /// Lowers `src` (which must be clean) and returns the guard of the choreography's first
+    /// message, which must be a sequence starting with a guarded message.
+    pub(crate) fn first_guard(src: &str) -> (Program, crate::hir::Expr) {
+        let (prog, d) = lower_src(src);
+        assert!(d.is_empty(), "{d:?}");
+        let Some(crate::hir::Global::Seq(items, _)) = prog.choreography.as_ref().map(|c| c.body.clone()) else {
+            panic!("a sequence")
+        };
+        let crate::hir::Global::Msg(m) = &items[0] else { panic!("a message") };
+        let g = m.guard.clone().expect("guard");
+        (prog, g)
+    }
+
     pub(crate) fn lower_src(src: &str) -> (Program, Vec<Diagnostic>) {
         let mut db = SourceDb::new();
         let id = db.add("test.chor", src);

@@ -643,30 +643,8 @@ pub fn one() -> Real {
 
 /// A decimal literal (`0.65`, `1e-3`, `12`) as an exact Z3 rational.
 pub fn rational(lit: &str) -> Option<Real> {
-    let (mant, exp) = match lit.split_once(['e', 'E']) {
-        Some((m, e)) => (m, e.parse::<i32>().ok()?),
-        None => (lit, 0),
-    };
-    let (neg, mant) = match mant.strip_prefix('-') {
-        Some(m) => (true, m),
-        None => (false, mant),
-    };
-    let (int, frac) = mant.split_once('.').unwrap_or((mant, ""));
-    if !int.chars().chain(frac.chars()).all(|c| c.is_ascii_digit()) || exp.abs() > 400 {
-        return None;
-    }
-    let mut num = format!("{int}{frac}").trim_start_matches('0').to_string();
-    if num.is_empty() {
-        num = "0".into();
-    }
-    let scale = exp - frac.len() as i32;
-    let (num, den) = if scale >= 0 {
-        (format!("{num}{}", "0".repeat(scale as usize)), "1".to_string())
-    } else {
-        (num, format!("1{}", "0".repeat((-scale) as usize)))
-    };
-    let num = if neg { format!("-{num}") } else { num };
-    Real::from_rational_str(&num, &den)
+    // One reader of decimals for the whole checker: the interval stage's.
+    real_of_rational(&bounds::decimal(lit)?)
 }
 
 /// An f64 as the exact rational it is (not its shortest round-trip decimal, which may

@@ -1421,9 +1421,7 @@ fn to_world(prog: &Program, role: RoleId, b: [Interval; 3]) -> Option<[Interval;
 
 #[cfg(test)]
 mod tests {
-    use super::super::{discharge, Decision, SmtConfig};
-    use crate::lower::tests::lower_src;
-    use crate::obligation::{Goal, Obligation, Rule};
+    use super::super::Decision;
 
     /// [T-SESS] on two bodies: A's footprint the corner `0 <= x <= 1, 0 <= y <= 0.1,
     /// x + y <= cut` at the origin; B's the bar `1 <= x <= 2, |y| <= 0.1` turned by
@@ -1437,17 +1435,7 @@ mod tests {
              system S {{ participant A: BotA {{ init: s == 0; }} participant B: BotB {{ init: s == 0; at: pose(0.5, -0.9, 0, 0, 0, {yaw}); }} }}
              choreography G = dt<A: hold> * dt<B: hold>;"
         );
-        let (prog, d) = lower_src(&src);
-        assert!(d.is_empty(), "{d:?}");
-        let hyps = prog.roles.iter().filter_map(|r| r.init.clone()).collect();
-        let ob = Obligation {
-            rule: Rule::TSess,
-            span: Default::default(),
-            what: "initial states".into(),
-            hyps,
-            goal: Goal::InitiallyDisjoint { firsts: prog.first_motions() },
-        };
-        discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0
+        crate::smt::tests::initial_states(&src)
     }
 
     #[test]
@@ -1470,13 +1458,7 @@ mod tests {
                 "robot R {{ state x: real, c: real; }} system S {{ participant A: R; participant B: R; }}
                  choreography G = A -> B : [{p}] go. end;"
             );
-            let (prog, d) = lower_src(&src);
-            assert!(d.is_empty(), "{d:?}");
-            let Some(crate::hir::Global::Seq(items, _)) = prog.choreography.as_ref().map(|c| c.body.clone()) else {
-                panic!("a sequence")
-            };
-            let crate::hir::Global::Msg(m) = &items[0] else { panic!("a message") };
-            let g = m.guard.clone().expect("guard");
+            let (prog, g) = crate::lower::tests::first_guard(&src);
             let fs: Vec<crate::hir::Expr> = g.conjuncts().into_iter().cloned().collect();
             (prog, fs)
         };

@@ -832,7 +832,7 @@ fn describe(prog: &Program, ob: &Obligation, part: &Part) -> String {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::lower::tests::lower_src;
 
@@ -972,7 +972,13 @@ mod tests {
              system S {{ participant A: Bot {{ init: s == 0; }} participant B: Bot {{ init: s == 0; at: pose({gap}, 0, 0); }} }}
              choreography G = dt<A: hold> * dt<B: hold>;"
         );
-        let (prog, d) = lower_src(&src);
+        initial_states(&src)
+    }
+
+    /// Lowers `src` (which must be clean) and decides its [T-SESS] obligation: the first
+    /// footprints of the participants, from their initial states, are disjoint.
+    pub(crate) fn initial_states(src: &str) -> Decision {
+        let (prog, d) = lower_src(src);
         assert!(d.is_empty(), "{d:?}");
         let hyps = prog.roles.iter().filter_map(|r| r.init.clone()).collect();
         let ob = Obligation {

@@ -847,7 +847,13 @@ mod tests {
     ";
 
     fn codes(chor: &str) -> Vec<Code> {
-        let (p, d) = lower_src(&format!("{SYS} choreography G = {chor};"));
+        codes_in(SYS, chor)
+    }
+
+    /// The synchronisability codes of `chor` over the system `sys` (which must be clean
+    /// up to this stage).
+    fn codes_in(sys: &str, chor: &str) -> Vec<Code> {
+        let (p, d) = lower_src(&format!("{sys} choreography G = {chor};"));
         assert!(d.is_empty(), "{d:?}");
         let c = p.choreography.as_ref().expect("choreography");
         let wf = super::super::check(&p);
@@ -920,12 +926,7 @@ mod tests {
     ";
 
     fn codes4(chor: &str) -> Vec<Code> {
-        let (p, d) = lower_src(&format!("{SYS4} choreography G = {chor};"));
-        assert!(d.is_empty(), "{d:?}");
-        let c = p.choreography.as_ref().expect("choreography");
-        let wf = super::super::check(&p);
-        assert!(wf.side.is_empty() && wf.scope.is_empty(), "{:?} {:?}", wf.side, wf.scope);
-        super::check(&p, &c.body).into_iter().map(|d| d.code).collect()
+        codes_in(SYS4, chor)
     }
 
     #[test]
