@@ -1,6 +1,7 @@
 //! mochi: a type checker and verifier for motion choreographies.
 //!
-//! The pipeline, in reading order (ARCHITECTURE.md tells the whole story):
+//! The pipeline, stage by stage, which is also the order to read the modules in (the
+//! `pub mod` list below is alphabetical; ARCHITECTURE.md tells the whole story):
 //! source text → [`syntax`] (tokens, AST) → [`lower`] (names resolved, [`hir`]) →
 //! [`wf`] (Def 4.1 side conditions, well-scopedness, synchronisability) →
 //! [`project`] (local types, Defs 4.7-4.8) → [`typeck`] (processes, Table 1) →
@@ -9,7 +10,10 @@
 //! [`render`] turns diagnostics and reports into text or JSON. Beside the pipeline,
 //! [`simulate`] runs a choreography on concrete trajectories (an independent check of the
 //! verdicts) and [`exact`] evaluates expressions in exact arithmetic for it and for the
-//! replay of counterexamples.
+//! replay of counterexamples. Also: [`source`] (files and spans) and [`diag`] (codes
+//! and diagnostics), used by every stage; [`sigma`] (the logical context Σ that scoping
+//! and typing thread); [`subtype`] (subtyping of local types, Fig 5, and the predicate
+//! helpers typing shares); [`lanes`] (generates the parallel-lanes benchmark).
 //!
 //! ```
 //! use mochi::driver::{check_source, Config, Verdict};

@@ -1,8 +1,8 @@
 //! Proof obligations: the predicate side conditions that the structural checks meet
 //! and cannot decide themselves. Each names the rule that produced it and the source
-//! span it comes from. The SMT stage (a later part) discharges them; until then
-//! [`Obligation::trivially_holds`] settles the syntactically trivial ones and the rest
-//! are reported as undecided, never as passed.
+//! span it comes from. The SMT stage ([`crate::smt::discharge`]) decides them, after
+//! [`Obligation::trivially_holds`] has settled the syntactically trivial ones; what it
+//! cannot decide is reported as undecided (`unknown`), never as passed.
 
 use crate::hir::{Expr, ExprKind, PrimApp, PrimId, RoleId};
 use crate::source::Span;

@@ -2,7 +2,7 @@
 //! Def 4.7, with Def 4.8 (3) read as the merge `⊓` (seeds README, known error 3).
 //!
 //! Projection is continuation-passing: [`project`] takes the local type `tail` that
-//! follows `g` and pushes it into every branch of a choice. Tails are [`Rc`]-shared,
+//! follows `g` and pushes it into every branch of a choice. Tails are [`Arc`]-shared,
 //! so a sequence of choices costs linear space, and the result is in the prefix form of
 //! Def 4.6 (`dt<a>.T`, `⊕{..}`, `&{..}`, `&{..} & dt<a>.T`, `mu t.T`, `t`, `end`).
 //!

@@ -1,5 +1,5 @@
-//! Resolved predicates and terms. No solver types appear here: the SMT stage (a later
-//! part) encodes [`Expr`] into its own terms.
+//! Resolved predicates and terms. No solver types appear here: the SMT stage
+//! (`smt::encode`) encodes [`Expr`] into its own terms.
 
 use super::{ConstId, Loc, RoleId, ValueId};
 pub use crate::syntax::ast::{BinOp, UnOp};

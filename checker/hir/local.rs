@@ -1,6 +1,6 @@
 //! Local types (Def 4.6):
 //! `T ::= dt<a>.T | ⊕{[P_i] q!l_i(P'_i).T_i} | &{p?l_i(P_i).T_i} | &{p?l_i(P_i).T_i} & dt<a>.T | mu t.T | t`
-//! plus `end`. Continuations are shared through [`Rc`], so the tail that projection pushes
+//! plus `end`. Continuations are shared through [`Arc`], so the tail that projection pushes
 //! into every branch of a choice is stored once.
 
 use super::{Expr, Field, Loc, PrimApp, RecParam, RoleId};
