@@ -51,11 +51,42 @@ pub struct CheckResult {
     pub name: &'static str,
     pub status: Status,
     pub millis: f64,
-    /// A short human summary ("3 obligations undecided").
+    /// What the check found, as counts; `render` words it ("3 obligation(s), 5 queries").
     #[serde(skip)]
-    pub detail: String,
+    pub detail: Detail,
     /// SMT queries this check made (0 for the structural checks).
     pub queries: usize,
+}
+
+/// The counts behind a check's line in the table. Data only: `render` formats it (its
+/// `Display` is the table's wording).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum Detail {
+    /// Nothing to add (a structural check that passed).
+    #[default]
+    None,
+    /// A structural check that failed with this many errors.
+    Errors(usize),
+    /// A family of obligations decided by the SMT stage.
+    Obligations {
+        total: usize,
+        queries: usize,
+        /// Queries answered from the cache.
+        cached: usize,
+        /// Obligations settled without Z3 (bounds, folding).
+        folded: usize,
+        failed: usize,
+        undecided: usize,
+        /// Obligations that held only because their context is unsatisfiable.
+        vacuous: usize,
+    },
+    /// Obligations not decided because only the structural checks ran (`mochi project`).
+    NotDecided(usize),
+    /// The vacuity guard: of `proved` obligations with hypotheses, `vacuous` held only
+    /// because their context is unsatisfiable; `unsure` contexts were undecided.
+    Vacuity { vacuous: usize, proved: usize, unsure: usize },
+    /// The file was not started: the run's `--deadline` (in seconds) had passed.
+    PastDeadline { seconds: f64 },
 }
 
 /// Everything `mochi check` learns about one file.
@@ -168,7 +199,7 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut sy
             name: "obligations",
             status: Status::Unknown,
             millis: 0.0,
-            detail: format!("{} not decided (structural checks only)", obligations.len()),
+            detail: Detail::NotDecided(obligations.len()),
             queries: 0,
         });
     }
@@ -204,7 +235,7 @@ impl Run {
             name,
             status: if ok { Status::Pass } else { Status::Fail },
             millis: self.last_millis,
-            detail: if ok { String::new() } else { format!("{n} error(s)") },
+            detail: if ok { Detail::None } else { Detail::Errors(n) },
             queries: 0,
         });
         self.diagnostics.extend(diags);
@@ -321,27 +352,15 @@ impl Run {
             } else {
                 Status::Pass
             };
-            let mut detail = format!(
-                "{} obligation(s), {} quer{}",
+            let detail = Detail::Obligations {
                 total,
-                stats.queries,
-                if stats.queries == 1 { "y" } else { "ies" }
-            );
-            if stats.cached > 0 {
-                detail.push_str(&format!(" ({} cached)", stats.cached));
-            }
-            if stats.folded > 0 {
-                detail.push_str(&format!(", {} without Z3", stats.folded));
-            }
-            if failed > 0 {
-                detail.push_str(&format!(", {failed} failed"));
-            }
-            if unknown > 0 {
-                detail.push_str(&format!(", {unknown} undecided"));
-            }
-            if stats.vacuous > 0 {
-                detail.push_str(&format!(", {} held vacuously", stats.vacuous));
-            }
+                queries: stats.queries,
+                cached: stats.cached,
+                folded: stats.folded,
+                failed,
+                undecided: unknown,
+                vacuous: stats.vacuous,
+            };
             self.checks.push(CheckResult { name, status, millis, detail, queries: stats.queries });
         }
         self.vacuity(db, vacuous, proved, unsure);
@@ -375,14 +394,7 @@ impl Run {
                 .with_help("remove the unreachable code, or fix the condition that makes its context false"),
             );
         }
-        let mut detail = format!(
-            "{} of {} proved obligation(s) held only because their context is unsatisfiable",
-            vacuous.len(),
-            proved
-        );
-        if unsure > 0 {
-            detail.push_str(&format!(", {unsure} context(s) undecided"));
-        }
+        let detail = Detail::Vacuity { vacuous: vacuous.len(), proved, unsure };
         self.checks.push(CheckResult { name: "vacuity", status: Status::Pass, millis: 0.0, detail, queries: 0 });
     }
 

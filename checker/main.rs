@@ -24,7 +24,7 @@
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use mochi::diag::Code;
-use mochi::driver::{CheckResult, Config, Report, Status, Verdict};
+use mochi::driver::{CheckResult, Config, Detail, Report, Status, Verdict};
 use mochi::render::{self, Json, RunSummary};
 use mochi::source::SourceDb;
 use mochi::{fsload, syntax};
@@ -414,7 +414,7 @@ fn past_deadline(seconds: f64) -> Report {
             name: "deadline",
             status: Status::Unknown,
             millis: 0.0,
-            detail: format!("not checked: the --deadline of {seconds} s had passed"),
+            detail: Detail::PastDeadline { seconds },
             queries: 0,
         }],
         projections: Default::default(),

@@ -10,7 +10,7 @@
 //! clamped, one in an unknown file loses its location but not its message.
 
 use crate::diag::{Code, Diagnostic, Severity};
-use crate::driver::{Report, Status, Verdict};
+use crate::driver::{Detail, Report, Status, Verdict};
 use crate::source::{SourceDb, Span};
 use codespan_reporting::diagnostic::{self as cs, LabelStyle};
 use codespan_reporting::files::SimpleFiles;
@@ -102,7 +102,7 @@ fn write_summary(
         write!(out, "  ")?;
         paint(out, colour, &format!("{word:<7}"))?;
         write!(out, "  {:<16} {:>8.1} ms", c.name, c.millis)?;
-        if !c.detail.is_empty() {
+        if c.detail != Detail::None {
             write!(out, "  {}", c.detail)?;
         }
         writeln!(out)?;
@@ -129,6 +129,48 @@ fn write_summary(
     paint(out, colour, word)?;
     writeln!(out, " ({file_name})")?;
     Ok(())
+}
+
+/// A check's detail as the table shows it: `11 obligation(s), 18 queries (5 cached), 2
+/// without Z3`, `1 error(s)`; empty for [`Detail::None`].
+impl std::fmt::Display for Detail {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Detail::None => Ok(()),
+            Detail::Errors(n) => write!(f, "{n} error(s)"),
+            Detail::NotDecided(n) => write!(f, "{n} not decided (structural checks only)"),
+            Detail::PastDeadline { seconds } => write!(f, "not checked: the --deadline of {seconds} s had passed"),
+            Detail::Obligations { total, queries, cached, folded, failed, undecided, vacuous } => {
+                write!(f, "{total} obligation(s), {queries} quer{}", if queries == 1 { "y" } else { "ies" })?;
+                if cached > 0 {
+                    write!(f, " ({cached} cached)")?;
+                }
+                if folded > 0 {
+                    write!(f, ", {folded} without Z3")?;
+                }
+                if failed > 0 {
+                    write!(f, ", {failed} failed")?;
+                }
+                if undecided > 0 {
+                    write!(f, ", {undecided} undecided")?;
+                }
+                if vacuous > 0 {
+                    write!(f, ", {vacuous} held vacuously")?;
+                }
+                Ok(())
+            }
+            Detail::Vacuity { vacuous, proved, unsure } => {
+                write!(
+                    f,
+                    "{vacuous} of {proved} proved obligation(s) held only because their context is unsatisfiable"
+                )?;
+                if unsure > 0 {
+                    write!(f, ", {unsure} context(s) undecided")?;
+                }
+                Ok(())
+            }
+        }
+    }
 }
 
 /// The report as one JSON object. The schema is part of mochi's interface:
@@ -642,7 +684,7 @@ mod tests {
                 name: "parse",
                 status: Status::Fail,
                 millis: 0.25,
-                detail: "1 error(s)".into(),
+                detail: Detail::Errors(1),
                 queries: 0,
             }],
             projections: BTreeMap::new(),
@@ -683,6 +725,26 @@ mod tests {
         assert_eq!(
             run_summary_json(&s),
             json!({ "summary": { "files": 6, "verified": 3, "rejected": 1, "unknown": 0, "unreadable": 2, "seconds": 0.812 } })
+        );
+    }
+
+    #[test]
+    fn details_read_as_the_table_shows_them() {
+        let ob =
+            Detail::Obligations { total: 11, queries: 18, cached: 5, folded: 2, failed: 0, undecided: 0, vacuous: 0 };
+        assert_eq!(ob.to_string(), "11 obligation(s), 18 queries (5 cached), 2 without Z3");
+        let ob =
+            Detail::Obligations { total: 1, queries: 1, cached: 0, folded: 0, failed: 1, undecided: 2, vacuous: 3 };
+        assert_eq!(ob.to_string(), "1 obligation(s), 1 query, 1 failed, 2 undecided, 3 held vacuously");
+        assert_eq!(Detail::None.to_string(), "");
+        assert_eq!(Detail::Errors(2).to_string(), "2 error(s)");
+        assert_eq!(
+            Detail::Vacuity { vacuous: 0, proved: 4, unsure: 1 }.to_string(),
+            "0 of 4 proved obligation(s) held only because their context is unsatisfiable, 1 context(s) undecided"
+        );
+        assert_eq!(
+            Detail::PastDeadline { seconds: 0.5 }.to_string(),
+            "not checked: the --deadline of 0.5 s had passed"
         );
     }
 

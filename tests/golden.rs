@@ -25,8 +25,8 @@ fn dump(path: &Path) -> String {
         // How many SMT queries a check asked depends on which worker thread answered which
         // question first (the cache, and the vacuity guard's shared context answers): not
         // golden. The obligation and error counts are.
-        let detail = c
-            .detail
+        let detail = c.detail.to_string();
+        let detail = detail
             .split(", ")
             .filter(|part| !part.contains(" quer") && !part.contains("without Z3"))
             .collect::<Vec<_>>()
