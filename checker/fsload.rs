@@ -149,6 +149,34 @@ fn check_root(db: &mut SourceDb, (root, bad): (FileId, Option<Diagnostic>), cfg:
 mod tests {
     use super::*;
 
+    /// The pipeline reads imports only through the loader it is given: the example's
+    /// library, served from memory under a name that exists nowhere on disk, verifies; the
+    /// same text checked with the file-system loader cannot find it (E0105).
+    #[test]
+    fn the_pipeline_reads_imports_only_through_its_loader() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let chor = read_source(&dir.join("choreographies/example-4-2-4.chor")).expect("example");
+        let lib = read_source(&dir.join("motion-primitives/bot.mochi")).expect("library");
+        let chor = chor.replace("\"../motion-primitives/bot.mochi\"", "\"nowhere/in-memory.mochi\"");
+        let mut asked = Vec::new();
+        let mut memory = |p: &Path| {
+            asked.push(p.to_path_buf());
+            match p.strip_prefix("virtual") {
+                Ok(rest) if rest == Path::new("nowhere/in-memory.mochi") => Ok(lib.clone()),
+                // What the library imports in turn (`../robots/bot.mochi`): the real file.
+                Ok(rest) => read_source(&dir.join(rest)),
+                Err(_) => Err(std::io::Error::new(std::io::ErrorKind::NotFound, "not in memory")),
+            }
+        };
+        let mut db = SourceDb::new();
+        let root = db.add("virtual/example.chor", chor.as_str());
+        let report = driver::check_loaded(&mut db, root, &Config::default(), &mut memory);
+        assert_eq!(report.verdict, driver::Verdict::Verified, "{:?}", report.diagnostics);
+        assert_eq!(asked[0], Path::new("virtual/nowhere/in-memory.mochi"), "{asked:?}");
+        let report = check_source(&mut SourceDb::new(), "virtual/example.chor", &chor, &Config::default());
+        assert_eq!(report.diagnostics.first().map(|d| d.code), Some(Code::ImportNotFound), "{:?}", report.diagnostics);
+    }
+
     #[test]
     fn only_regular_utf8_files_within_the_size_limit_are_read() {
         let dir = std::env::temp_dir().join(format!("mochi-read-source-{}", std::process::id()));
