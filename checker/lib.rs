@@ -28,6 +28,7 @@ pub mod bounds;
 pub mod diag;
 pub mod driver;
 pub mod exact;
+pub mod fsload;
 pub mod hir;
 pub mod lanes;
 pub mod lower;

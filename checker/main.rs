@@ -1,8 +1,9 @@
 //! The `mochi` command line: `check`, `project`, `explain` and `simulate`.
 //!
-//! This is the only place that does IO: it reads arguments, hands each file to
-//! [`mochi::driver`], prints what [`mochi::render`] makes of the report, and turns the
-//! verdicts into the exit code:
+//! This is the IO edge, with [`mochi::fsload`] (which reads source files): it reads
+//! arguments, hands each file to the pipeline ([`mochi::fsload::check_file`], which runs
+//! [`mochi::driver`] with the file-system loader), writes what [`mochi::render`] makes of
+//! the report, and turns the verdicts into the exit code:
 //!
 //! | code | meaning                                                              |
 //! |------|----------------------------------------------------------------------|
@@ -13,17 +14,20 @@
 //! | 3    | undecided: some verdict unknown, none rejected                       |
 //! | 101  | mochi crashed (a bug: the panic message says where)                  |
 //!
-//! Output follows rustc: results (the check table and verdict, the summary line, JSON,
-//! projections, explanations) go to stdout; diagnostics and errors go to stderr. With
-//! `--format json` every input file yields exactly one JSON object on stdout, even
-//! one that could not be read.
+//! Output follows rustc, for every subcommand: results (the check table and verdict, the
+//! summary line, JSON, projections, explanations, simulation reports) go to stdout;
+//! diagnostics and errors go to stderr. With `--format json` every input file yields
+//! exactly one JSON object on stdout, even one that could not be read, and a run of
+//! several inputs ends with a summary object. The only text made here is the one-line
+//! `error: ...` of a failure of the run itself (an unreadable file, a bad option value);
+//! everything else, and the colour decision, is [`mochi::render`]'s.
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use mochi::diag::Code;
-use mochi::driver::{self, CheckResult, Config, Report, Status, Verdict};
-use mochi::render;
+use mochi::driver::{CheckResult, Config, Detail, Report, Status, Verdict};
+use mochi::render::{self, Json, RunSummary};
 use mochi::source::SourceDb;
-use mochi::syntax;
+use mochi::{fsload, syntax};
 use std::io::{IsTerminal, Write};
 use std::panic::{self, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
@@ -139,6 +143,20 @@ enum ColorChoice {
     Never,
 }
 
+impl ColorChoice {
+    /// Whether to colour stdout (`stdout: true`) or stderr: [`render::use_color`] decides
+    /// from the facts gathered here.
+    fn for_stream(self, stdout: bool) -> bool {
+        let choice = match self {
+            ColorChoice::Auto => render::ColorChoice::Auto,
+            ColorChoice::Always => render::ColorChoice::Always,
+            ColorChoice::Never => render::ColorChoice::Never,
+        };
+        let terminal = if stdout { std::io::stdout().is_terminal() } else { std::io::stderr().is_terminal() };
+        render::use_color(choice, terminal, std::env::var_os(render::COLOR_OFF_VAR).as_deref())
+    }
+}
+
 /// How a file, or a whole run, ended. Later variants win when files are combined.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 enum Outcome {
@@ -194,7 +212,7 @@ fn simulate(args: &SimulateArgs, color: ColorChoice) -> Outcome {
     let report = match panic::catch_unwind(AssertUnwindSafe(|| simulate_file(&mut db, &args.file, &cfg))) {
         Ok(Ok(Ok(r))) => r,
         Ok(Ok(Err(diags))) => {
-            let color = use_color(color, std::io::stderr().is_terminal());
+            let color = color.for_stream(false);
             eprint_safe(&diags.iter().map(|d| render::text(&db, d, color)).collect::<String>());
             return Outcome::Invalid;
         }
@@ -207,8 +225,8 @@ fn simulate(args: &SimulateArgs, color: ColorChoice) -> Outcome {
     let name = args.file.display().to_string();
     match args.format {
         Format::Text => print_safe(&render::simulation_text(&name, &report)),
-        Format::Json => match serde_json::to_string_pretty(&report) {
-            Ok(s) => print_safe(&(s + "\n")),
+        Format::Json => match render::simulation_json_text(&report) {
+            Ok(s) => print_safe(&s),
             Err(e) => {
                 eprintln_safe(&format!("error: cannot write the simulation as JSON: {e}"));
                 return Outcome::Crashed;
@@ -226,8 +244,8 @@ fn simulate(args: &SimulateArgs, color: ColorChoice) -> Outcome {
 
 fn check(args: &CheckArgs, color: ColorChoice) -> Outcome {
     let started = Instant::now();
-    let out_color = use_color(color, std::io::stdout().is_terminal());
-    let err_color = use_color(color, std::io::stderr().is_terminal());
+    let out_color = color.for_stream(true);
+    let err_color = color.for_stream(false);
     let mut config = Config::default();
     config.smt.timeout = Duration::from_secs_f64(args.timeout);
     if let Some(j) = args.jobs {
@@ -248,7 +266,7 @@ fn check(args: &CheckArgs, color: ColorChoice) -> Outcome {
     }
     let json_lines = inputs.len() > 1;
     let mut worst = Outcome::Verified;
-    let mut counts = [0usize; 4]; // verified, rejected, unknown, unreadable
+    let mut counts = RunSummary::default();
     for (i, input) in inputs.iter().enumerate() {
         let name = match input {
             Input::File(p) | Input::Unreadable(p, _) => p.display().to_string(),
@@ -261,7 +279,12 @@ fn check(args: &CheckArgs, color: ColorChoice) -> Outcome {
             (_, Some(d)) if Instant::now() >= d => Ok(past_deadline(args.deadline.unwrap_or_default())),
             _ => {
                 if let Some(d) = deadline {
-                    cfg.smt.timeout = cfg.smt.timeout.min(d.saturating_duration_since(Instant::now()));
+                    let left = d.saturating_duration_since(Instant::now());
+                    if left < cfg.smt.timeout {
+                        // An unknown then says the deadline, not the timeout, ran out.
+                        cfg.smt.timeout = left;
+                        cfg.cut_by_deadline = true;
+                    }
                 }
                 check_input(&mut db, input, &cfg)
             }
@@ -269,27 +292,19 @@ fn check(args: &CheckArgs, color: ColorChoice) -> Outcome {
         let report = match result {
             Ok(report) => report,
             Err(CheckError::Unreadable(msg)) => {
-                counts[3] += 1;
+                counts.unreadable += 1;
                 worst = worst.max(Outcome::Invalid);
                 eprintln_safe(&format!("error: cannot read {name}: {msg}"));
                 if let Format::Json = args.format {
-                    let value = serde_json::json!({
-                        "file": name, "verdict": "unreadable", "error": msg,
-                        "diagnostics": [], "checks": [], "partitions": []
-                    });
-                    print_json(&value, json_lines);
+                    print_json(&render::no_report_json(&name, "unreadable", &msg), json_lines);
                 }
                 continue;
             }
             Err(CheckError::Crashed) => {
-                counts[3] += 1;
+                counts.unreadable += 1;
                 worst = worst.max(Outcome::Crashed);
                 if let Format::Json = args.format {
-                    let value = serde_json::json!({
-                        "file": name, "verdict": "crashed", "error": "internal error: a bug in mochi",
-                        "diagnostics": [], "checks": [], "partitions": []
-                    });
-                    print_json(&value, json_lines);
+                    print_json(&render::no_report_json(&name, "crashed", "internal error: a bug in mochi"), json_lines);
                 }
                 continue;
             }
@@ -308,26 +323,28 @@ fn check(args: &CheckArgs, color: ColorChoice) -> Outcome {
                 }
             }
         }
-        counts[match report.verdict {
-            Verdict::Verified => 0,
-            Verdict::Rejected => 1,
-            Verdict::Unknown => 2,
-        }] += 1;
+        *match report.verdict {
+            Verdict::Verified => &mut counts.verified,
+            Verdict::Rejected => &mut counts.rejected,
+            Verdict::Unknown => &mut counts.unknown,
+        } += 1;
         worst = worst.max(match report.verdict {
             Verdict::Verified => Outcome::Verified,
             Verdict::Unknown => Outcome::Unknown,
             Verdict::Rejected => Outcome::Rejected,
         });
     }
-    if inputs.len() > 1 && matches!(args.format, Format::Text) {
-        let unreadable = if counts[3] > 0 { format!(", {} unreadable", counts[3]) } else { String::new() };
-        print_safe(&format!(
-            "\n{} verified, {} rejected, {} unknown{unreadable} in {:.1} s\n",
-            counts[0],
-            counts[1],
-            counts[2],
-            started.elapsed().as_secs_f64()
-        ));
+    // With several inputs, a last summary: a line of text, or a last JSON object.
+    if inputs.len() > 1 {
+        counts.seconds = started.elapsed().as_secs_f64();
+        match args.format {
+            Format::Text => print_safe(&render::run_summary_text(&counts)),
+            Format::Json => {
+                if !print_json(&render::run_summary_json(&counts), true) {
+                    worst = worst.max(Outcome::Crashed);
+                }
+            }
+        }
     }
     if inputs.is_empty() {
         eprintln_safe("error: no `.chor` files to check");
@@ -397,7 +414,7 @@ fn past_deadline(seconds: f64) -> Report {
             name: "deadline",
             status: Status::Unknown,
             millis: 0.0,
-            detail: format!("not checked: the --deadline of {seconds} s had passed"),
+            detail: Detail::PastDeadline { seconds },
             queries: 0,
         }],
         projections: Default::default(),
@@ -418,11 +435,10 @@ fn writable_dir(dir: &Path) -> std::io::Result<()> {
 
 /// Prints `value` as one line (several inputs: JSON Lines) or pretty; false if it could
 /// not be serialised (reported).
-fn print_json(value: &serde_json::Value, one_line: bool) -> bool {
-    let res = if one_line { serde_json::to_string(value) } else { serde_json::to_string_pretty(value) };
-    match res {
+fn print_json(value: &Json, one_line: bool) -> bool {
+    match render::json_text(value, one_line) {
         Ok(s) => {
-            print_safe(&(s + "\n"));
+            print_safe(&s);
             true
         }
         Err(e) => {
@@ -477,7 +493,7 @@ fn project(args: &ProjectArgs, color: ColorChoice) -> Outcome {
     };
     if selected.is_empty() {
         // The errors say why projection did not run; without any, the role is wrong.
-        let color = use_color(color, std::io::stderr().is_terminal());
+        let color = color.for_stream(false);
         let errors: String =
             report.diagnostics.iter().filter(|d| d.is_error()).map(|d| render::text(&db, d, color)).collect();
         let role = args.role.as_deref().unwrap_or_default();
@@ -495,25 +511,15 @@ fn project(args: &ProjectArgs, color: ColorChoice) -> Outcome {
         return Outcome::Invalid;
     }
     match (args.format, &args.role) {
-        (Format::Text, Some(_)) => {
-            let local = selected[0].1;
-            print_safe(&format!("{}\n", local.trim_end_matches('\n')));
-        }
-        (Format::Text, None) => {
-            let text: String =
-                selected.iter().map(|(role, local)| format!("local {role} = {};\n", local.trim_end())).collect();
-            print_safe(&text);
-        }
+        (Format::Text, Some(_)) => print_safe(&render::local_text(selected[0].1)),
+        (Format::Text, None) => print_safe(&render::locals_text(&selected)),
         (Format::Json, Some(role)) => {
-            let value = serde_json::json!({ "file": name, "role": role, "local": selected[0].1 });
-            if !print_json(&value, false) {
+            if !print_json(&render::local_json(&name, role, selected[0].1), false) {
                 return Outcome::Crashed;
             }
         }
         (Format::Json, None) => {
-            let locals: Vec<serde_json::Value> =
-                selected.iter().map(|(role, local)| serde_json::json!({ "role": role, "local": local })).collect();
-            if !print_json(&serde_json::json!({ "file": name, "locals": locals }), false) {
+            if !print_json(&render::locals_json(&name, &selected), false) {
                 return Outcome::Crashed;
             }
         }
@@ -526,8 +532,8 @@ fn project(args: &ProjectArgs, color: ColorChoice) -> Outcome {
 fn check_input(db: &mut SourceDb, input: &Input, config: &Config) -> Result<Report, CheckError> {
     // The panic hook has already printed the message and location when this returns.
     let res = panic::catch_unwind(AssertUnwindSafe(|| match input {
-        Input::File(path) => driver::check_file(db, path, config),
-        Input::Stdin => driver::check_stdin(db, config),
+        Input::File(path) => fsload::check_file(db, path, config),
+        Input::Stdin => fsload::check_stdin(db, config),
         Input::Unreadable(_, _) => Err(std::io::Error::other("unreadable")),
     }));
     match res {
@@ -551,10 +557,7 @@ fn check_input(db: &mut SourceDb, input: &Input, config: &Config) -> Result<Repo
 
 fn explain(args: &ExplainArgs) -> u8 {
     if args.list {
-        let mut codes = Code::ALL.to_vec();
-        codes.sort_by_key(|c| c.as_str());
-        let list: String = codes.iter().map(|c| format!("{c}  {}\n", c.title())).collect();
-        print_safe(&list);
+        print_safe(&render::code_list_text());
         return 0;
     }
     let text = args.code.as_deref().unwrap_or_default();
@@ -566,36 +569,8 @@ fn explain(args: &ExplainArgs) -> u8 {
         ));
         return USAGE;
     };
-    print_safe(&format!("{code}: {}\n\n{}\n", code.title(), wrap(code.explain(), 90)));
+    print_safe(&render::explain_text(code));
     0
-}
-
-/// Greedy word wrap at `width` characters; a longer word gets a line of its own.
-fn wrap(text: &str, width: usize) -> String {
-    let mut out = String::new();
-    let mut line_len = 0;
-    for word in text.split_whitespace() {
-        let n = word.chars().count();
-        if line_len > 0 && line_len + 1 + n > width {
-            out.push('\n');
-            line_len = 0;
-        } else if line_len > 0 {
-            out.push(' ');
-            line_len += 1;
-        }
-        out.push_str(word);
-        line_len += n;
-    }
-    out
-}
-
-/// `auto` colours a terminal unless `NO_COLOR` is set to a non-empty value (no-color.org).
-fn use_color(choice: ColorChoice, is_terminal: bool) -> bool {
-    match choice {
-        ColorChoice::Always => true,
-        ColorChoice::Never => false,
-        ColorChoice::Auto => is_terminal && std::env::var_os("NO_COLOR").is_none_or(|v| v.is_empty()),
-    }
 }
 
 /// Writes to stdout. A closed pipe (`mochi check ... | head`) is not an error worth a
@@ -621,15 +596,6 @@ mod tests {
     #[test]
     fn the_cli_definition_is_consistent() {
         Cli::command().debug_assert();
-    }
-
-    #[test]
-    fn wrap_keeps_lines_short_and_words_whole() {
-        let text = Code::NotTotallySynchronised.explain();
-        let wrapped = wrap(text, 90);
-        assert!(wrapped.lines().all(|l| l.chars().count() <= 90), "{wrapped}");
-        assert_eq!(wrapped.split_whitespace().collect::<Vec<_>>(), text.split_whitespace().collect::<Vec<_>>());
-        assert_eq!(wrap("a-very-long-word b", 4), "a-very-long-word\nb");
     }
 
     #[test]

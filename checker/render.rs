@@ -2,18 +2,24 @@
 //! codespan-reporting, rustc's layout) or into JSON for tools.
 //!
 //! **Architecture invariant:** this is the only module that knows about colours and
-//! output formats. Stages produce plain data; `main.rs` decides where it is written.
+//! output formats (`tests/tidy.rs` checks that no other names `serde_json`, `termcolor`,
+//! `codespan` or `NO_COLOR`). Stages produce plain data; `main.rs` gathers the facts
+//! (is the stream a terminal, is `NO_COLOR` set), asks [`use_color`], and writes what
+//! this module returns where it belongs.
 //! Rendering never panics, whatever the spans say: a span past the end of its file is
 //! clamped, one in an unknown file loses its location but not its message.
 
-use crate::diag::{Diagnostic, Severity};
-use crate::driver::{Report, Status, Verdict};
+use crate::diag::{Code, Diagnostic, Severity};
+use crate::driver::{Detail, Report, Status, Verdict};
 use crate::source::{SourceDb, Span};
 use codespan_reporting::diagnostic::{self as cs, LabelStyle};
 use codespan_reporting::files::SimpleFiles;
 use codespan_reporting::term::termcolor::{Buffer, Color, ColorSpec, WriteColor};
 use codespan_reporting::term::{self, Chars};
 use serde_json::{json, Value};
+
+/// A JSON value as this module builds it; `main.rs` only writes it ([`json_text`]).
+pub use serde_json::Value as Json;
 use std::borrow::Cow;
 use std::fmt::Write as _;
 use std::io::Write;
@@ -96,7 +102,7 @@ fn write_summary(
         write!(out, "  ")?;
         paint(out, colour, &format!("{word:<7}"))?;
         write!(out, "  {:<16} {:>8.1} ms", c.name, c.millis)?;
-        if !c.detail.is_empty() {
+        if c.detail != Detail::None {
             write!(out, "  {}", c.detail)?;
         }
         writeln!(out)?;
@@ -123,6 +129,48 @@ fn write_summary(
     paint(out, colour, word)?;
     writeln!(out, " ({file_name})")?;
     Ok(())
+}
+
+/// A check's detail as the table shows it: `11 obligation(s), 18 queries (5 cached), 2
+/// without Z3`, `1 error(s)`; empty for [`Detail::None`].
+impl std::fmt::Display for Detail {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Detail::None => Ok(()),
+            Detail::Errors(n) => write!(f, "{n} error(s)"),
+            Detail::NotDecided(n) => write!(f, "{n} not decided (structural checks only)"),
+            Detail::PastDeadline { seconds } => write!(f, "not checked: the --deadline of {seconds} s had passed"),
+            Detail::Obligations { total, queries, cached, folded, failed, undecided, vacuous } => {
+                write!(f, "{total} obligation(s), {queries} quer{}", if queries == 1 { "y" } else { "ies" })?;
+                if cached > 0 {
+                    write!(f, " ({cached} cached)")?;
+                }
+                if folded > 0 {
+                    write!(f, ", {folded} without Z3")?;
+                }
+                if failed > 0 {
+                    write!(f, ", {failed} failed")?;
+                }
+                if undecided > 0 {
+                    write!(f, ", {undecided} undecided")?;
+                }
+                if vacuous > 0 {
+                    write!(f, ", {vacuous} held vacuously")?;
+                }
+                Ok(())
+            }
+            Detail::Vacuity { vacuous, proved, unsure } => {
+                write!(
+                    f,
+                    "{vacuous} of {proved} proved obligation(s) held only because their context is unsatisfiable"
+                )?;
+                if unsure > 0 {
+                    write!(f, ", {unsure} context(s) undecided")?;
+                }
+                Ok(())
+            }
+        }
+    }
 }
 
 /// The report as one JSON object. The schema is part of mochi's interface:
@@ -484,6 +532,136 @@ pub fn simulation_text(file_name: &str, r: &crate::simulate::SimReport) -> Strin
     out
 }
 
+/// `--color`: when to colour.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ColorChoice {
+    /// Colour a terminal unless `NO_COLOR` is set to a non-empty value (no-color.org).
+    Auto,
+    Always,
+    Never,
+}
+
+/// The environment variable that turns colour off under [`ColorChoice::Auto`].
+pub const COLOR_OFF_VAR: &str = "NO_COLOR";
+
+/// Whether to colour a stream: `is_terminal` says whether it is one, `no_color` is the
+/// value of [`COLOR_OFF_VAR`] (the caller reads the environment).
+pub fn use_color(choice: ColorChoice, is_terminal: bool, no_color: Option<&std::ffi::OsStr>) -> bool {
+    match choice {
+        ColorChoice::Always => true,
+        ColorChoice::Never => false,
+        ColorChoice::Auto => is_terminal && no_color.is_none_or(|v| v.is_empty()),
+    }
+}
+
+/// `value` as text: one line (several inputs: JSON Lines) or pretty, with a final newline.
+pub fn json_text(value: &Json, one_line: bool) -> Result<String, String> {
+    let res = if one_line { serde_json::to_string(value) } else { serde_json::to_string_pretty(value) };
+    res.map(|s| s + "\n").map_err(|e| e.to_string())
+}
+
+/// The JSON object of an input that yielded no report: `verdict` is `unreadable` (with
+/// the reason) or `crashed`; the other fields of [`report_json`] are there, empty, so that
+/// every input has the same shape.
+pub fn no_report_json(file_name: &str, verdict: &str, error: &str) -> Json {
+    json!({
+        "file": file_name, "verdict": verdict, "error": error,
+        "diagnostics": [], "checks": [], "partitions": []
+    })
+}
+
+/// How many inputs of a `mochi check` run ended how, and how long the run took.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RunSummary {
+    pub verified: usize,
+    pub rejected: usize,
+    pub unknown: usize,
+    /// Inputs with no report: unreadable, or mochi crashed on them.
+    pub unreadable: usize,
+    pub seconds: f64,
+}
+
+/// The last line of a `mochi check` of several inputs, after a blank line:
+/// `3 verified, 1 rejected, 0 unknown in 0.8 s`.
+pub fn run_summary_text(s: &RunSummary) -> String {
+    let unreadable = if s.unreadable > 0 { format!(", {} unreadable", s.unreadable) } else { String::new() };
+    format!(
+        "\n{} verified, {} rejected, {} unknown{unreadable} in {:.1} s\n",
+        s.verified, s.rejected, s.unknown, s.seconds
+    )
+}
+
+/// The last object of a `mochi check --format json` of several inputs (after one object
+/// per input): `{"summary": {"files", "verified", "rejected", "unknown", "unreadable",
+/// "seconds"}}`. It is the only object with a `summary` key (per-input objects have
+/// `file`).
+pub fn run_summary_json(s: &RunSummary) -> Json {
+    let files = s.verified + s.rejected + s.unknown + s.unreadable;
+    let seconds = (s.seconds * 1000.0).round() / 1000.0;
+    json!({ "summary": {
+        "files": files, "verified": s.verified, "rejected": s.rejected, "unknown": s.unknown,
+        "unreadable": s.unreadable, "seconds": seconds,
+    } })
+}
+
+/// `mochi project --role R`: R's local type on its own line.
+pub fn local_text(local: &str) -> String {
+    format!("{}\n", local.trim_end_matches('\n'))
+}
+
+/// `mochi project`: every local type as a `local R = T;` line.
+pub fn locals_text(locals: &[(&String, &String)]) -> String {
+    locals.iter().map(|(role, local)| format!("local {role} = {};\n", local.trim_end())).collect()
+}
+
+/// `mochi project --role R --format json`: `{"file", "role", "local"}`.
+pub fn local_json(file_name: &str, role: &str, local: &str) -> Json {
+    json!({ "file": file_name, "role": role, "local": local })
+}
+
+/// `mochi project --format json`: `{"file", "locals": [{"role", "local"}]}`.
+pub fn locals_json(file_name: &str, locals: &[(&String, &String)]) -> Json {
+    let locals: Vec<Value> = locals.iter().map(|(role, local)| json!({ "role": role, "local": local })).collect();
+    json!({ "file": file_name, "locals": locals })
+}
+
+/// `mochi simulate --format json`: the report, pretty, its fields named and ordered as in
+/// Rust (text, not a [`Json`] value, which would sort the keys).
+pub fn simulation_json_text(r: &crate::simulate::SimReport) -> Result<String, String> {
+    serde_json::to_string_pretty(r).map(|s| s + "\n").map_err(|e| e.to_string())
+}
+
+/// `mochi explain CODE`: the title, a blank line, and the paragraph wrapped at 90 columns.
+pub fn explain_text(code: Code) -> String {
+    format!("{code}: {}\n\n{}\n", code.title(), wrap(code.explain(), 90))
+}
+
+/// `mochi explain --list`: every code and its title, sorted by code.
+pub fn code_list_text() -> String {
+    let mut codes = Code::ALL.to_vec();
+    codes.sort_by_key(|c| c.as_str());
+    codes.iter().map(|c| format!("{c}  {}\n", c.title())).collect()
+}
+
+/// Greedy word wrap at `width` characters; a longer word gets a line of its own.
+fn wrap(text: &str, width: usize) -> String {
+    let mut out = String::new();
+    let mut line_len = 0;
+    for word in text.split_whitespace() {
+        let n = word.chars().count();
+        if line_len > 0 && line_len + 1 + n > width {
+            out.push('\n');
+            line_len = 0;
+        } else if line_len > 0 {
+            out.push(' ');
+            line_len += 1;
+        }
+        out.push_str(word);
+        line_len += n;
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -506,7 +684,7 @@ mod tests {
                 name: "parse",
                 status: Status::Fail,
                 millis: 0.25,
-                detail: "1 error(s)".into(),
+                detail: Detail::Errors(1),
                 queries: 0,
             }],
             projections: BTreeMap::new(),
@@ -514,6 +692,60 @@ mod tests {
             separations: Vec::new(),
             vacuous: 0,
         }
+    }
+
+    #[test]
+    fn wrap_keeps_lines_short_and_words_whole() {
+        let text = Code::NotTotallySynchronised.explain();
+        let wrapped = wrap(text, 90);
+        assert!(wrapped.lines().all(|l| l.chars().count() <= 90), "{wrapped}");
+        assert_eq!(wrapped.split_whitespace().collect::<Vec<_>>(), text.split_whitespace().collect::<Vec<_>>());
+        assert_eq!(wrap("a-very-long-word b", 4), "a-very-long-word\nb");
+    }
+
+    #[test]
+    fn colour_is_decided_from_the_choice_the_terminal_and_no_color() {
+        use std::ffi::OsStr;
+        assert!(use_color(ColorChoice::Always, false, Some(OsStr::new("1"))));
+        assert!(!use_color(ColorChoice::Never, true, None));
+        assert!(use_color(ColorChoice::Auto, true, None));
+        assert!(use_color(ColorChoice::Auto, true, Some(OsStr::new(""))), "an empty NO_COLOR does not count");
+        assert!(!use_color(ColorChoice::Auto, true, Some(OsStr::new("1"))));
+        assert!(!use_color(ColorChoice::Auto, false, None));
+    }
+
+    #[test]
+    fn the_run_summary_counts_every_input() {
+        let s = RunSummary { verified: 3, rejected: 1, unknown: 0, unreadable: 2, seconds: 0.8123 };
+        assert_eq!(run_summary_text(&s), "\n3 verified, 1 rejected, 0 unknown, 2 unreadable in 0.8 s\n");
+        assert_eq!(
+            run_summary_text(&RunSummary { unreadable: 0, ..s }),
+            "\n3 verified, 1 rejected, 0 unknown in 0.8 s\n"
+        );
+        assert_eq!(
+            run_summary_json(&s),
+            json!({ "summary": { "files": 6, "verified": 3, "rejected": 1, "unknown": 0, "unreadable": 2, "seconds": 0.812 } })
+        );
+    }
+
+    #[test]
+    fn details_read_as_the_table_shows_them() {
+        let ob =
+            Detail::Obligations { total: 11, queries: 18, cached: 5, folded: 2, failed: 0, undecided: 0, vacuous: 0 };
+        assert_eq!(ob.to_string(), "11 obligation(s), 18 queries (5 cached), 2 without Z3");
+        let ob =
+            Detail::Obligations { total: 1, queries: 1, cached: 0, folded: 0, failed: 1, undecided: 2, vacuous: 3 };
+        assert_eq!(ob.to_string(), "1 obligation(s), 1 query, 1 failed, 2 undecided, 3 held vacuously");
+        assert_eq!(Detail::None.to_string(), "");
+        assert_eq!(Detail::Errors(2).to_string(), "2 error(s)");
+        assert_eq!(
+            Detail::Vacuity { vacuous: 0, proved: 4, unsure: 1 }.to_string(),
+            "0 of 4 proved obligation(s) held only because their context is unsatisfiable, 1 context(s) undecided"
+        );
+        assert_eq!(
+            Detail::PastDeadline { seconds: 0.5 }.to_string(),
+            "not checked: the --deadline of 0.5 s had passed"
+        );
     }
 
     #[test]

@@ -164,12 +164,15 @@ fn several_files_in_json_give_one_line_each() {
     assert_eq!(o.status.code(), Some(1));
     let out = stdout(&o);
     let lines: Vec<&str> = out.lines().collect();
-    assert_eq!(lines.len(), 2, "{out}");
+    assert_eq!(lines.len(), 3, "one line per file, then the summary: {out}");
     let parsed: Vec<Value> = lines.iter().map(|l| serde_json::from_str(l).expect("each line is JSON")).collect();
     assert_eq!(parsed[0]["file"], path_arg(&first));
     assert_eq!(parsed[1]["file"], path_arg(&second));
     assert_eq!(parsed[1]["diagnostics"][0]["line"], 2);
     assert_eq!(parsed[1]["diagnostics"][0]["column"], 11);
+    let summary = &parsed[2]["summary"];
+    assert_eq!((summary["files"].as_u64(), summary["rejected"].as_u64()), (Some(2), Some(2)), "{summary}");
+    assert!(parsed[2].get("file").is_none(), "the summary is not a file's report: {}", parsed[2]);
 }
 
 #[test]
@@ -181,10 +184,12 @@ fn an_unreadable_file_among_others_fails_the_run() {
     assert_eq!(o.status.code(), Some(1));
     // Every input yields one JSON object, the unreadable one too (it failed before).
     let lines: Vec<Value> = stdout(&o).lines().map(|l| serde_json::from_str(l).expect("JSON")).collect();
-    assert_eq!(lines.len(), 2, "{}", stdout(&o));
+    assert_eq!(lines.len(), 3, "{}", stdout(&o));
     assert_eq!(lines[1]["file"], path_arg(&missing));
     assert_eq!(lines[1]["verdict"], "unreadable");
     assert!(lines[1]["error"].as_str().is_some_and(|e| !e.is_empty()));
+    assert_eq!(lines[2]["summary"]["rejected"], 1, "{}", lines[2]);
+    assert_eq!(lines[2]["summary"]["unreadable"], 1, "{}", lines[2]);
     assert!(stderr(&o).contains("cannot read"), "{}", stderr(&o));
     let o = mochi(&["check", "--format", "json", path_arg(&missing)]);
     let v: Value = serde_json::from_slice(&o.stdout).expect("one JSON document for one missing file");
@@ -308,6 +313,30 @@ fn a_forced_timeout_gives_unknown_and_exit_3() {
     let notes = undecided_notes(&v);
     assert!(!notes.is_empty() && notes.iter().all(|n| n.contains("timed out after 300 ms")), "{notes:?}");
     assert!(v["diagnostics"].as_array().expect("diagnostics").iter().all(|d| d["severity"] != "error"), "{v}");
+}
+
+#[test]
+fn a_query_cut_by_the_deadline_says_so_not_raise_the_timeout() {
+    // The same query, with the default --timeout (10 s) but a --deadline of 0.5 s for the
+    // run: the file starts at once, its queries get only the time left, and run out.
+    let o = mochi(&["check", "tests/data/hard-integer-guard.chor", "--deadline", "0.5", "--format", "json"]);
+    assert_eq!(o.status.code(), Some(3), "{}", stdout(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
+    assert_eq!(v["verdict"], "unknown");
+    let notes = undecided_notes(&v);
+    assert!(!notes.is_empty(), "{v}");
+    for n in &notes {
+        assert!(n.contains("the run's --deadline was reached (the query had only 0."), "{n}");
+        assert!(!n.contains("--timeout"), "raising --timeout would not help: {n}");
+    }
+    let helps: Vec<&str> = v["diagnostics"]
+        .as_array()
+        .expect("diagnostics")
+        .iter()
+        .filter(|d| d["code"] == "U0001")
+        .filter_map(|d| d["help"].as_str())
+        .collect();
+    assert!(helps.iter().all(|h| h.contains("later `--deadline`") && !h.contains("--timeout")), "{helps:?}");
 }
 
 #[test]
@@ -701,5 +730,61 @@ fn verdict_diagnostics_and_exit_code_agree_on_every_input() {
     // Every verdict occurs, so that no branch above holds vacuously.
     for verdict in ["verified", "rejected", "unknown"] {
         assert!(seen.get(verdict).is_some_and(|n| *n > 0), "no input was {verdict}: {seen:?}");
+    }
+}
+
+/// rustc's split, for every subcommand: results on stdout, diagnostics and errors on
+/// stderr, so `2>/dev/null` keeps exactly the results and `>/dev/null` exactly the
+/// problems (README, "Output streams").
+#[test]
+fn every_subcommand_writes_results_to_stdout_and_problems_to_stderr() {
+    let dir = TempDir::new("streams");
+    let bad = dir.write("bad.chor", SYNTAX_ERROR);
+    let bad = path_arg(&bad);
+    let missing = dir.0.join("missing.chor");
+    let missing = path_arg(&missing);
+    let good = "choreographies/example-4-2-4.chor";
+    // (arguments, exit code, what stdout holds, what stderr holds); `None`: nothing at all.
+    type Case<'a> = (&'a [&'a str], i32, Option<&'a str>, Option<&'a str>);
+    let cases: &[Case] = &[
+        (&["check", good], 0, Some("verdict: verified"), None),
+        (&["check", bad], 1, Some("verdict: rejected"), Some("error[E0103]")),
+        (&["check", "--format", "json", bad], 1, Some("\"verdict\": \"rejected\""), None),
+        (&["check", missing], 1, None, Some("error: cannot read")),
+        (
+            &["check", good, missing],
+            1,
+            Some("1 verified, 0 rejected, 0 unknown, 1 unreadable in "),
+            Some("error: cannot read"),
+        ),
+        (&["check", "--format", "json", good, bad], 1, Some("{\"summary\":"), None),
+        (&["project", "--role", "p1", good], 0, Some("mu t. dt<open>"), None),
+        (&["project", "--format", "json", good], 0, Some("\"locals\""), None),
+        (&["project", bad], 1, None, Some("error[E0103]")),
+        (&["project", "--role", "nobody", good], 1, None, Some("error: no participant named `nobody`")),
+        (&["project", missing], 1, None, Some("error: cannot read")),
+        (&["explain", "E0301"], 0, Some("E0301: message to oneself"), None),
+        (&["explain", "--list"], 0, Some("E0301  message to oneself"), None),
+        (&["explain", "E9999"], 2, None, Some("error: unknown code `E9999`")),
+        (&["simulate", "--runs", "1", "--steps", "4", good], 0, Some("no collision, no stuck state"), None),
+        (&["simulate", "--runs", "1", "--steps", "4", "--format", "json", good], 0, Some("\"findings\": []"), None),
+        (&["simulate", bad], 1, None, Some("error[E0103]")),
+        (&["simulate", missing], 1, None, Some("error: cannot read")),
+    ];
+    for (args, code, out, err) in cases {
+        let o = mochi(args);
+        let (so, se) = (stdout(&o), stderr(&o));
+        assert_eq!(o.status.code(), Some(*code), "{args:?}\nstdout: {so}\nstderr: {se}");
+        match out {
+            Some(want) => assert!(so.contains(want), "{args:?}: stdout lacks {want:?}:\n{so}"),
+            None => assert!(so.is_empty(), "{args:?}: a result on stdout where there is none:\n{so}"),
+        }
+        match err {
+            Some(want) => assert!(se.contains(want), "{args:?}: stderr lacks {want:?}:\n{se}"),
+            None => assert!(se.is_empty(), "{args:?}: stderr should be empty:\n{se}"),
+        }
+        // Diagnostics never reach stdout, results never reach stderr.
+        assert!(!so.contains("error[") && !so.contains("error:"), "{args:?}: a problem on stdout:\n{so}");
+        assert!(!se.contains("verdict:") && !se.contains("\"verdict\""), "{args:?}: a result on stderr:\n{se}");
     }
 }

@@ -22,6 +22,24 @@ use mochi::source::SourceDb;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
+/// A check's counts that do not depend on scheduling: how many obligations, how many
+/// failed, were undecided or held vacuously. Query, cache and "settled without Z3" counts
+/// are left out: which worker asked first decides them (a contract witnessed by a `dt`'s
+/// query needs no query of its own).
+fn golden_detail(d: &mochi::driver::Detail) -> String {
+    use mochi::driver::Detail;
+    match d {
+        Detail::None => String::new(),
+        Detail::Errors(n) => format!(" errors={n}"),
+        Detail::Obligations { total, failed, undecided, vacuous, .. } => {
+            format!(" obligations={total} failed={failed} undecided={undecided} vacuous={vacuous}")
+        }
+        Detail::NotDecided(n) => format!(" not-decided={n}"),
+        Detail::Vacuity { vacuous, proved, unsure } => format!(" proved={proved} vacuous={vacuous} unsure={unsure}"),
+        Detail::PastDeadline { .. } => " past-deadline".to_string(),
+    }
+}
+
 /// Every `.chor` under `choreographies/`, in every folder, sorted.
 fn chor_files() -> Vec<PathBuf> {
     fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
@@ -91,7 +109,7 @@ fn dump(path: &Path) -> String {
     let _ = writeln!(out, "==== VERDICT ====\n{:?}", report.verdict);
     out.push_str("==== CHECKS ====\n");
     for c in &report.checks {
-        let _ = writeln!(out, "{:<20} {:?}", c.name, c.status);
+        let _ = writeln!(out, "{:<20} {:?}{}", c.name, c.status, golden_detail(&c.detail));
     }
     let _ = writeln!(out, "held vacuously: {}", report.vacuous);
     out.push_str("==== DIAGNOSTICS ====\n");

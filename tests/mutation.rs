@@ -67,7 +67,11 @@ fn root() -> PathBuf {
 }
 
 fn cfg(timeout: Duration) -> Config {
-    Config { smt: SmtConfig { timeout, jobs: 1, dump_dir: None, progress: false }, structural_only: false }
+    Config {
+        smt: SmtConfig { timeout, jobs: 1, dump_dir: None, progress: false },
+        structural_only: false,
+        ..Config::default()
+    }
 }
 
 /// A mutant ready to run: the example (relative to `choreographies/`), the mutated file

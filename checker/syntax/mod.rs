@@ -1,13 +1,26 @@
-//! Syntax: lexing and parsing of mochi's language (LANGUAGE.md), and loading a file
-//! with its imports into a [`SourceDb`]. This module knows nothing of name resolution.
+//! Syntax: lexing and parsing of mochi's language (LANGUAGE.md), and following a file's
+//! imports into a [`SourceDb`] through a [`Loader`] the caller passes in (the file system's
+//! is [`crate::fsload::read_source`]). This module does no IO and knows nothing of name
+//! resolution.
 
 pub mod ast;
 pub mod lexer;
 pub mod parser;
 
 use crate::diag::{Code, Diagnostic};
-use crate::source::{FileId, SourceDb, Span};
+use crate::source::{FileId, SourceDb};
 use std::path::{Path, PathBuf};
+
+// The file-system readers moved to the IO edge, `fsload`; re-exported at their old paths
+// so that other branches keep compiling (the lead removes this after the merge).
+pub use crate::fsload::{load, load_root, load_stdin, read_source};
+
+/// Where imports come from: the text of the file at a path (already joined to the
+/// importer's directory and normalised), or why it cannot be had. A [`SourceError`] inside
+/// the `io::Error` ([`source_error`]) becomes E0106 or E0107 at the import; any other
+/// error E0105. The file system's loader is [`crate::fsload::read_source`]; tests and
+/// library users pass closures over memory.
+pub type Loader<'a> = dyn FnMut(&Path) -> std::io::Result<String> + 'a;
 
 /// A file and everything it imports, parsed, in dependency order (imports first).
 #[derive(Debug, Default)]
@@ -19,8 +32,9 @@ pub struct Parsed {
 pub const MAX_FILE_SIZE: u64 = 64 << 20;
 
 /// Why a file could not be taken as source text. Carried inside an [`std::io::Error`]
-/// (kind `InvalidData` or `InvalidInput`) by [`read_source`], so readers stay
-/// `io::Result<String>`; [`source_error`] gets it back.
+/// (kind `InvalidData` or `InvalidInput`) by a [`Loader`] such as
+/// [`crate::fsload::read_source`], so loaders stay `io::Result<String>`; [`source_error`]
+/// gets it back.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum SourceError {
     /// A directory, device, FIFO or socket: reading `/dev/zero` never ends.
@@ -47,32 +61,9 @@ impl std::fmt::Display for SourceError {
 
 impl std::error::Error for SourceError {}
 
-/// The [`SourceError`] inside `e`, if [`read_source`] put one there.
+/// The [`SourceError`] inside `e`, if a [`Loader`] put one there.
 pub fn source_error(e: &std::io::Error) -> Option<&SourceError> {
     e.get_ref().and_then(|inner| inner.downcast_ref::<SourceError>())
-}
-
-/// Reads a source file: only a regular file (after following links), at most
-/// [`MAX_FILE_SIZE`] bytes, in UTF-8. The size is checked before and while reading, so
-/// a file that grows meanwhile cannot exhaust memory either.
-pub fn read_source(path: &Path) -> std::io::Result<String> {
-    use std::io::Read;
-    let fail = |e: SourceError| std::io::Error::new(std::io::ErrorKind::InvalidData, e);
-    let meta = std::fs::metadata(path)?;
-    let ft = meta.file_type();
-    if !ft.is_file() {
-        let kind = if ft.is_dir() { "a directory" } else { special_kind(&ft) };
-        return Err(fail(SourceError::NotRegular(kind)));
-    }
-    if meta.len() > MAX_FILE_SIZE {
-        return Err(fail(SourceError::TooLarge(meta.len())));
-    }
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
-    std::fs::File::open(path)?.take(MAX_FILE_SIZE + 1).read_to_end(&mut bytes)?;
-    if bytes.len() as u64 > MAX_FILE_SIZE {
-        return Err(fail(SourceError::TooLarge(bytes.len() as u64)));
-    }
-    decode(bytes).map_err(fail)
 }
 
 /// UTF-8 text of `bytes`, or where the first invalid byte is.
@@ -88,88 +79,16 @@ pub fn decode(bytes: Vec<u8>) -> Result<String, SourceError> {
     })
 }
 
-#[cfg(unix)]
-fn special_kind(ft: &std::fs::FileType) -> &'static str {
-    use std::os::unix::fs::FileTypeExt;
-    if ft.is_char_device() {
-        "a character device"
-    } else if ft.is_block_device() {
-        "a block device"
-    } else if ft.is_fifo() {
-        "a FIFO"
-    } else if ft.is_socket() {
-        "a socket"
-    } else {
-        "a special file"
-    }
-}
-
-#[cfg(not(unix))]
-fn special_kind(_: &std::fs::FileType) -> &'static str {
-    "a special file"
-}
-
-/// Reads the file the user named into `db` ([`read_source`]). A file that is not UTF-8
-/// is still added (with replacement characters) so that its E0107 can point at the
-/// bad byte: that diagnostic is returned beside the id.
-pub fn load(db: &mut SourceDb, path: &Path) -> std::io::Result<(FileId, Option<Diagnostic>)> {
-    match read_source(path) {
-        Ok(text) => Ok((db.add(path.display().to_string(), text), None)),
-        Err(e) => match source_error(&e) {
-            Some(&SourceError::NotUtf8 { offset, .. }) => {
-                let bytes = std::fs::read(path)?;
-                let err = e.get_ref().map(|e| e.to_string()).unwrap_or_default();
-                // Replacement characters keep the valid prefix, and so the bad offset, as is.
-                let text = String::from_utf8_lossy(&bytes).into_owned();
-                let id = db.add(path.display().to_string(), text);
-                let d = Diagnostic::error(Code::NotUtf8, Span::new(id, offset, offset + 1), err)
-                    .with_help("save the file as UTF-8 (mochi source is ASCII outside comments and strings)");
-                Ok((id, Some(d)))
-            }
-            _ => Err(e),
-        },
-    }
-}
-
-/// Reads a file from disk into `db` ([`read_source`]); the caller reports an unreadable
-/// root file. [`load`] turns a file that is not UTF-8 into a diagnostic instead.
-pub fn load_root(db: &mut SourceDb, path: &Path) -> std::io::Result<FileId> {
-    let text = read_source(path)?;
-    Ok(db.add(path.display().to_string(), text))
-}
-
-/// Loads standard input as the root file, named `<stdin>`; imports are then relative to
-/// the current directory. Same limits as [`read_source`].
-pub fn load_stdin(db: &mut SourceDb) -> std::io::Result<(FileId, Option<Diagnostic>)> {
-    use std::io::Read;
-    let mut bytes = Vec::new();
-    std::io::stdin().lock().take(MAX_FILE_SIZE + 1).read_to_end(&mut bytes)?;
-    if bytes.len() as u64 > MAX_FILE_SIZE {
-        return Err(std::io::Error::new(std::io::ErrorKind::InvalidData, SourceError::TooLarge(bytes.len() as u64)));
-    }
-    match decode(bytes.clone()) {
-        Ok(text) => Ok((db.add(STDIN_NAME, text), None)),
-        Err(e) => {
-            let offset = if let SourceError::NotUtf8 { offset, .. } = e { offset } else { 0 };
-            let id = db.add(STDIN_NAME, String::from_utf8_lossy(&bytes).into_owned());
-            let d = Diagnostic::error(Code::NotUtf8, Span::new(id, offset, offset + 1), e.to_string())
-                .with_help("send UTF-8 text (mochi source is ASCII outside comments and strings)");
-            Ok((id, Some(d)))
-        }
-    }
-}
-
 /// The display name of standard input; its imports are relative to the current directory.
 pub const STDIN_NAME: &str = "<stdin>";
 
 /// Parses `root` (already in `db`) and, transitively, the files it imports. Imported
 /// paths are relative to the importing file; each file is parsed once, so cycles are
-/// harmless. `read` abstracts the file system for tests and for the library API.
-pub fn parse_with_imports(
-    db: &mut SourceDb,
-    root: FileId,
-    read: &mut dyn FnMut(&Path) -> std::io::Result<String>,
-) -> (Parsed, Vec<Diagnostic>) {
+/// harmless. `read` is where the imported files come from: the file system at the edge
+/// ([`crate::fsload::read_source`]), memory in tests and for the library API. Whatever
+/// the loader, an import must name a `.mochi` or `.chor` file (E0106): that is the
+/// language's rule, checked here before the loader is asked.
+pub fn parse_with_imports(db: &mut SourceDb, root: FileId, read: &mut Loader<'_>) -> (Parsed, Vec<Diagnostic>) {
     let mut diags = Vec::new();
     let mut order = Vec::new();
     let mut seen: Vec<PathBuf> = vec![normalise(Path::new(&db.file(root).name))];
@@ -180,7 +99,7 @@ pub fn parse_with_imports(
 fn visit(
     db: &mut SourceDb,
     id: FileId,
-    read: &mut dyn FnMut(&Path) -> std::io::Result<String>,
+    read: &mut Loader<'_>,
     seen: &mut Vec<PathBuf>,
     order: &mut Vec<(FileId, ast::File)>,
     diags: &mut Vec<Diagnostic>,
@@ -278,26 +197,6 @@ mod tests {
         assert_eq!(reads, vec![PathBuf::from("lib/a.mochi")]);
         assert_eq!(parsed.files.len(), 2);
         assert_eq!(parsed.files[1].0, root, "imports come first");
-    }
-
-    #[test]
-    fn only_regular_utf8_files_within_the_size_limit_are_read() {
-        let dir = std::env::temp_dir().join(format!("mochi-read-source-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("temp dir");
-        let kind = |p: &Path| read_source(p).map_err(|e| source_error(&e).cloned());
-        assert_eq!(kind(&dir), Err(Some(SourceError::NotRegular("a directory"))));
-        #[cfg(unix)]
-        assert_eq!(kind(Path::new("/dev/zero")), Err(Some(SourceError::NotRegular("a character device"))));
-        // A sparse file just over the limit: refused from its metadata, nothing is read.
-        let big = dir.join("big.mochi");
-        std::fs::File::create(&big).and_then(|f| f.set_len(MAX_FILE_SIZE + 1)).expect("sparse file");
-        assert_eq!(kind(&big), Err(Some(SourceError::TooLarge(MAX_FILE_SIZE + 1))));
-        let bad = dir.join("bad.mochi");
-        std::fs::write(&bad, b"ab\r\ncd\rx\xffy").expect("write");
-        assert_eq!(kind(&bad), Err(Some(SourceError::NotUtf8 { byte: 0xff, offset: 8, line: 3, column: 2 })));
-        std::fs::write(&bad, "const a = 1;").expect("write");
-        assert_eq!(kind(&bad), Ok("const a = 1;".to_string()));
-        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
