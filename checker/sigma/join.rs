@@ -5,11 +5,10 @@
 //! literals on one term (the interval join).
 
 use super::normal::{binary, literal, normalize, Decimal};
-use super::{FxHasher, Sigma};
+use super::Sigma;
 use crate::hir::expr::BinOp;
 use crate::hir::*;
-use std::collections::{HashMap, HashSet};
-use std::hash::BuildHasherDefault;
+use rustc_hash::{FxHashMap, FxHashSet};
 
 impl Sigma {
     /// A context implied by each of the two (their disjunction, weakened): the facts
@@ -27,7 +26,7 @@ impl Sigma {
         }
         let (mine, theirs, kept) = (self.bounds(), other.bounds(), s.bounds());
         let mut adds = Vec::new();
-        let mut seen: HashSet<&Expr, BuildHasherDefault<FxHasher>> = HashSet::default();
+        let mut seen: FxHashSet<&Expr> = FxHashSet::default();
         for f in &self.facts {
             let Some((term, _, _)) = bound_of(f) else { continue };
             if !seen.insert(term) {
@@ -56,8 +55,8 @@ impl Sigma {
 
     /// The tightest lower and upper bound by a number literal that a fact of Σ states
     /// directly for each term.
-    fn bounds(&self) -> HashMap<&Expr, (Option<Bound>, Option<Bound>), BuildHasherDefault<FxHasher>> {
-        let mut out: HashMap<&Expr, (Option<Bound>, Option<Bound>), BuildHasherDefault<FxHasher>> = HashMap::default();
+    fn bounds(&self) -> FxHashMap<&Expr, (Option<Bound>, Option<Bound>)> {
+        let mut out: FxHashMap<&Expr, (Option<Bound>, Option<Bound>)> = FxHashMap::default();
         for f in &self.facts {
             let Some((term, lower, upper)) = bound_of(f) else { continue };
             let e = out.entry(term).or_default();

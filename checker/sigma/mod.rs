@@ -40,26 +40,24 @@
 //! participant's view.
 
 mod contract;
-mod hash;
 mod join;
 mod motion;
 mod normal;
 
 pub use contract::{init, initial_values, instantiate, invariant, participants, subst_params};
-pub(crate) use hash::fact_hash;
-use hash::FxHasher;
 use normal::{admissible, normalize};
 
 use crate::hir::*;
 use crate::subtype::{conjuncts, mentions};
-use std::collections::{HashMap, HashSet};
-use std::hash::BuildHasherDefault;
+use rustc_hash::{FxHashSet, FxHasher};
+use std::collections::HashMap;
+use std::hash::{Hash, Hasher};
 
 /// The logical context: a set of conjuncts, kept in the order they were learnt.
 #[derive(Clone, Debug, Default)]
 pub struct Sigma {
     facts: Vec<Expr>,
-    set: HashSet<Expr, BuildHasherDefault<FxHasher>>,
+    set: FxHashSet<Expr>,
 }
 
 /// Two contexts are equal when they hold the same facts, in whatever order.
@@ -67,6 +65,15 @@ impl PartialEq for Sigma {
     fn eq(&self, other: &Sigma) -> bool {
         self.facts.len() == other.facts.len() && self.facts.iter().all(|f| other.set.contains(f))
     }
+}
+
+/// A hash of a fact for ordering and sets, as equality sees it (without locations).
+/// FxHash (`rustc-hash`): much faster than the default SipHash on the many small terms a
+/// context hashes, and contexts need no protection against adversarial collisions.
+pub(crate) fn fact_hash(e: &Expr) -> u64 {
+    let mut h = FxHasher::default();
+    e.hash(&mut h);
+    h.finish()
 }
 
 impl Sigma {
