@@ -4,11 +4,11 @@
 //! helpers diagnostics use to show local types: [`describe`] (the first action),
 //! [`motion_text`], and [`print_bounded`] (whole types, summarised when too large).
 
+use super::node::NodeRef;
 use super::*;
 use crate::syntax::ast::{BinOp, UnOp};
 use std::collections::HashMap;
 use std::fmt::Write;
-use std::sync::Arc;
 
 /// Prints a local type over several lines, choices indented by two spaces.
 pub fn local(prog: &Program, t: &Local) -> String {
@@ -449,14 +449,14 @@ pub fn print_bounded(prog: &Program, t: &LocalRc, max_nodes: usize) -> String {
 }
 
 /// The number of nodes of `t` printed as a tree, saturating at `cap`.
-fn tree_size(t: &LocalRc, cap: usize, memo: &mut HashMap<usize, usize>) -> usize {
-    let key = Arc::as_ptr(t) as usize;
+fn tree_size<'t>(t: &'t LocalRc, cap: usize, memo: &mut HashMap<NodeRef<&'t Local>, usize>) -> usize {
+    let key = NodeRef::new(&**t);
     if let Some(&n) = memo.get(&key) {
         return n;
     }
     let n = stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || {
         let mut n = 1usize;
-        let mut add = |c: &LocalRc, memo: &mut HashMap<usize, usize>| {
+        let mut add = |c: &'t LocalRc, memo: &mut HashMap<NodeRef<&'t Local>, usize>| {
             n = n.saturating_add(tree_size(c, cap, memo)).min(cap);
         };
         match &**t {

@@ -3,6 +3,7 @@
 //! projections, and what E0602 compares a declared `local R = T` with (ARCHITECTURE.md,
 //! "Values are binding sites").
 
+use crate::hir::node::NodeRef;
 use crate::hir::*;
 use std::collections::HashSet;
 use std::sync::Arc;
@@ -28,16 +29,16 @@ pub fn first_difference(a: &LocalRc, b: &LocalRc) -> Option<(Loc, Loc)> {
 /// print the same. Pairs of nodes already found equal (or being compared) under the
 /// same renaming are remembered, so shared tails are compared once.
 /// A pair of nodes and the non-identity part of the renaming they were compared under.
-type Compared = (usize, usize, Vec<(ValueId, ValueId)>);
+type Compared<'t> = (NodeRef<&'t Local>, NodeRef<&'t Local>, Vec<(ValueId, ValueId)>);
 
-pub(super) struct Differ {
-    same: HashSet<Compared>,
+pub(super) struct Differ<'t> {
+    same: HashSet<Compared<'t>>,
     /// The binders in scope, outermost first: (binder of `a`, binder of `b`).
     ren: Vec<(ValueId, ValueId)>,
 }
 
-impl Differ {
-    pub(super) fn new() -> Differ {
+impl<'t> Differ<'t> {
+    pub(super) fn new() -> Differ<'t> {
         Differ { same: HashSet::new(), ren: Vec::new() }
     }
 
@@ -144,18 +145,18 @@ impl Differ {
             .all(|(x, y)| x.name == y.name && x.sort == y.sort && self.opt_expr(&x.refinement, &y.refinement))
     }
 
-    pub(super) fn diff(&mut self, a: &LocalRc, b: &LocalRc) -> Option<(Loc, Loc)> {
+    pub(super) fn diff(&mut self, a: &'t LocalRc, b: &'t LocalRc) -> Option<(Loc, Loc)> {
         let renamed = self.renamed();
         if renamed.is_empty() && Arc::ptr_eq(a, b) {
             return None;
         }
-        if !self.same.insert((Arc::as_ptr(a) as usize, Arc::as_ptr(b) as usize, renamed)) {
+        if !self.same.insert((NodeRef::new(&**a), NodeRef::new(&**b), renamed)) {
             return None;
         }
         stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.diff_inner(a, b))
     }
 
-    pub(super) fn diff_inner(&mut self, a: &LocalRc, b: &LocalRc) -> Option<(Loc, Loc)> {
+    pub(super) fn diff_inner(&mut self, a: &'t LocalRc, b: &'t LocalRc) -> Option<(Loc, Loc)> {
         let here = Some((a.loc(), b.loc()));
         let mark = self.ren.len();
         match (&**a, &**b) {

@@ -8,6 +8,7 @@
 use super::equal::{equal, first_difference, Differ};
 use super::Projector;
 use crate::diag::{Code, Diagnostic};
+use crate::hir::node::NodeRef;
 use crate::hir::print::{self, describe, motion_text, print_bounded, NOTE_NODES};
 use crate::hir::*;
 use std::collections::HashMap;
@@ -235,11 +236,15 @@ fn payloads_differ(a: &[Field], b: &[Field]) -> bool {
 /// `t` with the value variables `map` renamed (occurrences only; binders inside `t` keep
 /// their identity). Used by the merge to read one branch's continuation in terms of
 /// the other branch's binders of the same message. Shared tails stay shared.
-fn rename_local(t: &LocalRc, map: &HashMap<ValueId, (ValueId, String)>, memo: &mut HashMap<usize, LocalRc>) -> LocalRc {
+fn rename_local<'t>(
+    t: &'t LocalRc,
+    map: &HashMap<ValueId, (ValueId, String)>,
+    memo: &mut HashMap<NodeRef<&'t Local>, LocalRc>,
+) -> LocalRc {
     if map.is_empty() {
         return t.clone();
     }
-    if let Some(r) = memo.get(&(Arc::as_ptr(t) as usize)) {
+    if let Some(r) = memo.get(&NodeRef::new(&**t)) {
         return r.clone();
     }
     let e = |x: &Expr| {
@@ -305,6 +310,6 @@ fn rename_local(t: &LocalRc, map: &HashMap<ValueId, (ValueId, String)>, memo: &m
         Local::End(loc) => Local::End(*loc),
     });
     let out = Arc::new(out);
-    memo.insert(Arc::as_ptr(t) as usize, out.clone());
+    memo.insert(NodeRef::new(&**t), out.clone());
     out
 }

@@ -103,7 +103,7 @@ pub fn project(prog: &Program, g: &Global, role: RoleId, tail: LocalRc) -> Resul
 struct Projector<'a> {
     prog: &'a Program,
     role: RoleId,
-    occurs: &'a Occurs,
+    occurs: &'a Occurs<'a>,
 }
 
 #[cfg(test)]

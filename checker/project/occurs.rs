@@ -1,25 +1,27 @@
 //! Who occurs where in a global type, computed once for all roles: `pt{G}` of Def 4.8
 //! (4) for every node, and for each `*` the side each participant is on (Def 4.8 (7)).
 
+use crate::hir::node::NodeRef;
 use crate::hir::*;
 use fixedbitset::FixedBitSet;
 use std::collections::HashMap;
 
-/// The participants of every node of a global type, keyed by the node's address, and
-/// for each `*` the side each participant is on.
-pub(super) struct Occurs {
-    pub(super) pt: HashMap<*const Global, FixedBitSet>,
-    pub(super) sides: HashMap<*const Global, HashMap<RoleId, Vec<usize>>>,
+/// The participants of every node of a global type, and for each `*` the side each
+/// participant is on. Keyed by node ([`NodeRef`]): equal subterms at two places of the
+/// type are two nodes (the same `*` written twice has its sides looked up per place).
+pub(super) struct Occurs<'g> {
+    pt: HashMap<NodeRef<&'g Global>, FixedBitSet>,
+    sides: HashMap<NodeRef<&'g Global>, HashMap<RoleId, Vec<usize>>>,
 }
 
-impl Occurs {
-    pub(super) fn new(prog: &Program, g: &Global) -> Occurs {
+impl<'g> Occurs<'g> {
+    pub(super) fn new(prog: &Program, g: &'g Global) -> Occurs<'g> {
         let mut o = Occurs { pt: HashMap::new(), sides: HashMap::new() };
         o.fill(g, prog.roles.len());
         o
     }
 
-    pub(super) fn fill(&mut self, g: &Global, n: usize) -> FixedBitSet {
+    fn fill(&mut self, g: &'g Global, n: usize) -> FixedBitSet {
         let mut set = FixedBitSet::with_capacity(n);
         stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || match g {
             Global::Msg(m) => {
@@ -37,17 +39,17 @@ impl Occurs {
                     }
                     set.union_with(&sub);
                 }
-                self.sides.insert(g as *const Global, side_of);
+                self.sides.insert(NodeRef::new(g), side_of);
             }
             Global::Rec { body, .. } => set = self.fill(body, n),
             Global::Var(_) | Global::End(_) => {}
         });
-        self.pt.insert(g as *const Global, set.clone());
+        self.pt.insert(NodeRef::new(g), set.clone());
         set
     }
 
     pub(super) fn contains(&self, g: &Global, r: RoleId) -> bool {
-        match self.pt.get(&(g as *const Global)) {
+        match self.pt.get(&NodeRef::new(g)) {
             Some(set) => set.contains(r.idx()),
             None => {
                 // Not a node of the type `Occurs` was built for: compute directly.
@@ -56,5 +58,10 @@ impl Occurs {
                 pt.contains(&r)
             }
         }
+    }
+
+    /// For a `*` node of the type, the sides each participant occurs on.
+    pub(super) fn sides<'s>(&'s self, g: &'s Global) -> Option<&'s HashMap<RoleId, Vec<usize>>> {
+        self.sides.get(&NodeRef::new(g))
     }
 }

@@ -28,7 +28,7 @@ impl Projector<'_> {
                 Ok(t)
             }
             Global::Par(sides, loc) => {
-                let mine: Vec<&Global> = match self.occurs.sides.get(&(g as *const Global)) {
+                let mine: Vec<&Global> = match self.occurs.sides(g) {
                     Some(side_of) => {
                         side_of.get(&self.role).into_iter().flatten().filter_map(|&i| sides.get(i)).collect()
                     }

@@ -13,15 +13,15 @@ impl<'a> Checker<'a> {
     /// [T-CHOICE1,2] with [SUB-IN1,2]: every label of the type is handled; each branch
     /// continues under the refinement of what it received.
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn receive<'p>(
+    pub(super) fn receive(
         &mut self,
-        arms: &'p [RecvArm],
-        default: Option<&'p (PrimApp, Box<Process>)>,
+        arms: &'a [RecvArm],
+        default: Option<&'a (PrimApp, Box<Process>)>,
         loc: Loc,
         tb: &[RecvBranch],
         td: Option<&(Vec<PrimApp>, LocalRc)>,
         t: &LocalRc,
-        st: &State<'p>,
+        st: &State<'a>,
     ) {
         let missing: Vec<&RecvBranch> = tb.iter().filter(|b| !arms.iter().any(|a| a.label == b.label)).collect();
         if !missing.is_empty() {

@@ -47,6 +47,7 @@ mod report;
 mod walk;
 
 use crate::diag::{Code, Diagnostic};
+use crate::hir::node::NodeRef;
 use crate::hir::print::{print_bounded, NOTE_NODES};
 use crate::hir::*;
 use crate::obligation::{Goal, Obligation, Rule};
@@ -101,16 +102,72 @@ pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalRc>) 
     }
     let mut seen = HashSet::new();
     diags.retain(|d| seen.insert((d.code, d.span, d.message.clone())));
-    // A loop checked under several contexts may meet the same goal under the same
-    // hypotheses again (learnt at other places: hypotheses compare without locations,
-    // in any order).
-    let mut seen = HashSet::new();
-    obligations.retain(|o| {
-        let mut hyps = o.hyps.clone();
-        hyps.sort_by_key(hash_of);
-        seen.insert((o.rule, o.span, hyps, format!("{:?}", o.goal)))
-    });
+    dedupe(&mut obligations);
     (diags, obligations)
+}
+
+/// A loop checked under several contexts may meet the same goal under the same
+/// hypotheses again (learnt at other places): each is kept once. Obligations are the
+/// same when their rule, span, hypotheses (in any order) and goal are, terms compared
+/// as [`Expr`] compares them: by value, without locations, reals by their literal text
+/// (so `0.5` and `0.50` are kept apart: harmless, only fewer duplicates are found).
+/// Keeping one of two such obligations is sound: the solver is asked the same question.
+fn dedupe(obligations: &mut Vec<Obligation>) {
+    let mut seen = HashSet::new();
+    let keys: Vec<bool> = obligations
+        .iter()
+        .map(|o| {
+            let mut hyps: Vec<&Expr> = o.hyps.iter().collect();
+            hyps.sort_by_key(|e| hash_of(e));
+            seen.insert((o.rule, o.span, hyps, GoalKey::of(&o.goal)))
+        })
+        .collect();
+    let mut keep = keys.into_iter();
+    obligations.retain(|_| keep.next().unwrap_or(true));
+}
+
+/// A goal as a value that compares and hashes by its terms ([`Goal`] holds primitive
+/// applications, whose locations must not count). Exhaustive over [`Goal`]: a new kind
+/// of goal must say what makes two of it the same.
+#[derive(PartialEq, Eq, Hash)]
+enum GoalKey<'o> {
+    Valid(&'o Expr),
+    Compatible(Vec<(RoleId, AppKey<'o>)>),
+    Refines(RoleId, AppKey<'o>, Vec<AppKey<'o>>),
+    Separated(Vec<(&'o [RoleId], Vec<RunKey<'o>>)>),
+    InitiallyDisjoint(Vec<(RoleId, Vec<AppKey<'o>>)>),
+    CanEnd(PrimId),
+    Reachable(&'o [Vec<Expr>], bool),
+}
+
+/// A primitive application without its location.
+type AppKey<'o> = (PrimId, &'o [Expr]);
+
+/// A run of a side of `*`: who, what, and the context it starts in.
+type RunKey<'o> = (RoleId, AppKey<'o>, &'o [Expr]);
+
+impl<'o> GoalKey<'o> {
+    fn of(g: &'o Goal) -> GoalKey<'o> {
+        let app = |a: &'o PrimApp| (a.prim, &a.args[..]);
+        match g {
+            Goal::Valid(e) => GoalKey::Valid(e),
+            Goal::Compatible { parts } => GoalKey::Compatible(parts.iter().map(|(r, a)| (*r, app(a))).collect()),
+            Goal::Refines { role, concrete, abstract_ } => {
+                GoalKey::Refines(*role, app(concrete), abstract_.iter().map(app).collect())
+            }
+            Goal::Separated { sides } => GoalKey::Separated(
+                sides
+                    .iter()
+                    .map(|s| (&s.roles[..], s.runs.iter().map(|r| (r.role, app(&r.app), &r.hyps[..])).collect()))
+                    .collect(),
+            ),
+            Goal::InitiallyDisjoint { firsts } => GoalKey::InitiallyDisjoint(
+                firsts.iter().map(|(r, apps)| (*r, apps.iter().map(app).collect())).collect(),
+            ),
+            Goal::CanEnd { prim } => GoalKey::CanEnd(*prim),
+            Goal::Reachable { before, dead_branch } => GoalKey::Reachable(before, *dead_branch),
+        }
+    }
 }
 
 /// After this many different contexts for one (loop body, type) pair the context is
@@ -119,7 +176,7 @@ pub const WIDEN_AFTER: usize = 8;
 
 /// A process loop body and a type node, with the context and value map they are
 /// checked under.
-type LoopKey = (usize, usize, Vec<Expr>, Vec<(ValueId, Expr)>);
+type LoopKey<'a> = (NodeRef<&'a Process>, NodeRef<LocalRc>, Vec<Expr>, Vec<(ValueId, Expr)>);
 
 struct Checker<'a> {
     prog: &'a Program,
@@ -129,9 +186,9 @@ struct Checker<'a> {
     diags: Vec<Diagnostic>,
     obligations: Vec<Obligation>,
     /// (loop body, type node, context, value map) already checked or being checked.
-    assumed: HashSet<LoopKey>,
+    assumed: HashSet<LoopKey<'a>>,
     /// How many contexts each (loop body, type node) pair has been checked under.
-    contexts: HashMap<(usize, usize), usize>,
+    contexts: HashMap<(NodeRef<&'a Process>, NodeRef<LocalRc>), usize>,
 }
 
 /// What the checker knows at a point of the process.
@@ -199,7 +256,7 @@ impl<'a> Checker<'a> {
         out
     }
 
-    fn check<'p>(&mut self, p: &'p Process, t: LocalRc, st: State<'p>) {
+    fn check(&mut self, p: &'a Process, t: LocalRc, st: State<'a>) {
         stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.check_inner(p, t, st))
     }
 

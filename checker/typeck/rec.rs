@@ -5,13 +5,13 @@
 //! type's parameters (E0714).
 
 use super::{hash_of, Checker, State, WIDEN_AFTER};
+use crate::hir::node::NodeRef;
 use crate::hir::*;
 use crate::obligation::{Goal, Obligation, Rule};
 use crate::sigma::{self, Sigma};
 use crate::subtype::value_expr;
-use std::sync::Arc;
 
-impl Checker<'_> {
+impl<'a> Checker<'a> {
     /// The process's loop parameters get `values` (process terms, evaluated now), at
     /// entry (`jump` false) or at a jump back: [T-REC]/[T-VAR] with parameters.
     /// - Their refinements must hold of the values (E0712 at entry, E0713 at a jump),
@@ -85,8 +85,8 @@ impl Checker<'_> {
 
     /// Coinduction for process loops: whether `body` still needs checking against `t`
     /// under the current context. Widens the context after [`WIDEN_AFTER`] variants.
-    pub(super) fn enter(&mut self, body: &Process, t: &LocalRc, st: &mut State) -> bool {
-        let pair = (body as *const Process as usize, Arc::as_ptr(t) as usize);
+    pub(super) fn enter(&mut self, body: &'a Process, t: &LocalRc, st: &mut State) -> bool {
+        let pair = (NodeRef::new(body), NodeRef::from(t));
         let n = self.contexts.get(&pair).copied().unwrap_or(0);
         if n >= WIDEN_AFTER {
             st.sigma = Sigma::from_facts(&self.invariant);
@@ -96,7 +96,7 @@ impl Checker<'_> {
         sigma.sort_by_key(hash_of);
         let mut vals: Vec<(ValueId, Expr)> = st.vals.iter().map(|(k, v)| (*k, v.clone())).collect();
         vals.sort_by_key(|a| a.0);
-        if !self.assumed.insert((pair.0, pair.1, sigma, vals)) {
+        if !self.assumed.insert((pair.0.clone(), pair.1.clone(), sigma, vals)) {
             return false;
         }
         self.contexts.insert(pair, n + 1);

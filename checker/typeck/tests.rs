@@ -359,3 +359,51 @@ fn defaults_and_internal_choice() {
     );
     assert!(d.is_empty(), "{d:?}");
 }
+
+/// Obligations are the same when their rule, span, hypotheses (as a set) and goal are,
+/// terms compared as `Expr` compares them: without locations. (Before, goals compared
+/// by their `Debug` text, which prints locations, and a goal met twice with its terms
+/// written at other places was kept twice.)
+#[test]
+fn the_same_obligation_met_twice_is_kept_once() {
+    use crate::source::{FileId, Span};
+    let at = |start: usize| Loc(Span::new(FileId(0), start, start + 1));
+    let v = |id: u32, start: usize| Expr {
+        kind: ExprKind::Var(Var::Value(ValueId(id), "v".into())),
+        sort: Sort::Real,
+        loc: at(start),
+    };
+    let zero = |start: usize| Expr { kind: ExprKind::Real("0.5".into()), sort: Sort::Real, loc: at(start) };
+    let gt = |a: Expr, b: Expr| Expr {
+        kind: ExprKind::Binary(crate::hir::expr::BinOp::Gt, Box::new(a), Box::new(b)),
+        sort: Sort::Bool,
+        loc: Loc::default(),
+    };
+    let ob = |hyps: Vec<Expr>, goal: Goal| Obligation {
+        rule: Rule::TOut,
+        span: Span::new(FileId(0), 3, 4),
+        what: String::new(),
+        hyps,
+        goal,
+    };
+    let app = |start: usize| PrimApp { prim: PrimId(0), args: vec![v(0, start)], loc: at(start) };
+    let refines =
+        |start: usize| Goal::Refines { role: RoleId(0), concrete: app(start), abstract_: vec![app(start + 1)] };
+    let mut obs = vec![
+        ob(vec![gt(v(0, 1), zero(2)), gt(v(1, 1), zero(2))], Goal::Valid(gt(v(0, 5), zero(6)))),
+        // The same, written elsewhere, hypotheses in another order.
+        ob(vec![gt(v(1, 7), zero(8)), gt(v(0, 9), zero(10))], Goal::Valid(gt(v(0, 11), zero(12)))),
+        // Another value of the same name: another goal.
+        ob(vec![gt(v(0, 1), zero(2)), gt(v(1, 1), zero(2))], Goal::Valid(gt(v(1, 5), zero(6)))),
+        // Another literal text: kept (reals compare by their text, never rounded).
+        ob(
+            vec![gt(v(0, 1), zero(2)), gt(v(1, 1), zero(2))],
+            Goal::Valid(gt(v(0, 5), Expr { kind: ExprKind::Real("0.50000000000000001".into()), ..zero(6) })),
+        ),
+        ob(vec![], refines(20)),
+        ob(vec![], refines(30)),
+    ];
+    super::dedupe(&mut obs);
+    assert_eq!(obs.len(), 4, "{obs:#?}");
+    assert!(matches!(obs[3].goal, Goal::Refines { .. }));
+}
