@@ -1,7 +1,8 @@
-//! The logical context Σ: what is known about the state at a point of a choreography or
-//! of a process, as a set of conjuncts. Process typing (Table 1, `typeck.rs`) threads one
-//! per participant; the well-scopedness walk (`wf/scope.rs`) threads one over the global
-//! type and hands it to the [AGCOMP], total-choice and separation obligations.
+//! The logical context Σ (ARCHITECTURE.md, "The logical context Σ"): what is known about
+//! the state at a point of a choreography or of a process, as a set of conjuncts. Process
+//! typing (Table 1, `typeck/`) threads one per participant; the well-scopedness walk
+//! (`wf/scope.rs`) threads one over the global type and hands it to the [AGCOMP],
+//! total-choice and separation obligations.
 //!
 //! Facts speak about participants' variables ([`Var::Role`]), value variables (payload
 //! fields, received values, recursion parameters) and constants. A motion makes time

@@ -1,5 +1,6 @@
-//! The structural errors of process typing: the process and its local type disagree on
-//! the kind of the next action (E0702) or on where a loop goes back (E0706).
+//! The structural errors of process typing (Table 1): no rule applies because the
+//! process and its local type disagree on the kind of the next action (E0702) or on
+//! where a loop goes back ([T-REC]/[T-VAR], E0706).
 
 use super::Checker;
 use crate::diag::{Code, Diagnostic};
