@@ -95,6 +95,31 @@ impl Rule {
             Rule::Reachable | Rule::InitInvariant => "reachability",
         }
     }
+
+    /// The rule's name as a file-name-safe word (`agcomp`, `tmotion`): the variant's
+    /// name in lower case, for labels such as dumped queries' file names.
+    pub fn slug(self) -> &'static str {
+        match self {
+            Rule::TotalChoice => "totalchoice",
+            Rule::AgComp => "agcomp",
+            Rule::FullSeparation => "fullseparation",
+            Rule::Refinement => "refinement",
+            Rule::TMotion => "tmotion",
+            Rule::TOut => "tout",
+            Rule::TCond => "tcond",
+            Rule::Subtype => "subtype",
+            Rule::TSess => "tsess",
+            Rule::RecInit => "recinit",
+            Rule::RecJump => "recjump",
+            Rule::TRecInit => "trecinit",
+            Rule::TRecJump => "trecjump",
+            Rule::TRecArgs => "trecargs",
+            Rule::Contract => "contract",
+            Rule::Occupies => "occupies",
+            Rule::Reachable => "reachable",
+            Rule::InitInvariant => "initinvariant",
+        }
+    }
 }
 
 /// What must be shown.
@@ -213,5 +238,39 @@ mod tests {
         };
         assert!(ob(pos(0), pos(0)).trivially_holds());
         assert!(!ob(pos(0), pos(1)).trivially_holds());
+    }
+
+    /// `slug` is what the driver's labels were (`format!("{:?}", rule).to_lowercase()`),
+    /// so dumped file names do not change, and every slug is distinct.
+    #[test]
+    fn slugs_are_the_lowercase_variant_names() {
+        let all = [
+            Rule::TotalChoice,
+            Rule::AgComp,
+            Rule::FullSeparation,
+            Rule::Refinement,
+            Rule::TMotion,
+            Rule::TOut,
+            Rule::TCond,
+            Rule::Subtype,
+            Rule::TSess,
+            Rule::RecInit,
+            Rule::RecJump,
+            Rule::TRecInit,
+            Rule::TRecJump,
+            Rule::TRecArgs,
+            Rule::Contract,
+            Rule::Occupies,
+            Rule::Reachable,
+            Rule::InitInvariant,
+        ];
+        for r in all {
+            assert_eq!(r.slug(), format!("{r:?}").to_lowercase());
+            assert!(r.slug().chars().all(|c| c.is_ascii_lowercase()), "{r:?}");
+        }
+        let mut slugs: Vec<&str> = all.iter().map(|r| r.slug()).collect();
+        slugs.sort();
+        slugs.dedup();
+        assert_eq!(slugs.len(), all.len());
     }
 }

@@ -9,6 +9,7 @@
 pub mod expr;
 pub mod global;
 pub mod local;
+pub mod node;
 pub mod print;
 pub mod process;
 

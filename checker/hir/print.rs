@@ -1,9 +1,13 @@
 //! Printing the HIR in mochi's ASCII notation (LANGUAGE.md). What is printed parses back
 //! to an equal term, so projections can be golden-tested and pasted into `local` items.
-//! Participants' variables are always qualified (`Cart.x`).
+//! Participants' variables are always qualified (`Cart.x`). The end of the file has the
+//! helpers diagnostics use to show local types: [`describe`] (the first action),
+//! [`motion_text`], and [`print_bounded`] (whole types, summarised when too large).
 
+use super::node::NodeRef;
 use super::*;
 use crate::syntax::ast::{BinOp, UnOp};
+use std::collections::HashMap;
 use std::fmt::Write;
 
 /// Prints a local type over several lines, choices indented by two spaces.
@@ -392,3 +396,92 @@ impl Printer<'_> {
         }
     }
 }
+
+/// A short description of the first action of a local type, for messages:
+/// `GRobot!ready`, `&{Cart?ok, Cart?ko} & dt<m_idle>`, `dt<a /\ b>`, `end`.
+pub fn describe(prog: &Program, t: &Local) -> String {
+    match t {
+        Local::Motion { prims, .. } => motion_text(prog, prims),
+        Local::Send { branches, .. } => {
+            let items: Vec<String> = branches.iter().map(|b| format!("{}!{}", prog.role_name(b.to), b.label)).collect();
+            if items.len() == 1 {
+                items.join("")
+            } else {
+                format!("+{{{}}}", items.join(", "))
+            }
+        }
+        Local::Recv { branches, default, .. } => {
+            let items: Vec<String> =
+                branches.iter().map(|b| format!("{}?{}", prog.role_name(b.from), b.label)).collect();
+            let mut s = if items.len() == 1 && default.is_none() {
+                items.join("")
+            } else {
+                format!("&{{{}}}", items.join(", "))
+            };
+            if let Some((prims, _)) = default {
+                s.push_str(" & ");
+                s.push_str(&motion_text(prog, prims));
+            }
+            s
+        }
+        Local::Rec { var, body, .. } => format!("mu {var}. {}", describe(prog, body)),
+        Local::Var { var, args, .. } => {
+            if args.is_empty() {
+                var.clone()
+            } else {
+                let args: Vec<String> = args.iter().map(|a| expr(prog, None, a)).collect();
+                format!("{var}({})", args.join(", "))
+            }
+        }
+        Local::End(_) => "end".to_string(),
+    }
+}
+
+/// Prints a local type for a diagnostic. Shared tails make a local type a DAG whose
+/// printed tree can be exponentially larger, so a type that would print more than
+/// `max_nodes` nodes is summarised by its first action.
+pub fn print_bounded(prog: &Program, t: &LocalRc, max_nodes: usize) -> String {
+    if tree_size(t, max_nodes + 1, &mut HashMap::new()) <= max_nodes {
+        local(prog, t)
+    } else {
+        format!("{}. ... (too large to print here; use `mochi project`)", describe(prog, t))
+    }
+}
+
+/// The number of nodes of `t` printed as a tree, saturating at `cap`.
+fn tree_size<'t>(t: &'t LocalRc, cap: usize, memo: &mut HashMap<NodeRef<&'t Local>, usize>) -> usize {
+    let key = NodeRef::new(&**t);
+    if let Some(&n) = memo.get(&key) {
+        return n;
+    }
+    let n = stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || {
+        let mut n = 1usize;
+        let mut add = |c: &'t LocalRc, memo: &mut HashMap<NodeRef<&'t Local>, usize>| {
+            n = n.saturating_add(tree_size(c, cap, memo)).min(cap);
+        };
+        match &**t {
+            Local::Motion { cont, .. } => add(cont, memo),
+            Local::Send { branches, .. } => branches.iter().for_each(|b| add(&b.cont, memo)),
+            Local::Recv { branches, default, .. } => {
+                branches.iter().for_each(|b| add(&b.cont, memo));
+                if let Some((_, c)) = default {
+                    add(c, memo);
+                }
+            }
+            Local::Rec { body, .. } => add(body, memo),
+            Local::Var { .. } | Local::End(_) => {}
+        }
+        n
+    });
+    memo.insert(key, n);
+    n
+}
+
+/// `dt<a>` or `dt<a /\ b>`.
+pub fn motion_text(prog: &Program, prims: &[PrimApp]) -> String {
+    let items: Vec<String> = prims.iter().map(|a| prim_app(prog, a)).collect();
+    format!("dt<{}>", items.join(" /\\ "))
+}
+
+/// How many nodes a local type printed in a note may have.
+pub(crate) const NOTE_NODES: usize = 400;

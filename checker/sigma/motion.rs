@@ -1,0 +1,229 @@
+//! The strongest postcondition of a motion ([T-MOTION] of Table 1 with the Σ section
+//! of ARCHITECTURE.md): steps 1-5 of the module documentation of [`super`], syntactic,
+//! with one level of snapshots. Every step is an equivalence or a weakening, so Σ after
+//! a motion over-approximates the states the motion may end in.
+
+use super::normal::{binary, normalize, var, visit};
+use super::{instantiate, invariant, Sigma};
+use crate::hir::expr::BinOp;
+use crate::hir::*;
+use crate::subtype::{map_vars, mentions};
+use std::collections::HashSet;
+
+impl Sigma {
+    /// The effect of participant `role` running `prim` with `args` (evaluated when it
+    /// starts): see the module documentation.
+    pub fn run(&mut self, prog: &Program, role: RoleId, prim: PrimId, args: &[Expr]) {
+        self.effect(prog, &[(role, prim, args)]);
+    }
+
+    /// The effect of a joint motion `dt<p: a(..), q: b(..)>`: every part's effect at
+    /// once (all arguments are evaluated when the motion starts).
+    pub fn run_joint(&mut self, prog: &Program, parts: &[(RoleId, PrimApp)]) {
+        let parts: Vec<(RoleId, PrimId, &[Expr])> = parts.iter().map(|(r, a)| (*r, a.prim, &a.args[..])).collect();
+        self.effect(prog, &parts);
+    }
+
+    fn effect(&mut self, prog: &Program, parts: &[(RoleId, PrimId, &[Expr])]) {
+        let movers: Vec<RoleId> = parts.iter().map(|(r, _, _)| *r).collect();
+        // 1. One level of snapshots: forget the previous one.
+        self.forget(&|v| matches!(v, Var::Snap(r, _) if movers.contains(r)));
+        // 2. What was true of the movers' variables is now true of their snapshots.
+        let snap = |e: &Expr| {
+            map_vars(e, &mut |v, sort| match v {
+                Var::Role(r, s) if movers.contains(r) => Some(var(Var::Snap(*r, *s), sort)),
+                _ => None,
+            })
+        };
+        let moved = |v: &Var| matches!(v, Var::Role(r, _) if movers.contains(r));
+        let before = std::mem::take(&mut self.facts);
+        self.set.clear();
+        for f in before {
+            if mentions(&f, &moved) {
+                self.insert(normalize(snap(&f)));
+            } else {
+                self.insert(f);
+            }
+        }
+        // 3. The postconditions, 4. the invariants.
+        for (r, prim, args) in parts {
+            let args: Vec<Expr> = args.iter().map(snap).collect();
+            self.assume(&instantiate(&prog.prim(*prim).post, *r, &args));
+        }
+        for r in &movers {
+            for e in invariant(prog, *r) {
+                self.assume(&e);
+            }
+        }
+        // 5.
+        self.simplify();
+    }
+
+    /// Eliminates snapshots defined by equalities and simplifies `min`/`max`, until
+    /// nothing changes (a few rounds at most).
+    fn simplify(&mut self) {
+        for _ in 0..8 {
+            let a = self.eliminate_snapshots();
+            let b = self.simplify_min_max();
+            if !(a || b) {
+                break;
+            }
+        }
+        self.drop_unlinked_snapshots();
+    }
+
+    /// Drops the facts that speak only of snapshots (and constants) that no chain of
+    /// facts links to a current variable or a value: they constrain the past alone, so
+    /// they say nothing about the present (`∃ old(r.x). F` is implied by what remains,
+    /// up to satisfiability, and dropping facts only weakens Σ).
+    fn drop_unlinked_snapshots(&mut self) {
+        let snaps = |f: &Expr| {
+            let mut out: Vec<Var> = Vec::new();
+            let mut present = false;
+            f.visit_vars(&mut |v, _| match v {
+                Var::Snap(..) if !out.contains(v) => out.push(v.clone()),
+                Var::Role(..) | Var::Value(..) => present = true,
+                _ => {}
+            });
+            (out, present)
+        };
+        let info: Vec<(Vec<Var>, bool)> = self.facts.iter().map(snaps).collect();
+        if info.iter().all(|(s, present)| s.is_empty() || *present) {
+            return;
+        }
+        let mut linked: HashSet<Var> = HashSet::new();
+        let mut keep: Vec<bool> = info.iter().map(|(s, present)| s.is_empty() || *present).collect();
+        loop {
+            let mut grew = false;
+            for (i, (s, _)) in info.iter().enumerate() {
+                if keep[i] || s.iter().any(|v| linked.contains(v)) {
+                    keep[i] = true;
+                    for v in s {
+                        grew |= linked.insert(v.clone());
+                    }
+                }
+            }
+            if !grew {
+                break;
+            }
+        }
+        let mut i = 0;
+        self.retain(|_| {
+            i += 1;
+            keep[i - 1]
+        });
+    }
+
+    /// While some fact is `old(r.x) == e` with `e` free of `old(r.x)`, drops it and
+    /// replaces `old(r.x)` by `e` everywhere else. Definitions free of any snapshot are
+    /// used first, so the result speaks of the current state where it can.
+    fn eliminate_snapshots(&mut self) -> bool {
+        let mut changed = false;
+        while let Some((i, v, def)) = self.definition(true).or_else(|| self.definition(false)) {
+            changed = true;
+            let facts = std::mem::take(&mut self.facts);
+            self.set.clear();
+            for (j, f) in facts.into_iter().enumerate() {
+                if j == i {
+                    continue;
+                }
+                if !mentions(&f, &|w| *w == v) {
+                    self.insert(f);
+                    continue;
+                }
+                let g = map_vars(&f, &mut |w, _| if *w == v { Some(def.clone()) } else { None });
+                self.insert(normalize(g));
+            }
+        }
+        changed
+    }
+
+    /// The first fact `old(r.x) == e` (either way round) with `e` free of `old(r.x)`;
+    /// with `ground`, `e` must be free of every snapshot.
+    fn definition(&self, ground: bool) -> Option<(usize, Var, Expr)> {
+        let is_snap = |v: &Var| matches!(v, Var::Snap(..));
+        self.facts.iter().enumerate().find_map(|(i, f)| {
+            let ExprKind::Binary(BinOp::Eq, a, b) = &f.kind else { return None };
+            [(a, b), (b, a)].into_iter().find_map(|(x, e)| {
+                let ExprKind::Var(v @ Var::Snap(..)) = &x.kind else { return None };
+                let free = if ground { !mentions(e, &is_snap) } else { !mentions(e, &|w| w == v) };
+                free.then(|| (i, v.clone(), (**e).clone()))
+            })
+        })
+    }
+
+    /// Rewrites `min(a, b)` to `a` (and `max(a, b)` to `b`) when Σ holds `a <= b`,
+    /// `a < b` or `a == b`, and symmetrically.
+    fn simplify_min_max(&mut self) -> bool {
+        let has_min_max = |e: &Expr| {
+            let mut found = false;
+            visit(e, &mut |x| found |= matches!(x.kind, ExprKind::Call(Builtin::Min | Builtin::Max, _)));
+            found
+        };
+        if !self.facts.iter().any(has_min_max) {
+            return false;
+        }
+        let mut changed = false;
+        let mut out = Vec::with_capacity(self.facts.len());
+        for f in &self.facts {
+            if !has_min_max(f) {
+                out.push(f.clone());
+                continue;
+            }
+            let g = self.rewrite_min_max(f);
+            changed |= g != *f;
+            out.push(normalize(g));
+        }
+        if changed {
+            self.facts.clear();
+            self.set.clear();
+            for f in out {
+                self.insert(f);
+            }
+        }
+        changed
+    }
+
+    fn rewrite_min_max(&self, e: &Expr) -> Expr {
+        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.rewrite_min_max_inner(e))
+    }
+
+    fn rewrite_min_max_inner(&self, e: &Expr) -> Expr {
+        let kind = match &e.kind {
+            ExprKind::Call(f @ (Builtin::Min | Builtin::Max), args) if args.len() == 2 => {
+                let a = self.rewrite_min_max(&args[0]);
+                let b = self.rewrite_min_max(&args[1]);
+                let (lo, hi) = if self.known_le(&a, &b) {
+                    (a, b)
+                } else if self.known_le(&b, &a) {
+                    (b, a)
+                } else {
+                    return Expr { kind: ExprKind::Call(*f, vec![a, b]), sort: e.sort.clone(), loc: e.loc };
+                };
+                let pick = if *f == Builtin::Min { lo } else { hi };
+                return Expr { loc: e.loc, ..pick };
+            }
+            ExprKind::Call(f, args) => ExprKind::Call(*f, args.iter().map(|a| self.rewrite_min_max(a)).collect()),
+            ExprKind::Unary(op, a) => ExprKind::Unary(*op, Box::new(self.rewrite_min_max(a))),
+            ExprKind::Component(a, i) => ExprKind::Component(Box::new(self.rewrite_min_max(a)), *i),
+            ExprKind::Binary(op, a, b) => {
+                ExprKind::Binary(*op, Box::new(self.rewrite_min_max(a)), Box::new(self.rewrite_min_max(b)))
+            }
+            ExprKind::If(a, b, c) => ExprKind::If(
+                Box::new(self.rewrite_min_max(a)),
+                Box::new(self.rewrite_min_max(b)),
+                Box::new(self.rewrite_min_max(c)),
+            ),
+            ExprKind::Tuple(xs) => ExprKind::Tuple(xs.iter().map(|a| self.rewrite_min_max(a)).collect()),
+            ExprKind::Int(_) | ExprKind::Real(_) | ExprKind::Bool(_) | ExprKind::Var(_) => return e.clone(),
+        };
+        Expr { kind, sort: e.sort.clone(), loc: e.loc }
+    }
+
+    /// Whether Σ literally orders `a <= b`.
+    fn known_le(&self, a: &Expr, b: &Expr) -> bool {
+        a == b
+            || [BinOp::Le, BinOp::Lt, BinOp::Eq].into_iter().any(|op| self.set.contains(&binary(op, a, b)))
+            || self.set.contains(&binary(BinOp::Eq, b, a))
+    }
+}

@@ -1,0 +1,99 @@
+//! [T-OUT] of Table 1 with [SUB-OUT] (Fig 5): a send matches a branch of the type's
+//! internal choice (E0704 otherwise), with one value per field of the right sort (E0707,
+//! E0208), and the obligation `Σ ⇒ P ∧ P'{e/v}` for its guard and refinements.
+
+use super::{Checker, State};
+use crate::diag::{Code, Diagnostic};
+use crate::hir::*;
+use crate::obligation::{Goal, Obligation, Rule};
+use crate::subtype::{and_all, conjuncts, subst_values};
+
+impl Checker<'_> {
+    /// [T-OUT]: arity, sorts, and the obligation `Σ ⇒ guard ∧ refinement{args/fields}`.
+    pub(super) fn send(&mut self, args: &[Expr], loc: Loc, b: &SendBranch, st: &mut State) -> bool {
+        let to = self.prog.role_name(b.to);
+        if args.len() != b.payload.len() {
+            self.diags.push(
+                Diagnostic::error(
+                    Code::PayloadArity,
+                    loc.0,
+                    format!(
+                        "`{to}!{}` sends {} value(s), the local type's message carries {}",
+                        b.label,
+                        args.len(),
+                        b.payload.len()
+                    ),
+                )
+                .with_label(b.loc.0, format!("the message is declared here with {}", fields_text(&b.payload)))
+                .with_help("pass one value per payload field"),
+            );
+            return false;
+        }
+        for (a, f) in args.iter().zip(&b.payload) {
+            if !a.sort.fits(&f.sort) {
+                self.diags.push(
+                    Diagnostic::error(
+                        Code::SortMismatch,
+                        a.loc.0,
+                        format!("the value for field `{}` must be of sort `{}`, this is `{}`", f.name, f.sort, a.sort),
+                    )
+                    .with_label(b.loc.0, "the field is declared here")
+                    .with_help(format!("send a `{}` value", f.sort)),
+                );
+            }
+        }
+        // The type's fields get new values (a binding site met again in a loop): what
+        // was known of their earlier values goes. The guard reads only older values.
+        let fields: Vec<ValueId> = b.payload.iter().map(|f| f.value).collect();
+        st.forget(&fields);
+        let mut vals = st.vals.clone();
+        for (a, f) in args.iter().zip(&b.payload) {
+            vals.insert(f.value, a.clone());
+        }
+        let mut goal = Vec::new();
+        if let Some(g) = &b.guard {
+            conjuncts(&subst_values(g, &st.vals), &mut goal);
+        }
+        for f in &b.payload {
+            if let Some(r) = &f.refinement {
+                conjuncts(&subst_values(r, &vals), &mut goal);
+            }
+        }
+        if !goal.is_empty() {
+            self.obligations.push(Obligation {
+                rule: Rule::TOut,
+                span: loc.0,
+                what: format!("`{}` may send `{to}!{}`: the guard and payload refinement hold", self.name(), b.label),
+                hyps: st.sigma.facts().to_vec(),
+                goal: Goal::Valid(and_all(goal, loc)),
+            });
+        }
+        st.vals = vals;
+        st.actions += 1;
+        true
+    }
+
+    pub(super) fn unexpected_send(&mut self, to: RoleId, label: &str, loc: Loc, branches: &[SendBranch], tloc: Loc) {
+        let allowed: Vec<String> =
+            branches.iter().map(|b| format!("`{}!{}`", self.prog.role_name(b.to), b.label)).collect();
+        let allowed = allowed.join(", ");
+        self.diags.push(
+            Diagnostic::error(
+                Code::UnexpectedSend,
+                loc.0,
+                format!("the process sends `{}!{label}`, which the local type does not allow here", self.prog.role_name(to)),
+            )
+            .with_label(tloc.0, format!("the local type allows {allowed}"))
+            .with_note("[T-OUT] with [SUB-OUT]: each send matches a branch of the internal choice, with the same receiver and label")
+            .with_help(format!("send one of {allowed}")),
+        );
+    }
+}
+
+pub(super) fn fields_text(fields: &[Field]) -> String {
+    if fields.is_empty() {
+        return "no payload".to_string();
+    }
+    let items: Vec<String> = fields.iter().map(|f| format!("{}: {}", f.name, f.sort)).collect();
+    format!("payload ({})", items.join(", "))
+}
