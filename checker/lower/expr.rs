@@ -29,10 +29,10 @@ impl Lowerer {
     }
 
     pub(super) fn expr(&mut self, e: &ast::Expr, env: &Env) -> Expr {
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.expr_inner(e, env))
+        crate::stack::deep(|| self.expr_inner(e, env))
     }
 
-    pub(super) fn expr_inner(&mut self, e: &ast::Expr, env: &Env) -> Expr {
+    fn expr_inner(&mut self, e: &ast::Expr, env: &Env) -> Expr {
         let loc = Loc(e.span);
         let mk = |kind, sort| Expr { kind, sort, loc };
         match &e.kind {
@@ -41,156 +41,172 @@ impl Lowerer {
             ast::ExprKind::Bool(b) => mk(ExprKind::Bool(*b), Sort::Bool),
             ast::ExprKind::Error => mk(ExprKind::Bool(true), Sort::Any),
             ast::ExprKind::Var(name) => self.var(name, e.span, env),
-            ast::ExprKind::Dot(base, field) => {
-                if let ast::ExprKind::Var(b) = &base.kind {
-                    if !self.is_local_name(b, env) {
-                        if let Some(r) = self.prog.role_by_name(b) {
-                            return self.role_var(r, field, e.span, env);
-                        }
-                        if !self.resolves(b, env) {
-                            if !self.poisoned.contains(b) {
-                                let names: Vec<_> = self.prog.roles.iter().map(|p| format!("`{}`", p.name)).collect();
-                                self.err(
-                                    Code::UnknownParticipant,
-                                    base.span,
-                                    format!("unknown participant `{b}` in `{b}.{}`", field.name),
-                                    if names.is_empty() {
-                                        "declare participants in the `system` block".to_string()
-                                    } else {
-                                        format!("the participants are {}", names.join(", "))
-                                    },
-                                );
-                            }
-                            return mk(ExprKind::Bool(true), Sort::Any);
-                        }
-                    }
-                }
-                let b = self.expr(base, env);
-                if b.sort == Sort::Any {
-                    return mk(ExprKind::Bool(true), Sort::Any);
-                }
-                let axis = match field.name.as_str() {
-                    "x" => Some(0),
-                    "y" => Some(1),
-                    "z" => Some(2),
-                    _ => None,
-                };
-                match axis {
-                    Some(i) if b.sort.is_spatial() => mk(ExprKind::Component(Box::new(b), i), Sort::Real),
-                    _ => {
-                        self.err(
-                            Code::SortMismatch,
-                            field.span,
-                            format!("`.{}` needs a point or a vector, this is `{}`", field.name, b.sort),
-                            "components are `.x`, `.y`, `.z` of a `point` or `vector`; `Name.var` reads a participant's variable",
-                        );
-                        mk(ExprKind::Bool(true), Sort::Any)
-                    }
-                }
-            }
+            ast::ExprKind::Dot(base, field) => self.dot(base, field, e.span, env),
             ast::ExprKind::Call(f, args) if f.name == "old" => self.old(f, args, e.span, env),
-            ast::ExprKind::Call(f, args) => {
-                let args: Vec<Expr> = args.iter().map(|a| self.expr(a, env)).collect();
-                let Some(b) = Builtin::from_name(&f.name) else {
-                    self.err(
-                        Code::UnknownVariable,
-                        f.span,
-                        format!("unknown function `{}`", f.name),
-                        "functions are sqrt, min, max, abs, sin, cos, old, point, vector, dot, norm2",
-                    );
-                    return mk(ExprKind::Bool(true), Sort::Any);
-                };
-                if args.len() != b.arity() {
-                    self.err(
-                        Code::ArityMismatch,
-                        e.span,
-                        format!("`{}` takes {} argument(s), found {}", f.name, b.arity(), args.len()),
-                        "see LANGUAGE.md, Expressions",
-                    );
-                    return mk(ExprKind::Bool(true), Sort::Any);
-                }
-                let sort = match b {
-                    Builtin::Dot | Builtin::Norm2 => {
-                        for a in &args {
-                            self.expect_sort_spatial(a);
-                        }
-                        Sort::Real
-                    }
-                    Builtin::Point | Builtin::Vector => {
-                        for a in &args {
-                            self.expect_sort(a, &Sort::Real, "a coordinate");
-                        }
-                        if b == Builtin::Point {
-                            Sort::Point
-                        } else {
-                            Sort::Vector
-                        }
-                    }
-                    Builtin::Abs | Builtin::Min | Builtin::Max => {
-                        for a in &args {
-                            self.expect_sort(a, &Sort::Real, &format!("an argument of `{}`", f.name));
-                        }
-                        if args.iter().all(|a| a.sort == Sort::Int) {
-                            Sort::Int
-                        } else {
-                            Sort::Real
-                        }
-                    }
-                    Builtin::Sqrt | Builtin::Sin | Builtin::Cos => {
-                        self.expect_sort(&args[0], &Sort::Real, &format!("the argument of `{}`", f.name));
-                        Sort::Real
-                    }
-                    // Only the parser makes this call (`pi` is reserved, `pi()` does not parse).
-                    Builtin::Pi => Sort::Real,
-                };
-                mk(ExprKind::Call(b, args), sort)
-            }
-            ast::ExprKind::Unary(op, a) => {
-                let a = self.expr(a, env);
-                let sort = match op {
-                    UnOp::Not => {
-                        self.expect_sort(&a, &Sort::Bool, "the operand of `!`");
-                        Sort::Bool
-                    }
-                    UnOp::Neg if a.sort == Sort::Vector => Sort::Vector,
-                    UnOp::Neg => {
-                        self.expect_sort(&a, &Sort::Real, "the operand of `-`");
-                        a.sort.clone()
-                    }
-                };
-                mk(ExprKind::Unary(*op, Box::new(a)), sort)
-            }
+            ast::ExprKind::Call(f, args) => self.call(f, args, e.span, env),
+            ast::ExprKind::Unary(op, a) => self.unary(*op, a, loc, env),
             ast::ExprKind::Binary(op, a, b) => {
                 let a = self.expr(a, env);
                 let b = self.expr(b, env);
                 let sort = self.binary_sort(*op, &a, &b);
                 mk(ExprKind::Binary(*op, Box::new(a), Box::new(b)), sort)
             }
-            ast::ExprKind::If(c, a, b) => {
-                let c = self.pred(c, env, "a condition");
-                let a = self.expr(a, env);
-                let b = self.expr(b, env);
-                let sort = if a.sort.fits(&b.sort) {
-                    b.sort.clone()
-                } else if b.sort.fits(&a.sort) {
-                    a.sort.clone()
-                } else {
-                    self.err(
-                        Code::SortMismatch,
-                        b.loc.0,
-                        format!("the branches of `if` have sorts `{}` and `{}`", a.sort, b.sort),
-                        "both branches must have the same sort",
-                    );
-                    Sort::Any
-                };
-                mk(ExprKind::If(Box::new(c), Box::new(a), Box::new(b)), sort)
-            }
+            ast::ExprKind::If(c, a, b) => self.conditional(c, a, b, loc, env),
             ast::ExprKind::Tuple(items) => {
                 let items: Vec<Expr> = items.iter().map(|a| self.expr(a, env)).collect();
                 let sort = Sort::Product(items.iter().map(|i| i.sort.clone()).collect());
                 mk(ExprKind::Tuple(items), sort)
             }
         }
+    }
+
+    /// `base.field`: a participant's variable (`Cart.x`, unless `Cart` is a local name)
+    /// or a component `.x`, `.y`, `.z` of a point or vector.
+    fn dot(&mut self, base: &ast::Expr, field: &ast::Ident, span: Span, env: &Env) -> Expr {
+        let loc = Loc(span);
+        let mk = |kind, sort| Expr { kind, sort, loc };
+        if let ast::ExprKind::Var(b) = &base.kind {
+            if !self.is_local_name(b, env) {
+                if let Some(r) = self.prog.role_by_name(b) {
+                    return self.role_var(r, field, span, env);
+                }
+                if !self.resolves(b, env) {
+                    if !self.poisoned.contains(b) {
+                        let names: Vec<_> = self.prog.roles.iter().map(|p| format!("`{}`", p.name)).collect();
+                        self.err(
+                            Code::UnknownParticipant,
+                            base.span,
+                            format!("unknown participant `{b}` in `{b}.{}`", field.name),
+                            if names.is_empty() {
+                                "declare participants in the `system` block".to_string()
+                            } else {
+                                format!("the participants are {}", names.join(", "))
+                            },
+                        );
+                    }
+                    return mk(ExprKind::Bool(true), Sort::Any);
+                }
+            }
+        }
+        let b = self.expr(base, env);
+        if b.sort == Sort::Any {
+            return mk(ExprKind::Bool(true), Sort::Any);
+        }
+        let axis = match field.name.as_str() {
+            "x" => Some(0),
+            "y" => Some(1),
+            "z" => Some(2),
+            _ => None,
+        };
+        match axis {
+            Some(i) if b.sort.is_spatial() => mk(ExprKind::Component(Box::new(b), i), Sort::Real),
+            _ => {
+                self.err(
+                    Code::SortMismatch,
+                    field.span,
+                    format!("`.{}` needs a point or a vector, this is `{}`", field.name, b.sort),
+                    "components are `.x`, `.y`, `.z` of a `point` or `vector`; `Name.var` reads a participant's variable",
+                );
+                mk(ExprKind::Bool(true), Sort::Any)
+            }
+        }
+    }
+
+    /// A builtin function applied to its arguments (LANGUAGE.md, Expressions).
+    fn call(&mut self, f: &ast::Ident, args: &[ast::Expr], span: Span, env: &Env) -> Expr {
+        let loc = Loc(span);
+        let mk = |kind, sort| Expr { kind, sort, loc };
+        let args: Vec<Expr> = args.iter().map(|a| self.expr(a, env)).collect();
+        let Some(b) = Builtin::from_name(&f.name) else {
+            self.err(
+                Code::UnknownVariable,
+                f.span,
+                format!("unknown function `{}`", f.name),
+                "functions are sqrt, min, max, abs, sin, cos, old, point, vector, dot, norm2",
+            );
+            return mk(ExprKind::Bool(true), Sort::Any);
+        };
+        if args.len() != b.arity() {
+            self.err(
+                Code::ArityMismatch,
+                span,
+                format!("`{}` takes {} argument(s), found {}", f.name, b.arity(), args.len()),
+                "see LANGUAGE.md, Expressions",
+            );
+            return mk(ExprKind::Bool(true), Sort::Any);
+        }
+        let sort = match b {
+            Builtin::Dot | Builtin::Norm2 => {
+                for a in &args {
+                    self.expect_sort_spatial(a);
+                }
+                Sort::Real
+            }
+            Builtin::Point | Builtin::Vector => {
+                for a in &args {
+                    self.expect_sort(a, &Sort::Real, "a coordinate");
+                }
+                if b == Builtin::Point {
+                    Sort::Point
+                } else {
+                    Sort::Vector
+                }
+            }
+            Builtin::Abs | Builtin::Min | Builtin::Max => {
+                for a in &args {
+                    self.expect_sort(a, &Sort::Real, &format!("an argument of `{}`", f.name));
+                }
+                if args.iter().all(|a| a.sort == Sort::Int) {
+                    Sort::Int
+                } else {
+                    Sort::Real
+                }
+            }
+            Builtin::Sqrt | Builtin::Sin | Builtin::Cos => {
+                self.expect_sort(&args[0], &Sort::Real, &format!("the argument of `{}`", f.name));
+                Sort::Real
+            }
+            // Only the parser makes this call (`pi` is reserved, `pi()` does not parse).
+            Builtin::Pi => Sort::Real,
+        };
+        mk(ExprKind::Call(b, args), sort)
+    }
+
+    fn unary(&mut self, op: UnOp, a: &ast::Expr, loc: Loc, env: &Env) -> Expr {
+        let a = self.expr(a, env);
+        let sort = match op {
+            UnOp::Not => {
+                self.expect_sort(&a, &Sort::Bool, "the operand of `!`");
+                Sort::Bool
+            }
+            UnOp::Neg if a.sort == Sort::Vector => Sort::Vector,
+            UnOp::Neg => {
+                self.expect_sort(&a, &Sort::Real, "the operand of `-`");
+                a.sort.clone()
+            }
+        };
+        Expr { kind: ExprKind::Unary(op, Box::new(a)), sort, loc }
+    }
+
+    /// `if c then a else b`: the branches have one sort (ints promote).
+    fn conditional(&mut self, c: &ast::Expr, a: &ast::Expr, b: &ast::Expr, loc: Loc, env: &Env) -> Expr {
+        let c = self.pred(c, env, "a condition");
+        let a = self.expr(a, env);
+        let b = self.expr(b, env);
+        let sort = if a.sort.fits(&b.sort) {
+            b.sort.clone()
+        } else if b.sort.fits(&a.sort) {
+            a.sort.clone()
+        } else {
+            self.err(
+                Code::SortMismatch,
+                b.loc.0,
+                format!("the branches of `if` have sorts `{}` and `{}`", a.sort, b.sort),
+                "both branches must have the same sort",
+            );
+            Sort::Any
+        };
+        Expr { kind: ExprKind::If(Box::new(c), Box::new(a), Box::new(b)), sort, loc }
     }
 
     pub(super) fn expect_sort_spatial(&mut self, a: &Expr) {

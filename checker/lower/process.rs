@@ -21,7 +21,7 @@ impl Lowerer {
     }
 
     pub(super) fn process(&mut self, p: &ast::Process, me: RoleId, cx: &mut Scopes) -> Option<Process> {
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.process_inner(p, me, cx))
+        crate::stack::deep(|| self.process_inner(p, me, cx))
     }
 
     pub(super) fn process_inner(&mut self, p: &ast::Process, me: RoleId, cx: &mut Scopes) -> Option<Process> {

@@ -31,7 +31,7 @@ impl Lowerer {
     }
 
     pub(super) fn global(&mut self, g: &ast::Global, cx: &mut Scopes) -> Global {
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.global_inner(g, cx))
+        crate::stack::deep(|| self.global_inner(g, cx))
     }
 
     pub(super) fn global_inner(&mut self, g: &ast::Global, cx: &mut Scopes) -> Global {
@@ -198,7 +198,7 @@ impl Lowerer {
     }
 
     pub(super) fn local(&mut self, t: &ast::Local, me: RoleId, cx: &mut Scopes) -> LocalRc {
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || Arc::new(self.local_inner(t, me, cx)))
+        crate::stack::deep(|| Arc::new(self.local_inner(t, me, cx)))
     }
 
     pub(super) fn local_inner(&mut self, t: &ast::Local, me: RoleId, cx: &mut Scopes) -> Local {

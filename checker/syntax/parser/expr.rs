@@ -67,9 +67,7 @@ impl Parser {
             levels += 1;
             self.bump();
             let right_assoc = matches!(op, BinOp::Implies | BinOp::Pow);
-            let rhs = match stacker::maybe_grow(STACK_RED_ZONE, STACK_GROWTH, || {
-                self.expr_bp(if right_assoc { prec } else { prec + 1 })
-            }) {
+            let rhs = match crate::stack::deep(|| self.expr_bp(if right_assoc { prec } else { prec + 1 })) {
                 Ok(rhs) => rhs,
                 Err(()) => break Err(()),
             };

@@ -26,11 +26,6 @@ use crate::source::{FileId, Span};
 /// The deepest nesting of parentheses, prefixes and operators accepted.
 pub const MAX_DEPTH: usize = 1000;
 
-/// When less than this much stack is left, a new segment is allocated...
-pub const STACK_RED_ZONE: usize = 64 * 1024;
-/// ...of this size.
-pub const STACK_GROWTH: usize = 4 * 1024 * 1024;
-
 const ITEM_KEYWORDS: &[&str] = &["import", "const", "robot", "motion", "system", "choreography", "process", "local"];
 const RESERVED: &[&str] = &[
     "import",
@@ -216,11 +211,11 @@ impl Parser {
         Err(())
     }
 
-    /// Runs `f` one level deeper, growing the stack on demand (the `stacker` crate, as
-    /// rustc does) and refusing input nested deeper than [`MAX_DEPTH`].
+    /// Runs `f` one level deeper, growing the stack on demand ([`crate::stack::deep`]), and
+    /// refuses input nested deeper than [`MAX_DEPTH`].
     fn nested<T>(&mut self, f: impl FnOnce(&mut Parser) -> PResult<T>) -> PResult<T> {
         self.enter()?;
-        let r = stacker::maybe_grow(STACK_RED_ZONE, STACK_GROWTH, || f(self));
+        let r = crate::stack::deep(|| f(self));
         self.leave();
         r
     }
