@@ -7,7 +7,6 @@ use std::collections::HashMap;
 use std::ops::ControlFlow;
 
 /// Sorts of Sec 4.1 (`unit`, `real`, `point`, `vector`, products) plus `bool` and `int`.
-/// `Any` is the sort of a process binder before typing gives it one.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub enum Sort {
     Unit,
@@ -17,20 +16,27 @@ pub enum Sort {
     Point,
     Vector,
     Product(Vec<Sort>),
+    /// The sort of a process binder before typing gives it the payload's: open, not
+    /// wrong. An operation on it checks what it can and leaves the result open where
+    /// it depends on it.
     Any,
+    /// The sort of [`Expr::error`], an expression that failed to lower, its diagnostic
+    /// already reported. It fits every sort (nothing more is said about it), and an
+    /// expression with a failed part fails as a whole; see [`Expr::error`].
+    Error,
 }
 
 impl Sort {
     pub fn is_numeric(&self) -> bool {
-        matches!(self, Sort::Int | Sort::Real | Sort::Any)
+        matches!(self, Sort::Int | Sort::Real | Sort::Any | Sort::Error)
     }
     pub fn is_spatial(&self) -> bool {
-        matches!(self, Sort::Point | Sort::Vector | Sort::Any)
+        matches!(self, Sort::Point | Sort::Vector | Sort::Any | Sort::Error)
     }
     /// Whether a value of sort `self` may stand where `want` is expected (ints promote).
     pub fn fits(&self, want: &Sort) -> bool {
         match (self, want) {
-            (Sort::Any, _) | (_, Sort::Any) => true,
+            (Sort::Any | Sort::Error, _) | (_, Sort::Any | Sort::Error) => true,
             (Sort::Int, Sort::Real) => true,
             (Sort::Product(a), Sort::Product(b)) => a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.fits(y)),
             (a, b) => a == b,
@@ -48,6 +54,8 @@ impl std::fmt::Display for Sort {
             Sort::Point => f.write_str("point"),
             Sort::Vector => f.write_str("vector"),
             Sort::Any => f.write_str("_"),
+            // Never in a message: every check accepts it.
+            Sort::Error => f.write_str("{error}"),
             Sort::Product(ss) => {
                 f.write_str("(")?;
                 for (i, s) in ss.iter().enumerate() {
@@ -182,6 +190,21 @@ pub enum ExprKind {
 impl Expr {
     pub fn bool(b: bool, loc: Loc) -> Expr {
         Expr { kind: ExprKind::Bool(b), sort: Sort::Bool, loc }
+    }
+
+    /// An expression that failed to lower; the error that says why is reported already.
+    /// Its sort is [`Sort::Error`] (it fits everywhere, so nothing cascades from it) and
+    /// its kind the empty tuple, which no later stage gives a value: the SMT encoding and
+    /// exact evaluation refuse tuples, so if one ever got that far it would make a query
+    /// unknown, never hold (it used to be `true`, which holds). It does not get that far:
+    /// a program lowered with errors is rejected before any later stage runs (the driver
+    /// stops after `names`, `mochi simulate` before simulating).
+    pub fn error(loc: Loc) -> Expr {
+        Expr { kind: ExprKind::Tuple(Vec::new()), sort: Sort::Error, loc }
+    }
+
+    pub fn is_error(&self) -> bool {
+        self.sort == Sort::Error
     }
 
     pub fn is_true(&self) -> bool {

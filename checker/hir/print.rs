@@ -309,6 +309,11 @@ impl Printer<'_> {
     }
 
     fn expr_inner(&mut self, e: &Expr, ctx: u8) {
+        if e.is_error() {
+            // Never printed for a program that lowered cleanly; visible if it ever is.
+            self.out.push_str("{error}");
+            return;
+        }
         match &e.kind {
             ExprKind::Int(i) => {
                 if *i < 0 && ctx > 0 {

@@ -81,7 +81,14 @@ impl Lowerer {
             ast::SortKind::Real => Sort::Real,
             ast::SortKind::Point => Sort::Point,
             ast::SortKind::Vector => Sort::Vector,
-            ast::SortKind::Product(parts) => Sort::Product(parts.iter().map(|p| self.sort(p)).collect()),
+            ast::SortKind::Product(parts) => {
+                let parts: Vec<Sort> = parts.iter().map(|p| self.sort(p)).collect();
+                if parts.contains(&Sort::Error) {
+                    Sort::Error
+                } else {
+                    Sort::Product(parts)
+                }
+            }
             ast::SortKind::Named(n) => {
                 self.err(
                     Code::SortMismatch,
@@ -89,7 +96,7 @@ impl Lowerer {
                     format!("unknown sort `{n}`"),
                     "sorts are `unit`, `bool`, `int`, `real`, `point`, `vector` and products `(S, S)`",
                 );
-                Sort::Any
+                Sort::Error
             }
         }
     }

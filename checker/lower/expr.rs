@@ -39,7 +39,8 @@ impl Lowerer {
             ast::ExprKind::Int(i) => mk(ExprKind::Int(*i), Sort::Int),
             ast::ExprKind::Real(r) => mk(ExprKind::Real(r.clone()), Sort::Real),
             ast::ExprKind::Bool(b) => mk(ExprKind::Bool(*b), Sort::Bool),
-            ast::ExprKind::Error => mk(ExprKind::Bool(true), Sort::Any),
+            // The parser reported it.
+            ast::ExprKind::Error => Expr::error(loc),
             ast::ExprKind::Var(name) => self.var(name, e.span, env),
             ast::ExprKind::Dot(base, field) => self.dot(base, field, e.span, env),
             ast::ExprKind::Call(f, args) if f.name == "old" => self.old(f, args, e.span, env),
@@ -48,12 +49,20 @@ impl Lowerer {
             ast::ExprKind::Binary(op, a, b) => {
                 let a = self.expr(a, env);
                 let b = self.expr(b, env);
-                let sort = self.binary_sort(*op, &a, &b);
-                mk(ExprKind::Binary(*op, Box::new(a), Box::new(b)), sort)
+                if a.is_error() || b.is_error() {
+                    return Expr::error(loc);
+                }
+                match self.binary_sort(*op, &a, &b) {
+                    Sort::Error => Expr::error(loc),
+                    sort => mk(ExprKind::Binary(*op, Box::new(a), Box::new(b)), sort),
+                }
             }
             ast::ExprKind::If(c, a, b) => self.conditional(c, a, b, loc, env),
             ast::ExprKind::Tuple(items) => {
                 let items: Vec<Expr> = items.iter().map(|a| self.expr(a, env)).collect();
+                if items.iter().any(Expr::is_error) {
+                    return Expr::error(loc);
+                }
                 let sort = Sort::Product(items.iter().map(|i| i.sort.clone()).collect());
                 mk(ExprKind::Tuple(items), sort)
             }
@@ -84,13 +93,13 @@ impl Lowerer {
                             },
                         );
                     }
-                    return mk(ExprKind::Bool(true), Sort::Any);
+                    return Expr::error(loc);
                 }
             }
         }
         let b = self.expr(base, env);
-        if b.sort == Sort::Any {
-            return mk(ExprKind::Bool(true), Sort::Any);
+        if b.is_error() {
+            return Expr::error(loc);
         }
         let axis = match field.name.as_str() {
             "x" => Some(0),
@@ -107,7 +116,7 @@ impl Lowerer {
                     format!("`.{}` needs a point or a vector, this is `{}`", field.name, b.sort),
                     "components are `.x`, `.y`, `.z` of a `point` or `vector`; `Name.var` reads a participant's variable",
                 );
-                mk(ExprKind::Bool(true), Sort::Any)
+                Expr::error(loc)
             }
         }
     }
@@ -124,7 +133,7 @@ impl Lowerer {
                 format!("unknown function `{}`", f.name),
                 "functions are sqrt, min, max, abs, sin, cos, old, point, vector, dot, norm2",
             );
-            return mk(ExprKind::Bool(true), Sort::Any);
+            return Expr::error(loc);
         };
         if args.len() != b.arity() {
             self.err(
@@ -133,7 +142,10 @@ impl Lowerer {
                 format!("`{}` takes {} argument(s), found {}", f.name, b.arity(), args.len()),
                 "see LANGUAGE.md, Expressions",
             );
-            return mk(ExprKind::Bool(true), Sort::Any);
+            return Expr::error(loc);
+        }
+        if args.iter().any(Expr::is_error) {
+            return Expr::error(loc);
         }
         let sort = match b {
             Builtin::Dot | Builtin::Norm2 => {
@@ -174,6 +186,9 @@ impl Lowerer {
 
     fn unary(&mut self, op: UnOp, a: &ast::Expr, loc: Loc, env: &Env) -> Expr {
         let a = self.expr(a, env);
+        if a.is_error() {
+            return Expr::error(loc);
+        }
         let sort = match op {
             UnOp::Not => {
                 self.expect_sort(&a, &Sort::Bool, "the operand of `!`");
@@ -193,6 +208,9 @@ impl Lowerer {
         let c = self.pred(c, env, "a condition");
         let a = self.expr(a, env);
         let b = self.expr(b, env);
+        if c.is_error() || a.is_error() || b.is_error() {
+            return Expr::error(loc);
+        }
         let sort = if a.sort.fits(&b.sort) {
             b.sort.clone()
         } else if b.sort.fits(&a.sort) {
@@ -204,7 +222,7 @@ impl Lowerer {
                 format!("the branches of `if` have sorts `{}` and `{}`", a.sort, b.sort),
                 "both branches must have the same sort",
             );
-            Sort::Any
+            return Expr::error(loc);
         };
         Expr { kind: ExprKind::If(Box::new(c), Box::new(a), Box::new(b)), sort, loc }
     }
@@ -256,11 +274,13 @@ impl Lowerer {
                 }
                 a.sort.clone()
             }
-            Add | Sub if a.sort.is_spatial() && b.sort.is_spatial() && a.sort != Sort::Any => {
+            // Points and vectors, or a binder whose sort is still open beside one.
+            Add | Sub if a.sort.is_spatial() && b.sort.is_spatial() && (a.sort != Sort::Any || b.sort != Sort::Any) => {
                 match (op, &a.sort, &b.sort) {
                     (Sub, Sort::Point, Sort::Point) => Sort::Vector,
                     (_, Sort::Point, Sort::Vector) => Sort::Point,
                     (_, Sort::Vector, Sort::Vector) => Sort::Vector,
+                    (_, Sort::Any, _) | (_, _, Sort::Any) => Sort::Any,
                     _ => {
                         self.err(
                             Code::SortMismatch,
@@ -268,7 +288,7 @@ impl Lowerer {
                             format!("cannot apply `{}` to `{}` and `{}`", op.symbol(), a.sort, b.sort),
                             "point - point is a vector; point + vector is a point; vectors add",
                         );
-                        Sort::Any
+                        Sort::Error
                     }
                 }
             }

@@ -94,7 +94,7 @@ impl Lowerer {
             }
         }
         self.err(Code::UnknownVariable, span, format!("unknown variable `{name}`"), help);
-        Expr { kind: ExprKind::Bool(true), sort: Sort::Any, loc }
+        Expr::error(loc)
     }
 
     pub(super) fn not_allowed(&mut self, span: Span, what: &str, env: &Env) {
@@ -137,7 +137,7 @@ impl Lowerer {
                 ),
                 "contracts and initial states read their own robot's variables unqualified",
             );
-            return Expr { kind: ExprKind::Bool(true), sort: Sort::Any, loc };
+            return Expr::error(loc);
         }
         let k = self.prog.kind_of(r);
         match k.slot(&field.name) {
@@ -155,14 +155,14 @@ impl Lowerer {
                         format!("its variables are {}", vars.join(", "))
                     },
                 );
-                Expr { kind: ExprKind::Bool(true), sort: Sort::Any, loc }
+                Expr::error(loc)
             }
         }
     }
 
     pub(super) fn old(&mut self, f: &ast::Ident, args: &[ast::Expr], span: Span, env: &Env) -> Expr {
         let loc = Loc(span);
-        let bad = Expr { kind: ExprKind::Bool(true), sort: Sort::Any, loc };
+        let bad = Expr::error(loc);
         if !env.old {
             self.not_allowed(f.span, "`old(...)`", env);
             return bad;

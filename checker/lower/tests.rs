@@ -143,3 +143,61 @@ fn a_library_file_has_no_system() {
     let (_, d) = lower_src("robot R { state x: real; }");
     assert_eq!(codes(&d), vec![Code::MissingItem]);
 }
+
+/// An expression with a failed part (its error reported) fails as a whole, silently: one
+/// diagnostic per mistake, none about the well-sorted terms around it.
+#[test]
+fn a_failed_part_fails_its_whole_expression_silently() {
+    for guard in [
+        "norm2(ghost - point(1, 0, 0)) > 0",
+        "(ghost, 1).x > 0",
+        "ghost + true > 0",
+        "C.nope.x > 0",
+        "-old(x) > 0",
+        "sqrt(ghost) > point(0, 0, 0).x",
+    ] {
+        let src = format!("{HEADER} choreography G = C -> A: [{guard}] go. end;");
+        let (prog, d) = lower_src(&src);
+        let expected = if guard.contains("old") { Code::VariableNotAllowed } else { Code::UnknownVariable };
+        assert_eq!(codes(&d), vec![expected], "{guard}: {d:?}");
+        let Some(Global::Seq(items, _)) = prog.choreography.as_ref().map(|c| &c.body) else { panic!("a sequence") };
+        let Global::Msg(m) = &items[0] else { panic!("a message") };
+        let g = m.guard.as_ref().expect("guard");
+        assert!(g.is_error(), "{guard}: {g:?}");
+        // Never a proof of anything: no later stage gives the error expression a value.
+        assert!(!g.is_true() && crate::exact::eval(&prog, g, &|_: &Var| None).is_err(), "{guard}");
+    }
+}
+
+/// A process binder's sort is open until typing gives it the payload's (`Sort::Any`); that
+/// is not the sort of a failed expression (`Sort::Error`). `p.x` of a binder is its
+/// component (it used to become `true`, silently), and `p - point(...)` is no sort error.
+#[test]
+fn a_binder_is_not_a_failed_expression() {
+    let src = format!(
+        "{HEADER} choreography G = C -> A: go(q: point). dt<C: idle, A: work>. end;
+         process A = C?go(p). if p.x > norm2(p - point(1, 0, 0)) then dt<work>.end else dt<work>.end;"
+    );
+    let (prog, d) = lower_src(&src);
+    assert!(d.is_empty(), "{d:?}");
+    let Some(Process::Recv { branches, .. }) = prog.processes.first().map(|p| &p.body) else { panic!("a receive") };
+    let Process::If { cond, .. } = &branches[0].cont else { panic!("a conditional") };
+    let ExprKind::Binary(BinOp::Gt, a, _) = &cond.kind else { panic!("{cond:?}") };
+    assert!(matches!(a.kind, ExprKind::Component(_, 0)), "{a:?}");
+}
+
+/// The same through the whole pipeline: a process that branches on `j.x` for a number `j`
+/// it received used to be verified (`j.x` was `true`, a fine condition); a component is a
+/// real, not a condition, so it is rejected (E0208).
+#[test]
+fn a_component_of_a_received_value_is_no_condition() {
+    let src = std::fs::read_to_string("choreographies/countdown.chor").expect("countdown");
+    let before = "mu loop. (p?more(j).(p!half.dt<hold>.loop + p!full.dt<hold>.loop)";
+    assert!(src.contains(before));
+    let src = src.replace(before, "mu loop. (p?more(j).(if j.x then p!half.dt<hold>.loop else p!full.dt<hold>.loop)");
+    let mut db = SourceDb::new();
+    let cfg = crate::driver::Config::default();
+    let report = crate::driver::check_source(&mut db, "choreographies/binder-component.chor", &src, &cfg);
+    assert_eq!(report.verdict, crate::driver::Verdict::Rejected);
+    assert_eq!(codes(&report.diagnostics), vec![Code::SortMismatch], "{:?}", report.diagnostics);
+}
