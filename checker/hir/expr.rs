@@ -252,9 +252,9 @@ impl Expr {
 
     // ---- the generic traversals ---------------------------------------------------
     //
-    // Every pass over an expression is one of these: `visit` and `any` read it (pre-order,
-    // with an explicit stack, so no depth exhausts the call stack), `map` rebuilds it
-    // bottom-up. A new `ExprKind` is handled here once, not in each pass.
+    // Every pass over an expression is one of these: `visit` and `any` read it (pre-order),
+    // `map` rebuilds it bottom-up; all grow the stack on demand (`crate::stack::deep`), so
+    // no depth exhausts it. A new `ExprKind` is handled here once, not in each pass.
 
     /// Calls `f` on every node of `self`, parents before children, left to right.
     pub fn visit(&self, mut f: impl FnMut(&Expr)) {
@@ -270,23 +270,29 @@ impl Expr {
     }
 
     fn walk<B>(&self, f: &mut impl FnMut(&Expr) -> ControlFlow<B>) -> ControlFlow<B> {
-        let mut todo = vec![self];
-        while let Some(e) = todo.pop() {
-            f(e)?;
-            match &e.kind {
-                ExprKind::Int(_) | ExprKind::Real(_) | ExprKind::Bool(_) | ExprKind::Var(_) => {}
-                ExprKind::Unary(_, a) | ExprKind::Component(a, _) => todo.push(a),
-                ExprKind::Binary(_, a, b) => todo.extend([&**b, &**a]),
-                ExprKind::If(a, b, c) => todo.extend([&**c, &**b, &**a]),
-                ExprKind::Call(_, xs) | ExprKind::Tuple(xs) => todo.extend(xs.iter().rev()),
+        f(self)?;
+        // Recursion (no allocation: these run for every fact of every obligation), each
+        // step on a stack that grows on demand.
+        let mut sub = |e: &Expr| crate::stack::deep(|| e.walk(f));
+        match &self.kind {
+            ExprKind::Int(_) | ExprKind::Real(_) | ExprKind::Bool(_) | ExprKind::Var(_) => ControlFlow::Continue(()),
+            ExprKind::Unary(_, a) | ExprKind::Component(a, _) => sub(a),
+            ExprKind::Binary(_, a, b) => {
+                sub(a)?;
+                sub(b)
             }
+            ExprKind::If(a, b, c) => {
+                sub(a)?;
+                sub(b)?;
+                sub(c)
+            }
+            ExprKind::Call(_, xs) | ExprKind::Tuple(xs) => xs.iter().try_for_each(sub),
         }
-        ControlFlow::Continue(())
     }
 
     /// Rebuilds `self` bottom-up: each node, with its children already mapped, is given
     /// to `f`, which returns it or its replacement (a replacement is not traversed again).
-    pub fn map(&self, f: &mut dyn FnMut(Expr) -> Expr) -> Expr {
+    pub fn map(&self, f: &mut impl FnMut(Expr) -> Expr) -> Expr {
         crate::stack::deep(|| {
             let kind = match &self.kind {
                 ExprKind::Int(_) | ExprKind::Real(_) | ExprKind::Bool(_) | ExprKind::Var(_) => self.kind.clone(),
@@ -448,8 +454,8 @@ mod tests {
 
     #[test]
     fn traversals_do_not_exhaust_the_stack() {
-        // 200,000 nested negations, on a 1 MiB thread: `visit` keeps its own stack, `map`
-        // grows the call stack on demand (`crate::stack::deep`).
+        // 200,000 nested negations, on a 1 MiB thread: the traversals grow the call stack
+        // on demand (`crate::stack::deep`).
         let t = std::thread::Builder::new().stack_size(1 << 20).spawn(|| {
             let mut e = param(7);
             for _ in 0..200_000 {
