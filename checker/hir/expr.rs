@@ -1,5 +1,10 @@
 //! Resolved predicates and terms. No solver types appear here: the SMT stage (a later
 //! part) encodes [`Expr`] into its own terms.
+//!
+//! Passes over an expression use its generic traversals, [`Expr::visit`], [`Expr::any`]
+//! and [`Expr::map`]; the predicate helpers the later stages share ([`map_vars`],
+//! [`subst_values`], [`mentions`], [`conjuncts`], [`and_all`], [`implies`], [`not`]) are
+//! built on them here.
 
 use super::{ConstId, Loc, RoleId, ValueId};
 pub use crate::syntax::ast::{BinOp, UnOp};

@@ -2,7 +2,9 @@
 //! kinds, primitives, participants, variables, recursion variables), infers the sort
 //! of every expression and enforces which variables each part of a contract may read
 //! (Def 3.4). Errors are E02xx; lowering reports them all and still returns a program,
-//! but later stages only run on a program lowered without errors.
+//! but later stages only run on a program lowered without errors. An expression that
+//! fails becomes [`Expr::error`]: its sort fits everywhere and an expression with a failed
+//! part fails with it, silently, so each mistake is reported once.
 //!
 //! Name lookup for an unqualified name, innermost first: value variables in scope
 //! (payload fields, recursion parameters, process binders), primitive parameters, the
