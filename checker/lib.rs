@@ -39,6 +39,7 @@ pub mod sigma;
 pub mod simulate;
 pub mod smt;
 pub mod source;
+pub mod stack;
 pub mod subtype;
 pub mod syntax;
 pub mod typeck;

@@ -17,10 +17,10 @@
 //! and a pair of nodes met again is assumed to be related. Payload fields of the super
 //! type are renamed to the sub type's, so the implications speak about one value.
 //!
-//! The module also holds the predicate helpers that process typing shares.
+//! The predicate helpers process typing shares (`map_vars`, `subst_values`, ...) are
+//! re-exported from `hir::expr`, where they now live.
 
 use crate::diag::{Code, Diagnostic};
-use crate::hir::expr::{BinOp, UnOp};
 use crate::hir::*;
 use crate::obligation::{Goal, Obligation, Rule};
 use crate::project::{describe, motion_text};
@@ -411,82 +411,9 @@ fn rename_app(a: &PrimApp, ren: &Renaming) -> PrimApp {
     PrimApp { prim: a.prim, args: a.args.iter().map(|e| subst_values(e, ren)).collect(), loc: a.loc }
 }
 
-// ---- predicate helpers (shared with process typing) ------------------------------
-
-/// A value variable as an expression.
-pub(crate) fn value_expr(id: ValueId, name: &str, sort: &Sort) -> Expr {
-    Expr { kind: ExprKind::Var(Var::Value(id, name.to_string())), sort: sort.clone(), loc: Loc::default() }
-}
-
-/// Rebuilds `e`, replacing each variable occurrence (given with its sort) for which
-/// `f` answers.
-pub(crate) fn map_vars(e: &Expr, f: &mut dyn FnMut(&Var, &Sort) -> Option<Expr>) -> Expr {
-    stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || {
-        let kind = match &e.kind {
-            ExprKind::Var(v) => match f(v, &e.sort) {
-                Some(r) => return Expr { loc: e.loc, ..r },
-                None => ExprKind::Var(v.clone()),
-            },
-            ExprKind::Int(_) | ExprKind::Real(_) | ExprKind::Bool(_) => e.kind.clone(),
-            ExprKind::Unary(op, a) => ExprKind::Unary(*op, Box::new(map_vars(a, f))),
-            ExprKind::Component(a, i) => ExprKind::Component(Box::new(map_vars(a, f)), *i),
-            ExprKind::Binary(op, a, b) => ExprKind::Binary(*op, Box::new(map_vars(a, f)), Box::new(map_vars(b, f))),
-            ExprKind::If(a, b, c) => {
-                ExprKind::If(Box::new(map_vars(a, f)), Box::new(map_vars(b, f)), Box::new(map_vars(c, f)))
-            }
-            ExprKind::Call(b, args) => ExprKind::Call(*b, args.iter().map(|a| map_vars(a, f)).collect()),
-            ExprKind::Tuple(args) => ExprKind::Tuple(args.iter().map(|a| map_vars(a, f)).collect()),
-        };
-        Expr { kind, sort: e.sort.clone(), loc: e.loc }
-    })
-}
-
-/// Substitutes value variables by binding site.
-pub(crate) fn subst_values(e: &Expr, map: &HashMap<ValueId, Expr>) -> Expr {
-    if map.is_empty() {
-        return e.clone();
-    }
-    map_vars(e, &mut |v, _| match v {
-        Var::Value(id, _) => map.get(id).cloned(),
-        _ => None,
-    })
-}
-
-/// Whether some variable of `e` satisfies `pred`.
-pub(crate) fn mentions(e: &Expr, pred: &dyn Fn(&Var) -> bool) -> bool {
-    stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || match &e.kind {
-        ExprKind::Var(v) => pred(v),
-        ExprKind::Int(_) | ExprKind::Real(_) | ExprKind::Bool(_) => false,
-        ExprKind::Unary(_, a) | ExprKind::Component(a, _) => mentions(a, pred),
-        ExprKind::Binary(_, a, b) => mentions(a, pred) || mentions(b, pred),
-        ExprKind::If(a, b, c) => mentions(a, pred) || mentions(b, pred) || mentions(c, pred),
-        ExprKind::Call(_, args) | ExprKind::Tuple(args) => args.iter().any(|a| mentions(a, pred)),
-    })
-}
-
-/// The conjuncts of `e`, without `true`, appended to `out`.
-pub(crate) fn conjuncts(e: &Expr, out: &mut Vec<Expr>) {
-    out.extend(e.conjuncts().into_iter().cloned());
-}
-
-/// The conjunction of `items` (`true` when empty).
-pub(crate) fn and_all(items: impl IntoIterator<Item = Expr>, loc: Loc) -> Expr {
-    items.into_iter().fold(Expr::bool(true, loc), Expr::and)
-}
-
-pub(crate) fn implies(a: Expr, b: Expr) -> Expr {
-    if a.is_true() {
-        return b;
-    }
-    let loc = b.loc;
-    Expr { kind: ExprKind::Binary(BinOp::Implies, Box::new(a), Box::new(b)), sort: Sort::Bool, loc }
-}
-
-/// `!a`.
-pub(crate) fn not(a: Expr) -> Expr {
-    let loc = a.loc;
-    Expr { kind: ExprKind::Unary(UnOp::Not, Box::new(a)), sort: Sort::Bool, loc }
-}
+// The predicate helpers process typing and Σ import from here live in `hir::expr` now,
+// on top of `Expr::map` and `Expr::visit`; re-exported so that their paths keep working.
+pub(crate) use crate::hir::expr::{and_all, conjuncts, implies, map_vars, mentions, not, subst_values, value_expr};
 
 #[cfg(test)]
 mod tests {

@@ -1,11 +1,17 @@
 //! Resolved predicates and terms. No solver types appear here: the SMT stage
 //! (`smt::encode`) encodes [`Expr`] into its own terms.
+//!
+//! Passes over an expression use its generic traversals, [`Expr::visit`], [`Expr::any`]
+//! and [`Expr::map`]; the predicate helpers the later stages share ([`map_vars`],
+//! [`subst_values`], [`mentions`], [`conjuncts`], [`and_all`], [`implies`], [`not`]) are
+//! built on them here.
 
 use super::{ConstId, Loc, RoleId, ValueId};
 pub use crate::syntax::ast::{BinOp, UnOp};
+use std::collections::HashMap;
+use std::ops::ControlFlow;
 
 /// Sorts of Sec 4.1 (`unit`, `real`, `point`, `vector`, products) plus `bool` and `int`.
-/// `Any` is the sort of a process binder before typing gives it one.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub enum Sort {
     Unit,
@@ -15,20 +21,27 @@ pub enum Sort {
     Point,
     Vector,
     Product(Vec<Sort>),
+    /// The sort of a process binder before typing gives it the payload's: open, not
+    /// wrong. An operation on it checks what it can and leaves the result open where
+    /// it depends on it.
     Any,
+    /// The sort of [`Expr::error`], an expression that failed to lower, its diagnostic
+    /// already reported. It fits every sort (nothing more is said about it), and an
+    /// expression with a failed part fails as a whole; see [`Expr::error`].
+    Error,
 }
 
 impl Sort {
     pub fn is_numeric(&self) -> bool {
-        matches!(self, Sort::Int | Sort::Real | Sort::Any)
+        matches!(self, Sort::Int | Sort::Real | Sort::Any | Sort::Error)
     }
     pub fn is_spatial(&self) -> bool {
-        matches!(self, Sort::Point | Sort::Vector | Sort::Any)
+        matches!(self, Sort::Point | Sort::Vector | Sort::Any | Sort::Error)
     }
     /// Whether a value of sort `self` may stand where `want` is expected (ints promote).
     pub fn fits(&self, want: &Sort) -> bool {
         match (self, want) {
-            (Sort::Any, _) | (_, Sort::Any) => true,
+            (Sort::Any | Sort::Error, _) | (_, Sort::Any | Sort::Error) => true,
             (Sort::Int, Sort::Real) => true,
             (Sort::Product(a), Sort::Product(b)) => a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.fits(y)),
             (a, b) => a == b,
@@ -46,6 +59,8 @@ impl std::fmt::Display for Sort {
             Sort::Point => f.write_str("point"),
             Sort::Vector => f.write_str("vector"),
             Sort::Any => f.write_str("_"),
+            // Never in a message: every check accepts it.
+            Sort::Error => f.write_str("{error}"),
             Sort::Product(ss) => {
                 f.write_str("(")?;
                 for (i, s) in ss.iter().enumerate() {
@@ -182,6 +197,21 @@ impl Expr {
         Expr { kind: ExprKind::Bool(b), sort: Sort::Bool, loc }
     }
 
+    /// An expression that failed to lower; the error that says why is reported already.
+    /// Its sort is [`Sort::Error`] (it fits everywhere, so nothing cascades from it) and
+    /// its kind the empty tuple, which no later stage gives a value: the SMT encoding and
+    /// exact evaluation refuse tuples, so if one ever got that far it would make a query
+    /// unknown, never hold (it used to be `true`, which holds). It does not get that far:
+    /// a program lowered with errors is rejected before any later stage runs (the driver
+    /// stops after `names`, `mochi simulate` before simulating).
+    pub fn error(loc: Loc) -> Expr {
+        Expr { kind: ExprKind::Tuple(Vec::new()), sort: Sort::Error, loc }
+    }
+
+    pub fn is_error(&self) -> bool {
+        self.sort == Sort::Error
+    }
+
     pub fn is_true(&self) -> bool {
         matches!(self.kind, ExprKind::Bool(true))
     }
@@ -218,20 +248,231 @@ impl Expr {
 
     /// Calls `f` on every variable occurrence.
     pub fn visit_vars(&self, f: &mut dyn FnMut(&Var, Loc)) {
+        self.visit(|e| {
+            if let ExprKind::Var(v) = &e.kind {
+                f(v, e.loc)
+            }
+        })
+    }
+
+    // ---- the generic traversals ---------------------------------------------------
+    //
+    // Every pass over an expression is one of these: `visit` and `any` read it (pre-order),
+    // `map` rebuilds it bottom-up; all grow the stack on demand (`crate::stack::deep`), so
+    // no depth exhausts it. A new `ExprKind` is handled here once, not in each pass.
+
+    /// Calls `f` on every node of `self`, parents before children, left to right.
+    pub fn visit(&self, mut f: impl FnMut(&Expr)) {
+        let _: ControlFlow<()> = self.walk(&mut |e| {
+            f(e);
+            ControlFlow::Continue(())
+        });
+    }
+
+    /// Whether some node of `self` satisfies `pred` (pre-order; stops at the first).
+    pub fn any(&self, mut pred: impl FnMut(&Expr) -> bool) -> bool {
+        self.walk(&mut |e| if pred(e) { ControlFlow::Break(()) } else { ControlFlow::Continue(()) }).is_break()
+    }
+
+    fn walk<B>(&self, f: &mut impl FnMut(&Expr) -> ControlFlow<B>) -> ControlFlow<B> {
+        f(self)?;
+        // Recursion (no allocation: these run for every fact of every obligation), each
+        // step on a stack that grows on demand.
+        let mut sub = |e: &Expr| crate::stack::deep(|| e.walk(f));
         match &self.kind {
-            ExprKind::Var(v) => f(v, self.loc),
-            ExprKind::Int(_) | ExprKind::Real(_) | ExprKind::Bool(_) => {}
-            ExprKind::Unary(_, a) | ExprKind::Component(a, _) => a.visit_vars(f),
+            ExprKind::Int(_) | ExprKind::Real(_) | ExprKind::Bool(_) | ExprKind::Var(_) => ControlFlow::Continue(()),
+            ExprKind::Unary(_, a) | ExprKind::Component(a, _) => sub(a),
             ExprKind::Binary(_, a, b) => {
-                a.visit_vars(f);
-                b.visit_vars(f);
+                sub(a)?;
+                sub(b)
             }
             ExprKind::If(a, b, c) => {
-                a.visit_vars(f);
-                b.visit_vars(f);
-                c.visit_vars(f);
+                sub(a)?;
+                sub(b)?;
+                sub(c)
             }
-            ExprKind::Call(_, args) | ExprKind::Tuple(args) => args.iter().for_each(|a| a.visit_vars(f)),
+            ExprKind::Call(_, xs) | ExprKind::Tuple(xs) => xs.iter().try_for_each(sub),
         }
+    }
+
+    /// Rebuilds `self` bottom-up: each node, with its children already mapped, is given
+    /// to `f`, which returns it or its replacement (a replacement is not traversed again).
+    pub fn map(&self, f: &mut impl FnMut(Expr) -> Expr) -> Expr {
+        crate::stack::deep(|| {
+            let kind = match &self.kind {
+                ExprKind::Int(_) | ExprKind::Real(_) | ExprKind::Bool(_) | ExprKind::Var(_) => self.kind.clone(),
+                ExprKind::Unary(op, a) => ExprKind::Unary(*op, Box::new(a.map(f))),
+                ExprKind::Component(a, i) => ExprKind::Component(Box::new(a.map(f)), *i),
+                ExprKind::Binary(op, a, b) => ExprKind::Binary(*op, Box::new(a.map(f)), Box::new(b.map(f))),
+                ExprKind::If(a, b, c) => ExprKind::If(Box::new(a.map(f)), Box::new(b.map(f)), Box::new(c.map(f))),
+                ExprKind::Call(b, xs) => ExprKind::Call(*b, xs.iter().map(|a| a.map(f)).collect()),
+                ExprKind::Tuple(xs) => ExprKind::Tuple(xs.iter().map(|a| a.map(f)).collect()),
+            };
+            f(Expr { kind, sort: self.sort.clone(), loc: self.loc })
+        })
+    }
+}
+
+// ---- predicate helpers (on top of the traversals; used by subtyping, Σ and typing) ----
+
+/// A value variable as an expression.
+pub fn value_expr(id: ValueId, name: &str, sort: &Sort) -> Expr {
+    Expr { kind: ExprKind::Var(Var::Value(id, name.to_string())), sort: sort.clone(), loc: Loc::default() }
+}
+
+/// Rebuilds `e`, replacing each variable occurrence (given with its sort) for which
+/// `f` answers; the replacement takes the occurrence's location.
+pub fn map_vars(e: &Expr, f: &mut dyn FnMut(&Var, &Sort) -> Option<Expr>) -> Expr {
+    e.map(&mut |n| match &n.kind {
+        ExprKind::Var(v) => match f(v, &n.sort) {
+            Some(r) => Expr { loc: n.loc, ..r },
+            None => n,
+        },
+        _ => n,
+    })
+}
+
+/// Substitutes value variables by binding site.
+pub fn subst_values(e: &Expr, map: &HashMap<ValueId, Expr>) -> Expr {
+    if map.is_empty() {
+        return e.clone();
+    }
+    map_vars(e, &mut |v, _| match v {
+        Var::Value(id, _) => map.get(id).cloned(),
+        _ => None,
+    })
+}
+
+/// Whether some variable of `e` satisfies `pred`.
+pub fn mentions(e: &Expr, pred: &dyn Fn(&Var) -> bool) -> bool {
+    e.any(|n| matches!(&n.kind, ExprKind::Var(v) if pred(v)))
+}
+
+/// The conjuncts of `e`, without `true`, appended to `out`.
+pub fn conjuncts(e: &Expr, out: &mut Vec<Expr>) {
+    out.extend(e.conjuncts().into_iter().cloned());
+}
+
+/// The conjunction of `items` (`true` when empty).
+pub fn and_all(items: impl IntoIterator<Item = Expr>, loc: Loc) -> Expr {
+    items.into_iter().fold(Expr::bool(true, loc), Expr::and)
+}
+
+/// `a => b`, or `b` when `a` is `true`.
+pub fn implies(a: Expr, b: Expr) -> Expr {
+    if a.is_true() {
+        return b;
+    }
+    let loc = b.loc;
+    Expr { kind: ExprKind::Binary(BinOp::Implies, Box::new(a), Box::new(b)), sort: Sort::Bool, loc }
+}
+
+/// `!a`.
+pub fn not(a: Expr) -> Expr {
+    let loc = a.loc;
+    Expr { kind: ExprKind::Unary(UnOp::Not, Box::new(a)), sort: Sort::Bool, loc }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn param(i: usize) -> Expr {
+        Expr { kind: ExprKind::Var(Var::Param(i)), sort: Sort::Real, loc: Loc::default() }
+    }
+
+    fn bin(op: BinOp, a: Expr, b: Expr) -> Expr {
+        Expr { kind: ExprKind::Binary(op, Box::new(a), Box::new(b)), sort: Sort::Real, loc: Loc::default() }
+    }
+
+    /// `if p0 < p1 then min(p2, -p3) else (p4, p5).x`, every node kind with children.
+    fn sample() -> Expr {
+        let call = Expr {
+            kind: ExprKind::Call(
+                Builtin::Min,
+                vec![param(2), Expr { kind: ExprKind::Unary(UnOp::Neg, Box::new(param(3))), ..param(3) }],
+            ),
+            ..param(0)
+        };
+        let tuple = Expr { kind: ExprKind::Tuple(vec![param(4), param(5)]), ..param(0) };
+        let comp = Expr { kind: ExprKind::Component(Box::new(tuple), 0), ..param(0) };
+        let cond = bin(BinOp::Lt, param(0), param(1));
+        Expr { kind: ExprKind::If(Box::new(cond), Box::new(call), Box::new(comp)), ..param(0) }
+    }
+
+    fn params(e: &Expr) -> Vec<usize> {
+        let mut out = Vec::new();
+        e.visit_vars(&mut |v, _| {
+            if let Var::Param(i) = v {
+                out.push(*i)
+            }
+        });
+        out
+    }
+
+    #[test]
+    fn visit_reaches_every_node_parents_first_left_to_right() {
+        let e = sample();
+        assert_eq!(params(&e), vec![0, 1, 2, 3, 4, 5]);
+        let mut n = 0;
+        e.visit(|_| n += 1);
+        // if, <, p0, p1, min, p2, -, p3, .x, tuple, p4, p5
+        assert_eq!(n, 12);
+    }
+
+    #[test]
+    fn any_stops_at_the_first_match() {
+        let e = sample();
+        let mut seen = 0;
+        assert!(e.any(|n| {
+            seen += 1;
+            matches!(n.kind, ExprKind::Var(Var::Param(1)))
+        }));
+        assert_eq!(seen, 4, "if, <, p0, p1");
+        assert!(mentions(&e, &|v| *v == Var::Param(5)));
+        assert!(!mentions(&e, &|v| *v == Var::Param(6)));
+    }
+
+    #[test]
+    fn map_rebuilds_bottom_up_and_does_not_revisit_replacements() {
+        let e = sample();
+        // Each p_i becomes p_{i+1}: a replacement that is itself a variable is not mapped again.
+        let shifted = map_vars(&e, &mut |v, _| match v {
+            Var::Param(i) => Some(param(i + 1)),
+            _ => None,
+        });
+        assert_eq!(params(&shifted), vec![1, 2, 3, 4, 5, 6]);
+        // Bottom-up: a node sees its children already mapped.
+        let mut order = Vec::new();
+        e.map(&mut |n| {
+            if let ExprKind::Var(Var::Param(i)) = n.kind {
+                order.push(i);
+            }
+            if let ExprKind::Binary(_, a, _) = &n.kind {
+                assert!(matches!(a.kind, ExprKind::Var(_)));
+            }
+            n
+        });
+        assert_eq!(order, vec![0, 1, 2, 3, 4, 5]);
+        assert_eq!(e.map(&mut |n| n), e);
+    }
+
+    #[test]
+    fn traversals_do_not_exhaust_the_stack() {
+        // 200,000 nested negations, on a 1 MiB thread: the traversals grow the call stack
+        // on demand (`crate::stack::deep`).
+        let t = std::thread::Builder::new().stack_size(1 << 20).spawn(|| {
+            let mut e = param(7);
+            for _ in 0..200_000 {
+                e = Expr { kind: ExprKind::Unary(UnOp::Neg, Box::new(e)), ..param(0) };
+            }
+            let mapped = map_vars(&e, &mut |_, _| Some(param(8)));
+            let found = (params(&e), mentions(&mapped, &|v| *v == Var::Param(8)));
+            // Dropping a tree this deep recurses; these two are leaked on purpose.
+            std::mem::forget((e, mapped));
+            found
+        });
+        let (ps, found) = t.expect("spawn").join().expect("no stack overflow");
+        assert_eq!((ps, found), (vec![7], true));
     }
 }

@@ -55,6 +55,10 @@ impl Printer<'_> {
     }
 
     fn local(&mut self, t: &Local) {
+        crate::stack::deep(|| self.local_inner(t))
+    }
+
+    fn local_inner(&mut self, t: &Local) {
         match t {
             Local::Motion { prims, cont, .. } => {
                 self.motion(prims);
@@ -201,6 +205,10 @@ impl Printer<'_> {
     }
 
     fn global(&mut self, g: &Global) {
+        crate::stack::deep(|| self.global_inner(g))
+    }
+
+    fn global_inner(&mut self, g: &Global) {
         match g {
             Global::Msg(m) => {
                 let _ = write!(self.out, "{} -> {} : ", self.prog.role_name(m.from), self.prog.role_name(m.to));
@@ -301,6 +309,15 @@ impl Printer<'_> {
 
     /// Prints `e`, parenthesised when it binds looser than `ctx`.
     fn expr(&mut self, e: &Expr, ctx: u8) {
+        crate::stack::deep(|| self.expr_inner(e, ctx))
+    }
+
+    fn expr_inner(&mut self, e: &Expr, ctx: u8) {
+        if e.is_error() {
+            // Never printed for a program that lowered cleanly; visible if it ever is.
+            self.out.push_str("{error}");
+            return;
+        }
         match &e.kind {
             ExprKind::Int(i) => {
                 if *i < 0 && ctx > 0 {

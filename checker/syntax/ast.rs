@@ -1,5 +1,5 @@
 //! The syntax tree: what the parser produces, with a span on every node and no name
-//! resolution. Names are plain [`Ident`]s; `lower.rs` resolves them.
+//! resolution. Names are plain [`Ident`]s; `lower` resolves them.
 //!
 //! The shapes follow the paper's grammars: [`Global`] is Def 4.1 (plus `end` and
 //! parameterised recursion for refined sessions), [`Local`] is Def 4.6, [`Process`] is

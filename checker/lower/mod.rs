@@ -1,0 +1,183 @@
+//! Lowering: the parsed files → a resolved [`Program`]. Resolves every name (robot
+//! kinds, primitives, participants, variables, recursion variables), infers the sort
+//! of every expression and enforces which variables each part of a contract may read
+//! (Def 3.4). Errors are E02xx; lowering reports them all and still returns a program,
+//! but later stages only run on a program lowered without errors. An expression that
+//! fails becomes [`Expr::error`]: its sort fits everywhere and an expression with a failed
+//! part fails with it, silently, so each mistake is reported once.
+//!
+//! Name lookup for an unqualified name, innermost first: value variables in scope
+//! (payload fields, recursion parameters, process binders), primitive parameters, the
+//! footprint's point coordinates, `clock`, the robot's own state and input variables,
+//! constants. `Cart.x` names a participant's variable; `e.x` a component of a point.
+//!
+//! The pass structure: [`lower`] runs over all items in a fixed order, so that every
+//! name is declared before anything resolves it, whatever the order of the files:
+//! constants (`decl`, in dependency order), robot kinds, then their invariants (which
+//! may read constants), primitives (`contract`), the system and its input connections
+//! (`decl`), and last the choreography, local types (`types`) and processes
+//! (`process`). Expressions (`expr`) resolve names through `names` in an `Env`
+//! that says which variables the current position may read.
+
+mod contract;
+mod decl;
+mod expr;
+mod names;
+mod process;
+#[cfg(test)]
+pub(crate) mod tests;
+mod types;
+
+use crate::diag::{Code, Diagnostic};
+use crate::hir::*;
+use crate::source::Span;
+use crate::syntax::ast::{self, BinOp, UnOp};
+use crate::syntax::Parsed;
+use std::collections::HashMap;
+use std::sync::Arc;
+
+/// Lowers every file of `parsed` (imports first) into one program.
+pub fn lower(parsed: &Parsed) -> (Program, Vec<Diagnostic>) {
+    let mut l = Lowerer::default();
+    let items: Vec<&ast::Item> = parsed.files.iter().flat_map(|(_, f)| f.items.iter()).collect();
+    let root_span = parsed.files.last().map(|(id, _)| Span::new(*id, 0, 0)).unwrap_or_default();
+    let consts: Vec<&ast::ConstDecl> =
+        items.iter().filter_map(|it| if let ast::Item::Const(c) = it { Some(c) } else { None }).collect();
+    l.constants(&consts);
+    for it in &items {
+        if let ast::Item::Robot(r) = it {
+            l.robot_kind(r);
+        }
+    }
+    for it in &items {
+        if let ast::Item::Robot(r) = it {
+            l.robot_invariant(r);
+        }
+    }
+    for it in &items {
+        if let ast::Item::Motion(m) = it {
+            l.motion(m);
+        }
+    }
+    for it in &items {
+        if let ast::Item::System(s) = it {
+            l.system(s);
+        }
+    }
+    l.connect_inputs();
+    for it in &items {
+        match it {
+            ast::Item::Choreography(c) => l.choreography(c),
+            ast::Item::Process(p) => l.process_def(p),
+            ast::Item::Local(t) => l.local_def(t),
+            _ => {}
+        }
+    }
+    if l.prog.system.is_none() || l.prog.choreography.is_none() {
+        let what = match (l.prog.system.is_none(), l.prog.choreography.is_none()) {
+            (true, true) => "no `system` and no `choreography`",
+            (true, false) => "no `system`",
+            _ => "no `choreography`",
+        };
+        l.diags.push(
+            Diagnostic::error(Code::MissingItem, root_span, format!("{what} to check"))
+                .with_help("`mochi check` reads a `.chor` file with a `system` block and a `choreography`; library files are checked through the choreographies that import them"),
+        );
+    }
+    (l.prog, l.diags)
+}
+
+/// Lowers a local type written for `role` in the context of an already lowered
+/// program; `mochi project`'s output goes back through this in the round-trip tests.
+pub fn lower_local(prog: &Program, role: RoleId, t: &ast::Local) -> (LocalRc, Vec<Diagnostic>) {
+    let mut l = Lowerer { prog: prog.clone(), ..Lowerer::default() };
+    l.consts = prog.consts.iter().enumerate().map(|(i, c)| (c.name.clone(), ConstId(i as u32))).collect();
+    l.kinds = prog.kinds.iter().enumerate().map(|(i, k)| (k.name.clone(), KindId(i as u32))).collect();
+    l.prims = prog.prims.iter().enumerate().map(|(i, p)| ((p.kind, p.name.clone()), PrimId(i as u32))).collect();
+    let body = l.local(t, role, &mut Scopes::default());
+    (body, l.diags)
+}
+
+#[derive(Default)]
+struct Lowerer {
+    prog: Program,
+    diags: Vec<Diagnostic>,
+    consts: HashMap<String, ConstId>,
+    kinds: HashMap<String, KindId>,
+    prims: HashMap<(KindId, String), PrimId>,
+    /// Spans of the declarations, for duplicate reports.
+    const_spans: Vec<Span>,
+    kind_spans: Vec<Span>,
+    /// Participants whose kind is unknown: already reported, so uses stay silent.
+    poisoned: std::collections::HashSet<String>,
+    /// Process and local type declarations seen per role.
+    process_roles: HashMap<RoleId, Span>,
+    local_roles: HashMap<RoleId, Span>,
+}
+
+/// Whose variables an unqualified name may denote.
+#[derive(Clone, Copy, PartialEq)]
+enum Who {
+    Nobody,
+    /// Inside a robot kind's invariant or a primitive's contract: [`Var::Own`].
+    Kind(KindId),
+    /// In a participant's view: [`Var::Role`].
+    Role(RoleId),
+}
+
+/// The context an expression is resolved in.
+#[derive(Clone, Copy)]
+struct Env<'a> {
+    who: Who,
+    /// Which contract part this is, for E0211 messages (`None` outside contracts).
+    part: Option<&'static str>,
+    params: &'a [(String, Sort)],
+    point: Option<&'a [String; 3]>,
+    clock: bool,
+    old: bool,
+    state: bool,
+    input: bool,
+    qualified: bool,
+    values: &'a [ValueId],
+}
+
+impl<'a> Env<'a> {
+    fn consts_only() -> Env<'static> {
+        Env {
+            who: Who::Nobody,
+            part: None,
+            params: &[],
+            point: None,
+            clock: false,
+            old: false,
+            state: false,
+            input: false,
+            qualified: false,
+            values: &[],
+        }
+    }
+
+    /// A participant's view: its own variables, everybody's qualified ones, `values`.
+    fn role(r: RoleId, values: &'a [ValueId]) -> Env<'a> {
+        Env { who: Who::Role(r), state: true, input: true, qualified: true, values, ..Env::consts_only() }
+    }
+}
+
+fn dup(span: Span, what: &str, name: &str, first: Span) -> Diagnostic {
+    Diagnostic::error(Code::Duplicate, span, format!("{what} `{name}` is defined twice"))
+        .with_label(first, "first defined here")
+        .with_help("rename or remove one of the definitions")
+}
+
+impl Lowerer {
+    fn err(&mut self, code: Code, span: Span, msg: impl Into<String>, help: impl Into<String>) {
+        self.diags.push(Diagnostic::error(code, span, msg).with_help(help));
+    }
+}
+
+/// Value variables and recursion variables in scope while lowering a type or process.
+#[derive(Default)]
+struct Scopes {
+    values: Vec<ValueId>,
+    recs: Vec<(String, usize)>,
+}

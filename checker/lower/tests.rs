@@ -1,0 +1,205 @@
+//! Unit tests of lowering: names resolved, sorts checked, values bound by site (LANGUAGE.md "Names and scopes", "Sorts").
+
+use super::*;
+use crate::source::{FileId, SourceDb};
+
+/// Parses and lowers one source text; for tests of later stages too.
+/// Lowers `src` (which must be clean) and returns the guard of the choreography's first
+/// message, which must be a sequence starting with a guarded message.
+pub(crate) fn first_guard(src: &str) -> (Program, crate::hir::Expr) {
+    let (prog, d) = lower_src(src);
+    assert!(d.is_empty(), "{d:?}");
+    let Some(crate::hir::Global::Seq(items, _)) = prog.choreography.as_ref().map(|c| c.body.clone()) else {
+        panic!("a sequence")
+    };
+    let crate::hir::Global::Msg(m) = &items[0] else { panic!("a message") };
+    let g = m.guard.clone().expect("guard");
+    (prog, g)
+}
+
+pub(crate) fn lower_src(src: &str) -> (Program, Vec<Diagnostic>) {
+    let mut db = SourceDb::new();
+    let id = db.add("test.chor", src);
+    let (f, mut d) = crate::syntax::parser::parse(id, src);
+    assert!(d.is_empty(), "parse errors: {d:?}");
+    let (p, d2) = lower(&Parsed { files: vec![(FileId(id.0), f)] });
+    d.extend(d2);
+    (p, d)
+}
+
+pub(crate) const HEADER: &str = "
+    const amax = 0.5;
+    robot Cart { state x: real, v: real; invariant: v >= 0; }
+    robot Arm { state h: real; input x: real; }
+    motion Cart.move(xf: real) { interruptible: false; pre: xf > x && v == 0; post: x == xf; duration: [2 * sqrt(xf / amax), inf]; }
+    motion Cart.idle { interruptible: true; guarantee: x == old(x); }
+    motion Arm.work { interruptible: true; assume: x <= 1.0; footprint(px, py, pz): pz >= 0 && clock >= 0; }
+    system S {
+      participant C: Cart { init: x == 0 && v == 0; at: pose(0, 0, 0); }
+      participant A: Arm { at: pose(2, 1, 0); }
+    }
+";
+
+fn codes(d: &[Diagnostic]) -> Vec<Code> {
+    d.iter().map(|d| d.code).collect()
+}
+
+#[test]
+fn a_complete_program_lowers_cleanly() {
+    let src = format!(
+        "{HEADER} choreography G = mu t. C -> A : [x >= 0] go(tf: real {{ tf > C.x }}). dt<C: move(tf), A: work>. A -> C: done. t;
+         process C = mu k. A!go(x + 1).dt<move(x + 1)>.A?done.k;
+         process A = mu k. C?go(y).dt<work>.C!done.k;"
+    );
+    let (p, d) = lower_src(&src);
+    assert!(d.is_empty(), "{d:?}");
+    assert_eq!(p.roles.len(), 2);
+    assert_eq!(p.roles[1].input_sources, vec![Some(RoleId(0))]);
+    assert_eq!(p.processes.len(), 2);
+    let Some(c) = &p.choreography else { panic!() };
+    assert!(matches!(c.body, Global::Rec { .. }));
+}
+
+#[test]
+fn unknown_names_are_reported_with_their_kind() {
+    let src = format!(
+        "{HEADER} choreography G = C -> B : go. dt<C: fly, A: work>. t;
+         process C = dt<idle>.Z;"
+    );
+    let (_, d) = lower_src(&src);
+    assert_eq!(
+        codes(&d),
+        vec![Code::UnknownParticipant, Code::UnknownPrimitive, Code::UnboundRecursion, Code::UnboundRecursion]
+    );
+}
+
+#[test]
+fn contract_parts_read_only_what_def_3_4_allows() {
+    let src = "robot R { state x: real; input w: real; }
+               motion R.m { interruptible: true; assume: x > 0; guarantee: w > 0; pre: clock > 0; post: old(x) == x; }";
+    let (_, d) = lower_src(src);
+    let d: Vec<_> = d.into_iter().filter(|d| d.code != Code::MissingItem).collect();
+    assert_eq!(codes(&d), vec![Code::VariableNotAllowed; 3], "{d:?}");
+    assert!(d[0].message.contains("assumption"));
+}
+
+#[test]
+fn pi_is_a_reserved_real_constant_that_prints_back() {
+    let src = "const half_pi: real = pi / 2; robot R { state a: real; }
+               system S { participant A: R { init: a == -pi + half_pi; } } choreography G = end;";
+    let (p, d) = lower_src(src);
+    assert!(d.is_empty(), "{d:?}");
+    let half = &p.consts[0].value;
+    assert_eq!(half.sort, Sort::Real);
+    assert!(matches!(&half.kind, ExprKind::Binary(_, a, _) if matches!(a.kind, ExprKind::Call(Builtin::Pi, _))));
+    let init = p.roles[0].init.as_ref().expect("init");
+    let text = crate::hir::print::expr(&p, None, init);
+    assert_eq!(text, "A.a == -pi + half_pi");
+    // The printed text reads back to the same term.
+    let again = format!(
+        "const half_pi: real = pi / 2; robot R {{ state a: real; }}
+         system S {{ participant A: R {{ init: {}; }} }} choreography G = end;",
+        text.replace("A.a", "a")
+    );
+    let (q, d) = lower_src(&again);
+    assert!(d.is_empty(), "{d:?}");
+    assert_eq!(q.roles[0].init.as_ref().map(|e| crate::hir::print::expr(&q, None, e)), Some(text));
+    // `pi` cannot be redefined or called.
+    for bad in ["const pi: real = 3;", "const x = pi();", "robot R { state pi: real; }"] {
+        let mut db = SourceDb::new();
+        let id = db.add("t.chor", bad);
+        let (_, d) = crate::syntax::parser::parse(id, bad);
+        assert_eq!(codes(&d), vec![Code::UnexpectedToken], "{bad}: {d:?}");
+    }
+    let mut db = SourceDb::new();
+    let id = db.add("t.chor", "const pi: real = 3;");
+    let (_, d) = crate::syntax::parser::parse(id, "const pi: real = 3;");
+    assert!(d[0].help.as_deref().is_some_and(|h| h.contains("built-in constant")), "{d:?}");
+}
+
+#[test]
+fn sorts_are_checked() {
+    let src = format!("{HEADER} choreography G = C -> A : [x + true] go(n: int {{ n }}). end;");
+    let (_, d) = lower_src(&src);
+    assert!(codes(&d).iter().all(|c| *c == Code::SortMismatch), "{d:?}");
+    assert_eq!(d.len(), 3, "{d:?}"); // `x + true`, the guard is not bool, `n` is not bool
+}
+
+#[test]
+fn missing_interruptible_and_duplicates() {
+    let src = format!("{HEADER} motion Cart.idle {{ interruptible: true; }} motion Arm.j {{ pre: true; pre: true; }}");
+    let (_, d) = lower_src(&src);
+    let c = codes(&d);
+    assert!(c.contains(&Code::Duplicate) && c.contains(&Code::MissingField), "{d:?}");
+}
+
+#[test]
+fn unconnected_inputs_are_reported() {
+    let src = "robot R { input w: real; } system S { participant P: R; } choreography G = end;";
+    let (_, d) = lower_src(src);
+    assert_eq!(codes(&d), vec![Code::UnconnectedInput]);
+}
+
+#[test]
+fn a_library_file_has_no_system() {
+    let (_, d) = lower_src("robot R { state x: real; }");
+    assert_eq!(codes(&d), vec![Code::MissingItem]);
+}
+
+/// An expression with a failed part (its error reported) fails as a whole, silently: one
+/// diagnostic per mistake, none about the well-sorted terms around it.
+#[test]
+fn a_failed_part_fails_its_whole_expression_silently() {
+    for guard in [
+        "norm2(ghost - point(1, 0, 0)) > 0",
+        "(ghost, 1).x > 0",
+        "ghost + true > 0",
+        "C.nope.x > 0",
+        "-old(x) > 0",
+        "sqrt(ghost) > point(0, 0, 0).x",
+    ] {
+        let src = format!("{HEADER} choreography G = C -> A: [{guard}] go. end;");
+        let (prog, d) = lower_src(&src);
+        let expected = if guard.contains("old") { Code::VariableNotAllowed } else { Code::UnknownVariable };
+        assert_eq!(codes(&d), vec![expected], "{guard}: {d:?}");
+        let Some(Global::Seq(items, _)) = prog.choreography.as_ref().map(|c| &c.body) else { panic!("a sequence") };
+        let Global::Msg(m) = &items[0] else { panic!("a message") };
+        let g = m.guard.as_ref().expect("guard");
+        assert!(g.is_error(), "{guard}: {g:?}");
+        // Never a proof of anything: no later stage gives the error expression a value.
+        assert!(!g.is_true() && crate::exact::eval(&prog, g, &|_: &Var| None).is_err(), "{guard}");
+    }
+}
+
+/// A process binder's sort is open until typing gives it the payload's (`Sort::Any`); that
+/// is not the sort of a failed expression (`Sort::Error`). `p.x` of a binder is its
+/// component (it used to become `true`, silently), and `p - point(...)` is no sort error.
+#[test]
+fn a_binder_is_not_a_failed_expression() {
+    let src = format!(
+        "{HEADER} choreography G = C -> A: go(q: point). dt<C: idle, A: work>. end;
+         process A = C?go(p). if p.x > norm2(p - point(1, 0, 0)) then dt<work>.end else dt<work>.end;"
+    );
+    let (prog, d) = lower_src(&src);
+    assert!(d.is_empty(), "{d:?}");
+    let Some(Process::Recv { branches, .. }) = prog.processes.first().map(|p| &p.body) else { panic!("a receive") };
+    let Process::If { cond, .. } = &branches[0].cont else { panic!("a conditional") };
+    let ExprKind::Binary(BinOp::Gt, a, _) = &cond.kind else { panic!("{cond:?}") };
+    assert!(matches!(a.kind, ExprKind::Component(_, 0)), "{a:?}");
+}
+
+/// The same through the whole pipeline: a process that branches on `j.x` for a number `j`
+/// it received used to be verified (`j.x` was `true`, a fine condition); a component is a
+/// real, not a condition, so it is rejected (E0208).
+#[test]
+fn a_component_of_a_received_value_is_no_condition() {
+    let src = std::fs::read_to_string("choreographies/countdown.chor").expect("countdown");
+    let before = "mu loop. (p?more(j).(p!half.dt<hold>.loop + p!full.dt<hold>.loop)";
+    assert!(src.contains(before));
+    let src = src.replace(before, "mu loop. (p?more(j).(if j.x then p!half.dt<hold>.loop else p!full.dt<hold>.loop)");
+    let mut db = SourceDb::new();
+    let cfg = crate::driver::Config::default();
+    let report = crate::driver::check_source(&mut db, "choreographies/binder-component.chor", &src, &cfg);
+    assert_eq!(report.verdict, crate::driver::Verdict::Rejected);
+    assert_eq!(codes(&report.diagnostics), vec![Code::SortMismatch], "{:?}", report.diagnostics);
+}

@@ -1,0 +1,262 @@
+//! Global and local types (LANGUAGE.md, Global types and Local types; Defs 4.1 and 4.6):
+//! messages with guards and refined payloads, motions, sequence, choice, separation
+//! `*` with its partition, and parameterised recursion. Payload fields and recursion
+//! parameters become value variables (one [`ValueId`] per binding site), in scope in
+//! the rest of their branch.
+
+use super::*;
+
+impl Lowerer {
+    pub(super) fn choreography(&mut self, c: &ast::ChorDecl) {
+        if let Some(first) = &self.prog.choreography {
+            let d = dup(c.name.span, "choreography", &c.name.name, first.span);
+            self.diags.push(d);
+            return;
+        }
+        let mut cx = Scopes::default();
+        let body = self.global(&c.body, &mut cx);
+        self.prog.choreography = Some(Choreography { name: c.name.name.clone(), body, span: c.name.span });
+        for p in &c.partitions {
+            self.distinct_coordinates(&p.point);
+            let names = [p.point[0].name.clone(), p.point[1].name.clone(), p.point[2].name.clone()];
+            let env = Env { point: Some(&names), part: Some("a partition"), ..Env::consts_only() };
+            let regions = p.regions.iter().map(|r| self.pred(r, &env, "a partition's region")).collect();
+            self.prog.partitions.push(crate::hir::Partition {
+                par: p.par,
+                point: names.clone(),
+                regions,
+                span: p.span,
+            });
+        }
+    }
+
+    pub(super) fn global(&mut self, g: &ast::Global, cx: &mut Scopes) -> Global {
+        crate::stack::deep(|| self.global_inner(g, cx))
+    }
+
+    pub(super) fn global_inner(&mut self, g: &ast::Global, cx: &mut Scopes) -> Global {
+        match g {
+            ast::Global::Msg(m) => {
+                let from = self.role(&m.from);
+                let to = self.role(&m.to);
+                let (Some(from), Some(to)) = (from, to) else { return Global::End(Loc(m.span)) };
+                let guard = m.guard.as_ref().map(|gd| {
+                    let env = Env::role(from, &cx.values);
+                    self.pred(gd, &env, "a guard")
+                });
+                let payload = self.fields(&m.payload, from, ValueOrigin::Message { from, to }, &mut cx.values);
+                Global::Msg(Msg {
+                    from,
+                    to,
+                    guard,
+                    label: m.label.name.clone(),
+                    payload,
+                    loc: Loc(m.span),
+                    label_loc: Loc(m.label.span),
+                })
+            }
+            ast::Global::Motion { parts, span } => {
+                let mut out = Vec::new();
+                for (who, call) in parts {
+                    let Some(r) = self.role(who) else { continue };
+                    if let Some(app) = self.prim_app(r, call, &cx.values.clone()) {
+                        out.push((r, app));
+                    }
+                }
+                Global::Motion(Motion { parts: out, loc: Loc(*span) })
+            }
+            ast::Global::Seq(items, span) => {
+                Global::Seq(items.iter().map(|g| self.global(g, cx)).collect(), Loc(*span))
+            }
+            ast::Global::Choice(items, span) | ast::Global::Par(items, span) => {
+                let mark = cx.values.len();
+                let lowered = items
+                    .iter()
+                    .map(|g| {
+                        cx.values.truncate(mark);
+                        self.global(g, cx)
+                    })
+                    .collect();
+                cx.values.truncate(mark);
+                if matches!(g, ast::Global::Choice(..)) {
+                    Global::Choice(lowered, Loc(*span))
+                } else {
+                    Global::Par(lowered, Loc(*span))
+                }
+            }
+            ast::Global::Rec { var, params, body, span } => {
+                let mark = cx.values.len();
+                let params = self.rec_params(params, ValueOrigin::RecParam, Who::Nobody, &mut cx.values);
+                cx.recs.push((var.name.clone(), params.len()));
+                let body = self.global(body, cx);
+                cx.recs.pop();
+                cx.values.truncate(mark);
+                Global::Rec { var: var.name.clone(), params, body: Box::new(body), loc: Loc(*span) }
+            }
+            ast::Global::Var { var, args, span } => {
+                let args =
+                    self.rec_var(var, args, *span, &cx.recs, Env { values: &cx.values.clone(), ..Env::consts_only() });
+                Global::Var(RecVar { var: var.name.clone(), args, loc: Loc(*span) })
+            }
+            ast::Global::End(span) => Global::End(Loc(*span)),
+        }
+    }
+
+    /// Lowers payload fields, pushing their value variables onto `values` (each field's
+    /// refinement sees the fields before it and itself).
+    pub(super) fn fields(
+        &mut self,
+        fields: &[ast::Field],
+        viewer: RoleId,
+        origin: ValueOrigin,
+        values: &mut Vec<ValueId>,
+    ) -> Vec<Field> {
+        let mut out = Vec::new();
+        for f in fields {
+            let sort = self.sort(&f.sort);
+            let v = self.new_value(&f.name, sort.clone(), origin.clone());
+            values.push(v);
+            let refinement = f.refinement.as_ref().map(|r| {
+                let env = Env::role(viewer, values);
+                self.pred(r, &env, "a refinement")
+            });
+            out.push(Field { value: v, name: f.name.name.clone(), sort, refinement });
+        }
+        out
+    }
+
+    pub(super) fn new_value(&mut self, name: &ast::Ident, sort: Sort, origin: ValueOrigin) -> ValueId {
+        let id = ValueId(self.prog.values.len() as u32);
+        self.prog.values.push(ValueVar { name: name.name.clone(), sort, origin, span: name.span });
+        id
+    }
+
+    pub(super) fn rec_params(
+        &mut self,
+        params: &[ast::RecParam],
+        origin: ValueOrigin,
+        who: Who,
+        values: &mut Vec<ValueId>,
+    ) -> Vec<RecParam> {
+        let mut out = Vec::new();
+        for p in params {
+            let sort = self.sort(&p.sort);
+            let outer = values.clone();
+            let env =
+                Env { who, state: who != Who::Nobody, input: who != Who::Nobody, values: &outer, ..Env::consts_only() };
+            let init = self.expr(&p.init, &env);
+            self.expect_sort(&init, &sort, &format!("initial value of `{}`", p.name.name));
+            let v = self.new_value(&p.name, sort.clone(), origin.clone());
+            values.push(v);
+            let refinement = p.refinement.as_ref().map(|r| {
+                let env = Env { values, ..env };
+                self.pred(r, &env, "a refinement")
+            });
+            out.push(RecParam { value: v, name: p.name.name.clone(), sort, refinement, init });
+        }
+        out
+    }
+
+    pub(super) fn rec_var(
+        &mut self,
+        var: &ast::Ident,
+        args: &[ast::Expr],
+        span: Span,
+        recs: &[(String, usize)],
+        env: Env,
+    ) -> Vec<Expr> {
+        let args: Vec<Expr> = args.iter().map(|a| self.expr(a, &env)).collect();
+        match recs.iter().rev().find(|(n, _)| *n == var.name) {
+            None => self.err(
+                Code::UnboundRecursion,
+                var.span,
+                format!("recursion variable `{}` is not bound here", var.name),
+                format!("bind it with `mu {}. ...` around this occurrence", var.name),
+            ),
+            Some((_, n)) if *n != args.len() => self.err(
+                Code::ArityMismatch,
+                span,
+                format!("`{}` takes {n} argument(s), found {}", var.name, args.len()),
+                "pass one argument per recursion parameter",
+            ),
+            _ => {}
+        }
+        args
+    }
+
+    pub(super) fn local_def(&mut self, t: &ast::LocalDecl) {
+        let Some(role) = self.role(&t.role) else { return };
+        if let Some(&first) = self.local_roles.get(&role) {
+            let d = dup(t.role.span, "local type for", &t.role.name, first);
+            self.diags.push(d);
+            return;
+        }
+        self.local_roles.insert(role, t.role.span);
+        let mut cx = Scopes::default();
+        let body = self.local(&t.body, role, &mut cx);
+        self.prog.locals.push(LocalDef { role, body, span: t.role.span });
+    }
+
+    pub(super) fn local(&mut self, t: &ast::Local, me: RoleId, cx: &mut Scopes) -> LocalRc {
+        crate::stack::deep(|| Arc::new(self.local_inner(t, me, cx)))
+    }
+
+    pub(super) fn local_inner(&mut self, t: &ast::Local, me: RoleId, cx: &mut Scopes) -> Local {
+        let mark = cx.values.len();
+        let out = match t {
+            ast::Local::Motion { prims, cont, span } => {
+                let prims: Vec<PrimApp> =
+                    prims.iter().filter_map(|c| self.prim_app(me, c, &cx.values.clone())).collect();
+                let cont = self.local(cont, me, cx);
+                Local::Motion { prims, cont, loc: Loc(*span) }
+            }
+            ast::Local::Send { branches, span } => {
+                let mut out = Vec::new();
+                for b in branches {
+                    cx.values.truncate(mark);
+                    let guard = b.guard.as_ref().map(|g| {
+                        let env = Env::role(me, &cx.values);
+                        self.pred(g, &env, "a guard")
+                    });
+                    let Some(to) = self.role(&b.to) else { continue };
+                    let payload = self.fields(&b.payload, me, ValueOrigin::Message { from: me, to }, &mut cx.values);
+                    let cont = self.local(&b.cont, me, cx);
+                    out.push(SendBranch { guard, to, label: b.label.name.clone(), payload, cont, loc: Loc(b.span) });
+                }
+                Local::Send { branches: out, loc: Loc(*span) }
+            }
+            ast::Local::Recv { branches, default, span } => {
+                let mut out = Vec::new();
+                for b in branches {
+                    cx.values.truncate(mark);
+                    let Some(from) = self.role(&b.from) else { continue };
+                    let payload = self.fields(&b.payload, me, ValueOrigin::Message { from, to: me }, &mut cx.values);
+                    let cont = self.local(&b.cont, me, cx);
+                    out.push(RecvBranch { from, label: b.label.name.clone(), payload, cont, loc: Loc(b.span) });
+                }
+                cx.values.truncate(mark);
+                let default = default.as_ref().map(|(prims, cont)| {
+                    let prims: Vec<PrimApp> =
+                        prims.iter().filter_map(|c| self.prim_app(me, c, &cx.values.clone())).collect();
+                    (prims, self.local(cont, me, cx))
+                });
+                Local::Recv { branches: out, default, loc: Loc(*span) }
+            }
+            ast::Local::Rec { var, params, body, span } => {
+                let params = self.rec_params(params, ValueOrigin::RecParam, Who::Role(me), &mut cx.values);
+                cx.recs.push((var.name.clone(), params.len()));
+                let body = self.local(body, me, cx);
+                cx.recs.pop();
+                Local::Rec { var: var.name.clone(), params, body, loc: Loc(*span) }
+            }
+            ast::Local::Var { var, args, span } => {
+                let values = cx.values.clone();
+                let args = self.rec_var(var, args, *span, &cx.recs, Env::role(me, &values));
+                Local::Var { var: var.name.clone(), args, loc: Loc(*span) }
+            }
+            ast::Local::End(span) => Local::End(Loc(*span)),
+        };
+        cx.values.truncate(mark);
+        out
+    }
+}

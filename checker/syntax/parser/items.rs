@@ -1,0 +1,377 @@
+//! Items (LANGUAGE.md, Files, Robots, Motion primitives, Systems): `import`, `const`,
+//! `robot` blocks, `motion` blocks with their contract fields, `system` blocks with
+//! participants, and the pieces they share (sorts, variable declarations, payload
+//! fields, recursion parameters, primitive calls). Each block recovers inside itself, so
+//! one bad entry does not hide the rest.
+
+use super::*;
+
+impl Parser {
+    pub(super) fn file(&mut self) -> File {
+        let mut items = Vec::new();
+        while !self.at_eof() {
+            let before = self.pos;
+            match self.item() {
+                Ok(item) => items.push(item),
+                Err(()) => {
+                    self.recover(false);
+                    if self.pos == before {
+                        self.bump();
+                    }
+                }
+            }
+        }
+        File { items }
+    }
+
+    pub(super) fn item(&mut self) -> PResult<Item> {
+        let start = self.span();
+        let kw =
+            match self.peek() {
+                Tok::Ident(k) if ITEM_KEYWORDS.contains(&k.as_str()) => k.clone(),
+                _ => return self.error_expected(
+                    "an item (`import`, `const`, `robot`, `motion`, `system`, `choreography`, `process` or `local`)",
+                ),
+            };
+        self.bump();
+        let item = match kw.as_str() {
+            "import" => {
+                let path = match self.peek().clone() {
+                    Tok::Str(s) => {
+                        self.bump();
+                        s
+                    }
+                    _ => return self.error_expected("a file path in double quotes"),
+                };
+                self.expect_punct(";")?;
+                Item::Import(Import { path, span: start.to(self.prev_span()) })
+            }
+            "const" => {
+                let name = self.ident("a constant name")?;
+                let sort = if self.eat_punct(":") { Some(self.sort()?) } else { None };
+                self.expect_punct("=")?;
+                let value = self.expr()?;
+                self.expect_punct(";")?;
+                Item::Const(ConstDecl { name, sort, value, span: start.to(self.prev_span()) })
+            }
+            "robot" => Item::Robot(self.robot(start)?),
+            "motion" => Item::Motion(self.motion(start)?),
+            "system" => Item::System(self.system(start)?),
+            "choreography" => {
+                let name = self.ident("a choreography name")?;
+                self.expect_punct("=")?;
+                self.partitions.clear();
+                let body = self.global()?;
+                self.expect_punct(";")?;
+                let partitions = std::mem::take(&mut self.partitions);
+                Item::Choreography(ChorDecl { name, body, span: start.to(self.prev_span()), partitions })
+            }
+            "process" => {
+                let role = self.ident("a participant name")?;
+                self.expect_punct("=")?;
+                let body = self.process()?;
+                self.expect_punct(";")?;
+                Item::Process(ProcessDecl { role, body, span: start.to(self.prev_span()) })
+            }
+            _ => {
+                let role = self.ident("a participant name")?;
+                self.expect_punct("=")?;
+                let body = self.local()?;
+                self.expect_punct(";")?;
+                Item::Local(LocalDecl { role, body, span: start.to(self.prev_span()) })
+            }
+        };
+        Ok(item)
+    }
+
+    /// Parses `{ entry* }` calling `entry` for each, recovering inside the block.
+    pub(super) fn block(&mut self, mut entry: impl FnMut(&mut Parser) -> PResult<()>) -> PResult<()> {
+        self.expect_punct("{")?;
+        while !self.is_punct("}") && !self.at_eof() {
+            let before = self.pos;
+            if entry(self).is_err() {
+                self.recover(true);
+                if self.pos == before {
+                    self.bump();
+                }
+            }
+        }
+        self.expect_punct("}")?;
+        Ok(())
+    }
+
+    pub(super) fn robot(&mut self, start: Span) -> PResult<RobotDecl> {
+        let name = self.ident("a robot kind name")?;
+        let mut r = RobotDecl { name, state: vec![], inputs: vec![], geometry: None, invariant: None, span: start };
+        self.block(|p| {
+            let key = p.ident("`state`, `input`, `geometry` or `invariant`")?;
+            match key.name.as_str() {
+                "state" | "input" => {
+                    let vars = p.var_decls(";")?;
+                    p.expect_punct(";")?;
+                    if key.name == "state" {
+                        r.state.extend(vars)
+                    } else {
+                        r.inputs.extend(vars)
+                    }
+                }
+                "geometry" => {
+                    p.expect_punct(":")?;
+                    let shape = p.ident("a shape (`box`, `sphere`, `cylinder` or `urdf`)")?;
+                    let mut g = Geometry { shape, args: vec![], path: None, span: key.span };
+                    p.expect_punct("(")?;
+                    if let Tok::Str(s) = p.peek().clone() {
+                        p.bump();
+                        g.path = Some(s);
+                    } else if !p.is_punct(")") {
+                        g.args = p.expr_list(")")?;
+                    }
+                    p.expect_punct(")")?;
+                    g.span = key.span.to(p.prev_span());
+                    p.expect_punct(";")?;
+                    r.geometry = Some(g);
+                }
+                "invariant" => {
+                    p.expect_punct(":")?;
+                    r.invariant = Some(p.expr()?);
+                    p.expect_punct(";")?;
+                }
+                other => {
+                    let d = Diagnostic::error(
+                        Code::UnexpectedToken,
+                        key.span,
+                        format!("expected `state`, `input`, `geometry` or `invariant`, found `{other}`"),
+                    )
+                    .with_help("a robot block declares its variables, geometry and invariant");
+                    p.diags.push(d);
+                    return Err(());
+                }
+            }
+            Ok(())
+        })?;
+        r.span = start.to(self.prev_span());
+        Ok(r)
+    }
+
+    /// `a: real, b: int` up to (not including) `end`.
+    pub(super) fn var_decls(&mut self, end: &str) -> PResult<Vec<VarDecl>> {
+        let mut out = Vec::new();
+        if self.is_punct(end) {
+            return Ok(out);
+        }
+        loop {
+            let name = self.ident("a variable name")?;
+            self.expect_punct(":")?;
+            let sort = self.sort()?;
+            out.push(VarDecl { name, sort });
+            if !self.eat_punct(",") {
+                return Ok(out);
+            }
+        }
+    }
+
+    pub(super) fn motion(&mut self, start: Span) -> PResult<MotionDecl> {
+        let kind = self.ident("a robot kind")?;
+        self.expect_punct(".")?;
+        let name = self.ident("a motion primitive name")?;
+        let mut params = Vec::new();
+        if self.eat_punct("(") {
+            params = self.var_decls(")")?;
+            self.expect_punct(")")?;
+        }
+        let mut fields = Vec::new();
+        self.block(|p| {
+            let key = p.ident(
+                "a contract field (`pre`, `assume`, `guarantee`, `post`, `footprint`, `duration`, `interruptible`)",
+            )?;
+            let value = match key.name.as_str() {
+                "footprint" => {
+                    p.expect_punct("(")?;
+                    let a = p.ident("a coordinate name")?;
+                    p.expect_punct(",")?;
+                    let b = p.ident("a coordinate name")?;
+                    p.expect_punct(",")?;
+                    let c = p.ident("a coordinate name")?;
+                    p.expect_punct(")")?;
+                    p.expect_punct(":")?;
+                    FieldValue::Footprint { point: [a, b, c], pred: p.expr()? }
+                }
+                "duration" => {
+                    p.expect_punct(":")?;
+                    p.expect_punct("[")?;
+                    let lo = p.expr()?;
+                    p.expect_punct(",")?;
+                    let hi = if p.is_kw("inf") && matches!(p.peek_at(1), Tok::Punct("]")) {
+                        p.bump();
+                        None
+                    } else {
+                        Some(p.expr()?)
+                    };
+                    p.expect_punct("]")?;
+                    FieldValue::Duration { lo, hi }
+                }
+                "interruptible" => {
+                    p.expect_punct(":")?;
+                    if p.eat_kw("true") {
+                        FieldValue::Flag(true)
+                    } else if p.eat_kw("false") {
+                        FieldValue::Flag(false)
+                    } else {
+                        return p.error_expected("`true` or `false`");
+                    }
+                }
+                _ => {
+                    p.expect_punct(":")?;
+                    FieldValue::Pred(p.expr()?)
+                }
+            };
+            p.expect_punct(";")?;
+            fields.push(MotionField { span: key.span.to(p.prev_span()), key, value });
+            Ok(())
+        })?;
+        Ok(MotionDecl { kind, name, params, fields, span: start.to(self.prev_span()) })
+    }
+
+    pub(super) fn system(&mut self, start: Span) -> PResult<SystemDecl> {
+        let name = self.ident("a system name")?;
+        let mut participants = Vec::new();
+        self.block(|p| {
+            let pstart = p.expect_kw("participant")?;
+            let name = p.ident("a participant name")?;
+            p.expect_punct(":")?;
+            let kind = p.ident("a robot kind")?;
+            let mut part = ParticipantDecl { name, kind, init: None, at: None, span: pstart };
+            if !p.eat_punct(";") {
+                p.block(|p| {
+                    let key = p.ident("`init` or `at`")?;
+                    p.expect_punct(":")?;
+                    match key.name.as_str() {
+                        "init" => part.init = Some(p.expr()?),
+                        "at" => {
+                            let s = p.expect_kw("pose")?;
+                            p.expect_punct("(")?;
+                            let args = p.expr_list(")")?;
+                            p.expect_punct(")")?;
+                            part.at = Some(Pose { args, span: s.to(p.prev_span()) });
+                        }
+                        other => {
+                            let d = Diagnostic::error(
+                                Code::UnexpectedToken,
+                                key.span,
+                                format!("expected `init` or `at`, found `{other}`"),
+                            )
+                            .with_help("a participant block holds `init: PREDICATE;` and `at: pose(x, y, z);`");
+                            p.diags.push(d);
+                            return Err(());
+                        }
+                    }
+                    p.expect_punct(";")?;
+                    Ok(())
+                })?;
+            }
+            part.span = pstart.to(p.prev_span());
+            participants.push(part);
+            Ok(())
+        })?;
+        Ok(SystemDecl { name, participants, span: start.to(self.prev_span()) })
+    }
+
+    pub(super) fn sort(&mut self) -> PResult<SortAst> {
+        let start = self.span();
+        if self.eat_punct("(") {
+            let mut parts = vec![self.nested(Parser::sort)?];
+            while self.eat_punct(",") {
+                parts.push(self.nested(Parser::sort)?);
+            }
+            self.expect_punct(")")?;
+            let span = start.to(self.prev_span());
+            if parts.len() == 1 {
+                return Ok(parts.pop().unwrap_or(SortAst { kind: SortKind::Unit, span }));
+            }
+            return Ok(SortAst { kind: SortKind::Product(parts), span });
+        }
+        let id = self.ident("a sort (`unit`, `bool`, `int`, `real`, `point`, `vector` or a product `(S, S)`)")?;
+        let kind = match id.name.as_str() {
+            "unit" => SortKind::Unit,
+            "bool" => SortKind::Bool,
+            "int" => SortKind::Int,
+            "real" => SortKind::Real,
+            "point" => SortKind::Point,
+            "vector" => SortKind::Vector,
+            other => SortKind::Named(other.to_string()),
+        };
+        Ok(SortAst { kind, span: id.span })
+    }
+
+    /// `(f: S {P}, g: S)` payload fields; the opening `(` is already consumed.
+    pub(super) fn fields(&mut self) -> PResult<Vec<Field>> {
+        let mut out = Vec::new();
+        if self.is_punct(")") {
+            return Ok(out);
+        }
+        loop {
+            let name = self.ident("a field name")?;
+            self.expect_punct(":")?;
+            let sort = self.sort()?;
+            let refinement = if self.eat_punct("{") {
+                let e = self.expr()?;
+                self.expect_punct("}")?;
+                Some(e)
+            } else {
+                None
+            };
+            out.push(Field { name, sort, refinement });
+            if !self.eat_punct(",") {
+                return Ok(out);
+            }
+        }
+    }
+
+    pub(super) fn rec_params(&mut self) -> PResult<Vec<RecParam>> {
+        let mut out = Vec::new();
+        if !self.eat_punct("(") {
+            return Ok(out);
+        }
+        loop {
+            let name = self.ident("a recursion parameter")?;
+            self.expect_punct(":")?;
+            let sort = self.sort()?;
+            let refinement = if self.eat_punct("{") {
+                let e = self.expr()?;
+                self.expect_punct("}")?;
+                Some(e)
+            } else {
+                None
+            };
+            self.expect_punct("=")?;
+            let init = self.expr()?;
+            out.push(RecParam { name, sort, refinement, init });
+            if !self.eat_punct(",") {
+                break;
+            }
+        }
+        self.expect_punct(")")?;
+        Ok(out)
+    }
+
+    pub(super) fn prim_call(&mut self) -> PResult<PrimCall> {
+        let name = self.ident("a motion primitive")?;
+        let mut args = Vec::new();
+        if self.eat_punct("(") {
+            args = self.expr_list(")")?;
+            self.expect_punct(")")?;
+        }
+        Ok(PrimCall { span: name.span.to(self.prev_span()), name, args })
+    }
+
+    /// Optional `(e, ...)` after a name.
+    pub(super) fn opt_args(&mut self) -> PResult<Vec<Expr>> {
+        if self.eat_punct("(") {
+            let args = self.expr_list(")")?;
+            self.expect_punct(")")?;
+            Ok(args)
+        } else {
+            Ok(Vec::new())
+        }
+    }
+}
