@@ -376,7 +376,7 @@ pub fn exact(prog: &Program, e: &Expr) -> Option<BigRational> {
 }
 
 fn value(prog: &Program, e: &Expr, ranges: &dyn Ranges) -> Option<Val> {
-    stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || value_inner(prog, e, ranges))
+    crate::stack::deep(|| value_inner(prog, e, ranges))
 }
 
 fn value_inner(prog: &Program, e: &Expr, ranges: &dyn Ranges) -> Option<Val> {
@@ -489,7 +489,7 @@ pub const PI: Interval = Interval { lo: std::f64::consts::PI, hi: 3.141592653589
 /// ([`exact`]; a nonzero divisor), and an exact 0 (`0·π`). Anything else (a decimal
 /// such as 1.5708, a variable, `sqrt(pi)`) is `None`: never a guess from digits.
 pub fn pi_multiple(prog: &Program, e: &Expr) -> Option<BigRational> {
-    stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || pi_multiple_inner(prog, e))
+    crate::stack::deep(|| pi_multiple_inner(prog, e))
 }
 
 fn pi_multiple_inner(prog: &Program, e: &Expr) -> Option<BigRational> {
@@ -566,7 +566,7 @@ pub fn point_box(
     point: &dyn Fn(&Var) -> Option<usize>,
     ranges: &dyn Ranges,
 ) -> [Interval; 3] {
-    stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || point_box_inner(prog, pred, point, ranges))
+    crate::stack::deep(|| point_box_inner(prog, pred, point, ranges))
 }
 
 fn point_box_inner(

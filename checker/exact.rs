@@ -262,7 +262,7 @@ impl<F: Fn(&Var) -> Option<Value>> Env for F {
 
 /// Evaluates `e` under `env` (constants are evaluated from their definitions).
 pub fn eval(prog: &Program, e: &Expr, env: &dyn Env) -> Result<Value, String> {
-    stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || eval_inner(prog, e, env, 0))
+    crate::stack::deep(|| eval_inner(prog, e, env, 0))
 }
 
 /// Evaluates a predicate to a truth value; anything undecidable is `Unknown`.
@@ -277,7 +277,7 @@ fn eval_inner(prog: &Program, e: &Expr, env: &dyn Env, depth: usize) -> Result<V
     if depth > 10_000 {
         return Err("an expression nested too deeply".into());
     }
-    let ev = |x: &Expr| stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || eval_inner(prog, x, env, depth + 1));
+    let ev = |x: &Expr| crate::stack::deep(|| eval_inner(prog, x, env, depth + 1));
     let num = |x: &Expr| -> Result<Num, String> { ev(x)?.num().cloned() };
     Ok(match &e.kind {
         ExprKind::Bool(b) => Value::Bool(Tri::of(*b)),

@@ -116,6 +116,17 @@ pub fn load_stdin(db: &mut SourceDb) -> std::io::Result<(FileId, Option<Diagnost
     }
 }
 
+/// Reads the file at `path` and its imports from disk and simulates it (`mochi simulate`).
+/// `Err` of the inner result holds the errors that stopped it before a program existed.
+pub fn simulate_file(
+    db: &mut SourceDb,
+    path: &Path,
+    cfg: &crate::simulate::SimConfig,
+) -> std::io::Result<Result<crate::simulate::SimReport, Vec<Diagnostic>>> {
+    let root = load_root(db, path)?;
+    Ok(crate::simulate::simulate_loaded(db, root, cfg, &mut read_source))
+}
+
 /// Checks the file at `path`, its imports read from disk. A file that is not UTF-8 is a
 /// rejected report with its E0107; a file that cannot be read at all (missing, a
 /// directory, a device, too large) is the `Err`.

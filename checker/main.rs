@@ -206,7 +206,8 @@ fn run(cli: Cli) -> u8 {
 /// `mochi simulate`: 0 when nothing was found, 1 for a finding (or invalid input), 3
 /// when some run stopped undecided and nothing was found.
 fn simulate(args: &SimulateArgs, color: ColorChoice) -> Outcome {
-    use mochi::simulate::{simulate_file, SimConfig};
+    use mochi::fsload::simulate_file;
+    use mochi::simulate::SimConfig;
     let cfg = SimConfig { runs: args.runs, seed: args.seed, steps: args.steps, ..SimConfig::default() };
     let mut db = SourceDb::new();
     let report = match panic::catch_unwind(AssertUnwindSafe(|| simulate_file(&mut db, &args.file, &cfg))) {

@@ -120,25 +120,16 @@ pub fn simulate(prog: &Program, cfg: &SimConfig) -> SimReport {
     report
 }
 
-/// Reads and resolves the file at `path` (with its imports) and simulates it. `Err`
-/// holds the errors that stopped it before a program existed.
-pub fn simulate_file(
-    db: &mut crate::source::SourceDb,
-    path: &std::path::Path,
-    cfg: &SimConfig,
-) -> std::io::Result<Result<SimReport, Vec<crate::diag::Diagnostic>>> {
-    let root = crate::syntax::load_root(db, path)?;
-    Ok(simulate_loaded(db, root, cfg))
-}
-
-/// [`simulate_file`] for a file already in `db`.
+/// Resolves the file `root` already in `db` (its imports read through `load`, as
+/// `driver::check_loaded` does) and simulates it. `Err` holds the errors that stopped it
+/// before a program existed. (`fsload::simulate_file` reads a file from disk.)
 pub fn simulate_loaded(
     db: &mut crate::source::SourceDb,
     root: crate::source::FileId,
     cfg: &SimConfig,
+    load: &mut crate::syntax::Loader<'_>,
 ) -> Result<SimReport, Vec<crate::diag::Diagnostic>> {
-    let mut read = |p: &std::path::Path| std::fs::read_to_string(p);
-    let (parsed, mut diags) = crate::syntax::parse_with_imports(db, root, &mut read);
+    let (parsed, mut diags) = crate::syntax::parse_with_imports(db, root, load);
     if diags.iter().any(|d| d.is_error()) {
         return Err(diags);
     }

@@ -4,7 +4,8 @@
 //! the simulator must be able to fail: it finds the collisions of rejected examples.
 
 use mochi::driver::{check_file, check_source, Config, Verdict};
-use mochi::simulate::{simulate_file, simulate_loaded, Kind, SimConfig, SimReport};
+use mochi::fsload::{read_source, simulate_file};
+use mochi::simulate::{simulate_loaded, Kind, SimConfig, SimReport};
 use mochi::source::SourceDb;
 use std::path::Path;
 
@@ -85,7 +86,7 @@ fn check_and_simulate(src: &str, c: &SimConfig) -> (Verdict, SimReport) {
     let v = check_source(&mut db, "lanes.chor", src, &Config::default()).verdict;
     let mut db = SourceDb::new();
     let root = db.add("lanes.chor", src);
-    let r = simulate_loaded(&mut db, root, c).unwrap_or_else(|d| panic!("does not resolve: {d:?}"));
+    let r = simulate_loaded(&mut db, root, c, &mut read_source).unwrap_or_else(|d| panic!("does not resolve: {d:?}"));
     (v, r)
 }
 
@@ -140,7 +141,7 @@ fn generated_cart_and_arm_layouts_agree_with_the_verdict() {
         let report = check_source(&mut db, "choreographies/generated.chor", &src, &Config::default());
         let mut db = SourceDb::new();
         let root = db.add("choreographies/generated.chor", src);
-        let r = simulate_loaded(&mut db, root, &cfg(1, 12, case as u64)).expect("resolves");
+        let r = simulate_loaded(&mut db, root, &cfg(1, 12, case as u64), &mut read_source).expect("resolves");
         let what = format!("arms at x = {x}, {y} m beside the lane");
         let overlap = report.diagnostics.iter().any(|d| matches!(d.code.as_str(), "E0404" | "E0406"));
         match report.verdict {

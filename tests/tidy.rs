@@ -26,10 +26,6 @@ const IO_ALLOWED_FOR_NOW: &[(&str, &str)] = &[
     // The hardlimit branch replaces the SMT dump writing and the progress bar with
     // callbacks that main.rs supplies; remove this entry when it is merged.
     ("checker/smt/mod.rs", "writes --dump-smt files and draws the progress bar"),
-    // `simulate_loaded` reads imports with `std::fs::read_to_string` (without the checks
-    // of `fsload::read_source`); its owner is to take a loader as `driver::check_loaded`
-    // does. Remove this entry then.
-    ("checker/simulate.rs", "reads imports itself"),
 ];
 
 /// The words rule (b) looks for.

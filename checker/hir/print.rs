@@ -471,7 +471,7 @@ fn tree_size<'t>(t: &'t LocalRc, cap: usize, memo: &mut HashMap<NodeRef<&'t Loca
     if let Some(&n) = memo.get(&key) {
         return n;
     }
-    let n = stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || {
+    let n = crate::stack::deep(|| {
         let mut n = 1usize;
         let mut add = |c: &'t LocalRc, memo: &mut HashMap<NodeRef<&'t Local>, usize>| {
             n = n.saturating_add(tree_size(c, cap, memo)).min(cap);

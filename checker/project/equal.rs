@@ -71,7 +71,7 @@ impl<'t> Differ<'t> {
         if a.sort != b.sort {
             return false;
         }
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || match (&a.kind, &b.kind) {
+        crate::stack::deep(|| match (&a.kind, &b.kind) {
             (ExprKind::Var(Var::Value(x, n)), ExprKind::Var(Var::Value(y, m))) => n == m && self.value_eq(*x, *y),
             (ExprKind::Var(Var::Value(..)), _) | (_, ExprKind::Var(Var::Value(..))) => false,
             (ExprKind::Unary(o, x), ExprKind::Unary(p, y)) => o == p && self.expr_renamed(x, y),
@@ -153,7 +153,7 @@ impl<'t> Differ<'t> {
         if !self.same.insert((NodeRef::new(&**a), NodeRef::new(&**b), renamed)) {
             return None;
         }
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.diff_inner(a, b))
+        crate::stack::deep(|| self.diff_inner(a, b))
     }
 
     pub(super) fn diff_inner(&mut self, a: &'t LocalRc, b: &'t LocalRc) -> Option<(Loc, Loc)> {

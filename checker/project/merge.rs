@@ -57,7 +57,7 @@ impl Projector<'_> {
 
     /// The merge `T1 ⊓ T2` of Def 4.7.
     pub(super) fn merge(&self, a: &LocalRc, b: &LocalRc) -> Result<LocalRc, Clash> {
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.merge_inner(a, b))
+        crate::stack::deep(|| self.merge_inner(a, b))
     }
 
     pub(super) fn merge_inner(&self, a: &LocalRc, b: &LocalRc) -> Result<LocalRc, Clash> {
@@ -264,7 +264,7 @@ fn rename_local<'t>(
     let fields = |fs: &[Field]| -> Vec<Field> {
         fs.iter().map(|f| Field { value: to(f.value), refinement: f.refinement.as_ref().map(e), ..f.clone() }).collect()
     };
-    let out = stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || match &**t {
+    let out = crate::stack::deep(|| match &**t {
         Local::Motion { prims, cont, loc } => {
             Local::Motion { prims: prims.iter().map(app).collect(), cont: rename_local(cont, map, memo), loc: *loc }
         }

@@ -23,7 +23,7 @@ impl<'g> Occurs<'g> {
 
     fn fill(&mut self, g: &'g Global, n: usize) -> FixedBitSet {
         let mut set = FixedBitSet::with_capacity(n);
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || match g {
+        crate::stack::deep(|| match g {
             Global::Msg(m) => {
                 set.insert(m.from.idx());
                 set.insert(m.to.idx());

@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 impl Projector<'_> {
     pub(super) fn project(&self, g: &Global, tail: LocalRc) -> Result<LocalRc, Diagnostic> {
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.project_inner(g, tail))
+        crate::stack::deep(|| self.project_inner(g, tail))
     }
 
     pub(super) fn project_inner(&self, g: &Global, tail: LocalRc) -> Result<LocalRc, Diagnostic> {
@@ -153,7 +153,7 @@ fn not_a_choice(loc: Loc) -> Diagnostic {
 /// `(g1 + g2).g = g1.g + g2.g`, as Sec 4.1 writes choices. Fails with the location of
 /// a branch that does not start with a message.
 fn split_branch<'g>(b: &'g Global, rest: &[&'g Global], out: &mut Vec<(&'g Msg, Vec<&'g Global>)>) -> Result<(), Loc> {
-    stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || {
+    crate::stack::deep(|| {
         let mut items = Vec::new();
         flatten_seq(b, &mut items);
         items.extend_from_slice(rest);

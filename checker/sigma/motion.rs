@@ -185,7 +185,7 @@ impl Sigma {
     }
 
     fn rewrite_min_max(&self, e: &Expr) -> Expr {
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.rewrite_min_max_inner(e))
+        crate::stack::deep(|| self.rewrite_min_max_inner(e))
     }
 
     fn rewrite_min_max_inner(&self, e: &Expr) -> Expr {

@@ -44,7 +44,7 @@ pub(super) fn normalize(e: Expr) -> Expr {
 /// Results are written as the parser would read them: an integer as an `int` literal, a
 /// negative number as `-` applied to a literal. What would overflow is left as it is.
 fn fold(e: &Expr) -> Expr {
-    stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || {
+    crate::stack::deep(|| {
         let kind = match &e.kind {
             ExprKind::Binary(op, a, b) => {
                 let (a, b) = (fold(a), fold(b));
@@ -184,7 +184,7 @@ pub(super) fn binary(op: BinOp, a: &Expr, b: &Expr) -> Expr {
 
 /// Calls `f` on every subterm of `e`.
 pub(super) fn visit(e: &Expr, f: &mut dyn FnMut(&Expr)) {
-    stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || visit_inner(e, f))
+    crate::stack::deep(|| visit_inner(e, f))
 }
 
 fn visit_inner(e: &Expr, f: &mut dyn FnMut(&Expr)) {

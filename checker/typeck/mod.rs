@@ -257,7 +257,7 @@ impl<'a> Checker<'a> {
     }
 
     fn check(&mut self, p: &'a Process, t: LocalRc, st: State<'a>) {
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.check_inner(p, t, st))
+        crate::stack::deep(|| self.check_inner(p, t, st))
     }
 
     fn name(&self) -> &'a str {
