@@ -7,19 +7,48 @@
 use super::node::NodeRef;
 use super::*;
 use crate::syntax::ast::{BinOp, UnOp};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::fmt::Write;
 
 /// Prints a local type over several lines, choices indented by two spaces.
+///
+/// Two passes: the first finds the binders that hide a value the type still reads (a
+/// second `v` received before a guard on the first), the second prints those under fresh
+/// names. A binder that hides nothing read is printed as written.
 pub fn local(prog: &Program, t: &Local) -> String {
-    let mut p = Printer { prog, prim: None, out: String::new(), indent: 0 };
+    let mut find = Printer { prog, prim: None, out: String::new(), indent: 0, scope: Vec::new(), rename: None };
+    find.rename = Some(Rename { pass: Pass::Find, hiding: HashSet::new(), renamed: HashSet::new() });
+    find.local(t);
+    let hiding = find.rename.map(|r| r.hiding).unwrap_or_default();
+    let mut p = Printer { prog, prim: None, out: String::new(), indent: 0, scope: Vec::new(), rename: None };
+    p.rename = Some(Rename { pass: Pass::Print, hiding, renamed: HashSet::new() });
     p.local(t);
     p.out
 }
 
+/// Which pass of [`local`] a printer is in.
+#[derive(Clone, Copy, PartialEq)]
+enum Pass {
+    /// Binders print as written; a read of a value hidden by a later binder of the same
+    /// name marks that binder.
+    Find,
+    /// Marked binders, and binders whose name a renamed binder now takes, print fresh.
+    Print,
+}
+
+/// The renaming state of [`local`]'s two passes.
+struct Rename {
+    pass: Pass,
+    /// The binders that hide a value read in their scope.
+    hiding: HashSet<ValueId>,
+    /// The binders printed under a fresh name (second pass): a later binder written with
+    /// that name must not capture it.
+    renamed: HashSet<ValueId>,
+}
+
 /// Prints a global type on several lines, choices and separations indented.
 pub fn global(prog: &Program, g: &Global) -> String {
-    let mut p = Printer { prog, prim: None, out: String::new(), indent: 0 };
+    let mut p = Printer { prog, prim: None, out: String::new(), indent: 0, scope: Vec::new(), rename: None };
     p.global(g);
     p.out
 }
@@ -27,14 +56,14 @@ pub fn global(prog: &Program, g: &Global) -> String {
 /// Prints an expression; `prim` names the primitive whose parameters and kind variables
 /// it may mention.
 pub fn expr(prog: &Program, prim: Option<PrimId>, e: &Expr) -> String {
-    let mut p = Printer { prog, prim, out: String::new(), indent: 0 };
+    let mut p = Printer { prog, prim, out: String::new(), indent: 0, scope: Vec::new(), rename: None };
     p.expr(e, 0);
     p.out
 }
 
 /// `a(args)`
 pub fn prim_app(prog: &Program, a: &PrimApp) -> String {
-    let mut p = Printer { prog, prim: None, out: String::new(), indent: 0 };
+    let mut p = Printer { prog, prim: None, out: String::new(), indent: 0, scope: Vec::new(), rename: None };
     p.prim_app(a);
     p.out
 }
@@ -44,6 +73,16 @@ struct Printer<'a> {
     prim: Option<PrimId>,
     out: String,
     indent: usize,
+    /// The values bound on the way to what is being printed (a local type's message
+    /// fields and recursion parameters), innermost last, each with the name it is printed
+    /// as. A value's identity is its binding site, not its name (LANGUAGE.md, "Names and
+    /// scopes"): when a binder's name is already in scope for another value, the binder is
+    /// printed under a fresh name (`v_2`), so that what is printed reads back to the same
+    /// type (a guard on the first `v` after a second `v` was received stays on the first).
+    scope: Vec<(ValueId, String)>,
+    /// `Some` while printing a whole local type ([`local`]): which binders to rename.
+    /// Without it (expressions, global types) binders print as written.
+    rename: Option<Rename>,
 }
 
 impl Printer<'_> {
@@ -103,9 +142,11 @@ impl Printer<'_> {
             }
             Local::Rec { var, params, body, .. } => {
                 let _ = write!(self.out, "mu {var}");
+                let outer = self.scope.len();
                 self.rec_params(params);
                 self.out.push_str(". ");
                 self.local(body);
+                self.scope.truncate(outer);
             }
             Local::Var { var, args, .. } => {
                 self.out.push_str(var);
@@ -122,16 +163,48 @@ impl Printer<'_> {
             self.out.push_str("] ");
         }
         let _ = write!(self.out, "{}!{}", self.prog.role_name(b.to), b.label);
+        let outer = self.scope.len();
         self.fields(&b.payload);
         self.out.push('.');
         self.local(&b.cont);
+        self.scope.truncate(outer);
     }
 
     fn recv(&mut self, b: &RecvBranch) {
         let _ = write!(self.out, "{}?{}", self.prog.role_name(b.from), b.label);
+        let outer = self.scope.len();
         self.fields(&b.payload);
         self.out.push('.');
         self.local(&b.cont);
+        self.scope.truncate(outer);
+    }
+
+    /// Binds `value` (written `name`) for what follows and returns the name it is printed
+    /// as: `name` itself unless another value of that name is in scope, then the first of
+    /// `name_2`, `name_3`, ... that names neither a value in scope nor a constant.
+    fn bind(&mut self, value: ValueId, name: &str) -> String {
+        let taken = |n: &str, scope: &[(ValueId, String)]| {
+            scope.iter().any(|(v, m)| m == n && *v != value) || self.prog.consts.iter().any(|c| c.name == n)
+        };
+        let fresh = match &self.rename {
+            None | Some(Rename { pass: Pass::Find, .. }) => false,
+            Some(Rename { hiding, renamed, .. }) => {
+                hiding.contains(&value)
+                    || self.scope.iter().any(|(v, m)| m == name && *v != value && renamed.contains(v))
+            }
+        };
+        let printed = if fresh {
+            (2..).map(|k| format!("{name}_{k}")).find(|n| !taken(n, &self.scope)).unwrap_or_default()
+        } else {
+            name.to_string()
+        };
+        if fresh {
+            if let Some(r) = &mut self.rename {
+                r.renamed.insert(value);
+            }
+        }
+        self.scope.push((value, printed.clone()));
+        printed
     }
 
     fn motion(&mut self, prims: &[PrimApp]) {
@@ -173,7 +246,8 @@ impl Printer<'_> {
             if i > 0 {
                 self.out.push_str(", ");
             }
-            let _ = write!(self.out, "{}: {}", f.name, f.sort);
+            let name = self.bind(f.value, &f.name);
+            let _ = write!(self.out, "{}: {}", name, f.sort);
             if let Some(r) = &f.refinement {
                 self.out.push_str(" { ");
                 self.expr(r, 0);
@@ -192,7 +266,8 @@ impl Printer<'_> {
             if i > 0 {
                 self.out.push_str(", ");
             }
-            let _ = write!(self.out, "{}: {}", p.name, p.sort);
+            let name = self.bind(p.value, &p.name);
+            let _ = write!(self.out, "{}: {}", name, p.sort);
             if let Some(r) = &p.refinement {
                 self.out.push_str(" { ");
                 self.expr(r, 0);
@@ -218,7 +293,11 @@ impl Printer<'_> {
                     self.out.push_str("] ");
                 }
                 self.out.push_str(&m.label);
+                // A global type's binders are printed as written: their scopes follow the
+                // sequence and `*` structure, which this printer does not track.
+                let outer = self.scope.len();
                 self.fields(&m.payload);
+                self.scope.truncate(outer);
             }
             Global::Motion(m) => {
                 self.out.push_str("dt<");
@@ -256,7 +335,9 @@ impl Printer<'_> {
             }
             Global::Rec { var, params, body, .. } => {
                 let _ = write!(self.out, "mu {var}");
+                let outer = self.scope.len();
                 self.rec_params(params);
+                self.scope.truncate(outer);
                 self.out.push_str(". ");
                 self.global(body);
             }
@@ -276,6 +357,19 @@ impl Printer<'_> {
             self.out.push(')');
         } else {
             self.global(g);
+        }
+    }
+
+    /// In the first pass of [`local`], a read of `id` marks the binders after its own in
+    /// scope that print under the same name (they hide it).
+    fn note_read(&mut self, id: ValueId) {
+        let Some(Rename { pass: Pass::Find, hiding, .. }) = &mut self.rename else { return };
+        let Some(at) = self.scope.iter().rposition(|(v, _)| *v == id) else { return };
+        let name = &self.scope[at].1;
+        for (v, n) in &self.scope[at + 1..] {
+            if n == name && *v != id {
+                hiding.insert(*v);
+            }
         }
     }
 
@@ -299,7 +393,10 @@ impl Printer<'_> {
                 let kind = self.prog.role(*r).kind;
                 format!("{}.{}", self.prog.role_name(*r), self.prog.slot_name(kind, *slot))
             }
-            Var::Value(_, name) => name.clone(),
+            Var::Value(id, name) => match self.scope.iter().rposition(|(v, _)| v == id) {
+                Some(at) => self.scope[at].1.clone(),
+                None => name.clone(),
+            },
             Var::Snap(r, slot) => {
                 let kind = self.prog.role(*r).kind;
                 format!("old({}.{})", self.prog.role_name(*r), self.prog.slot_name(kind, *slot))
@@ -329,6 +426,9 @@ impl Printer<'_> {
             ExprKind::Real(r) => self.out.push_str(r),
             ExprKind::Bool(b) => self.out.push_str(if *b { "true" } else { "false" }),
             ExprKind::Var(v) => {
+                if let Var::Value(id, _) = v {
+                    self.note_read(*id);
+                }
                 let s = self.var_name(v);
                 self.out.push_str(&s);
             }

@@ -14,6 +14,14 @@ pub fn equal(a: &LocalRc, b: &LocalRc) -> bool {
     first_difference(a, b).is_none()
 }
 
+/// Whether `a` and `b` are equal up to the renaming of their value binders, whatever
+/// the binders are called (alpha-equivalence proper). `mochi project` prints a binder
+/// that hides a value still read under a fresh name (`v_2`): what it prints reads back
+/// to a type `alpha_equal` to the projection, though not [`equal`] to it.
+pub fn alpha_equal(a: &LocalRc, b: &LocalRc) -> bool {
+    Differ { names: false, ..Differ::new() }.diff(a, b).is_none()
+}
+
 /// The locations of the first pair of nodes where `a` and `b` differ, if any.
 pub fn first_difference(a: &LocalRc, b: &LocalRc) -> Option<(Loc, Loc)> {
     Differ::new().diff(a, b)
@@ -35,11 +43,13 @@ pub(super) struct Differ<'t> {
     same: HashSet<Compared<'t>>,
     /// The binders in scope, outermost first: (binder of `a`, binder of `b`).
     ren: Vec<(ValueId, ValueId)>,
+    /// Whether binders must also have the same names ([`equal`]) or not ([`alpha_equal`]).
+    names: bool,
 }
 
 impl<'t> Differ<'t> {
     pub(super) fn new() -> Differ<'t> {
-        Differ { same: HashSet::new(), ren: Vec::new() }
+        Differ { same: HashSet::new(), ren: Vec::new(), names: true }
     }
 
     /// Whether the renaming in scope is the identity (then equal ids mean equal values
@@ -72,7 +82,9 @@ impl<'t> Differ<'t> {
             return false;
         }
         crate::stack::deep(|| match (&a.kind, &b.kind) {
-            (ExprKind::Var(Var::Value(x, n)), ExprKind::Var(Var::Value(y, m))) => n == m && self.value_eq(*x, *y),
+            (ExprKind::Var(Var::Value(x, n)), ExprKind::Var(Var::Value(y, m))) => {
+                (n == m || !self.names) && self.value_eq(*x, *y)
+            }
             (ExprKind::Var(Var::Value(..)), _) | (_, ExprKind::Var(Var::Value(..))) => false,
             (ExprKind::Unary(o, x), ExprKind::Unary(p, y)) => o == p && self.expr_renamed(x, y),
             (ExprKind::Component(x, i), ExprKind::Component(y, j)) => i == j && self.expr_renamed(x, y),
@@ -128,9 +140,9 @@ impl<'t> Differ<'t> {
             return false;
         }
         self.ren.extend(a.iter().zip(b).map(|(x, y)| (x.value, y.value)));
-        a.iter()
-            .zip(b)
-            .all(|(x, y)| x.name == y.name && x.sort == y.sort && self.opt_expr(&x.refinement, &y.refinement))
+        a.iter().zip(b).all(|(x, y)| {
+            (x.name == y.name || !self.names) && x.sort == y.sort && self.opt_expr(&x.refinement, &y.refinement)
+        })
     }
 
     /// As [`Differ::bind_fields`] for recursion parameters; their initial values are
@@ -140,9 +152,9 @@ impl<'t> Differ<'t> {
             return false;
         }
         self.ren.extend(a.iter().zip(b).map(|(x, y)| (x.value, y.value)));
-        a.iter()
-            .zip(b)
-            .all(|(x, y)| x.name == y.name && x.sort == y.sort && self.opt_expr(&x.refinement, &y.refinement))
+        a.iter().zip(b).all(|(x, y)| {
+            (x.name == y.name || !self.names) && x.sort == y.sort && self.opt_expr(&x.refinement, &y.refinement)
+        })
     }
 
     pub(super) fn diff(&mut self, a: &'t LocalRc, b: &'t LocalRc) -> Option<(Loc, Loc)> {

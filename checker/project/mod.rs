@@ -34,7 +34,7 @@ mod occurs;
 mod rules;
 
 pub use crate::hir::print::{describe, motion_text, print_bounded};
-pub use equal::{equal, first_difference};
+pub use equal::{alpha_equal, equal, first_difference};
 
 use crate::diag::{Code, Diagnostic};
 use crate::hir::*;
