@@ -146,7 +146,7 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config) -> Report {
     }
     let Some(chor) = &prog.choreography else { return run.finish() };
     // The three well-formedness checks, each timed on its own; synchronisability relies
-    // on the other two (see `wf::check`).
+    // on the other two.
     let diags = run.stage(|| wf::side::check(&prog, &chor.body));
     let side_ok = run.record("side-conditions", diags);
     let (diags, mut obligations) = run.stage(|| wf::scope::check(&prog, &chor.body));
@@ -479,7 +479,7 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
         (Rule::TMotion, _) => Code::MotionPrecondition,
         (Rule::TOut, _) => Code::SendPredicate,
         (Rule::TSess, _) => Code::InitialCollision,
-        (Rule::TCond | Rule::Subtype, _) => Code::SubtypePredicate,
+        (Rule::Subtype, _) => Code::SubtypePredicate,
         (Rule::RecInit, _) => Code::RecInitRefinement,
         (Rule::RecJump, _) => Code::RecJumpRefinement,
         (Rule::TRecInit, _) => Code::ProcessRecInit,
