@@ -10,7 +10,7 @@ use crate::hir::print;
 use crate::obligation::{Goal, Obligation, Rule};
 use crate::smt::{self, goals::Part, Decision, SmtConfig};
 use crate::source::{FileId, SourceDb};
-use crate::{lower, project, syntax, typeck, wf};
+use crate::{lower, project, subtype, syntax, typeck, wf};
 use serde::Serialize;
 use std::collections::{BTreeMap, HashSet};
 use std::path::Path;
@@ -163,12 +163,18 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config) -> Report {
         run.projections.insert(prog.role_name(*role).to_string(), print::local(&prog, t));
     }
     let projected = run.record("projection", diags);
+    // [T-SUB]: a written `local R = T;` is a subtype of the projection, and R's process
+    // is typed against T (`subtype::check_declared`).
+    let mut types = locals.clone();
     if projected && !prog.locals.is_empty() {
-        let diags = run.stage(|| project::check_declared(&prog, &locals));
-        run.record("declared-locals", diags);
+        let (diags, obs, declared) = run.stage(|| subtype::check_declared(&prog, &locals));
+        if run.record("declared-locals", diags) {
+            obligations.extend(obs);
+        }
+        types = declared;
     }
     if projected {
-        let (diags, obs) = run.stage(|| typeck::check_processes(&prog, &locals));
+        let (diags, obs) = run.stage(|| typeck::check_processes(&prog, &types));
         if run.record("typing", diags) {
             obligations.extend(obs);
         }
@@ -510,6 +516,7 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
         Code::VacuousContract => "fix the duration's bounds (lo <= hi, hi >= 0), or make the guarantee and the postcondition agree at the end of the motion",
         Code::StuckContext => "fix the step named above (an `init` no state satisfies, a refinement or guard that contradicts what holds there): no execution gets past it",
         Code::InitOutsideInvariant => "make `init` and the robot kind's invariant agree on at least one state (fix `init`, or widen the invariant)",
+        Code::SubtypePredicate => "in the declared local type, strengthen the send's guard or refinement (weaken the reception's) until it implies the projection's, or drop the `local` item",
         _ => "make the process's predicate imply the type's",
     };
     let mut d = Diagnostic::error(code, ob.span, format!("{} ({})", code.title(), ob.what))
