@@ -375,6 +375,13 @@ codes! {
          known at the jump, on every path that reaches it. The counterexample is a state (with the \
          current parameters) that reaches the jump with arguments that break P. Guard the branch \
          that jumps (for example `[n > 0]` before `t(n - 1)`), or change the arguments.";
+    EmptyLibrary = "E0420", "a library declares no robot kind and no motion primitive",
+        "A note, not an error. `mochi check lib.mochi` checks a library on its own when the file \
+         (with its imports) has no `system` and no `choreography`: its names and sorts, that each \
+         robot kind's invariant admits a state (E0411), that each motion primitive can end (E0409) \
+         and that each footprint of a kind with a body holds a point (E0412). A library with \
+         neither kinds nor primitives (constants only) has nothing beyond names and sorts to \
+         check; the verdict is `verified` and this note says how little that means.";
     MotionPrecondition = "E0708", "a motion's precondition may not hold in the process",
         "[T-MOTION] (Table 1): when a process starts a motion, what it knows (Σ: its initial state, \
          the postconditions of its earlier motions, the refinements of values it received, the \

@@ -10,7 +10,7 @@ use crate::hir::print;
 use crate::obligation::{Goal, Obligation, Rule};
 use crate::smt::{self, goals::Part, Decision, SmtConfig};
 use crate::source::{FileId, SourceDb};
-use crate::{lower, project, subtype, syntax, typeck, wf};
+use crate::{library, lower, project, subtype, syntax, typeck, wf};
 use serde::Serialize;
 use std::collections::{BTreeMap, HashSet};
 use std::path::Path;
@@ -140,8 +140,30 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config) -> Report {
     if !run.record("parse", diags) {
         return run.finish();
     }
-    let (prog, diags) = run.stage(|| lower::lower(&parsed));
+    let (mut prog, mut diags) = run.stage(|| lower::lower(&parsed));
+    // A `.mochi` library on its own: no E0210, its kinds and primitives are checked.
+    let library = library::is_library(db, root, &prog);
+    if library {
+        diags.retain(|d| d.code != Code::MissingItem);
+    }
     if !run.record("names", diags) {
+        return run.finish();
+    }
+    if library {
+        library::synthetic_participants(&mut prog);
+        let (notes, obligations) = run.stage(|| library::plan(&prog, root));
+        run.record("library", notes);
+        if cfg.structural_only {
+            run.checks.push(CheckResult {
+                name: "obligations",
+                status: Status::Unknown,
+                millis: 0.0,
+                detail: format!("{} not decided (structural checks only)", obligations.len()),
+                queries: 0,
+            });
+        } else {
+            run.obligations(db, &prog, &obligations, &cfg.smt);
+        }
         return run.finish();
     }
     let Some(chor) = &prog.choreography else { return run.finish() };
@@ -547,8 +569,9 @@ fn dead_branch(ob: &Obligation, f: smt::Failure) -> Diagnostic {
 
 /// One obligation per primitive the protocol runs (`used`): its contract admits a run
 /// that ends (Fig 3 [NON-INTERRUPT], [INTERRUPT]). A primitive nothing runs cannot make
-/// this protocol deadlock; checking a library on its own is a separate question.
-fn contracts(prog: &crate::hir::Program, used: &HashSet<crate::hir::PrimId>) -> Vec<Obligation> {
+/// this protocol deadlock; a library checked on its own asks it of every primitive
+/// (`library::plan`).
+pub(crate) fn contracts(prog: &crate::hir::Program, used: &HashSet<crate::hir::PrimId>) -> Vec<Obligation> {
     let used: Vec<crate::hir::PrimId> =
         (0..prog.prims.len()).map(|i| crate::hir::PrimId(i as u32)).filter(|p| used.contains(p)).collect();
     // Its footprint holds some point (E0412): asked of every primitive of a kind with a

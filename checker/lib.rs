@@ -26,6 +26,7 @@ pub mod driver;
 pub mod exact;
 pub mod hir;
 pub mod lanes;
+pub mod library;
 pub mod lower;
 pub mod obligation;
 pub mod project;

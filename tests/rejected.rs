@@ -27,6 +27,11 @@ fn corpus() -> Vec<PathBuf> {
         })
         .collect();
     files.sort();
+    // The library files are read too (a filter that dropped them all would pass).
+    assert!(
+        files.iter().filter(|p| p.extension().is_some_and(|e| e == "mochi")).count() >= 2,
+        "the rejected libraries (E0409-library-*.mochi, E0412-library-*.mochi) are in the corpus"
+    );
     files
 }
 
@@ -94,6 +99,12 @@ const NOT_ALONE: &[(&str, &str)] = &[
         "[T-SESS] compares first footprints at time 0; every participant moves in the first motion \
          of its scope (total motion), so a collision there is also an [AGCOMP] (E0404) or separation \
          (E0406) failure at time 0. Tested in smt::tests::initially_apart_holds_for_distant_bots_and_fails_for_touching_ones",
+    ),
+    (
+        "E0420",
+        "a note, not an error: a library with no robot kind and no motion primitive is verified \
+         (names and sorts checked) and says so. Tested in library::tests::\
+         a_library_of_constants_verifies_with_a_note_and_chor_files_still_need_a_system",
     ),
     (
         "U0001",
