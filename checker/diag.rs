@@ -118,8 +118,10 @@ codes! {
          input or the state variables so that exactly one other participant provides it.";
     MissingItem = "E0210", "missing system or choreography",
         "`mochi check` needs one `system` block and one `choreography` in the files it reads. \
-         Library files under `robots/` and `motion-primitives/` have neither; check the \
-         choreography that imports them instead.";
+         A `.chor` file, or standard input, without them is E0210, and so is a program with only \
+         one of the two. A `.mochi` library with neither (the files under `robots/` and \
+         `motion-primitives/`) is checked on its own instead: its kinds' invariants and its \
+         primitives' contracts (E0411, E0409, E0412; see E0420).";
     VariableNotAllowed = "E0211", "variable not allowed in this part of a contract",
         "Def 3.4 fixes what each part of a motion primitive may read: pre- and postconditions read \
          state and input variables; the assumption reads inputs and `clock`; the guarantee reads \

@@ -717,13 +717,13 @@ mod tests {
     }
 }
 
-/// [`check_declared`] in the pipeline, on `choreographies/declared-subtype.chor`.
+/// [`check_declared`] in the pipeline, on `tests/data/declared-subtype.chor`.
 #[cfg(test)]
 mod declared_tests {
     use crate::diag::{Code, Severity};
     use crate::driver::{check_source, Config, Verdict};
 
-    const FILE: &str = "choreographies/declared-subtype.chor";
+    const FILE: &str = "tests/data/declared-subtype.chor";
 
     fn check(edit: &dyn Fn(String) -> String) -> (Verdict, Vec<Code>) {
         let text = std::fs::read_to_string(FILE).expect("the example exists");
@@ -733,6 +733,18 @@ mod declared_tests {
         let r = check_source(&mut db, FILE, &edited, &Config::default());
         let codes = r.diagnostics.iter().filter(|d| d.severity == Severity::Error).map(|d| d.code).collect();
         (r.verdict, codes)
+    }
+
+    /// The example verifies: its written local types are proper subtypes of the
+    /// projections (fewer sends, a stronger send refinement, more receptions, a weaker
+    /// receive refinement), and two E0711 obligations were proved. Before, two E0602.
+    #[test]
+    fn the_example_verifies_with_its_subtyping_obligations() {
+        let mut db = crate::source::SourceDb::new();
+        let r = crate::driver::check_file(&mut db, std::path::Path::new(FILE), &Config::default()).expect("readable");
+        assert_eq!(r.verdict, Verdict::Verified, "{:?}", r.diagnostics);
+        let typing = r.checks.iter().find(|c| c.name == "typing-obligations").expect("typing obligations");
+        assert!(typing.detail.starts_with("5 obligation(s)"), "{}", typing.detail);
     }
 
     /// The process is typed against the written local type, not the projection: a value
