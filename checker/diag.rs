@@ -215,7 +215,8 @@ codes! {
          the projection's, and carry stronger send and weaker receive predicates (those are checked \
          as E0711 and E0407). E0602 is the structural part: at the point shown `T` does an action \
          of another kind, sends a label or receives from a sender the projection does not allow, \
-         misses a label it may be sent, or carries a different number of values. A type equal to \
+         misses a label it may be sent, carries a different number of values, or runs a primitive \
+         of another interruptibility or robot kind. A type equal to \
          the projection always fits; `mochi project FILE --role R` prints it.";
     MissingProcess = "E0701", "participant has no process",
         "[T-SESS] types one process per participant. Add `process R = ...;` for the participant.";
