@@ -9,8 +9,12 @@
 use crate::source::Span;
 use serde::Serialize;
 
+/// Each entry is `Variant = "E0000", "title", "explain text";`. An entry written
+/// `Variant = "E0000" (reserved), ...` is a code no check produces any more (or not yet):
+/// it keeps its number (a code never changes meaning) and `mochi explain` and
+/// `mochi explain --list` show it as reserved (the title says so).
 macro_rules! codes {
-    ($($variant:ident = $code:literal, $title:literal, $explain:literal;)*) => {
+    ($($variant:ident = $code:literal $(($reserved:ident))?, $title:literal, $explain:literal;)*) => {
         /// A stable diagnostic code.
         #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
         pub enum Code { $($variant,)* }
@@ -24,14 +28,22 @@ macro_rules! codes {
                 match self { $(Code::$variant => $code,)* }
             }
 
-            /// A short lowercase title.
+            /// A short lowercase title; a reserved code's ends in `(reserved: never produced)`.
             pub fn title(self) -> &'static str {
-                match self { $(Code::$variant => $title,)* }
+                match self { $(Code::$variant => concat!($title $(, " (", stringify!($reserved), ": never produced)")?),)* }
             }
 
-            /// The paragraph printed by `mochi explain CODE`.
+            /// The paragraph printed by `mochi explain CODE`; a reserved code's starts with
+            /// `reserved: `.
             pub fn explain(self) -> &'static str {
-                match self { $(Code::$variant => $explain,)* }
+                match self {
+                    $(Code::$variant => concat!($(stringify!($reserved), ": no check produces this code; it keeps its number so that it never changes meaning. ",)? $explain),)*
+                }
+            }
+
+            /// Whether the code is reserved: no check produces it.
+            pub fn is_reserved(self) -> bool {
+                match self { $(Code::$variant => false $(|| stringify!($reserved) == "reserved")?,)* }
             }
         }
     };
@@ -106,8 +118,10 @@ codes! {
          input or the state variables so that exactly one other participant provides it.";
     MissingItem = "E0210", "missing system or choreography",
         "`mochi check` needs one `system` block and one `choreography` in the files it reads. \
-         Library files under `robots/` and `motion-primitives/` have neither; check the \
-         choreography that imports them instead.";
+         A `.chor` file, or standard input, without them is E0210, and so is a program with only \
+         one of the two. A `.mochi` library with neither (the files under `robots/` and \
+         `motion-primitives/`) is checked on its own instead: its kinds' invariants and its \
+         primitives' contracts (E0411, E0409, E0412; see E0420).";
     VariableNotAllowed = "E0211", "variable not allowed in this part of a contract",
         "Def 3.4 fixes what each part of a motion primitive may read: pre- and postconditions read \
          state and input variables; the assumption reads inputs and `clock`; the guarantee reads \
@@ -194,9 +208,16 @@ codes! {
          when they are equal, when both are receptions from the same sender (possibly with a \
          default motion), or when one is a motion and the other receptions with that default. \
          The participant cannot tell which branch was taken; inform it with a message.";
-    LocalMismatch = "E0602", "declared local type differs from the projection",
-        "A `local R = T;` item states what the projection of the choreography onto `R` must be. \
-         The projection mochi computed differs; `mochi project FILE --role R` prints it.";
+    LocalMismatch = "E0602", "declared local type does not fit the projection",
+        "A `local R = T;` item states the local type `R`'s process is typed against. By [T-SUB] \
+         (Table 1) that is sound when `T` is a subtype of the projection of the choreography onto \
+         `R` (Def 4.10, Fig 5): `T` may send fewer labels, receive more, use primitives that refine \
+         the projection's, and carry stronger send and weaker receive predicates (those are checked \
+         as E0711 and E0407). E0602 is the structural part: at the point shown `T` does an action \
+         of another kind, sends a label or receives from a sender the projection does not allow, \
+         misses a label it may be sent, carries a different number of values, or runs a primitive \
+         of another interruptibility or robot kind. A type equal to \
+         the projection always fits; `mochi project FILE --role R` prints it.";
     MissingProcess = "E0701", "participant has no process",
         "[T-SESS] types one process per participant. Add `process R = ...;` for the participant.";
     ActionMismatch = "E0702", "process action does not match the local type",
@@ -357,6 +378,13 @@ codes! {
          known at the jump, on every path that reaches it. The counterexample is a state (with the \
          current parameters) that reaches the jump with arguments that break P. Guard the branch \
          that jumps (for example `[n > 0]` before `t(n - 1)`), or change the arguments.";
+    EmptyLibrary = "E0420", "a library declares no robot kind and no motion primitive",
+        "A note, not an error. `mochi check lib.mochi` checks a library on its own when the file \
+         (with its imports) has no `system` and no `choreography`: its names and sorts, that each \
+         robot kind's invariant admits a state (E0411), that each motion primitive can end (E0409) \
+         and that each footprint of a kind with a body holds a point (E0412). A library with \
+         neither kinds nor primitives (constants only) has nothing beyond names and sorts to \
+         check; the verdict is `verified` and this note says how little that means.";
     MotionPrecondition = "E0708", "a motion's precondition may not hold in the process",
         "[T-MOTION] (Table 1): when a process starts a motion, what it knows (Σ: its initial state, \
          the postconditions of its earlier motions, the refinements of values it received, the \
@@ -372,10 +400,14 @@ codes! {
          participant by the footprint of its first motion at time 0 (a footprint contains the robot, \
          Fig 3 [TRAJ-STEP]) in its initial state, and checks those are pairwise disjoint. The \
          counterexample is a point in both. Move a participant's pose or change its `init`.";
-    SubtypePredicate = "E0711", "a predicate of the process is weaker than the type's",
-        "[SUB-OUT], [SUB-IN] (Fig 5) and [T-COND]: where a process or a local type is checked \
-         against another, their predicates must imply each other in the direction the rule states. \
-         The counterexample is a state where the implication fails.";
+    SubtypePredicate = "E0711", "a predicate of a subtype is weaker than its super type's",
+        "[SUB-OUT] and [SUB-IN] (Fig 5): where a written `local R = T;` is checked as a subtype of \
+         the projection onto `R` ([T-SUB], Table 1), each send's guard and payload refinement in `T` \
+         must imply the projection's (a process of type `T` promises at least as much), and each \
+         reception's refinement in the projection must imply `T`'s (the process assumes no more than \
+         it is sent). The implication must hold for every value and state; the counterexample is \
+         one where it fails. A process's own sends and receptions are checked against its type \
+         directly (E0709).";
     ProcessRecInit = "E0712", "a process loop's initial value breaks its parameter's refinement",
         "[T-REC] with parameters (DATUM): a process loop `mu x(k: S {P} = e). P` may assume P of k \
          in its body, so P must hold of e under what the process knows when it enters the loop. \
@@ -527,6 +559,12 @@ mod tests {
             assert_eq!(c.title(), c.title().to_lowercase(), "{c} title must be lowercase");
         }
         assert_eq!("e0301".parse::<Code>(), Ok(Code::SelfMessage));
+        // `explain` and `explain --list` print the title and the text: a reserved code says
+        // so in both, and no other code does.
+        for &c in Code::ALL {
+            assert_eq!(c.title().contains("(reserved"), c.is_reserved(), "{c}");
+            assert_eq!(c.explain().starts_with("reserved: "), c.is_reserved(), "{c}");
+        }
         assert!("E9999".parse::<Code>().is_err());
     }
 }

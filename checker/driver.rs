@@ -11,7 +11,7 @@ use crate::hir::print;
 use crate::obligation::{Goal, Obligation, Rule};
 use crate::smt::{self, goals::Part, Decision, SmtConfig};
 use crate::source::{FileId, SourceDb};
-use crate::{lower, project, syntax, typeck, wf};
+use crate::{library, lower, project, subtype, syntax, typeck, wf};
 use serde::Serialize;
 use std::collections::{BTreeMap, HashSet};
 use std::time::Instant;
@@ -105,6 +105,17 @@ pub struct Report {
     /// Obligations that held only because their hypotheses are unsatisfiable (the
     /// vacuity guard's count; each such point is unreachable or reported).
     pub vacuous: usize,
+    /// The program and the obligations the SMT stage was asked to decide (`None` when a
+    /// structural check stopped the run first), for tests and tools that look behind a
+    /// verdict (the golden test re-evaluates each counterexample against its goal).
+    pub planned: Option<Planned>,
+}
+
+/// What the structural stages handed to the SMT stage.
+#[derive(Debug)]
+pub struct Planned {
+    pub program: crate::hir::Program,
+    pub obligations: Vec<Obligation>,
 }
 
 /// How one `*` was found separated.
@@ -154,13 +165,36 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut sy
     if !run.record("parse", diags) {
         return run.finish();
     }
-    let (prog, diags) = run.stage(|| lower::lower(&parsed));
+    let (mut prog, mut diags) = run.stage(|| lower::lower(&parsed));
+    // A `.mochi` library on its own: no E0210, its kinds and primitives are checked.
+    let library = library::is_library(db, root, &prog);
+    if library {
+        diags.retain(|d| d.code != Code::MissingItem);
+    }
     if !run.record("names", diags) {
+        return run.finish();
+    }
+    if library {
+        library::synthetic_participants(&mut prog);
+        let (notes, obligations) = run.stage(|| library::plan(&prog, root));
+        run.record("library", notes);
+        if cfg.structural_only {
+            run.checks.push(CheckResult {
+                name: "obligations",
+                status: Status::Unknown,
+                millis: 0.0,
+                detail: Detail::NotDecided(obligations.len()),
+                queries: 0,
+            });
+        } else {
+            run.obligations(db, &prog, &obligations, cfg);
+            run.planned = Some(Planned { program: prog, obligations });
+        }
         return run.finish();
     }
     let Some(chor) = &prog.choreography else { return run.finish() };
     // The three well-formedness checks, each timed on its own; synchronisability relies
-    // on the other two (see `wf::check`).
+    // on the other two.
     let diags = run.stage(|| wf::side::check(&prog, &chor.body));
     let side_ok = run.record("side-conditions", diags);
     let (diags, mut obligations) = run.stage(|| wf::scope::check(&prog, &chor.body));
@@ -177,12 +211,18 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut sy
         run.projections.insert(prog.role_name(*role).to_string(), print::local(&prog, t));
     }
     let projected = run.record("projection", diags);
+    // [T-SUB]: a written `local R = T;` is a subtype of the projection, and R's process
+    // is typed against T (`subtype::check_declared`).
+    let mut types = locals.clone();
     if projected && !prog.locals.is_empty() {
-        let diags = run.stage(|| project::check_declared(&prog, &locals));
-        run.record("declared-locals", diags);
+        let (diags, obs, declared) = run.stage(|| subtype::check_declared(&prog, &locals));
+        if run.record("declared-locals", diags) {
+            obligations.extend(obs);
+        }
+        types = declared;
     }
     if projected {
-        let (diags, obs) = run.stage(|| typeck::check_processes(&prog, &locals));
+        let (diags, obs) = run.stage(|| typeck::check_processes(&prog, &types));
         if run.record("typing", diags) {
             obligations.extend(obs);
         }
@@ -194,6 +234,7 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut sy
         let used = used_primitives(&obligations);
         obligations.extend(contracts(&prog, &used));
         run.obligations(db, &prog, &obligations, cfg);
+        run.planned = Some(Planned { program: prog, obligations });
     } else if !obligations.is_empty() && !run.checks.iter().any(|c| c.status == Status::Fail) {
         run.checks.push(CheckResult {
             name: "obligations",
@@ -216,6 +257,7 @@ struct Run {
     separations: Vec<Separation>,
     last_millis: f64,
     vacuous: usize,
+    planned: Option<Planned>,
 }
 
 impl Run {
@@ -417,6 +459,7 @@ impl Run {
             partitions: self.partitions,
             separations: self.separations,
             vacuous: self.vacuous,
+            planned: self.planned,
         }
     }
 }
@@ -485,7 +528,7 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
         (Rule::TMotion, _) => Code::MotionPrecondition,
         (Rule::TOut, _) => Code::SendPredicate,
         (Rule::TSess, _) => Code::InitialCollision,
-        (Rule::TCond | Rule::Subtype, _) => Code::SubtypePredicate,
+        (Rule::Subtype, _) => Code::SubtypePredicate,
         (Rule::RecInit, _) => Code::RecInitRefinement,
         (Rule::RecJump, _) => Code::RecJumpRefinement,
         (Rule::TRecInit, _) => Code::ProcessRecInit,
@@ -516,6 +559,7 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
         Code::VacuousContract => "fix the duration's bounds (lo <= hi, hi >= 0), or make the guarantee and the postcondition agree at the end of the motion",
         Code::StuckContext => "fix the step named above (an `init` no state satisfies, a refinement or guard that contradicts what holds there): no execution gets past it",
         Code::InitOutsideInvariant => "make `init` and the robot kind's invariant agree on at least one state (fix `init`, or widen the invariant)",
+        Code::SubtypePredicate => "in the declared local type, strengthen the send's guard or refinement (weaken the reception's) until it implies the projection's, or drop the `local` item",
         _ => "make the process's predicate imply the type's",
     };
     let mut d = Diagnostic::error(code, ob.span, format!("{} ({})", code.title(), ob.what))
@@ -546,8 +590,9 @@ fn dead_branch(ob: &Obligation, f: smt::Failure) -> Diagnostic {
 
 /// One obligation per primitive the protocol runs (`used`): its contract admits a run
 /// that ends (Fig 3 [NON-INTERRUPT], [INTERRUPT]). A primitive nothing runs cannot make
-/// this protocol deadlock; checking a library on its own is a separate question.
-fn contracts(prog: &crate::hir::Program, used: &HashSet<crate::hir::PrimId>) -> Vec<Obligation> {
+/// this protocol deadlock; a library checked on its own asks it of every primitive
+/// (`library::plan`).
+pub(crate) fn contracts(prog: &crate::hir::Program, used: &HashSet<crate::hir::PrimId>) -> Vec<Obligation> {
     let used: Vec<crate::hir::PrimId> =
         (0..prog.prims.len()).map(|i| crate::hir::PrimId(i as u32)).filter(|p| used.contains(p)).collect();
     // Its footprint holds some point (E0412): asked of every primitive of a kind with a

@@ -31,6 +31,7 @@ pub mod exact;
 pub mod fsload;
 pub mod hir;
 pub mod lanes;
+pub mod library;
 pub mod lower;
 pub mod obligation;
 pub mod project;

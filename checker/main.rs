@@ -422,6 +422,7 @@ fn past_deadline(seconds: f64) -> Report {
         partitions: Vec::new(),
         separations: Vec::new(),
         vacuous: 0,
+        planned: None,
     }
 }
 

@@ -23,8 +23,6 @@ pub enum Rule {
     TMotion,
     /// Table 1 [T-OUT]: the context implies the guard and the refinement of the value.
     TOut,
-    /// Table 1 [T-COND]: the condition selects a branch whose guard holds.
-    TCond,
     /// Fig 5 [SUB-OUT] / [SUB-IN]: predicate implications between local types.
     Subtype,
     /// Table 1 [T-SESS]: initial states are collision free.
@@ -60,7 +58,6 @@ impl Rule {
             Rule::Refinement => "primitive refinement (Def 3.4)",
             Rule::TMotion => "[T-MOTION]",
             Rule::TOut => "[T-OUT]",
-            Rule::TCond => "[T-COND]",
             Rule::Subtype => "[SUB-OUT]/[SUB-IN]",
             Rule::TSess => "[T-SESS]",
             Rule::RecInit => "recursion parameter at entry (DATUM)",
@@ -85,7 +82,6 @@ impl Rule {
             Rule::Refinement
             | Rule::TMotion
             | Rule::TOut
-            | Rule::TCond
             | Rule::Subtype
             | Rule::TSess
             | Rule::TRecInit
@@ -106,7 +102,6 @@ impl Rule {
             Rule::Refinement => "refinement",
             Rule::TMotion => "tmotion",
             Rule::TOut => "tout",
-            Rule::TCond => "tcond",
             Rule::Subtype => "subtype",
             Rule::TSess => "tsess",
             Rule::RecInit => "recinit",
@@ -251,7 +246,6 @@ mod tests {
             Rule::Refinement,
             Rule::TMotion,
             Rule::TOut,
-            Rule::TCond,
             Rule::Subtype,
             Rule::TSess,
             Rule::RecInit,

@@ -691,6 +691,7 @@ mod tests {
             partitions: Vec::new(),
             separations: Vec::new(),
             vacuous: 0,
+            planned: None,
         }
     }
 

@@ -14,26 +14,107 @@
 //!
 //! The relation is the largest one closed under these rules, so it is checked
 //! coinductively: recursion is unfolded through an environment of the enclosing `mu`s,
-//! and a pair of nodes met again is assumed to be related. Payload fields of the super
-//! type are renamed to the sub type's, so the implications speak about one value.
+//! and a pair of nodes met again (under the same renaming) is assumed to be related.
+//! Payload fields of the super type are renamed to the sub type's, so the implications
+//! speak about one value.
+//!
+//! Where the pipeline uses it: [T-SUB] (Table 1) for written local types. `local R = T;`
+//! is checked as `T <= G↾R` by [`check_declared`] (E0602 when the shapes do not fit, an
+//! E0711 obligation per predicate implication, decided by Z3 under the vacuity guard),
+//! and `R`'s process is then typed against `T`: `P : T` and `T <= G↾R` give `P : G↾R`
+//! by [T-SUB], which is what [T-SESS] asks. Process typing itself (`typeck.rs`) folds
+//! [T-SUB] into its rules and does not call [`subtype`].
 //!
 //! The predicate helpers process typing shares (`map_vars`, `subst_values`, ...) are
 //! re-exported from `hir::expr`, where they now live.
 
 use crate::diag::{Code, Diagnostic};
+use crate::hir::print::{describe, motion_text, print_bounded, NOTE_NODES};
 use crate::hir::*;
 use crate::obligation::{Goal, Obligation, Rule};
-use crate::project::{describe, motion_text};
 use crate::source::Span;
-use std::collections::{HashMap, HashSet};
+use std::collections::{BTreeMap, HashMap, HashSet};
 use std::sync::Arc;
 
 /// Checks `sub <= sup` for local types of `role` (the role instantiates the refinement
 /// obligations). Returns the predicate obligations, or the first structural failure.
 pub fn subtype(prog: &Program, role: RoleId, sub: &LocalRc, sup: &LocalRc) -> Result<Vec<Obligation>, Diagnostic> {
-    let mut s = Sub { prog, role, assumed: HashSet::new(), obligations: Vec::new() };
+    subtype_named(prog, role, sub, sup, ["the sub type", "the super type"])
+}
+
+/// [`subtype`], naming the two types in the obligations' descriptions.
+fn subtype_named(
+    prog: &Program,
+    role: RoleId,
+    sub: &LocalRc,
+    sup: &LocalRc,
+    names: [&str; 2],
+) -> Result<Vec<Obligation>, Diagnostic> {
+    let names = names.map(str::to_string);
+    let mut s = Sub { prog, role, names, assumed: HashSet::new(), obligations: Vec::new() };
     s.check(sub, &mut Vec::new(), sup, &mut Vec::new(), &HashMap::new())?;
     Ok(s.obligations)
+}
+
+/// [T-SUB] (Table 1) for the written local types: each `local R = T;` must be a subtype
+/// of the projection `G↾R` (Def 4.10, Fig 5), and `R`'s process is typed against `T`.
+///
+/// Returns the structural failures (E0602, one per `local` item, at its role name), the
+/// predicate side conditions of Fig 5 (E0711 and, for [SUB-MOTION], E0407 obligations),
+/// and the local type each participant's process is to be typed against: its `local`
+/// when it fits, its projection otherwise. A role without a projection (projection
+/// failed, reported already) is skipped.
+///
+/// Sound: typing `P` against `T` proves `P : T`; the structural part and the obligations
+/// prove `T <= G↾R`; [T-SUB] gives `P : G↾R`. An undecided obligation leaves the verdict
+/// `unknown` like any other.
+pub fn check_declared(
+    prog: &Program,
+    projections: &BTreeMap<RoleId, LocalRc>,
+) -> (Vec<Diagnostic>, Vec<Obligation>, BTreeMap<RoleId, LocalRc>) {
+    let mut diags = Vec::new();
+    let mut obligations = Vec::new();
+    let mut types = projections.clone();
+    for def in &prog.locals {
+        let Some(proj) = projections.get(&def.role) else {
+            continue;
+        };
+        let name = prog.role_name(def.role);
+        let declared = format!("the declared local type of `{name}`");
+        match subtype_named(prog, def.role, &def.body, proj, [&declared, "the projection"]) {
+            Ok(obs) => {
+                obligations.extend(obs);
+                types.insert(def.role, def.body.clone());
+            }
+            Err(d) => {
+                // The subtype's words, in this setting's: the sub type is the declared one.
+                let ours = |t: &str| t.replace("super type", "projection").replace("sub type", "declared type");
+                let mut e = Diagnostic::error(
+                    Code::LocalMismatch,
+                    def.span,
+                    format!(
+                        "the declared local type of `{name}` is not a subtype of the projection of the choreography"
+                    ),
+                )
+                .with_label(d.span, ours(&d.message));
+                for l in d.labels {
+                    e = e.with_label(l.span, ours(&l.message));
+                }
+                for n in d.notes {
+                    e = e.with_note(ours(&n));
+                }
+                let help = ours(&d.help.unwrap_or_default());
+                diags.push(
+                    e.with_note("[T-SUB] (Table 1): `local R = T;` needs T <= the projection onto R (Def 4.10, Fig 5), and the process is typed against T")
+                        .with_note(format!("the projection onto `{name}` is:\n{}", print_bounded(prog, proj, NOTE_NODES)))
+                        .with_help(format!(
+                            "in the declared type: {help}; `mochi project FILE --role {name}` prints the projection"
+                        )),
+                );
+            }
+        }
+    }
+    (diags, obligations, types)
 }
 
 /// The enclosing `mu t. T` nodes of a local type, innermost last.
@@ -108,10 +189,17 @@ pub(crate) fn unfold_with(
 /// the sub type.
 type Renaming = HashMap<ValueId, Expr>;
 
+/// A pair of nodes (sub, super) and the renaming, sorted by binding site.
+type Assumed = (usize, usize, Vec<(ValueId, Expr)>);
+
 struct Sub<'a> {
     prog: &'a Program,
     role: RoleId,
-    assumed: HashSet<(usize, usize)>,
+    /// How the obligations name the sub and the super type.
+    names: [String; 2],
+    /// The pairs of nodes assumed related, with the renaming they were met under (the
+    /// predicates of the super type's node read the renamed values).
+    assumed: HashSet<Assumed>,
     obligations: Vec<Obligation>,
 }
 
@@ -137,9 +225,13 @@ impl Sub<'_> {
     ) -> Result<(), Diagnostic> {
         let (s, _) = unfold(s, senv)?;
         let (t, _) = unfold(t, tenv)?;
-        // Coinduction: a pair met again is assumed related. Which `mu` binds a variable
-        // is lexical, so the node pointers determine the environments.
-        if !self.assumed.insert((Arc::as_ptr(&s) as usize, Arc::as_ptr(&t) as usize)) {
+        // Coinduction: a pair met again under the same renaming is assumed related. Which
+        // `mu` binds a variable is lexical, so the node pointers determine the
+        // environments. The renaming maps binding sites of the super type to those of the
+        // sub type, finitely many, so this terminates.
+        let mut key: Vec<(ValueId, Expr)> = ren.iter().map(|(k, v)| (*k, v.clone())).collect();
+        key.sort_by_key(|(k, _)| *k);
+        if !self.assumed.insert((Arc::as_ptr(&s) as usize, Arc::as_ptr(&t) as usize, key)) {
             return Ok(());
         }
         match (&*s, &*t) {
@@ -172,14 +264,14 @@ impl Sub<'_> {
                     if let Some(g) = &y.guard {
                         let sup_guard = subst_values(g, ren);
                         let sub_guard = x.guard.clone().unwrap_or_else(|| Expr::bool(true, x.loc));
-                        self.implication(sub_guard, sup_guard, x.loc.0, format!("the guard of `{}`", x.label));
+                        self.implication(sub_guard, sup_guard, x.loc.0, format!("the guard of `{}`", x.label), 0);
                     }
                     let sub_ref = and_all(x.payload.iter().filter_map(|f| f.refinement.clone()), x.loc);
                     let sup_ref = and_all(
                         y.payload.iter().filter_map(|f| f.refinement.as_ref().map(|r| subst_values(r, &inner))),
                         y.loc,
                     );
-                    self.implication(sub_ref, sup_ref, x.loc.0, format!("the payload refinement of `{}`", x.label));
+                    self.implication(sub_ref, sup_ref, x.loc.0, format!("the payload refinement of `{}`", x.label), 0);
                     self.check(&x.cont, &mut senv.clone(), &y.cont, &mut tenv.clone(), &inner)?;
                 }
                 Ok(())
@@ -216,7 +308,7 @@ impl Sub<'_> {
                         y.loc,
                     );
                     let sub_ref = and_all(x.payload.iter().filter_map(|f| f.refinement.clone()), x.loc);
-                    self.implication(sup_ref, sub_ref, x.loc.0, format!("the payload refinement of `{}`", x.label));
+                    self.implication(sup_ref, sub_ref, x.loc.0, format!("the payload refinement of `{}`", x.label), 1);
                     self.check(&x.cont, &mut senv.clone(), &y.cont, &mut tenv.clone(), &inner)?;
                 }
                 match (sd, td) {
@@ -310,17 +402,22 @@ impl Sub<'_> {
         Ok(())
     }
 
-    /// Records `lhs => rhs` unless it holds syntactically.
-    fn implication(&mut self, lhs: Expr, rhs: Expr, span: Span, what: String) {
+    /// Records `lhs => rhs` unless it holds syntactically: `lhs`'s conjuncts are the
+    /// hypotheses, so the vacuity guard sees a predicate that can never hold (a send the
+    /// sub type never makes, a reception the super type never delivers).
+    fn implication(&mut self, lhs: Expr, rhs: Expr, span: Span, what: String, from: usize) {
         if rhs.is_true() || lhs == rhs {
             return;
         }
+        let [a, b] = [&self.names[from], &self.names[1 - from]];
+        let mut hyps = Vec::new();
+        conjuncts(&lhs, &mut hyps);
         self.obligations.push(Obligation {
             rule: Rule::Subtype,
             span,
-            what: format!("{what} implies the super type's"),
-            hyps: Vec::new(),
-            goal: Goal::Valid(implies(lhs, rhs)),
+            what: format!("{what} in {a} implies the one in {b}"),
+            hyps,
+            goal: Goal::Valid(rhs),
         });
     }
 }
@@ -413,7 +510,7 @@ fn rename_app(a: &PrimApp, ren: &Renaming) -> PrimApp {
 
 // The predicate helpers process typing and Σ import from here live in `hir::expr` now,
 // on top of `Expr::map` and `Expr::visit`; re-exported so that their paths keep working.
-pub(crate) use crate::hir::expr::{and_all, conjuncts, implies, map_vars, mentions, not, subst_values, value_expr};
+pub(crate) use crate::hir::expr::{and_all, conjuncts, map_vars, mentions, not, subst_values, value_expr};
 
 #[cfg(test)]
 mod tests {
@@ -493,7 +590,7 @@ mod tests {
         let texts: Vec<String> = obs
             .iter()
             .map(|o| match &o.goal {
-                Goal::Valid(e) => print::expr(&prog, None, e),
+                Goal::Valid(e) => implication(&prog, o, e),
                 _ => String::new(),
             })
             .collect();
@@ -515,7 +612,14 @@ mod tests {
         assert_eq!(obs.len(), 1);
         let Goal::Valid(e) = &obs[0].goal else { panic!() };
         let prog = run("end", "end").0;
-        assert_eq!(print::expr(&prog, None, e), "v > 1 => v > 0");
+        assert_eq!(implication(&prog, &obs[0], e), "v > 1 => v > 0");
+    }
+
+    /// `hyps => goal` as text: the left side of a Fig 5 implication is the obligation's
+    /// hypotheses (so that the vacuity guard sees it), the right side its goal.
+    fn implication(prog: &Program, o: &Obligation, goal: &Expr) -> String {
+        let hyps: Vec<String> = o.hyps.iter().map(|h| print::expr(prog, None, h)).collect();
+        format!("{} => {}", hyps.join(" && "), print::expr(prog, None, goal))
     }
 
     #[test]
@@ -545,5 +649,74 @@ mod tests {
         assert!(obligations("mu t. O!a.O?b.t", "O!a.mu s. O?b.O!a.s").is_empty());
         assert!(obligations("mu t. O!a.O?b.O!a.O?b.t", "mu s. O!a.O?b.s").is_empty());
         assert_eq!(fails("mu t. O!a.O?b.t", "mu s. O!a.O?b.end").code, Code::ActionMismatch);
+    }
+}
+
+/// [`check_declared`] in the pipeline, on `tests/data/declared-subtype.chor`.
+#[cfg(test)]
+mod declared_tests {
+    use crate::diag::{Code, Severity};
+    use crate::driver::{check_source, Config, Verdict};
+
+    const FILE: &str = "tests/data/declared-subtype.chor";
+
+    fn check(edit: &dyn Fn(String) -> String) -> (Verdict, Vec<Code>) {
+        let text = std::fs::read_to_string(FILE).expect("the example exists");
+        let edited = edit(text.clone());
+        assert_ne!(edited, text, "the edit changes nothing");
+        let mut db = crate::source::SourceDb::new();
+        let r = check_source(&mut db, FILE, &edited, &Config::default());
+        let codes = r.diagnostics.iter().filter(|d| d.severity == Severity::Error).map(|d| d.code).collect();
+        (r.verdict, codes)
+    }
+
+    /// The example verifies: its written local types are proper subtypes of the
+    /// projections (fewer sends, a stronger send refinement, more receptions, a weaker
+    /// receive refinement), and two E0711 obligations were proved. Before, two E0602.
+    #[test]
+    fn the_example_verifies_with_its_subtyping_obligations() {
+        let mut db = crate::source::SourceDb::new();
+        let r = crate::driver::check_file(&mut db, std::path::Path::new(FILE), &Config::default()).expect("readable");
+        assert_eq!(r.verdict, Verdict::Verified, "{:?}", r.diagnostics);
+        let typing = r.checks.iter().find(|c| c.name == "typing-obligations").expect("typing obligations");
+        assert!(matches!(typing.detail, crate::driver::Detail::Obligations { total: 5, .. }), "{}", typing.detail);
+    }
+
+    /// The process is typed against the written local type, not the projection: a value
+    /// the projection allows (0.7) but `local p` does not (`n == 0.5`) is E0709.
+    #[test]
+    fn the_process_implements_the_declared_type() {
+        let sends =
+            |t: String| t.replace("process p = q!go(0.5).dt<move_to(0.5)>", "process p = q!go(0.7).dt<move_to(0.7)>");
+        assert_eq!(check(&sends), (Verdict::Rejected, vec![Code::SendPredicate]));
+        // `local q` receives `abort` too, so q's process must handle it.
+        let drop = |t: String| t.replace(" + p?abort.dt<hold>.end;", ";");
+        assert_eq!(check(&drop), (Verdict::Rejected, vec![Code::MissingBranch]));
+    }
+
+    /// Structural failures of `T <= G↾R` are E0602 at the `local` item.
+    #[test]
+    fn a_declared_type_that_is_no_subtype_is_e0602() {
+        // A send the projection does not allow ([SUB-OUT]).
+        let extra = |t: String| {
+            t.replace(
+                "local p = q!go(n: real {n == 0.5})",
+                "local p = +{ q!halt.dt<hold>.end, q!go(n: real {n == 0.5})",
+            )
+        };
+        let extra = |t: String| extra(t).replace(".dt<move_to(n)>.end;", ".dt<move_to(n)>.end };");
+        assert_eq!(check(&extra), (Verdict::Rejected, vec![Code::LocalMismatch]));
+        // A label the projection may deliver and the declared type misses ([SUB-IN]).
+        let missing = |t: String| t.replace(" p?stop.dt<hold>.end, p?abort", " p?abort");
+        assert_eq!(check(&missing).1.first(), Some(&Code::LocalMismatch));
+    }
+
+    /// [SUB-MOTION]: a declared motion must refine the projection's (Def 3.4, concrete on
+    /// the left): `wave` does not keep the joint still as `hold` guarantees (E0407).
+    #[test]
+    fn a_declared_motion_refines_the_projections() {
+        let wave = |t: String| t.replace("p?go(m: real {m >= 0}).dt<hold>.end", "p?go(m: real {m >= 0}).dt<wave>.end");
+        let wave = |t: String| wave(t).replace("process q = p?go(m).dt<hold>.end", "process q = p?go(m).dt<wave>.end");
+        assert_eq!(check(&wave), (Verdict::Rejected, vec![Code::RefinementFails]));
     }
 }

@@ -210,42 +210,6 @@ use mochi::obligation::{Goal, Obligation};
 use mochi::smt::{goals::Part, replay, Decision};
 use std::collections::HashMap;
 
-/// The obligations of a file, built by the same stages as the driver's (the driver does
-/// not hand out its obligations); `None` when a structural check fails first, as the
-/// driver then asks no SMT question either.
-fn obligations_of(path: &Path) -> Option<(Program, Vec<Obligation>)> {
-    use mochi::{lower, project, syntax, typeck, wf};
-    let mut db = SourceDb::new();
-    let (root, bad) = syntax::load(&mut db, path).ok()?;
-    let clean = |d: &[Diagnostic]| !d.iter().any(Diagnostic::is_error);
-    if bad.is_some() {
-        return None;
-    }
-    let (parsed, d) = syntax::parse_with_imports(&mut db, root, &mut |p| syntax::read_source(p));
-    if !clean(&d) {
-        return None;
-    }
-    let (prog, d) = lower::lower(&parsed);
-    if !clean(&d) {
-        return None;
-    }
-    let body = prog.choreography.as_ref()?.body.clone();
-    let (d, mut obligations) = wf::scope::check(&prog, &body);
-    if !clean(&d) || !clean(&wf::side::check(&prog, &body)) || !clean(&wf::sync::check(&prog, &body)) {
-        return None;
-    }
-    let (locals, d) = project::project_all(&prog);
-    if !clean(&d) || (!prog.locals.is_empty() && !clean(&project::check_declared(&prog, &locals))) {
-        return None;
-    }
-    let (d, typing) = typeck::check_processes(&prog, &locals);
-    if !clean(&d) {
-        return None;
-    }
-    obligations.extend(typing);
-    Some((prog, obligations))
-}
-
 /// A value as the report prints it (`0.5`, `-3`, `1e-7`, `true`, `(1, 0, 2)`), exactly;
 /// `None` for what is not a decimal (an algebraic number Z3 prints as a root).
 fn parse_value(text: &str) -> Option<Value> {
@@ -355,18 +319,24 @@ enum Replay {
 }
 
 /// Evaluates obligation `ob`'s failed `part` under the values diagnostic `d` shows: the
-/// best outcome over the readings of its value names (see [`Model::readings`]).
-fn replay_counterexample(prog: &Program, ob: &Obligation, part: &Part, d: &Diagnostic) -> Result<Replay, String> {
+/// best outcome over the readings of its value names (see [`Model::readings`]), with the
+/// index of the reading that found the part violated.
+fn replay_readings(
+    prog: &Program,
+    ob: &Obligation,
+    part: &Part,
+    d: &Diagnostic,
+) -> (Result<Replay, String>, Option<usize>) {
     let mut outcome: Option<Result<Replay, String>> = None;
-    for model in Model::readings(prog, d) {
+    for (k, model) in Model::readings(prog, d).into_iter().enumerate() {
         let this = replay_reading(prog, ob, part, &model);
         match (&outcome, &this) {
-            (_, Ok(Replay::Violated)) => return this,
+            (_, Ok(Replay::Violated)) => return (this, Some(k)),
             (None, _) | (Some(Err(_)), Ok(_)) => outcome = Some(this),
             _ => {}
         }
     }
-    outcome.unwrap_or_else(|| Err("no reading of the counterexample".into()))
+    (outcome.unwrap_or_else(|| Err("no reading of the counterexample".into())), None)
 }
 
 fn replay_reading(prog: &Program, ob: &Obligation, part: &Part, model: &Model) -> Result<Replay, String> {
@@ -473,6 +443,7 @@ fn frame<'a>(
 fn shown_counterexamples(path: &Path) -> Vec<(Program, Obligation, Part, Diagnostic)> {
     let mut db = SourceDb::new();
     let report = check_file(&mut db, path, &Config::default()).expect("readable");
+    let planned = report.planned;
     let shown: Vec<Diagnostic> = report
         .diagnostics
         .into_iter()
@@ -481,8 +452,10 @@ fn shown_counterexamples(path: &Path) -> Vec<(Program, Obligation, Part, Diagnos
     if shown.is_empty() {
         return Vec::new();
     }
-    let (prog, obligations) =
-        obligations_of(path).unwrap_or_else(|| panic!("{}: a counterexample, but no obligations", path.display()));
+    // The obligations the driver planned (its one wiring), decided again here so that each
+    // shown counterexample can be matched to its failed part.
+    let mochi::driver::Planned { program: prog, obligations } =
+        planned.unwrap_or_else(|| panic!("{}: a counterexample, but no obligations", path.display()));
     let labels = vec![String::new(); obligations.len()];
     let results = mochi::smt::discharge(&prog, &obligations, &labels, &Default::default());
     let mut out = Vec::new();
@@ -520,13 +493,14 @@ fn every_counterexample_shown_falsifies_its_goal() {
     let mut decided = Vec::new();
     for path in chor_files() {
         for (prog, ob, part, d) in shown_counterexamples(&path) {
-            match replay_counterexample(&prog, &ob, &part, &d) {
-                Ok(Replay::Violated) => {
+            match replay_readings(&prog, &ob, &part, &d) {
+                (Ok(Replay::Violated), Some(reading)) => {
                     violated += 1;
-                    decided.push((path.clone(), prog, ob, part, d));
+                    decided.push((path.clone(), prog, ob, part, d, reading));
                 }
-                Ok(Replay::NotContradicted) => replayed += 1,
-                Err(why) => failures.push(format!("{}: {} ({}): {why}", path.display(), d.code, d.message)),
+                (Ok(Replay::Violated), None) => unreachable!("a violation comes from a reading"),
+                (Ok(Replay::NotContradicted), _) => replayed += 1,
+                (Err(why), _) => failures.push(format!("{}: {} ({}): {why}", path.display(), d.code, d.message)),
             }
         }
     }
@@ -537,14 +511,17 @@ fn every_counterexample_shown_falsifies_its_goal() {
     assert!(violated >= 8, "only {violated} counterexamples decided violated ({replayed} only replayed)");
     eprintln!("{violated} counterexamples decided violated, {replayed} only replayed");
     // The check can fail: a corrupted counterexample is caught.
-    for (path, prog, ob, part, d) in &decided {
+    // The corruption is read as the original was (the same binding of names to values):
+    // another reading could bind a changed name to a namesake the goal does not read.
+    for (path, prog, ob, part, d, reading) in &decided {
         let cx = d.counterexample.as_deref().expect("a counterexample");
         let caught = (0..cx.values.len()).any(|i| {
             ["0", "1", "-1", "0.5", "1000", "-1000", "true", "false"].iter().any(|other| {
                 let mut c = cx.clone();
                 c.values[i].value = other.to_string();
                 let bad = Diagnostic { counterexample: Some(Box::new(c)), ..d.clone() };
-                replay_counterexample(prog, ob, part, &bad).is_err()
+                let model = Model::readings(prog, &bad).into_iter().nth(*reading).expect("the same readings");
+                replay_reading(prog, ob, part, &model).is_err()
             })
         });
         assert!(caught, "{}: no change of a value of {}'s counterexample is noticed", path.display(), d.code);

@@ -856,8 +856,8 @@ mod tests {
         let (p, d) = lower_src(&format!("{sys} choreography G = {chor};"));
         assert!(d.is_empty(), "{d:?}");
         let c = p.choreography.as_ref().expect("choreography");
-        let wf = super::super::check(&p);
-        assert!(wf.side.is_empty() && wf.scope.is_empty(), "{:?} {:?}", wf.side, wf.scope);
+        let (side, (scope, _)) = (super::super::side::check(&p, &c.body), super::super::scope::check(&p, &c.body));
+        assert!(side.is_empty() && scope.is_empty(), "{side:?} {scope:?}");
         super::check(&p, &c.body).into_iter().map(|d| d.code).collect()
     }
 
