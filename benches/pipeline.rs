@@ -6,7 +6,7 @@
 //! MOCHI_BENCH_LARGE=1 cargo bench --bench pipeline   # also n = 300, 3000
 //! ```
 //!
-//! For each size the benchmark generates the source with [`mochi::lanes::parallel_lanes`],
+//! For each size the benchmark generates the source with `parallel_lanes` (`examples/common/lanes.rs`),
 //! runs `check_source` for a tenth of the budget to warm up, then repeatedly until the time budget is spent
 //! (at least three runs), and prints the mean, median and minimum wall time, the mean time of
 //! each stage as reported in `Report::checks`, the time per cart and the ratio
@@ -23,10 +23,15 @@
 //! No dependencies (no criterion): the numbers are meant to be read, not tracked.
 
 use mochi::driver::{check_source, Config, Report};
-use mochi::lanes::parallel_lanes;
 use mochi::source::SourceDb;
 use std::hint::black_box;
 use std::time::{Duration, Instant};
+
+// The generator, shared with `examples/parallel_lanes.rs` (not part of the library).
+#[path = "../examples/common/lanes.rs"]
+#[allow(dead_code)]
+mod lanes;
+use lanes::parallel_lanes;
 
 /// Minimum number of timed runs per size.
 const MIN_RUNS: usize = 3;

@@ -25,7 +25,6 @@ pub mod diag;
 pub mod driver;
 pub mod exact;
 pub mod hir;
-pub mod lanes;
 pub mod lower;
 pub mod obligation;
 pub mod project;
@@ -38,3 +37,10 @@ pub mod subtype;
 pub mod syntax;
 pub mod typeck;
 pub mod wf;
+
+/// The parallel-lanes generator (not part of the library: it lives beside the example
+/// and the benchmark that use it), for the unit tests that check generated lanes.
+#[cfg(test)]
+#[path = "../examples/common/lanes.rs"]
+#[allow(dead_code)]
+pub(crate) mod lanes;

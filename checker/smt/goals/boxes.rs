@@ -1,0 +1,208 @@
+//! Boxes: a sound enclosure, in world coordinates, of the points a run's footprint can
+//! cover over its whole motion, by interval arithmetic ([`crate::bounds`], rounded
+//! outwards) on the ranges its context, precondition, guarantee and invariant give the
+//! variables, moved into the world by the participant's pose. Two footprints whose boxes
+//! are disjoint never meet, so separation (Sec 4.1: the sides of `*` need a partition,
+//! here inferred), [T-SESS]'s first footprints and [AGCOMP]'s pairwise footprint
+//! disjointness ask Z3 only about the pairs whose boxes meet (or cannot be bounded).
+
+use super::super::encode::Unsupported;
+use super::query::{seeds_of, slice};
+use super::{Part, Plan};
+use crate::bounds::{self, Interval};
+use crate::hir::{Builtin, Expr, PrimApp, Program, RoleId, Slot, Var};
+use crate::obligation::{Obligation, Run, Side};
+
+/// [T-SESS]: the first motions of every two participants start with disjoint footprints;
+/// boxes first, as for separation: only participants whose boxes meet need Z3.
+pub(super) fn initially_disjoint(prog: &Program, ob: &Obligation, firsts: &[(RoleId, Vec<PrimApp>)]) -> Plan {
+    // Boxes first, as for separation: only participants whose boxes meet need Z3.
+    let boxes: Vec<Option<[Interval; 3]>> = firsts
+        .iter()
+        .map(|(role, apps)| {
+            let side = Side {
+                roles: vec![*role],
+                runs: apps
+                    .iter()
+                    .map(|a| Run {
+                        role: *role,
+                        app: a.clone(),
+                        hyps: slice(prog, &ob.hyps, seeds_of(prog, &[(*role, a.clone())])),
+                    })
+                    .collect(),
+            };
+            side_box(prog, &side)
+        })
+        .collect();
+    let mut out = Vec::new();
+    for r in 0..firsts.len() {
+        for s in r + 1..firsts.len() {
+            if let (Some(x), Some(y)) = (&boxes[r], &boxes[s]) {
+                if (0..3).any(|k| x[k].disjoint(y[k])) {
+                    continue;
+                }
+            }
+            out.push(Part::InitiallyApart { r, s });
+        }
+    }
+    if out.is_empty() {
+        return Plan::Holds(None);
+    }
+    Plan::Parts(out)
+}
+
+/// Separation: first by boxes (a sound enclosure of each run's footprint in the world;
+/// disjoint boxes are the partition of [AGCOMP], inferred), then by queries for the
+/// pairs of runs whose boxes meet.
+pub(super) fn separation_plan(prog: &Program, sides: &[Side]) -> Plan {
+    // Every side of `*` moves (Def 4.4 (3)); a side listing no run means the context
+    // stage recorded nothing, and "nothing to compare" must not read as "separated".
+    if let Some(i) = sides.iter().position(|s| s.runs.is_empty()) {
+        return Plan::Unknown(Unsupported(format!("a side of `*` (side {}) whose motions were not recorded", i + 1)));
+    }
+    // Per run too: two runs whose boxes are disjoint need no query even when their
+    // sides' boxes meet (the boxes are sound enclosures, rotations included).
+    let run_boxes: Vec<Vec<Option<[Interval; 3]>>> =
+        sides.iter().map(|s| s.runs.iter().map(|r| run_box(prog, r)).collect()).collect();
+    let boxes: Vec<Option<[Interval; 3]>> = run_boxes.iter().map(|rs| hull_all(rs)).collect();
+    let apart = |x: &Option<[Interval; 3]>, y: &Option<[Interval; 3]>| match (x, y) {
+        (Some(x), Some(y)) => (0..3).any(|k| x[k].disjoint(y[k])),
+        _ => false,
+    };
+    let mut parts = Vec::new();
+    for a in 0..sides.len() {
+        for b in a + 1..sides.len() {
+            if apart(&boxes[a], &boxes[b]) {
+                continue;
+            }
+            for ra in 0..sides[a].runs.len() {
+                for rb in 0..sides[b].runs.len() {
+                    if !apart(&run_boxes[a][ra], &run_boxes[b][rb]) {
+                        parts.push(Part::Apart { a, ra, b, rb });
+                    }
+                }
+            }
+        }
+    }
+    if parts.is_empty() {
+        let described: Vec<String> = boxes
+            .iter()
+            .zip(sides)
+            .filter_map(|(b, s)| {
+                let b = b.as_ref()?;
+                let who: Vec<&str> = s.roles.iter().map(|r| prog.role_name(*r)).collect();
+                Some(format!(
+                    "{} within x ∈ [{:.3}, {:.3}], y ∈ [{:.3}, {:.3}], z ∈ [{:.3}, {:.3}]",
+                    who.join(", "),
+                    b[0].lo,
+                    b[0].hi,
+                    b[1].lo,
+                    b[1].hi,
+                    b[2].lo,
+                    b[2].hi
+                ))
+            })
+            .collect();
+        return Plan::Holds((!described.is_empty()).then(|| format!("partition inferred: {}", described.join("; "))));
+    }
+    Plan::Parts(parts)
+}
+
+/// The world box of each side's footprints, where they can be bounded (for reports: the
+/// driver lists an inferred partition's boxes in JSON).
+pub fn side_boxes(prog: &Program, sides: &[Side]) -> Vec<Option<[Interval; 3]>> {
+    sides.iter().map(|s| side_box(prog, s)).collect()
+}
+
+/// A world box around every footprint of a side, if each can be bounded.
+pub(super) fn side_box(prog: &Program, side: &Side) -> Option<[Interval; 3]> {
+    hull_all(&side.runs.iter().map(|r| run_box(prog, r)).collect::<Vec<_>>())
+}
+
+/// The hull of boxes, if each is bounded (`None` for none).
+pub(super) fn hull_all(boxes: &[Option<[Interval; 3]>]) -> Option<[Interval; 3]> {
+    let mut acc: Option<[Interval; 3]> = None;
+    for b in boxes {
+        let b = (*b)?;
+        acc = Some(match acc {
+            None => b,
+            Some(a) => [a[0].hull(b[0]), a[1].hull(b[1]), a[2].hull(b[2])],
+        });
+    }
+    acc
+}
+
+/// A world box around one run's footprint, from the ranges its context, precondition,
+/// guarantee and invariant give the variables.
+pub fn run_box(prog: &Program, run: &Run) -> Option<[Interval; 3]> {
+    let prim = prog.prim(run.app.prim);
+    let fp = prim.footprint.as_ref()?;
+    // Ranges of the shared vocabulary (start state, values) from the context.
+    let inv = prog.kind(prim.kind).invariant.as_ref();
+    let start: Vec<&Expr> = run.hyps.iter().collect();
+    let shared = bounds::ranges_from(prog, &start, &bounds::closed);
+    let shared_lookup = |v: &Var| shared.get(v).copied();
+    // In the primitive's frame: old(x) and the start are the participant's `Role` vars.
+    let role = run.role;
+    let args = &run.app.args;
+    let lift = |v: &Var| -> Option<Interval> {
+        match v {
+            Var::Old(i) => shared_lookup(&Var::Role(role, Slot::State(*i))),
+            Var::Param(i) => args.get(*i).and_then(|a| bounds::eval(prog, a, &shared_lookup)),
+            Var::Clock => Some(Interval { lo: 0.0, hi: f64::INFINITY }),
+            _ => None,
+        }
+    };
+    let mut facts: Vec<&Expr> = vec![&prim.guarantee];
+    facts.extend(inv);
+    let own = bounds::ranges_from(prog, &facts, &lift);
+    // Old(x) gets its range from the start facts and from the invariant over Own.
+    let all = |v: &Var| -> Option<Interval> {
+        let o = own.get(v).copied();
+        let l = lift(v);
+        match (o, l) {
+            (Some(a), Some(b)) => Some(a.meet(b)),
+            (a, b) => a.or(b),
+        }
+    };
+    let point = |v: &Var| match v {
+        Var::Point(k) => Some(*k),
+        _ => None,
+    };
+    let local = bounds::point_box(prog, &fp.pred, &point, &all);
+    if !local.iter().all(Interval::is_finite) {
+        return None;
+    }
+    to_world(prog, role, local)
+}
+
+/// Moves a box from `role`'s frame into the world (interval arithmetic on the pose).
+pub(super) fn to_world(prog: &Program, role: RoleId, b: [Interval; 3]) -> Option<[Interval; 3]> {
+    let pose = &prog.role(role).pose;
+    let num = |i: usize| -> Option<Interval> {
+        match pose.get(i) {
+            Some(e) => bounds::eval(prog, e, &bounds::closed),
+            None => Some(Interval::point(0.0)),
+        }
+    };
+    let mut v = b;
+    // Apply roll (x), pitch (y), yaw (z): world = o + Rz Ry Rx local.
+    for (idx, (a, c)) in [(3usize, (1usize, 2usize)), (4, (2, 0)), (5, (0, 1))] {
+        let angle = num(idx)?;
+        if angle.is_exactly(0.0) {
+            continue;
+        }
+        // An exact quarter turn rotates the box exactly (0 and ±1 are exact doubles).
+        let (cs, sn) = match pose.get(idx).and_then(|e| bounds::quarter_turn(prog, e)) {
+            Some((cs, sn)) => (Interval::point(cs as f64), Interval::point(sn as f64)),
+            None => (bounds::trig(Builtin::Cos, Some(angle)), bounds::trig(Builtin::Sin, Some(angle))),
+        };
+        let (x, y) = (v[a], v[c]);
+        v[a] = cs * x + -(sn * y);
+        v[c] = sn * x + cs * y;
+    }
+    for (k, c) in v.iter_mut().enumerate() {
+        *c = *c + num(k)?;
+    }
+    Some(v)
+}
