@@ -7,15 +7,18 @@
 //! [`super::boxes`] without a query.
 
 use super::super::encode::Unsupported;
+use super::boxes::{app_box, meeting_pairs};
 use super::frames::world_point;
 use super::motion::{ends, Inst};
 use super::query::{hyps, seeds_of, slice, zero};
 use super::{Part, Plan, Query};
+use crate::bounds;
 use crate::hir::{Expr, PrimApp, Program, RoleId, Slot};
+use std::collections::HashMap;
 use z3::ast::Bool;
 
 /// The parts of a `dt`'s [AGCOMP] obligation.
-pub(super) fn plan(prog: &Program, parts: &[(RoleId, PrimApp)]) -> Plan {
+pub(super) fn plan(prog: &Program, hyps: &[Expr], parts: &[(RoleId, PrimApp)]) -> Plan {
     let mut out = Vec::new();
     // A lone primitive's precondition is [T-MOTION]'s to check, in its process.
     let lone = parts.len() == 1;
@@ -28,20 +31,23 @@ pub(super) fn plan(prog: &Program, parts: &[(RoleId, PrimApp)]) -> Plan {
             out.push(Part::Assume(i));
         }
     }
-    for i in 0..parts.len() {
-        for j in i + 1..parts.len() {
-            let (a, b) = (prog.prim(parts[i].1.prim), prog.prim(parts[j].1.prim));
-            if a.footprint.is_none() || b.footprint.is_none() {
-                let who = if a.footprint.is_none() { &parts[i] } else { &parts[j] };
-                return Plan::Fails(format!(
-                    "`{}` of `{}` declares no footprint, so it may occupy all space and meets every other footprint",
-                    prog.prim(who.1.prim).name,
-                    prog.role_name(who.0)
-                ));
-            }
-            out.push(Part::Disjoint(i, j));
+    // A part with no footprint may occupy all space and meets every other footprint.
+    if parts.len() > 1 {
+        if let Some(who) = parts.iter().find(|(_, app)| prog.prim(app.prim).footprint.is_none()) {
+            return Plan::Fails(format!(
+                "`{}` of `{}` declares no footprint, so it may occupy all space and meets every other footprint",
+                prog.prim(who.1.prim).name,
+                prog.role_name(who.0)
+            ));
         }
     }
+    // Footprints pairwise disjoint: a pair whose boxes are apart is proved by the boxes
+    // (sound enclosures of each footprint over its whole motion, from the context at the
+    // `dt`); only the pairs whose boxes meet, or that cannot be bounded, become queries.
+    let facts: Vec<&Expr> = hyps.iter().collect();
+    let shared = bounds::ranges_from(prog, &facts, &bounds::closed);
+    let boxes: Vec<_> = parts.iter().map(|(r, app)| app_box(prog, *r, app, &shared)).collect();
+    out.extend(meeting_pairs(&boxes).into_iter().map(|(i, j)| Part::Disjoint(i, j)));
     // One can-end question for the whole `dt`: the parts end together.
     out.push(Part::CanEnd);
     let non: Vec<usize> = (0..parts.len()).filter(|&i| !prog.prim(parts[i].1.prim).interruptible).collect();
@@ -54,14 +60,34 @@ pub(super) fn plan(prog: &Program, parts: &[(RoleId, PrimApp)]) -> Plan {
 }
 
 pub(super) fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], part: &Part) -> Result<(), Unsupported> {
+    let prog = q.enc.prog();
+    // The parts the question is about: a pair's footprints (with the parts whose state
+    // their inputs read, transitively: an input is its source's state while both move),
+    // one part's precondition, two parts' durations; every part for the joint questions
+    // (can end, can start, assumptions, a common time). Leaving the others out drops
+    // hypotheses only, which can turn "holds" into "fails" but never the reverse, and
+    // keeps a query's size independent of the number of parts (a wide `dt`'s pairs would
+    // otherwise cost n² in all, or n³ without the boxes).
+    let about: Vec<usize> = match part {
+        Part::Disjoint(i, j) => with_sources(prog, parts, &[*i, *j]),
+        Part::Pre(i) => vec![*i],
+        Part::Within(n, j) => with_sources(prog, parts, &[*n, *j]),
+        _ => (0..parts.len()).collect(),
+    };
+    let mut at = vec![None; parts.len()];
+    for (k, &p) in about.iter().enumerate() {
+        at[p] = Some(k);
+    }
+    let at = |p: usize| at.get(p).copied().flatten().ok_or_else(|| Unsupported("an [AGCOMP] part out of range".into()));
+    let sub: Vec<(RoleId, PrimApp)> = about.iter().map(|&p| parts[p].clone()).collect();
     if matches!(part, Part::CanEnd | Part::CanStart) {
         hyps(q, hs)?;
     } else {
-        hyps(q, &slice(q.enc.prog(), hs, seeds_of(q.enc.prog(), parts)))?;
+        hyps(q, &slice(prog, hs, seeds_of(prog, &sub)))?;
     }
     let t = q.enc.named_real("time");
     let mut insts = Vec::new();
-    for (r, app) in parts {
+    for (r, app) in &sub {
         insts.push(Inst::new(&mut q.enc, *r, app, t.clone(), "t")?);
     }
     connect(q, &mut insts);
@@ -74,7 +100,7 @@ pub(super) fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], pa
             }
         }
         Part::Pre(i) => {
-            let inst = &insts[*i];
+            let inst = &insts[at(*i)?];
             if let Some(inv) = q.enc.prog().kind(inst.prim.kind).invariant.clone() {
                 let b = inst.pred(&mut q.enc, &inv, &inst.start_frame())?;
                 q.assertions.push(b);
@@ -101,8 +127,8 @@ pub(super) fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], pa
                 inst.running(q)?;
             }
             let p = world_point(q);
-            insts[*i].occupies(q, &p)?;
-            insts[*j].occupies(q, &p)?;
+            insts[at(*i)?].occupies(q, &p)?;
+            insts[at(*j)?].occupies(q, &p)?;
             q.point = Some(p);
             q.times = vec![t];
         }
@@ -110,8 +136,8 @@ pub(super) fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], pa
             for inst in &insts {
                 inst.started(q)?;
             }
-            let (nlo, nhi) = insts[*n].duration(&mut q.enc)?;
-            let (jlo, jhi) = insts[*j].duration(&mut q.enc)?;
+            let (nlo, nhi) = insts[at(*n)?].duration(&mut q.enc)?;
+            let (jlo, jhi) = insts[at(*j)?].duration(&mut q.enc)?;
             let inside = match (nhi, jhi) {
                 (_, None) => jlo.le(&nlo),
                 (Some(nhi), Some(jhi)) => Bool::and(&[jlo.le(&nlo), nhi.le(&jhi)]),
@@ -143,15 +169,36 @@ pub(super) fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], pa
     Ok(())
 }
 
+/// `seeds` and the parts whose state their inputs read, transitively, in order.
+fn with_sources(prog: &Program, parts: &[(RoleId, PrimApp)], seeds: &[usize]) -> Vec<usize> {
+    let mut keep = vec![false; parts.len()];
+    let mut todo: Vec<usize> = seeds.iter().copied().filter(|&p| p < parts.len()).collect();
+    while let Some(p) = todo.pop() {
+        if std::mem::replace(&mut keep[p], true) {
+            continue;
+        }
+        for src in prog.role(parts[p].0).input_sources.iter().flatten() {
+            todo.extend(parts.iter().position(|(r, _)| r == src));
+        }
+    }
+    (0..parts.len()).filter(|&p| keep[p]).collect()
+}
+
 /// Inputs read the state of the participant they are connected to, when it moves in
 /// the same joint motion.
 pub(super) fn connect(q: &mut Query, insts: &mut [Inst]) {
     let prog = q.enc.prog();
     let mut eqs = Vec::new();
+    // The first instance of each participant (an index, not a search per input: a wide
+    // `dt` of participants with inputs would cost n² otherwise).
+    let mut first: HashMap<RoleId, usize> = HashMap::new();
+    for (k, inst) in insts.iter().enumerate() {
+        first.entry(inst.role).or_insert(k);
+    }
     for a in insts.iter() {
         for (i, src) in prog.role(a.role).input_sources.iter().enumerate() {
             let Some(src) = src else { continue };
-            let Some(b) = insts.iter().find(|b| b.role == *src) else { continue };
+            let Some(b) = first.get(src).map(|&k| &insts[k]) else { continue };
             let name = &prog.kind_of(a.role).inputs[i].0;
             let Some((slot, _)) = prog.kind_of(*src).slot(name) else { continue };
             if let (Some(x), Some(y)) = (a.frame.own.get(&Slot::Input(i)), b.frame.own.get(&slot)) {
@@ -160,4 +207,81 @@ pub(super) fn connect(q: &mut Query, insts: &mut [Inst]) {
         }
     }
     q.assertions.extend(eqs);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::super::{discharge, Decision, SmtConfig};
+    use super::super::tests::{first_dt, parts};
+    use super::super::Part;
+
+    /// `n` bots in one `dt`, bot `i` at `x == gap * i` with the footprint of a cube of
+    /// side 0.2 around its position, held still (`hold`), or for the bots listed in `free`
+    /// roaming anywhere (`roam`: the footprint follows `x`, which nothing bounds).
+    fn bots(n: usize, gap: &str, free: &[usize]) -> String {
+        let mut s = String::from(
+            "robot Bot { state x: real; }
+             motion Bot.hold { interruptible: true; guarantee: x == old(x); duration: [0, inf];
+               footprint(px, py, pz): old(x) - 0.1 <= px <= old(x) + 0.1 && -0.1 <= py <= 0.1 && -0.1 <= pz <= 0.1; }
+             motion Bot.roam { interruptible: true; duration: [0, inf];
+               footprint(px, py, pz): x - 0.1 <= px <= x + 0.1 && -0.1 <= py <= 0.1 && -0.1 <= pz <= 0.1; }
+             system S {",
+        );
+        for i in 0..n {
+            s.push_str(&format!(" participant B{i}: Bot {{ init: x == {gap} * {i}; }}"));
+        }
+        s.push_str(" } choreography G = dt<");
+        let ps: Vec<String> =
+            (0..n).map(|i| format!("B{i}: {}", if free.contains(&i) { "roam" } else { "hold" })).collect();
+        s.push_str(&ps.join(", "));
+        s.push_str(">. end;");
+        s
+    }
+
+    fn disjoint_parts(src: &str) -> Vec<(usize, usize)> {
+        let (prog, ob) = first_dt(src);
+        let ps = parts(&prog, &ob).expect("parts");
+        ps.into_iter()
+            .filter_map(|p| match p {
+                Part::Disjoint(i, j) => Some((i, j)),
+                _ => None,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn footprints_whose_boxes_are_apart_need_no_query() {
+        // Failed before the interval index: every one of the 190 pairs was a query.
+        assert_eq!(disjoint_parts(&bots(20, "1", &[])), vec![]);
+        let (prog, ob) = first_dt(&bots(20, "1", &[]));
+        let (d, stats) = discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0);
+        assert_eq!(d, Decision::Holds(None));
+        assert!(stats.queries < 20, "{stats:?}");
+    }
+
+    #[test]
+    fn footprints_whose_boxes_meet_are_queried_and_an_overlap_is_found() {
+        // 0.15 apart: neighbours' cubes overlap, and their boxes meet; bots two apart
+        // (0.3) have disjoint boxes.
+        assert_eq!(disjoint_parts(&bots(4, "0.15", &[])), vec![(0, 1), (1, 2), (2, 3)]);
+        let (prog, ob) = first_dt(&bots(4, "0.15", &[]));
+        let Decision::Fails(f) = discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0 else {
+            panic!("neighbours overlap")
+        };
+        assert_eq!(f.which, Some(Part::Disjoint(0, 1)));
+        // Touching boxes (0.2 apart: the cubes share a face) are a query, and a common
+        // point is found: closed sets that touch are not disjoint.
+        assert_eq!(disjoint_parts(&bots(3, "0.2", &[])), vec![(0, 1), (1, 2)]);
+        let (prog, ob) = first_dt(&bots(3, "0.2", &[]));
+        assert!(matches!(discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0, Decision::Fails(_)));
+    }
+
+    #[test]
+    fn a_footprint_without_a_box_is_compared_with_every_other() {
+        // `roam` leaves `x` unbounded while it runs: no box, so every pair with B2 is a
+        // query (and fails: B2 may roam into anyone).
+        assert_eq!(disjoint_parts(&bots(5, "1", &[2])), vec![(0, 2), (1, 2), (2, 3), (2, 4)]);
+        let (prog, ob) = first_dt(&bots(5, "1", &[2]));
+        assert!(matches!(discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0, Decision::Fails(_)));
+    }
 }

@@ -12,6 +12,7 @@ use super::{Part, Plan};
 use crate::bounds::{self, Interval};
 use crate::hir::{Builtin, Expr, PrimApp, Program, RoleId, Slot, Var};
 use crate::obligation::{Obligation, Run, Side};
+use std::collections::HashMap;
 
 /// [T-SESS]: the first motions of every two participants start with disjoint footprints;
 /// boxes first, as for separation: only participants whose boxes meet need Z3.
@@ -65,21 +66,13 @@ pub(super) fn separation_plan(prog: &Program, sides: &[Side]) -> Plan {
     let run_boxes: Vec<Vec<Option<[Interval; 3]>>> =
         sides.iter().map(|s| s.runs.iter().map(|r| run_box(prog, r)).collect()).collect();
     let boxes: Vec<Option<[Interval; 3]>> = run_boxes.iter().map(|rs| hull_all(rs)).collect();
-    let apart = |x: &Option<[Interval; 3]>, y: &Option<[Interval; 3]>| match (x, y) {
-        (Some(x), Some(y)) => (0..3).any(|k| x[k].disjoint(y[k])),
-        _ => false,
-    };
     let mut parts = Vec::new();
-    for a in 0..sides.len() {
-        for b in a + 1..sides.len() {
-            if apart(&boxes[a], &boxes[b]) {
-                continue;
-            }
-            for ra in 0..sides[a].runs.len() {
-                for rb in 0..sides[b].runs.len() {
-                    if !apart(&run_boxes[a][ra], &run_boxes[b][rb]) {
-                        parts.push(Part::Apart { a, ra, b, rb });
-                    }
+    // Sides whose boxes meet, by the interval index (no n² loop over the sides of a wide `*`).
+    for (a, b) in meeting_pairs(&boxes) {
+        for ra in 0..sides[a].runs.len() {
+            for rb in 0..sides[b].runs.len() {
+                if !apart(&run_boxes[a][ra], &run_boxes[b][rb]) {
+                    parts.push(Part::Apart { a, ra, b, rb });
                 }
             }
         }
@@ -135,16 +128,29 @@ pub(super) fn hull_all(boxes: &[Option<[Interval; 3]>]) -> Option<[Interval; 3]>
 /// A world box around one run's footprint, from the ranges its context, precondition,
 /// guarantee and invariant give the variables.
 pub fn run_box(prog: &Program, run: &Run) -> Option<[Interval; 3]> {
-    let prim = prog.prim(run.app.prim);
-    let fp = prim.footprint.as_ref()?;
     // Ranges of the shared vocabulary (start state, values) from the context.
-    let inv = prog.kind(prim.kind).invariant.as_ref();
     let start: Vec<&Expr> = run.hyps.iter().collect();
     let shared = bounds::ranges_from(prog, &start, &bounds::closed);
+    app_box(prog, run.role, &run.app, &shared)
+}
+
+/// A world box around the footprint of `app` run by `role`, at every time of the motion,
+/// from the ranges `shared` the context gives the start state and the values (which must
+/// hold of every state the context allows), and the ranges the primitive's guarantee and
+/// its kind's invariant give the state while it runs. `None` when some coordinate cannot
+/// be bounded (no footprint, or one that reads an unbounded variable).
+pub(super) fn app_box(
+    prog: &Program,
+    role: RoleId,
+    app: &PrimApp,
+    shared: &HashMap<Var, Interval>,
+) -> Option<[Interval; 3]> {
+    let prim = prog.prim(app.prim);
+    let fp = prim.footprint.as_ref()?;
+    let inv = prog.kind(prim.kind).invariant.as_ref();
     let shared_lookup = |v: &Var| shared.get(v).copied();
     // In the primitive's frame: old(x) and the start are the participant's `Role` vars.
-    let role = run.role;
-    let args = &run.app.args;
+    let args = &app.args;
     let lift = |v: &Var| -> Option<Interval> {
         match v {
             Var::Old(i) => shared_lookup(&Var::Role(role, Slot::State(*i))),
@@ -205,4 +211,137 @@ pub(super) fn to_world(prog: &Program, role: RoleId, b: [Interval; 3]) -> Option
         *c = *c + num(k)?;
     }
     Some(v)
+}
+
+/// Whether two boxes are apart: both bounded and disjoint along some axis. Sound as a
+/// proof that two footprints never meet because each box encloses its footprint at every
+/// time (outward rounding, [`crate::bounds`]) and closed intervals that are disjoint share
+/// no point.
+pub(super) fn apart(x: &Option<[Interval; 3]>, y: &Option<[Interval; 3]>) -> bool {
+    match (x, y) {
+        (Some(x), Some(y)) => (0..3).any(|k| x[k].disjoint(y[k])),
+        _ => false,
+    }
+}
+
+/// The interval index: every pair `(i, j)`, `i < j`, of `boxes` that are not [`apart`], in
+/// lexicographic order — exactly the pairs a loop over all pairs would keep, without
+/// comparing all pairs. Boxes that are bounded and non-empty on every axis are sorted by
+/// their lower end along the axis that spreads them most and swept: a box is compared only
+/// with the boxes still open when it starts, then on the other two axes. The others
+/// (unbounded: `None`; an empty or NaN interval, which only a contradictory context gives)
+/// are compared with every box, by [`apart`] itself.
+pub(super) fn meeting_pairs(boxes: &[Option<[Interval; 3]>]) -> Vec<(usize, usize)> {
+    let indexed = |b: &Option<[Interval; 3]>| b.is_some_and(|b| b.iter().all(|i| i.is_finite() && i.lo <= i.hi));
+    let (mut swept, others): (Vec<usize>, Vec<usize>) = (0..boxes.len()).partition(|&i| indexed(&boxes[i]));
+    let at = |i: usize| boxes[i].unwrap_or([Interval::point(0.0); 3]);
+    let mut pairs = Vec::new();
+    for &u in &others {
+        for v in 0..boxes.len() {
+            // A pair of two unindexed boxes is found from its first.
+            if v != u && (v > u || indexed(&boxes[v])) && !apart(&boxes[u], &boxes[v]) {
+                pairs.push((u.min(v), u.max(v)));
+            }
+        }
+    }
+    // The axis along which the boxes are most spread out: the largest ratio of the extent
+    // of all boxes to the sum of their widths (parallel lanes: across the lanes).
+    let spread = |k: usize| {
+        let lo = swept.iter().map(|&i| at(i)[k].lo).fold(f64::INFINITY, f64::min);
+        let hi = swept.iter().map(|&i| at(i)[k].hi).fold(f64::NEG_INFINITY, f64::max);
+        let widths: f64 = swept.iter().map(|&i| at(i)[k].hi - at(i)[k].lo).sum();
+        (hi - lo) / (widths + f64::MIN_POSITIVE)
+    };
+    let axis = (0..3).max_by(|&a, &b| spread(a).total_cmp(&spread(b))).unwrap_or(0);
+    swept.sort_by(|&i, &j| at(i)[axis].lo.total_cmp(&at(j)[axis].lo).then(i.cmp(&j)));
+    let mut open: Vec<usize> = Vec::new();
+    for &i in &swept {
+        let b = at(i);
+        // Boxes that ended before this one starts end before every later one starts too
+        // (indexed ends are numbers, never NaN).
+        open.retain(|&j| at(j)[axis].hi >= b[axis].lo);
+        for &j in &open {
+            // Overlapping along the axis (j started no later and has not ended): the other
+            // two axes decide.
+            if !apart(&boxes[i], &boxes[j]) {
+                pairs.push((i.min(j), i.max(j)));
+            }
+        }
+        open.push(i);
+    }
+    pairs.sort_unstable();
+    pairs
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{apart, meeting_pairs};
+    use crate::bounds::Interval;
+
+    /// The pairs a loop over all pairs keeps.
+    fn brute(boxes: &[Option<[Interval; 3]>]) -> Vec<(usize, usize)> {
+        let mut out = Vec::new();
+        for i in 0..boxes.len() {
+            for j in i + 1..boxes.len() {
+                if !apart(&boxes[i], &boxes[j]) {
+                    out.push((i, j));
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn the_interval_index_keeps_exactly_the_pairs_of_the_pairwise_loop() {
+        // A small deterministic generator: boxes on a coarse grid (so that ends coincide
+        // and boxes touch), some unbounded, empty, infinite or NaN.
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = |m: u64| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed % m
+        };
+        for round in 0..300 {
+            let n = next(40) as usize;
+            let boxes: Vec<Option<[Interval; 3]>> = (0..n)
+                .map(|_| {
+                    if next(10) == 0 {
+                        return None;
+                    }
+                    let mut b = [Interval::point(0.0); 3];
+                    for c in &mut b {
+                        let lo = next(20) as f64 / 2.0;
+                        *c = Interval { lo, hi: lo + next(6) as f64 / 2.0 };
+                        match next(40) {
+                            0 => c.hi = f64::INFINITY,
+                            1 => c.lo = f64::NEG_INFINITY,
+                            2 => c.hi = c.lo - 1.0, // empty
+                            3 => c.lo = f64::NAN,
+                            _ => {}
+                        }
+                    }
+                    Some(b)
+                })
+                .collect();
+            assert_eq!(meeting_pairs(&boxes), brute(&boxes), "round {round}: {boxes:?}");
+        }
+    }
+
+    #[test]
+    fn lanes_are_swept_across_and_touching_boxes_meet() {
+        let lane =
+            |k: f64, len: f64| Some([Interval::new(0.0, len), Interval::new(k, k + 0.5), Interval::new(0.0, 0.1)]);
+        // Long lanes half a unit wide, one unit apart: no pair; then lane 3 widened to
+        // touch lane 4, and one box with no bound, which meets everything.
+        let mut boxes: Vec<_> = (0..50).map(|k| lane(k as f64, 100.0)).collect();
+        assert_eq!(meeting_pairs(&boxes), vec![]);
+        boxes[3] = Some([Interval::new(0.0, 100.0), Interval::new(3.0, 4.0), Interval::new(0.0, 0.1)]);
+        assert_eq!(meeting_pairs(&boxes), vec![(3, 4)]);
+        boxes.push(None);
+        let mut expected: Vec<(usize, usize)> = (0..50).map(|k| (k, 50)).collect();
+        expected.push((3, 4));
+        expected.sort_unstable();
+        assert_eq!(meeting_pairs(&boxes), expected);
+    }
 }

@@ -128,7 +128,7 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
             let n = e.conjuncts().len();
             Plan::Parts(if n > 1 { (0..n).map(Part::Conjunct).collect() } else { vec![Part::Valid] })
         }
-        Goal::Compatible { parts } => agcomp::plan(prog, parts),
+        Goal::Compatible { parts } => agcomp::plan(prog, &ob.hyps, parts),
         Goal::Separated { sides } => match prog.partition(ob.span) {
             Some(p) if p.regions.len() == sides.len() => {
                 let mut parts = Vec::new();
@@ -148,5 +148,70 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
         Goal::CanEnd { .. } if ob.rule == crate::obligation::Rule::Occupies => Plan::Parts(vec![Part::Occupies]),
         Goal::CanEnd { .. } => Plan::Parts(vec![Part::Realisable]),
         Goal::Reachable { .. } => Plan::Parts(vec![Part::Context]),
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::hir::{PrimApp, RoleId};
+    use crate::obligation::Rule;
+
+    /// Lowers `src` (which must be clean) and gives its program with the [AGCOMP]
+    /// obligation of the choreography's first joint motion, from the initial states: every
+    /// participant's first primitive is one part.
+    pub(crate) fn first_dt(src: &str) -> (Program, Obligation) {
+        let (prog, d) = crate::lower::tests::lower_src(src);
+        assert!(d.is_empty(), "{d:?}");
+        let hyps = prog.roles.iter().filter_map(|r| r.init.clone()).collect();
+        let parts: Vec<(RoleId, PrimApp)> =
+            prog.first_motions().into_iter().filter_map(|(r, apps)| Some((r, apps.first()?.clone()))).collect();
+        let ob = Obligation {
+            rule: Rule::AgComp,
+            span: Default::default(),
+            what: "the first joint motion".into(),
+            hyps,
+            goal: Goal::Compatible { parts },
+        };
+        (prog, ob)
+    }
+
+    /// The parts `plan` gives, or a description of what it decided instead.
+    pub(crate) fn parts(prog: &Program, ob: &Obligation) -> Result<Vec<Part>, String> {
+        match plan(prog, ob) {
+            Plan::Parts(ps) => Ok(ps),
+            Plan::Holds(n) => Err(format!("holds ({n:?})")),
+            Plan::Fails(why) => Err(format!("fails: {why}")),
+            Plan::Unknown(u) => Err(format!("unknown: {}", u.0)),
+        }
+    }
+
+    #[test]
+    fn a_valid_goal_has_one_part_per_conjunct() {
+        let (prog, g) = crate::lower::tests::first_guard(
+            "robot R { state x: real; } system S { participant A: R; participant B: R; }
+             choreography G = A -> B : [x >= 0 && x <= 1 && x != 2] go. end;",
+        );
+        let ob = |goal| Obligation {
+            rule: Rule::TOut,
+            span: Default::default(),
+            what: String::new(),
+            hyps: Vec::new(),
+            goal: Goal::Valid(goal),
+        };
+        assert_eq!(parts(&prog, &ob(g.clone())), Ok(vec![Part::Conjunct(0), Part::Conjunct(1), Part::Conjunct(2)]));
+        let one = g.conjuncts()[0].clone();
+        assert_eq!(parts(&prog, &ob(one)), Ok(vec![Part::Valid]));
+    }
+
+    #[test]
+    fn sat_questions_are_the_witness_parts() {
+        for p in [Part::CanEnd, Part::CanStart, Part::Context, Part::Before(0), Part::Realisable, Part::Occupies] {
+            assert!(p.is_sat_question(), "{p:?}");
+        }
+        for p in [Part::Valid, Part::Pre(0), Part::Disjoint(0, 1), Part::Meet, Part::Refine(RefineItem::Post)] {
+            assert!(!p.is_sat_question(), "{p:?}");
+        }
+        assert!(Part::Refine(RefineItem::Realisable).is_sat_question());
     }
 }
