@@ -15,7 +15,7 @@ use super::{Part, Plan, Query};
 use crate::bounds;
 use crate::hir::{Expr, PrimApp, Program, RoleId, Slot};
 use std::collections::HashMap;
-use z3::ast::Bool;
+use z3::ast::{Bool, Real};
 
 /// The parts of a `dt`'s [AGCOMP] obligation.
 pub(super) fn plan(prog: &Program, hyps: &[Expr], parts: &[(RoleId, PrimApp)]) -> Plan {
@@ -154,15 +154,26 @@ pub(super) fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], pa
             for inst in &insts {
                 ds.push(inst.duration(&mut q.enc)?);
             }
-            let mut ok = Vec::new();
-            for (lo, _) in &ds {
-                for (_, hi) in &ds {
-                    if let Some(hi) = hi {
-                        ok.push(lo.le(hi));
-                    }
+            // They share a time iff no part ends before another starts (every lo_i <= every
+            // hi_j). Asked as: the latest start `m` (no lower end exceeds it, and it is one
+            // of them) lies after some upper end, in a query linear in the parts (the
+            // n² comparisons of every pair made a wide `dt`'s query quadratic). Equivalent:
+            // lo_i > hi_j gives m = max lo >= lo_i > hi_j; conversely m = lo_k > hi_j.
+            let his: Vec<&Real> = ds.iter().filter_map(|(_, hi)| hi.as_ref()).collect();
+            if his.is_empty() || ds.is_empty() {
+                // Every part may run for ever: any late enough time is common.
+                q.assertions.push(Bool::from_bool(false));
+            } else {
+                let m = q.enc.named_real("latest start");
+                let mut one_of = Vec::new();
+                for (lo, _) in &ds {
+                    q.assertions.push(m.ge(lo));
+                    one_of.push(m.eq(lo));
                 }
+                q.assertions.push(Bool::or(&one_of));
+                let after: Vec<Bool> = his.iter().map(|hi| m.gt(*hi)).collect();
+                q.assertions.push(Bool::or(&after));
             }
-            q.assertions.push(Bool::and(&ok).not());
         }
         _ => return Err(Unsupported("an [AGCOMP] obligation split into a part of another kind".into())),
     }
@@ -274,6 +285,57 @@ mod tests {
         assert_eq!(disjoint_parts(&bots(3, "0.2", &[])), vec![(0, 1), (1, 2)]);
         let (prog, ob) = first_dt(&bots(3, "0.2", &[]));
         assert!(matches!(discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0, Decision::Fails(_)));
+    }
+
+    /// `n` bots a metre apart in one `dt`, bot `i` running `timed(lo_i, hi_i)`: an
+    /// interruptible primitive whose duration is its arguments.
+    fn timed(durations: &[(u32, u32)]) -> String {
+        let mut s = String::from(
+            "robot Bot { state x: real; }
+             motion Bot.timed(a: real, b: real) { interruptible: true; guarantee: x == old(x); duration: [a, b];
+               footprint(px, py, pz): old(x) - 0.1 <= px <= old(x) + 0.1 && -0.1 <= py <= 0.1 && -0.1 <= pz <= 0.1; }
+             system S {",
+        );
+        for i in 0..durations.len() {
+            s.push_str(&format!(" participant B{i}: Bot {{ init: x == {i}; }}"));
+        }
+        let ps: Vec<String> =
+            durations.iter().enumerate().map(|(i, (a, b))| format!("B{i}: timed({a}, {b})")).collect();
+        s.push_str(&format!(" }} choreography G = dt<{}>. end;", ps.join(", ")));
+        s
+    }
+
+    #[test]
+    fn the_durations_share_a_time_in_a_query_linear_in_the_parts() {
+        let meet = |ds: &[(u32, u32)]| {
+            let (prog, ob) = first_dt(&timed(ds));
+            let q = super::super::build(&prog, &ob, &Part::Meet).expect("a query");
+            let size: usize = q.assertions.iter().map(|a| a.to_string().len()).sum();
+            let d = discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0;
+            (size, d)
+        };
+        // [0, 5], [1, 6], [2, 7], ...: all contain [n - 1, 5] while n <= 6.
+        let ds = |n: u32| (0..n).map(|i| (i, i + 5)).collect::<Vec<_>>();
+        let (small, d) = meet(&ds(5));
+        assert_eq!(d, Decision::Holds(None));
+        // Failed before: one comparison per pair of parts, a query 4 times as large.
+        let (large, _) = meet(&(0..40).map(|_| (0, 5)).collect::<Vec<_>>());
+        let (larger, _) = meet(&(0..80).map(|_| (0, 5)).collect::<Vec<_>>());
+        assert!(larger < 3 * large, "{large} -> {larger}");
+        assert!(small < large);
+        // [0, 5] and [6, 7] share no time: the durations part's query has a model (and the
+        // obligation fails; its can-end part, asked first, already says so).
+        let apart = [(0, 5), (2, 5), (6, 7)];
+        assert!(matches!(meet(&apart).1, Decision::Fails(_)));
+        let (prog, ob) = first_dt(&timed(&apart));
+        let q = super::super::build(&prog, &ob, &Part::Meet).expect("a query");
+        let solver = z3::Solver::new();
+        for a in q.assertions.iter().chain(q.enc.side_conditions()) {
+            solver.assert(a);
+        }
+        assert_eq!(solver.check(), z3::SatResult::Sat);
+        // Touching ends share the time 5.
+        assert_eq!(meet(&[(0, 5), (5, 7)]).1, Decision::Holds(None));
     }
 
     #[test]

@@ -7,7 +7,6 @@
 //! disjointness ask Z3 only about the pairs whose boxes meet (or cannot be bounded).
 
 use super::super::encode::Unsupported;
-use super::query::{seeds_of, slice};
 use super::{Part, Plan};
 use crate::bounds::{self, Interval};
 use crate::hir::{Builtin, Expr, PrimApp, Program, RoleId, Slot, Var};
@@ -17,35 +16,16 @@ use std::collections::HashMap;
 /// [T-SESS]: the first motions of every two participants start with disjoint footprints;
 /// boxes first, as for separation: only participants whose boxes meet need Z3.
 pub(super) fn initially_disjoint(prog: &Program, ob: &Obligation, firsts: &[(RoleId, Vec<PrimApp>)]) -> Plan {
-    // Boxes first, as for separation: only participants whose boxes meet need Z3.
+    // Boxes first, as for separation: only participants whose boxes meet need Z3. The
+    // ranges are read once from all of Σ (the initial states), not from a slice per
+    // participant (n slices of n facts each); they hold of every state Σ allows.
+    let facts: Vec<&Expr> = ob.hyps.iter().collect();
+    let shared = bounds::ranges_from(prog, &facts, &bounds::closed);
     let boxes: Vec<Option<[Interval; 3]>> = firsts
         .iter()
-        .map(|(role, apps)| {
-            let side = Side {
-                roles: vec![*role],
-                runs: apps
-                    .iter()
-                    .map(|a| Run {
-                        role: *role,
-                        app: a.clone(),
-                        hyps: slice(prog, &ob.hyps, seeds_of(prog, &[(*role, a.clone())])),
-                    })
-                    .collect(),
-            };
-            side_box(prog, &side)
-        })
+        .map(|(role, apps)| hull_all(&apps.iter().map(|a| app_box(prog, *role, a, &shared)).collect::<Vec<_>>()))
         .collect();
-    let mut out = Vec::new();
-    for r in 0..firsts.len() {
-        for s in r + 1..firsts.len() {
-            if let (Some(x), Some(y)) = (&boxes[r], &boxes[s]) {
-                if (0..3).any(|k| x[k].disjoint(y[k])) {
-                    continue;
-                }
-            }
-            out.push(Part::InitiallyApart { r, s });
-        }
-    }
+    let out: Vec<Part> = meeting_pairs(&boxes).into_iter().map(|(r, s)| Part::InitiallyApart { r, s }).collect();
     if out.is_empty() {
         return Plan::Holds(None);
     }
@@ -326,6 +306,47 @@ mod tests {
                 .collect();
             assert_eq!(meeting_pairs(&boxes), brute(&boxes), "round {round}: {boxes:?}");
         }
+    }
+
+    /// [T-SESS] for `n` bots in a row `gap` apart (cubes of side 0.2): its plan.
+    fn initial_plan(n: usize, gap: &str) -> Result<Vec<super::Part>, String> {
+        use crate::obligation::{Goal, Obligation, Rule};
+        let mut src = String::from(
+            "robot Bot { state x: real; }
+             motion Bot.hold { interruptible: true; duration: [0, inf]; guarantee: x == old(x);
+               footprint(px, py, pz): x - 0.1 <= px <= x + 0.1 && -0.1 <= py <= 0.1 && -0.1 <= pz <= 0.1; }
+             system S {",
+        );
+        for i in 0..n {
+            src.push_str(&format!(" participant B{i}: Bot {{ init: x == {gap} * {i}; }}"));
+        }
+        let sides: Vec<String> = (0..n).map(|i| format!("dt<B{i}: hold>")).collect();
+        src.push_str(&format!(" }} choreography G = {};", sides.join(" * ")));
+        let (prog, d) = crate::lower::tests::lower_src(&src);
+        assert!(d.is_empty(), "{d:?}");
+        let ob = Obligation {
+            rule: Rule::TSess,
+            span: Default::default(),
+            what: "initial states".into(),
+            hyps: prog.roles.iter().filter_map(|r| r.init.clone()).collect(),
+            goal: Goal::InitiallyDisjoint { firsts: prog.first_motions() },
+        };
+        super::super::tests::parts(&prog, &ob)
+    }
+
+    #[test]
+    fn initial_footprints_whose_boxes_are_apart_need_no_query() {
+        assert_eq!(initial_plan(30, "1"), Err("holds (None)".into()));
+        // 0.15 apart: each bot meets its neighbours only.
+        let near = initial_plan(4, "0.15").expect("parts");
+        let pairs: Vec<(usize, usize)> = near
+            .iter()
+            .map(|p| match p {
+                super::Part::InitiallyApart { r, s } => (*r, *s),
+                other => panic!("{other:?}"),
+            })
+            .collect();
+        assert_eq!(pairs, vec![(0, 1), (1, 2), (2, 3)]);
     }
 
     #[test]

@@ -175,3 +175,43 @@ pub(super) fn end_frame(enc: &mut Encoder, inst: &Inst) -> Result<Frame, Unsuppo
     }
     Ok(Frame { own, clock: None, ..inst.frame.clone() })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::super::{discharge, Decision, SmtConfig};
+    use crate::obligation::{Goal, Obligation, Rule};
+
+    /// Can `R.m` (with the given contract) end, from some start and arguments? (Def 4.11:
+    /// some time in its duration and an end state meeting its guarantee, postcondition and
+    /// the invariant, [`super::ends`].)
+    fn can_end(contract: &str) -> Decision {
+        let src = format!(
+            "robot R {{ state x: real; invariant: 0 <= x <= 10; }}
+             motion R.m(d: real) {{ interruptible: true; {contract} }}
+             system S {{ participant A: R {{ init: x == 1; }} }} choreography G = dt<A: m(1)>. end;"
+        );
+        let (prog, d) = crate::lower::tests::lower_src(&src);
+        assert!(d.is_empty(), "{d:?}");
+        let ob = Obligation {
+            rule: Rule::Contract,
+            span: Default::default(),
+            what: "m can end".into(),
+            hyps: Vec::new(),
+            goal: Goal::CanEnd {
+                prim: prog.prims.iter().position(|p| p.name == "m").map(|i| crate::hir::PrimId(i as u32)).expect("m"),
+            },
+        };
+        discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0
+    }
+
+    #[test]
+    fn a_motion_ends_where_its_post_guarantee_and_invariant_meet() {
+        assert_eq!(can_end("post: x == old(x) + d; duration: [0, 5];"), Decision::Holds(None));
+        // The end state must satisfy the invariant (x <= 10) and the post together.
+        assert!(matches!(can_end("post: x == old(x) + 20; guarantee: x >= old(x);"), Decision::Fails(_)));
+        // An empty duration: no time to end at.
+        assert!(matches!(can_end("duration: [2, 1];"), Decision::Fails(_)));
+        // The guarantee must hold at the end too.
+        assert!(matches!(can_end("guarantee: x > 100;"), Decision::Fails(_)));
+    }
+}

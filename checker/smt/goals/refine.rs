@@ -174,3 +174,77 @@ pub(super) fn refine(
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::super::{discharge, Decision, SmtConfig};
+    use super::super::tests::parts;
+    use super::super::{Part, RefineItem};
+    use crate::hir::{PrimApp, PrimId, Program};
+    use crate::obligation::{Goal, Obligation, Rule};
+
+    /// Does `concrete` refine `abstract_`? Both primitives of `R`, with state `x` in
+    /// [0, 10] (the participant starts at 1).
+    fn refines(prims: &str, concrete: &str, abstract_: &str) -> (Program, Obligation) {
+        let src = format!(
+            "robot R {{ state x: real; invariant: 0 <= x <= 10; }} {prims}
+             system S {{ participant A: R {{ init: x == 1; }} }} choreography G = dt<A: wait>. end;"
+        );
+        let (prog, d) = crate::lower::tests::lower_src(&src);
+        assert!(d.is_empty(), "{d:?}");
+        let app = |name: &str| {
+            let i = prog.prims.iter().position(|p| p.name == name).expect("a primitive");
+            PrimApp { prim: PrimId(i as u32), args: Vec::new(), loc: Default::default() }
+        };
+        let role = prog.role_ids().next().expect("a participant");
+        let ob = Obligation {
+            rule: Rule::Refinement,
+            span: Default::default(),
+            what: "refinement".into(),
+            hyps: prog.roles.iter().filter_map(|r| r.init.clone()).collect(),
+            goal: Goal::Refines { role, concrete: app(concrete), abstract_: vec![app(abstract_)] },
+        };
+        (prog, ob)
+    }
+
+    const PRIMS: &str = "
+        motion R.slow { interruptible: false; guarantee: x == old(x); duration: [2, 2]; }
+        motion R.spec { interruptible: false; guarantee: x >= old(x) - 1; duration: [1, 3]; }
+        motion R.wait { interruptible: true; duration: [0, inf]; }";
+
+    #[test]
+    fn a_refinement_plans_one_part_per_item_of_def_3_4() {
+        let (prog, ob) = refines(PRIMS, "slow", "spec");
+        let expected: Vec<Part> = [
+            RefineItem::Realisable,
+            RefineItem::Pre,
+            RefineItem::Assume,
+            RefineItem::Guarantee,
+            RefineItem::Post,
+            RefineItem::Footprint,
+            RefineItem::Duration,
+        ]
+        .into_iter()
+        .map(Part::Refine)
+        .collect();
+        assert_eq!(parts(&prog, &ob), Ok(expected));
+        // A primitive refines itself without a question; interruptibility must match.
+        let (prog, ob) = refines(PRIMS, "slow", "slow");
+        assert_eq!(parts(&prog, &ob), Err("holds (None)".into()));
+        let (prog, ob) = refines(PRIMS, "wait", "spec");
+        assert!(parts(&prog, &ob).is_err_and(|e| e.contains("interruptib")));
+    }
+
+    #[test]
+    fn durations_nest_in_the_corrected_direction() {
+        // Non-interruptible: the concrete duration [2, 2] lies within the abstract [1, 3].
+        let (prog, ob) = refines(PRIMS, "slow", "spec");
+        assert_eq!(discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0, Decision::Holds(None));
+        // The other way round it does not: [1, 3] is not within [2, 2].
+        let (prog, ob) = refines(PRIMS, "spec", "slow");
+        let Decision::Fails(f) = discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0 else {
+            panic!("spec does not refine slow")
+        };
+        assert!(matches!(f.which, Some(Part::Refine(RefineItem::Guarantee | RefineItem::Duration))), "{f:?}");
+    }
+}
