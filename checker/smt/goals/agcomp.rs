@@ -63,14 +63,18 @@ pub(super) fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], pa
     let prog = q.enc.prog();
     // The parts the question is about: a pair's footprints (with the parts whose state
     // their inputs read, transitively: an input is its source's state while both move),
-    // one part's precondition, two parts' durations; every part for the joint questions
-    // (can end, can start, assumptions, a common time). Leaving the others out drops
+    // one part's precondition, one part's assumption (with the parts its inputs read), two
+    // parts' durations; every part for the joint questions (can end, can start, a common
+    // time). Leaving the others out drops
     // hypotheses only, which can turn "holds" into "fails" but never the reverse, and
     // keeps a query's size independent of the number of parts (a wide `dt`'s pairs would
     // otherwise cost n² in all, or n³ without the boxes).
     let about: Vec<usize> = match part {
         Part::Disjoint(i, j) => with_sources(prog, parts, &[*i, *j]),
         Part::Pre(i) => vec![*i],
+        // An assumption reads the part's own state and inputs: the partners whose
+        // guarantees can discharge it are the ones its inputs read (transitively).
+        Part::Assume(i) => with_sources(prog, parts, &[*i]),
         Part::Within(n, j) => with_sources(prog, parts, &[*n, *j]),
         _ => (0..parts.len()).collect(),
     };
@@ -109,16 +113,17 @@ pub(super) fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], pa
             q.assertions.push(pre.not());
         }
         Part::Assume(i) => {
+            let i = at(*i)?;
             for (j, inst) in insts.iter().enumerate() {
                 inst.started(q)?;
-                if j == *i {
+                if j == i {
                     // Its own guarantee is not assumed: that would be circular.
                     q.assertions.push(t.ge(zero()));
                 } else {
                     inst.running(q)?;
                 }
             }
-            let a = insts[*i].pred(&mut q.enc, &insts[*i].prim.assume, &insts[*i].frame)?;
+            let a = insts[i].pred(&mut q.enc, &insts[i].prim.assume, &insts[i].frame)?;
             q.assertions.push(a.not());
         }
         Part::Disjoint(i, j) => {
@@ -336,6 +341,43 @@ mod tests {
         assert_eq!(solver.check(), z3::SatResult::Sat);
         // Touching ends share the time 5.
         assert_eq!(meet(&[(0, 5), (5, 7)]).1, Decision::Holds(None));
+    }
+
+    /// A tail whose assumption reads its input `p`, connected to the leader's state `p`,
+    /// with `n` bystanders (no input, no `p`) in the same `dt`.
+    fn leader_and_tail(lead_guarantee: &str, n: usize) -> String {
+        let cube = |at: &str| {
+            format!("footprint(px, py, pz): {at} - 0.1 <= px <= {at} + 0.1 && -0.1 <= py <= 0.1 && -0.1 <= pz <= 0.1;")
+        };
+        let mut s = format!(
+            "robot Lead {{ state p: real; }} robot Tail {{ state x: real; input p: real; }} robot Bot {{ state x: real; }}
+             motion Lead.go {{ interruptible: true; guarantee: {lead_guarantee}; duration: [0, inf]; {} }}
+             motion Tail.follow {{ interruptible: true; assume: p >= 0; guarantee: x == old(x); duration: [0, inf]; {} }}
+             motion Bot.hold {{ interruptible: true; guarantee: x == old(x); duration: [0, inf]; {} }}
+             system S {{ participant L: Lead {{ init: p == 0; }} participant T: Tail {{ init: x == 2; }}",
+            cube("-2"),
+            cube("old(x)"),
+            cube("old(x)")
+        );
+        for k in 0..n {
+            s.push_str(&format!(" participant B{k}: Bot {{ init: x == {}; }}", 4 + 2 * k));
+        }
+        let bys: String = (0..n).map(|k| format!(", B{k}: hold")).collect();
+        s.push_str(&format!(" }} choreography G = dt<L: go, T: follow{bys}>. end;"));
+        s
+    }
+
+    #[test]
+    fn an_assumption_is_discharged_by_the_partner_its_input_reads() {
+        let (prog, ob) = first_dt(&leader_and_tail("0 <= p && p <= 1", 6));
+        assert!(parts(&prog, &ob).expect("parts").contains(&Part::Assume(1)));
+        assert_eq!(discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0, Decision::Holds(None));
+        // A leader that may go below 0 does not discharge it, bystanders or not.
+        let (prog, ob) = first_dt(&leader_and_tail("-1 <= p && p <= 1", 6));
+        let Decision::Fails(f) = discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0 else {
+            panic!("the assumption is not discharged")
+        };
+        assert_eq!(f.which, Some(Part::Assume(1)));
     }
 
     #[test]
