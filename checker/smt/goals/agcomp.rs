@@ -12,19 +12,24 @@ use super::frames::world_point;
 use super::motion::{ends, Inst};
 use super::query::{hyps, seeds_of, slice, zero};
 use super::{Part, Plan, Query};
-use crate::bounds;
-use crate::hir::{Expr, PrimApp, Program, RoleId, Slot};
+use crate::bounds::{self, Interval};
+use crate::hir::expr::BinOp;
+use crate::hir::{Expr, ExprKind, PrimApp, Program, RoleId, Slot, Var};
 use std::collections::HashMap;
 use z3::ast::{Bool, Real};
 
 /// The parts of a `dt`'s [AGCOMP] obligation.
 pub(super) fn plan(prog: &Program, hyps: &[Expr], parts: &[(RoleId, PrimApp)]) -> Plan {
     let mut out = Vec::new();
-    // A lone primitive's precondition is [T-MOTION]'s to check, in its process.
+    // The ranges Σ gives the variables at the `dt` (they hold of every state it allows).
+    let facts: Vec<&Expr> = hyps.iter().collect();
+    let shared = bounds::ranges_from(prog, &facts, &bounds::closed);
+    // A lone primitive's precondition is [T-MOTION]'s to check, in its process. One that
+    // the ranges alone decide needs no query.
     let lone = parts.len() == 1;
-    for (i, (_, app)) in parts.iter().enumerate() {
+    for (i, (role, app)) in parts.iter().enumerate() {
         let p = prog.prim(app.prim);
-        if !p.pre.is_true() && !lone {
+        if !p.pre.is_true() && !lone && !pre_by_intervals(prog, *role, app, &shared) {
             out.push(Part::Pre(i));
         }
         if !p.assume.is_true() {
@@ -183,6 +188,46 @@ pub(super) fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], pa
         _ => return Err(Unsupported("an [AGCOMP] obligation split into a part of another kind".into())),
     }
     Ok(())
+}
+
+/// Whether the precondition of `app`, run by `role`, holds at every state in the ranges
+/// `shared` (which Σ gives at the `dt`), by intervals alone: every conjunct a comparison
+/// `a op b` whose sides' enclosures ([`bounds::eval`], rounded outwards) are apart the
+/// right way. Sound: every state Σ allows lies in the ranges, so Σ ∧ ¬Pre is unsat, the
+/// pre part's question. `false` means only "not shown" (the query decides): an equality,
+/// a variable with no range, or an empty range (a contradictory Σ, which the vacuity guard
+/// reports) never counts.
+fn pre_by_intervals(prog: &Program, role: RoleId, app: &PrimApp, shared: &HashMap<Var, Interval>) -> bool {
+    let lookup = |v: &Var| shared.get(v).copied();
+    let ranges = |v: &Var| -> Option<Interval> {
+        let r = match v {
+            // In the start frame the participant's own state is Σ's.
+            Var::Own(slot @ Slot::State(_)) => lookup(&Var::Role(role, *slot)),
+            Var::Old(i) => lookup(&Var::Role(role, Slot::State(*i))),
+            Var::Param(i) => app.args.get(*i).and_then(|a| bounds::eval(prog, a, &lookup)),
+            _ => None,
+        }?;
+        (r.lo <= r.hi).then_some(r)
+    };
+    let certainly = |c: &Expr| {
+        let ExprKind::Binary(op, a, b) = &c.kind else { return false };
+        let (Some(x), Some(y)) = (bounds::eval(prog, a, &ranges), bounds::eval(prog, b, &ranges)) else {
+            return false;
+        };
+        // Non-empty, NaN-free enclosures only.
+        if !(x.lo <= x.hi && y.lo <= y.hi) {
+            return false;
+        }
+        match op {
+            BinOp::Le => x.hi <= y.lo,
+            BinOp::Lt => x.hi < y.lo,
+            BinOp::Ge => x.lo >= y.hi,
+            BinOp::Gt => x.lo > y.hi,
+            BinOp::Ne => x.hi < y.lo || y.hi < x.lo,
+            _ => false,
+        }
+    };
+    prog.prim(app.prim).pre.conjuncts().into_iter().all(certainly)
 }
 
 /// `seeds` and the parts whose state their inputs read, transitively, in order.
@@ -378,6 +423,30 @@ mod tests {
             panic!("the assumption is not discharged")
         };
         assert_eq!(f.which, Some(Part::Assume(1)));
+    }
+
+    #[test]
+    fn preconditions_the_ranges_decide_need_no_query() {
+        // `hold` needs x >= 0 (B_i starts at x == gap * i): a metre apart from 0, the
+        // ranges of Σ decide every precondition. Failed before: one query per part.
+        let src = |gap: &str| {
+            bots(12, gap, &[])
+                .replace("interruptible: true; guarantee", "interruptible: true; pre: x >= 0 && x != -1; guarantee")
+        };
+        let pres = |gap: &str| {
+            let (prog, ob) = first_dt(&src(gap));
+            let ps = parts(&prog, &ob).expect("parts");
+            ps.into_iter().filter(|p| matches!(p, Part::Pre(_))).count()
+        };
+        assert_eq!(pres("1"), 0);
+        // Starting at 0, -1, -2, ...: B0 is decided (0 >= 0), the others are queries, and
+        // B1's fails.
+        assert_eq!(pres("-1"), 11);
+        let (prog, ob) = first_dt(&src("-1"));
+        let Decision::Fails(f) = discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0 else {
+            panic!("B1 starts below 0")
+        };
+        assert_eq!(f.which, Some(Part::Pre(1)));
     }
 
     #[test]
