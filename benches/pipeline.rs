@@ -6,7 +6,7 @@
 //! MOCHI_BENCH_LARGE=1 cargo bench --bench pipeline   # also n = 300, 3000
 //! ```
 //!
-//! For each size the benchmark generates the source with [`mochi::lanes::parallel_lanes`],
+//! For each size the benchmark generates the source with `parallel_lanes` (`examples/common/lanes.rs`),
 //! runs `check_source` for a tenth of the budget to warm up, then repeatedly until the time budget is spent
 //! (at least three runs), and prints the mean, median and minimum wall time, the mean time of
 //! each stage as reported in `Report::checks`, the time per cart and the ratio
@@ -20,13 +20,23 @@
 //! quadratic cost dominates), 20 MB of one repeated definition, and a 10^4 chain of `^`.
 //! For each it prints the size of the rendered text diagnostics, which the caps keep small.
 //!
+//! A third table times issue 8's wide joint motion once per size (`MOCHI_BENCH_WIDE=0` skips
+//! it): `wide_dt(n)` (`examples/common/lanes.rs`), the n carts in one `dt`, for n = 10, 100,
+//! 1000, with the time of each stage and the queries [AGCOMP] asked. Without the interval
+//! index every pair of footprints was a query over all n carts (n = 100: 131 s).
+//!
 //! No dependencies (no criterion): the numbers are meant to be read, not tracked.
 
 use mochi::driver::{check_source, Config, Report};
-use mochi::lanes::parallel_lanes;
 use mochi::source::SourceDb;
 use std::hint::black_box;
 use std::time::{Duration, Instant};
+
+// The generator, shared with `examples/parallel_lanes.rs` (not part of the library).
+#[path = "../examples/common/lanes.rs"]
+#[allow(dead_code)]
+mod lanes;
+use lanes::parallel_lanes;
 
 /// Minimum number of timed runs per size.
 const MIN_RUNS: usize = 3;
@@ -72,6 +82,10 @@ fn main() {
         if let Err(e) = worker.map(|w| w.join()) {
             println!("shapes: cannot start the thread: {e}");
         }
+    }
+
+    if std::env::var("MOCHI_BENCH_WIDE").map_or(true, |v| v != "0") {
+        wide();
     }
 
     match peak_rss_kib() {
@@ -244,6 +258,28 @@ fn shapes() {
         println!(
             "{name:<22} {:>9.1} {parse_ms:>10.1} {names_ms:>10.1} {check:>12} {out:>14}  {verdict}",
             src.len() as f64 / 1024.0
+        );
+    }
+}
+
+/// Times one check of the wide `dt` for each size (see the module documentation).
+fn wide() {
+    println!(
+        "\n{:>6} {:>9} {:>10} {:>18} {:>14}  verdict / slowest stage",
+        "wide n", "src KiB", "check ms", "compatibility ms", "agcomp queries"
+    );
+    for n in [10, 100, 1000] {
+        let src = lanes::wide_dt(n);
+        let (ms, report) = run_once(&format!("wide{n}.chor"), &src, &Config::default());
+        let compat = report.checks.iter().find(|c| c.name == "compatibility");
+        let slowest = report.checks.iter().max_by(|a, b| a.millis.total_cmp(&b.millis));
+        let slowest = slowest.map(|c| format!("{} {:.0} ms", c.name, c.millis)).unwrap_or_default();
+        println!(
+            "{n:>6} {:>9.1} {ms:>10.1} {:>18} {:>14}  {:?}, {slowest}",
+            src.len() as f64 / 1024.0,
+            compat.map_or("-".into(), |c| format!("{:.1}", c.millis)),
+            compat.map_or("-".into(), |c| c.queries.to_string()),
+            report.verdict
         );
     }
 }

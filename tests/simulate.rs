@@ -9,6 +9,11 @@ use mochi::simulate::{simulate_loaded, Kind, SimConfig, SimReport};
 use mochi::source::SourceDb;
 use std::path::Path;
 
+// The parallel-lanes generator, shared with the example and the benchmark.
+#[path = "../examples/common/lanes.rs"]
+#[allow(dead_code)]
+mod lanes;
+
 fn cfg(runs: usize, steps: usize, seed: u64) -> SimConfig {
     SimConfig { runs, steps, seed, ..SimConfig::default() }
 }
@@ -75,8 +80,8 @@ fn pgcd_handover_never_collides_or_gets_stuck() {
 }
 
 fn lanes(n: usize, spacing: &str) -> String {
-    let src = mochi::lanes::parallel_lanes(n);
-    let from = format!("const lane_dy: real = {:?};", mochi::lanes::LANE_SPACING);
+    let src = lanes::parallel_lanes(n);
+    let from = format!("const lane_dy: real = {:?};", lanes::LANE_SPACING);
     assert!(src.contains(&from), "the generator's spacing line changed");
     src.replace(&from, &format!("const lane_dy: real = {spacing};"))
 }

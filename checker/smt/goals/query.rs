@@ -1,0 +1,273 @@
+//! The query of each part: hypotheses (the context Σ, sliced to the cone of influence of
+//! what the part is about), the instances of the motions involved ([`super::motion`]) and
+//! the negated goal. [T-SESS]'s first footprints, separation's runs, the partition's
+//! regions, the primitives' contracts (Def 4.11: each can end) and the reachability
+//! questions are built here; [AGCOMP]'s and refinement's parts in their modules.
+
+use super::super::encode::Encoder;
+use super::super::encode::{Frame, Unsupported};
+use super::agcomp::compat;
+use super::frames::world_point;
+use super::motion::{ends, Inst};
+use super::refine::refine;
+use super::{Part, Query};
+use crate::hir::{Expr, PrimApp, Program, RoleId, Slot, Var};
+use crate::obligation::{Goal, Obligation};
+use std::collections::HashSet;
+use z3::ast::{Bool, Real};
+
+/// Builds the query of one part.
+pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Query<'p>, Unsupported> {
+    let mut q = Query { enc: Encoder::new(prog), assertions: Vec::new(), point: None, times: Vec::new() };
+    match (&ob.goal, part) {
+        (Goal::Valid(goal), Part::Valid) => {
+            let seeds = vars_of(prog, [goal]);
+            hyps(&mut q, &slice(prog, &ob.hyps, seeds))?;
+            let g = q.enc.boolean(goal)?;
+            q.assertions.push(g.not());
+        }
+        (Goal::Valid(goal), Part::Conjunct(k)) => {
+            let c = goal.conjuncts()[*k];
+            hyps(&mut q, &slice(prog, &ob.hyps, vars_of(prog, [c])))?;
+            let g = q.enc.boolean(c)?;
+            q.assertions.push(g.not());
+        }
+        // Σ alone, whatever the goal (the vacuity guard; a stuck motion).
+        (_, Part::Context) => hyps(&mut q, &context_of(prog, ob))?,
+        (Goal::Compatible { parts }, _) => compat(&mut q, &ob.hyps, parts, part)?,
+        (Goal::Separated { sides }, Part::Apart { a, ra, b, rb }) => {
+            let (x, y) = (&sides[*a].runs[*ra], &sides[*b].runs[*rb]);
+            let p = world_point(&mut q);
+            let mut times = Vec::new();
+            for (run, tag) in [(x, "t1"), (y, "t2")] {
+                hyps(&mut q, &slice(prog, &run.hyps, seeds_of(prog, &[(run.role, run.app.clone())])))?;
+                let t = q.enc.named_real(if tag == "t1" { "time 1" } else { "time 2" });
+                let inst = Inst::new(&mut q.enc, run.role, &run.app, t.clone(), tag)?;
+                inst.started(&mut q)?;
+                inst.running(&mut q)?;
+                inst.occupies(&mut q, &p)?;
+                times.push(t);
+            }
+            q.point = Some(p);
+            q.times = times;
+        }
+        (Goal::Separated { .. }, Part::RegionsApart(a, b)) => {
+            let p = world_point(&mut q);
+            let regions = &prog.partition(ob.span).ok_or_else(|| Unsupported("a partition".into()))?.regions;
+            let frame = Frame { point: Some(p.clone()), ..Frame::default() };
+            for i in [*a, *b] {
+                let r = q.enc.in_frame(&frame, |enc| enc.boolean(&regions[i]))?;
+                q.assertions.push(r);
+            }
+            q.point = Some(p);
+        }
+        (Goal::Separated { sides }, Part::InRegion { a, ra }) => {
+            let run = &sides[*a].runs[*ra];
+            let regions = &prog.partition(ob.span).ok_or_else(|| Unsupported("a partition".into()))?.regions;
+            hyps(&mut q, &slice(prog, &run.hyps, seeds_of(prog, &[(run.role, run.app.clone())])))?;
+            let p = world_point(&mut q);
+            let t = q.enc.named_real("time");
+            let inst = Inst::new(&mut q.enc, run.role, &run.app, t.clone(), "t")?;
+            inst.started(&mut q)?;
+            inst.running(&mut q)?;
+            inst.occupies(&mut q, &p)?;
+            let frame = Frame { point: Some(p.clone()), ..Frame::default() };
+            let r = q.enc.in_frame(&frame, |enc| enc.boolean(&regions[*a]))?;
+            q.assertions.push(r.not());
+            q.point = Some(p);
+            q.times = vec![t];
+        }
+        (Goal::Refines { role, concrete, abstract_ }, Part::Refine(item)) => {
+            refine(&mut q, *role, concrete, abstract_, *item)?
+        }
+        (Goal::InitiallyDisjoint { firsts }, Part::InitiallyApart { r, s }) => {
+            let mut involved = Vec::new();
+            for (role, apps) in [&firsts[*r], &firsts[*s]] {
+                involved.extend(apps.iter().map(|a| (*role, a.clone())));
+            }
+            hyps(&mut q, &slice(prog, &ob.hyps, seeds_of(prog, &involved)))?;
+            let p = world_point(&mut q);
+            let zero = zero();
+            let mut any = Vec::new();
+            for (role, apps) in [&firsts[*r], &firsts[*s]] {
+                // Whichever first motion the participant takes, it starts inside it.
+                let mut inside = Vec::new();
+                for app in apps {
+                    let inst = Inst::new(&mut q.enc, *role, app, zero.clone(), "0")?;
+                    let fp = inst.footprint(&mut q.enc, &p)?;
+                    let start_is_now = inst.at_start();
+                    inside.push(Bool::and(&[fp, start_is_now]));
+                }
+                // Each first footprint contains the robot at time 0, so the robot lies in
+                // their intersection (not merely their union).
+                any.push(Bool::and(&inside));
+            }
+            q.assertions.extend(any);
+            q.point = Some(p);
+        }
+        (Goal::Reachable { before, .. }, Part::Before(k)) => {
+            hyps(&mut q, before.get(*k).map(Vec::as_slice).unwrap_or_default())?
+        }
+        (Goal::CanEnd { prim }, Part::Realisable) => {
+            // Some arguments, start state and time: every parameter is free.
+            let prog = q.enc.prog();
+            let p = prog.prim(*prim);
+            // Read in the frame of some participant of the kind (the driver asks only
+            // about kinds that have one): its name shows in the counterexample.
+            let role = prog.role_ids().find(|r| prog.role(*r).kind == p.kind);
+            let Some(role) = role else { return Err(Unsupported("a primitive of a kind no participant has".into())) };
+            let app = PrimApp { prim: *prim, args: Vec::new(), loc: Default::default() };
+            let t = q.enc.named_real("time");
+            let mut inst = Inst::new(&mut q.enc, role, &app, t.clone(), "t")?;
+            inst.frame.params = p.params.iter().map(|(n, sort)| q.enc.named(n, sort)).collect::<Result<_, _>>()?;
+            ends(&mut q, std::slice::from_ref(&inst), &t)?;
+        }
+        (Goal::CanEnd { prim }, Part::Occupies) => {
+            // Some arguments, state and point (in the robot's own frame: a pose only moves
+            // it) satisfy the footprint's predicate at time 0. Deliberately weak and cheap:
+            // it catches footprints no point satisfies (`false`, contradictory bounds).
+            let prog = q.enc.prog();
+            let p = prog.prim(*prim);
+            let role = prog.role_ids().find(|r| prog.role(*r).kind == p.kind);
+            let Some(role) = role else { return Err(Unsupported("a primitive of a kind no participant has".into())) };
+            let Some(fp) = p.footprint.clone() else { return Ok(q) };
+            let app = PrimApp { prim: *prim, args: Vec::new(), loc: Default::default() };
+            let mut inst = Inst::new(&mut q.enc, role, &app, zero(), "t")?;
+            inst.frame.params = p.params.iter().map(|(n, sort)| q.enc.named(n, sort)).collect::<Result<_, _>>()?;
+            let local = [q.enc.named_real("point.x"), q.enc.named_real("point.y"), q.enc.named_real("point.z")];
+            let frame = Frame { point: Some(local.clone()), ..inst.frame.clone() };
+            let holds = inst.pred(&mut q.enc, &fp.pred, &frame)?;
+            q.assertions.push(holds);
+        }
+        _ => return Err(Unsupported("an obligation split into a part of another kind".into())),
+    }
+    Ok(q)
+}
+
+/// The hypotheses a proof of `ob` rests on, for the vacuity guard: for a validity goal
+/// the slice its parts use (each conjunct's cone of influence lies within the goal's),
+/// otherwise all of them. The proof is vacuous iff these are unsatisfiable.
+pub fn context_of(prog: &Program, ob: &Obligation) -> Vec<Expr> {
+    match &ob.goal {
+        Goal::Valid(goal) => slice(prog, &ob.hyps, vars_of(prog, [goal])),
+        _ => ob.hyps.clone(),
+    }
+}
+
+pub(super) fn zero() -> Real {
+    z3::ast::Int::from_i64(0).to_real()
+}
+
+/// The variables of some expressions (constants excepted).
+/// Inputs count as their source's state variable, which they are.
+pub(super) fn vars_of<'e>(prog: &Program, es: impl IntoIterator<Item = &'e Expr>) -> HashSet<Var> {
+    let mut out = HashSet::new();
+    for e in es {
+        e.visit_vars(&mut |v, _| {
+            if !matches!(v, Var::Const(_)) {
+                out.insert(prog.source_of(v));
+            }
+        });
+    }
+    out
+}
+
+/// What the hypotheses of a motion query may be about: the participants' variables
+/// (now and at their latest snapshot), their input sources', and the arguments'.
+pub(super) fn seeds_of(prog: &Program, parts: &[(RoleId, PrimApp)]) -> HashSet<Var> {
+    let mut out = vars_of(prog, parts.iter().flat_map(|(_, a)| a.args.iter()));
+    for (r, _) in parts {
+        let mut roles = vec![*r];
+        roles.extend(prog.role(*r).input_sources.iter().flatten().copied());
+        for role in roles {
+            let kind = prog.kind_of(role);
+            for i in 0..kind.state.len() {
+                out.insert(Var::Role(role, Slot::State(i)));
+                out.insert(Var::Snap(role, Slot::State(i)));
+            }
+            for i in 0..kind.inputs.len() {
+                out.insert(prog.source_of(&Var::Role(role, Slot::Input(i))));
+            }
+        }
+    }
+    out
+}
+
+/// The hypotheses connected to `seeds` through shared variables (the cone of
+/// influence). Dropping the others keeps queries small and lets identical questions
+/// about different participants share a cache entry. It is sound: fewer hypotheses
+/// can only turn "holds" into "fails" — and only when the dropped ones contradict each
+/// other, i.e. the point is unreachable, which is reported rather than hidden.
+pub(super) fn slice(prog: &Program, hs: &[Expr], mut seeds: HashSet<Var>) -> Vec<Expr> {
+    // One visit of each hypothesis per pass, without collecting its variables first: a
+    // query of a wide `dt` slices a context of n facts, n times.
+    let mut keep = vec![false; hs.len()];
+    loop {
+        let mut grew = false;
+        for (i, h) in hs.iter().enumerate() {
+            if keep[i] {
+                continue;
+            }
+            let (mut any, mut hit) = (false, false);
+            h.visit_vars(&mut |v, _| {
+                if !hit && !matches!(v, Var::Const(_)) {
+                    any = true;
+                    hit = seeds.contains(&prog.source_of(v));
+                }
+            });
+            if hit || !any {
+                keep[i] = true;
+                grew = true;
+                seeds.extend(vars_of(prog, [h]));
+            }
+        }
+        if !grew {
+            break;
+        }
+    }
+    hs.iter().zip(keep).filter(|(_, k)| *k).map(|(h, _)| h.clone()).collect()
+}
+
+pub(super) fn hyps(q: &mut Query, hs: &[Expr]) -> Result<(), Unsupported> {
+    for h in hs {
+        let b = q.enc.boolean(h)?;
+        q.assertions.push(b);
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{slice, vars_of};
+    use crate::hir::Expr;
+
+    /// The conjuncts of a guard over `A`'s state `x, y, z, w`.
+    fn facts(guard: &str) -> (crate::hir::Program, Vec<Expr>) {
+        let (prog, g) = crate::lower::tests::first_guard(&format!(
+            "robot R {{ state x: real, y: real, z: real, w: real; }} system S {{ participant A: R; participant B: R; }}
+             choreography G = A -> B : [{guard}] go. end;"
+        ));
+        let fs = g.conjuncts().into_iter().cloned().collect();
+        (prog, fs)
+    }
+
+    fn printed(prog: &crate::hir::Program, es: &[Expr]) -> Vec<String> {
+        es.iter().map(|e| crate::hir::print::expr(prog, None, e)).collect()
+    }
+
+    #[test]
+    fn a_slice_keeps_the_cone_of_influence_and_closed_facts() {
+        let (prog, fs) = facts("x >= 0 && y == x + 1 && z == 2 && w <= z && 1 <= 2 && y <= 5");
+        // From `x`: the facts linked to it through `y`, and the fact with no variable.
+        let kept = slice(&prog, &fs, vars_of(&prog, [&fs[0]]));
+        assert_eq!(
+            printed(&prog, &kept),
+            printed(&prog, &[fs[0].clone(), fs[1].clone(), fs[4].clone(), fs[5].clone()])
+        );
+        // From `w`: `z` through `w <= z`, whichever comes first.
+        let kept = slice(&prog, &fs, vars_of(&prog, [&fs[3]]));
+        assert_eq!(printed(&prog, &kept), printed(&prog, &[fs[2].clone(), fs[3].clone(), fs[4].clone()]));
+        // No seeds: only the closed fact.
+        assert_eq!(slice(&prog, &fs, Default::default()).len(), 1);
+    }
+}

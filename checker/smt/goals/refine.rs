@@ -1,0 +1,250 @@
+//! Refinement (Def 3.4, read in the corrected direction of the seeds' README, item 1): a
+//! concrete primitive `c` implements the abstract ones `s` (their meet, Def 4.7) iff
+//! `Pre_s ⇒ Pre_c`, `A_s ⇒ A_c`, `G_c ⇒ G_s`, `Post_c ⇒ Post_s`, `FP_c ⊆ FP_s` at every state
+//! and time, the interruptibility is the same, and the durations nest (interruptible
+//! `D_s ⊆ D_c`, non-interruptible `D_c ⊆ D_s`); and `c` can end from a start `s` allows
+//! (otherwise every item holds vacuously). One part per item.
+
+use super::super::encode::{Frame, Unsupported};
+use super::frames::world_point;
+use super::motion::{end_frame, ends, Inst};
+use super::query::zero;
+use super::{Part, Plan, Query};
+use crate::hir::{Expr, PrimApp, Primitive, Program, RoleId};
+use z3::ast::Bool;
+
+/// The parts of a refinement obligation: none for a primitive refining itself, a failure
+/// for a change of interruptibility, else one per item of Def 3.4.
+pub(super) fn plan(prog: &Program, concrete: &PrimApp, abstract_: &[PrimApp]) -> Plan {
+    if abstract_.len() == 1 && abstract_[0] == *concrete {
+        return Plan::Holds(None); // a primitive refines itself
+    }
+    let c = prog.prim(concrete.prim);
+    if let Some(s) = abstract_.iter().map(|a| prog.prim(a.prim)).find(|s| s.interruptible != c.interruptible) {
+        return Plan::Fails(format!(
+            "`{}` is {} but `{}` is {} (Def 3.4: refinement keeps interruptibility)",
+            c.name,
+            interruptibility(c),
+            s.name,
+            interruptibility(s)
+        ));
+    }
+    use RefineItem::*;
+    Plan::Parts([Realisable, Pre, Assume, Guarantee, Post, Footprint, Duration].into_iter().map(Part::Refine).collect())
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum RefineItem {
+    Pre,
+    Assume,
+    Guarantee,
+    Post,
+    Footprint,
+    Duration,
+    /// The concrete primitive admits a run that ends from a start the abstract one
+    /// allows (a sat question): otherwise the other items hold vacuously.
+    Realisable,
+}
+
+impl RefineItem {
+    pub fn text(self) -> &'static str {
+        match self {
+            RefineItem::Pre => "the abstract precondition implies the concrete one",
+            RefineItem::Assume => "the abstract assumption implies the concrete one",
+            RefineItem::Guarantee => "the concrete guarantee implies the abstract one",
+            RefineItem::Post => "the concrete postcondition implies the abstract one",
+            RefineItem::Footprint => "the concrete footprint lies within the abstract one",
+            RefineItem::Duration => "the durations nest (Def 3.4, corrected)",
+            RefineItem::Realisable => {
+                "the concrete primitive can end (some time in its duration, an end state meeting its guarantee, postcondition and invariant) from a start the abstract precondition allows; otherwise every other item holds vacuously"
+            }
+        }
+    }
+}
+
+pub(super) fn interruptibility(p: &Primitive) -> &'static str {
+    if p.interruptible {
+        "interruptible"
+    } else {
+        "non-interruptible"
+    }
+}
+
+pub(super) fn refine(
+    q: &mut Query,
+    role: RoleId,
+    c: &PrimApp,
+    ss: &[PrimApp],
+    item: RefineItem,
+) -> Result<(), Unsupported> {
+    let t = q.enc.named_real("time");
+    let ci = Inst::new(&mut q.enc, role, c, t.clone(), "t")?;
+    let mut sis = Vec::new();
+    for s in ss {
+        let mut si = Inst::new(&mut q.enc, role, s, t.clone(), "t")?;
+        // The same participant: the abstract primitive reads the same state.
+        si.frame.own = ci.frame.own.clone();
+        sis.push(si);
+    }
+    let sf = ci.start_frame();
+    // Pre_S of the meet is the disjunction of the abstract preconditions.
+    let mut pres = Vec::new();
+    for si in &sis {
+        pres.push(si.pred(&mut q.enc, &si.prim.pre, &sf)?);
+    }
+    let pre_s = Bool::or(&pres);
+    let all =
+        |q: &mut Query, f: &dyn Fn(&Primitive) -> &Expr, frame: &Frame, conj: bool| -> Result<Bool, Unsupported> {
+            let mut bs = Vec::new();
+            for si in &sis {
+                let fr = Frame { params: si.frame.params.clone(), ..frame.clone() };
+                bs.push(si.pred(&mut q.enc, f(si.prim), &fr)?);
+            }
+            Ok(if conj { Bool::and(&bs) } else { Bool::or(&bs) })
+        };
+    if let Some(inv) = q.enc.prog().kind(ci.prim.kind).invariant.clone() {
+        let b = ci.pred(&mut q.enc, &inv, &sf)?;
+        q.assertions.push(b);
+    }
+    match item {
+        RefineItem::Realisable => {
+            q.assertions.push(pre_s);
+            ends(q, std::slice::from_ref(&ci), &t)?;
+        }
+        RefineItem::Pre => {
+            let pc = ci.pred(&mut q.enc, &ci.prim.pre, &sf)?;
+            q.assertions.extend([pre_s, pc.not()]);
+        }
+        RefineItem::Assume => {
+            let a_s = all(q, &|p| &p.assume, &ci.frame, false)?;
+            let a_c = ci.pred(&mut q.enc, &ci.prim.assume, &ci.frame)?;
+            q.assertions.extend([pre_s, t.ge(zero()), a_s, a_c.not()]);
+        }
+        RefineItem::Guarantee | RefineItem::Footprint => {
+            q.assertions.push(pre_s);
+            ci.running(q)?;
+            if item == RefineItem::Guarantee {
+                let g_s = all(q, &|p| &p.guarantee, &ci.frame, true)?;
+                q.assertions.push(g_s.not());
+            } else {
+                let p = world_point(q);
+                let fc = ci.footprint(&mut q.enc, &p)?;
+                let mut fs = Vec::new();
+                for si in &sis {
+                    let si_now = Inst { frame: Frame { own: ci.frame.own.clone(), ..si.frame.clone() }, ..si.clone() };
+                    fs.push(si_now.footprint(&mut q.enc, &p)?);
+                }
+                q.assertions.extend([fc, Bool::and(&fs).not()]);
+                q.point = Some(p);
+                q.times = vec![t];
+            }
+        }
+        RefineItem::Post => {
+            let end = end_frame(&mut q.enc, &ci)?;
+            let pc = ci.pred(&mut q.enc, &ci.prim.post, &end)?;
+            let p_s = all(q, &|p| &p.post, &end, true)?;
+            if let Some(inv) = q.enc.prog().kind(ci.prim.kind).invariant.clone() {
+                let b = ci.pred(&mut q.enc, &inv, &end)?;
+                q.assertions.push(b);
+            }
+            q.assertions.extend([pre_s, pc, p_s.not()]);
+        }
+        RefineItem::Duration => {
+            q.assertions.push(pre_s);
+            let (clo, chi) = ci.duration(&mut q.enc)?;
+            // The meet's duration is the intersection of the abstract ones.
+            let mut nested = Vec::new();
+            for si in &sis {
+                let si_start = Inst { frame: Frame { own: ci.start.clone(), ..si.frame.clone() }, ..si.clone() };
+                let (slo, shi) = si_start.duration(&mut q.enc)?;
+                let (outer_lo, outer_hi, inner_lo, inner_hi) = if ci.prim.interruptible {
+                    (clo.clone(), chi.clone(), slo, shi) // D_s ⊆ D_c
+                } else {
+                    (slo, shi, clo.clone(), chi.clone()) // D_c ⊆ D_s
+                };
+                let hi_ok = match (inner_hi, outer_hi) {
+                    (_, None) => Bool::from_bool(true),
+                    (Some(i), Some(o)) => i.le(&o),
+                    (None, Some(_)) => Bool::from_bool(false),
+                };
+                nested.push(Bool::and(&[outer_lo.le(&inner_lo), hi_ok]));
+            }
+            q.assertions.push(Bool::and(&nested).not());
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::super::{discharge, Decision, SmtConfig};
+    use super::super::tests::parts;
+    use super::super::{Part, RefineItem};
+    use crate::hir::{PrimApp, PrimId, Program};
+    use crate::obligation::{Goal, Obligation, Rule};
+
+    /// Does `concrete` refine `abstract_`? Both primitives of `R`, with state `x` in
+    /// [0, 10] (the participant starts at 1).
+    fn refines(prims: &str, concrete: &str, abstract_: &str) -> (Program, Obligation) {
+        let src = format!(
+            "robot R {{ state x: real; invariant: 0 <= x <= 10; }} {prims}
+             system S {{ participant A: R {{ init: x == 1; }} }} choreography G = dt<A: wait>. end;"
+        );
+        let (prog, d) = crate::lower::tests::lower_src(&src);
+        assert!(d.is_empty(), "{d:?}");
+        let app = |name: &str| {
+            let i = prog.prims.iter().position(|p| p.name == name).expect("a primitive");
+            PrimApp { prim: PrimId(i as u32), args: Vec::new(), loc: Default::default() }
+        };
+        let role = prog.role_ids().next().expect("a participant");
+        let ob = Obligation {
+            rule: Rule::Refinement,
+            span: Default::default(),
+            what: "refinement".into(),
+            hyps: prog.roles.iter().filter_map(|r| r.init.clone()).collect(),
+            goal: Goal::Refines { role, concrete: app(concrete), abstract_: vec![app(abstract_)] },
+        };
+        (prog, ob)
+    }
+
+    const PRIMS: &str = "
+        motion R.slow { interruptible: false; guarantee: x == old(x); duration: [2, 2]; }
+        motion R.spec { interruptible: false; guarantee: x >= old(x) - 1; duration: [1, 3]; }
+        motion R.wait { interruptible: true; duration: [0, inf]; }";
+
+    #[test]
+    fn a_refinement_plans_one_part_per_item_of_def_3_4() {
+        let (prog, ob) = refines(PRIMS, "slow", "spec");
+        let expected: Vec<Part> = [
+            RefineItem::Realisable,
+            RefineItem::Pre,
+            RefineItem::Assume,
+            RefineItem::Guarantee,
+            RefineItem::Post,
+            RefineItem::Footprint,
+            RefineItem::Duration,
+        ]
+        .into_iter()
+        .map(Part::Refine)
+        .collect();
+        assert_eq!(parts(&prog, &ob), Ok(expected));
+        // A primitive refines itself without a question; interruptibility must match.
+        let (prog, ob) = refines(PRIMS, "slow", "slow");
+        assert_eq!(parts(&prog, &ob), Err("holds (None)".into()));
+        let (prog, ob) = refines(PRIMS, "wait", "spec");
+        assert!(parts(&prog, &ob).is_err_and(|e| e.contains("interruptib")));
+    }
+
+    #[test]
+    fn durations_nest_in_the_corrected_direction() {
+        // Non-interruptible: the concrete duration [2, 2] lies within the abstract [1, 3].
+        let (prog, ob) = refines(PRIMS, "slow", "spec");
+        assert_eq!(discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0, Decision::Holds(None));
+        // The other way round it does not: [1, 3] is not within [2, 2].
+        let (prog, ob) = refines(PRIMS, "spec", "slow");
+        let Decision::Fails(f) = discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0 else {
+            panic!("spec does not refine slow")
+        };
+        assert!(matches!(f.which, Some(Part::Refine(RefineItem::Guarantee | RefineItem::Duration))), "{f:?}");
+    }
+}
