@@ -87,10 +87,14 @@ pub(super) fn refine(
         sis.push(si);
     }
     let sf = ci.start_frame();
-    // Pre_S of the meet is the disjunction of the abstract preconditions.
+    // Pre_S of the meet is the disjunction of the abstract preconditions, each read with
+    // its own primitive's arguments (the start frame is the concrete primitive's: read with
+    // it, `a(k)`'s `s >= k` took the concrete `c(j)`'s argument `j` for `k`, and a refinement
+    // that fails from a start only the abstract arguments allow was proved).
     let mut pres = Vec::new();
     for si in &sis {
-        pres.push(si.pred(&mut q.enc, &si.prim.pre, &sf)?);
+        let fr = Frame { params: si.frame.params.clone(), ..sf.clone() };
+        pres.push(si.pred(&mut q.enc, &si.prim.pre, &fr)?);
     }
     let pre_s = Bool::or(&pres);
     let all =
