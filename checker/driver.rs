@@ -302,6 +302,7 @@ impl Run {
                     .with_help(match why {
                         smt::Why::Timeout(_) => "raise the per-query limit with `--timeout SECONDS`, or simplify the predicates (keep them polynomial and local); the verdict stays `unknown`, never `verified`",
                         smt::Why::Unsupported(_) => "rewrite the predicate with the supported constructs (LANGUAGE.md, \"Expressions\"); the verdict stays `unknown`, never `verified`",
+                        smt::Why::Abandoned(_) | smt::Why::NotRun(_) => "simplify the predicates (keep them polynomial and local; Z3 ignored the interrupt on this one, so a higher `--timeout` may not help); the verdict stays `unknown`, never `verified`",
                         smt::Why::Incomplete(_) => "simplify the predicate (nonlinear and trigonometric facts are decided only partially); the verdict stays `unknown`, never `verified`",
                     });
                 if ob.rule == Rule::AgComp || ob.rule == Rule::FullSeparation {

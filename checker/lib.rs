@@ -25,6 +25,7 @@ pub mod diag;
 pub mod driver;
 pub mod exact;
 pub mod hir;
+pub mod io;
 pub mod lanes;
 pub mod lower;
 pub mod obligation;
