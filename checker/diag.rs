@@ -357,6 +357,12 @@ codes! {
          known at the jump, on every path that reaches it. The counterexample is a state (with the \
          current parameters) that reaches the jump with arguments that break P. Guard the branch \
          that jumps (for example `[n > 0]` before `t(n - 1)`), or change the arguments.";
+    SmtDumpFailed = "E0430", "an SMT query could not be dumped",
+        "With `--dump-smt DIR`, every query the SMT stage asks Z3 is written to DIR as an SMT-LIB \
+         file. When one cannot be written (the disk is full, DIR was removed or made read-only \
+         during the run), mochi says so once, at the obligation whose query it was, and dumps no \
+         more; the checks themselves are not affected (this is a warning, the verdict stands). \
+         Make DIR writable, free space, or run without `--dump-smt`.";
     MotionPrecondition = "E0708", "a motion's precondition may not hold in the process",
         "[T-MOTION] (Table 1): when a process starts a motion, what it knows (Σ: its initial state, \
          the postconditions of its earlier motions, the refinements of values it received, the \

@@ -271,6 +271,9 @@ impl Run {
             let (mut failed, mut unknown) = (0, 0);
             let mut undecided = Vec::new();
             for (ob, d, st) in obs {
+                if let Some(e) = &st.dump_error {
+                    self.diagnostics.push(dump_failed(ob, e));
+                }
                 stats.add(&st);
                 match d {
                     Decision::Holds(note) => {
@@ -525,6 +528,18 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
         d = d.with_note(text);
     }
     d.with_help(help).with_counterexample(cx)
+}
+
+/// The SMT stage's dump sink failed on a query of `ob` (E0430): a warning, the verdict
+/// stands; nothing more is dumped.
+fn dump_failed(ob: &Obligation, e: &str) -> Diagnostic {
+    Diagnostic {
+        severity: diag::Severity::Warning,
+        ..Diagnostic::error(Code::SmtDumpFailed, ob.span, format!("could not dump a query of {}", ob.what))
+    }
+    .with_note(e.to_string())
+    .with_note("no further query was dumped; the checks are not affected")
+    .with_help("make the `--dump-smt` directory writable (and free space), or run without `--dump-smt`")
 }
 
 /// A branch whose guard cannot hold where the choice is made: a warning (the branch is
