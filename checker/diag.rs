@@ -357,7 +357,7 @@ codes! {
          known at the jump, on every path that reaches it. The counterexample is a state (with the \
          current parameters) that reaches the jump with arguments that break P. Guard the branch \
          that jumps (for example `[n > 0]` before `t(n - 1)`), or change the arguments.";
-    SmtDumpFailed = "E0430", "an SMT query could not be dumped",
+    SmtDumpFailed = "E0430", "a solver query could not be dumped",
         "With `--dump-smt DIR`, every query the SMT stage asks Z3 is written to DIR as an SMT-LIB \
          file. When one cannot be written (the disk is full, DIR was removed or made read-only \
          during the run), mochi says so once, at the obligation whose query it was, and dumps no \

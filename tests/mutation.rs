@@ -67,7 +67,7 @@ fn root() -> PathBuf {
 }
 
 fn cfg(timeout: Duration) -> Config {
-    Config { smt: SmtConfig { timeout, jobs: 1, dump_dir: None, progress: false }, structural_only: false }
+    Config { smt: SmtConfig { timeout, jobs: 1, ..SmtConfig::default() }, structural_only: false }
 }
 
 /// A mutant ready to run: the example (relative to `choreographies/`), the mutated file

@@ -137,6 +137,8 @@ pub struct Shared<W> {
     pub cfg: SmtConfig,
     /// State the workers share (caches), beside the pool's own.
     pub extra: W,
+    /// Whether [`run`] reports each decision (it is then woken for each).
+    each: bool,
     pool: Mutex<PoolState>,
     changed: Condvar,
 }
@@ -192,8 +194,13 @@ impl<W> Lease<'_, W> {
             st.results[i] = Some(result);
             st.decided += 1;
         }
+        // The pool needs waking for progress, and when all are decided; otherwise it
+        // wakes on its own for the next limit (a wake per obligation costs on big runs).
+        let wake = self.shared.each || st.decided == st.results.len();
         drop(st);
-        self.shared.changed.notify_all();
+        if wake {
+            self.shared.changed.notify_all();
+        }
     }
 }
 
@@ -387,6 +394,7 @@ impl<W> Shared<W> {
     pub fn new(prog: Program, obligations: Vec<Obligation>, labels: Vec<String>, cfg: SmtConfig, extra: W) -> Self {
         let n = obligations.len();
         Shared {
+            each: cfg.on_progress.is_some(),
             prog,
             obligations,
             labels,
