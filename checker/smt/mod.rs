@@ -1083,6 +1083,30 @@ pub(crate) mod tests {
         }
     }
 
+    /// The solver is chosen from the variables the encoder declared (an `Int`: the default
+    /// solver; reals only: nlsat), and agrees with what the query's text declares.
+    #[test]
+    fn the_logic_is_the_encoders_decision() {
+        for (p, ints) in [("x > 1 => x > 0", false), ("n > 1 => 2 * n >= 4", true), ("x > 0 || n >= 0 || b", true)] {
+            let (prog, e) = pred("", p);
+            let ob = Obligation {
+                rule: crate::obligation::Rule::TOut,
+                span: Default::default(),
+                what: String::new(),
+                hyps: Vec::new(),
+                goal: Goal::Valid(e),
+            };
+            let q = goals::build(&prog, &ob, &Part::Valid).unwrap_or_else(|_| panic!("{p} encodes"));
+            let logic = q.enc.logic();
+            assert_eq!(logic == Logic::WithIntegers, ints, "{p}");
+            let solver = solver_for(&q);
+            for a in q.assertions.iter().chain(q.enc.side_conditions()) {
+                solver.assert(a);
+            }
+            assert_eq!(solver.to_string().contains(" () Int)"), ints, "{p}");
+        }
+    }
+
     #[test]
     fn a_timeout_is_unknown() {
         // Fermat's last theorem for cubes: true, but beyond Z3's nonlinear integer
