@@ -28,14 +28,17 @@ use crate::obligation::Obligation;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
-/// Workers abandoned in one [`run`] before the rest of its obligations are given up.
+/// Abandoned workers still running (in Z3) at once, in one [`run`], before the rest of its
+/// obligations are given up. One that stops later (Z3 noticed the interrupt after all)
+/// no longer counts.
 pub const MAX_ABANDONED: usize = 2;
 
-/// How long past its limit a query may run before its worker is abandoned: enough for Z3
-/// to notice an interrupt on a loaded machine (it normally takes milliseconds), short
-/// next to the limit itself.
+/// How long past its limit a query may run before its worker is abandoned: a fifth of the
+/// limit, between 1 and 10 s. Z3 normally notices an interrupt within milliseconds, but a
+/// separation query between two turning boxes (ARCHITECTURE.md, "The time limit holds")
+/// took 2.9 s to stop after a 30 s limit: the grace leaves room for that.
 pub fn grace(limit: Duration) -> Duration {
-    (limit / 10).clamp(Duration::from_secs(1), Duration::from_secs(10))
+    (limit / 5).clamp(Duration::from_secs(1), Duration::from_secs(10))
 }
 
 /// Interrupts the worker's Z3 context when a query runs past its deadline.
@@ -159,7 +162,8 @@ struct Slot {
     /// The obligation the worker is deciding.
     current: Option<usize>,
     abandoned: bool,
-    /// The thread, while it may still be joined (not abandoned).
+    /// The thread (`None` if it could not start). An abandoned one is never joined; its
+    /// handle only says whether it still runs.
     thread: Option<std::thread::JoinHandle<()>>,
 }
 
@@ -267,7 +271,7 @@ pub fn run<W: Send + Sync + 'static>(
         // A worker that died (a panic: a bug) leaves its obligation unknown; another
         // takes its place, within the same cap as abandoned ones.
         for k in 0..st.slots.len() {
-            let dead = st.slots[k].thread.as_ref().is_some_and(|t| t.is_finished());
+            let dead = !st.slots[k].abandoned && st.slots[k].thread.as_ref().is_some_and(|t| t.is_finished());
             let Some(i) = st.slots[k].current.filter(|_| dead) else { continue };
             st.slots[k].current = None;
             if st.results[i].is_none() {
@@ -282,7 +286,8 @@ pub fn run<W: Send + Sync + 'static>(
                 spawn(&shared, &mut st, work);
             }
         }
-        let live = st.slots.iter().filter(|s| s.thread.as_ref().is_some_and(|t| !t.is_finished())).count();
+        let live =
+            st.slots.iter().filter(|s| !s.abandoned && s.thread.as_ref().is_some_and(|t| !t.is_finished())).count();
         // Obligations nobody will take: after the cap, or with no worker left.
         if (st.given_up || live == 0) && st.decided < n {
             let why = if st.given_up {
@@ -319,8 +324,6 @@ pub fn run<W: Send + Sync + 'static>(
             let slot = &mut st.slots[k];
             slot.abandoned = true;
             slot.current = None;
-            // Detach: the thread is never joined.
-            slot.thread = None;
             st.abandoned += 1;
             let after = now.saturating_duration_since(at) + limit;
             if st.results[i].is_none() {
@@ -330,7 +333,10 @@ pub fn run<W: Send + Sync + 'static>(
                 ));
                 st.decided += 1;
             }
-            if st.abandoned >= MAX_ABANDONED {
+            // The thread is never joined; it counts against the cap while it runs.
+            let runaway =
+                st.slots.iter().filter(|s| s.abandoned && s.thread.as_ref().is_some_and(|t| !t.is_finished())).count();
+            if runaway >= MAX_ABANDONED {
                 st.given_up = true;
             } else {
                 spawn(&shared, &mut st, work);
@@ -347,7 +353,7 @@ pub fn run<W: Send + Sync + 'static>(
     }
     // Every obligation is decided: the live workers are idle or leaving; join them so
     // that their Z3 contexts are freed now. Abandoned ones stay detached.
-    let threads: Vec<_> = st.slots.iter_mut().filter_map(|s| s.thread.take()).collect();
+    let threads: Vec<_> = st.slots.iter_mut().filter(|s| !s.abandoned).filter_map(|s| s.thread.take()).collect();
     let results = std::mem::take(&mut st.results);
     drop(st);
     for t in threads {
