@@ -385,6 +385,12 @@ codes! {
          and that each footprint of a kind with a body holds a point (E0412). A library with \
          neither kinds nor primitives (constants only) has nothing beyond names and sorts to \
          check; the verdict is `verified` and this note says how little that means.";
+    SmtDumpFailed = "E0430", "a solver query could not be dumped",
+        "With `--dump-smt DIR`, every query the SMT stage asks Z3 is written to DIR as an SMT-LIB \
+         file. When one cannot be written (the disk is full, DIR was removed or made read-only \
+         during the run), mochi says so once, at the obligation whose query it was, and dumps no \
+         more; the checks themselves are not affected (this is a warning, the verdict stands). \
+         Make DIR writable, free space, or run without `--dump-smt`.";
     MotionPrecondition = "E0708", "a motion's precondition may not hold in the process",
         "[T-MOTION] (Table 1): when a process starts a motion, what it knows (Σ: its initial state, \
          the postconditions of its earlier motions, the refinements of values it received, the \

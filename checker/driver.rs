@@ -328,6 +328,9 @@ impl Run {
             let (mut failed, mut unknown) = (0, 0);
             let mut undecided = Vec::new();
             for (ob, d, st) in obs {
+                if let Some(e) = &st.dump_error {
+                    self.diagnostics.push(dump_failed(ob, e));
+                }
                 stats.add(&st);
                 match d {
                     Decision::Holds(note) => {
@@ -369,6 +372,7 @@ impl Run {
                         smt::Why::Timeout(_) if config.cut_by_deadline => "give the run a later `--deadline` (or none), or check this file on its own; the verdict stays `unknown`, never `verified`",
                         smt::Why::Timeout(_) => "raise the per-query limit with `--timeout SECONDS`, or simplify the predicates (keep them polynomial and local); the verdict stays `unknown`, never `verified`",
                         smt::Why::Unsupported(_) => "rewrite the predicate with the supported constructs (LANGUAGE.md, \"Expressions\"); the verdict stays `unknown`, never `verified`",
+                        smt::Why::Abandoned(_) | smt::Why::NotRun(_) => "simplify the predicates (keep them polynomial and local; Z3 ignored the interrupt on this one, so a higher `--timeout` may not help); the verdict stays `unknown`, never `verified`",
                         smt::Why::Incomplete(_) => "simplify the predicate (nonlinear and trigonometric facts are decided only partially); the verdict stays `unknown`, never `verified`",
                     });
                 if ob.rule == Rule::AgComp || ob.rule == Rule::FullSeparation {
@@ -574,6 +578,18 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
         d = d.with_note(text);
     }
     d.with_help(help).with_counterexample(cx)
+}
+
+/// The SMT stage's dump sink failed on a query of `ob` (E0430): a warning, the verdict
+/// stands; nothing more is dumped.
+fn dump_failed(ob: &Obligation, e: &str) -> Diagnostic {
+    Diagnostic {
+        severity: diag::Severity::Warning,
+        ..Diagnostic::error(Code::SmtDumpFailed, ob.span, format!("could not dump a query of {}", ob.what))
+    }
+    .with_note(e.to_string())
+    .with_note("no further query was dumped; the checks are not affected")
+    .with_help("make the `--dump-smt` directory writable (and free space), or run without `--dump-smt`")
 }
 
 /// A branch whose guard cannot hold where the choice is made: a warning (the branch is

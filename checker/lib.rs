@@ -31,6 +31,7 @@ pub mod driver;
 pub mod exact;
 pub mod fsload;
 pub mod hir;
+pub mod io;
 pub mod library;
 pub mod lower;
 pub mod obligation;

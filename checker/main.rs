@@ -258,8 +258,8 @@ fn check(args: &CheckArgs, color: ColorChoice) -> Outcome {
             return Outcome::Usage;
         }
     }
-    config.smt.dump_dir = args.dump_smt.clone();
-    config.smt.progress = std::io::stderr().is_terminal();
+    config.smt.dump = args.dump_smt.clone().map(mochi::io::dump_to_dir);
+    config.smt.on_progress = Some(mochi::io::progress_bar());
     let deadline = args.deadline.map(|d| started + Duration::from_secs_f64(d));
     let mut inputs = Vec::new();
     for path in &args.files {

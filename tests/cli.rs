@@ -788,3 +788,47 @@ fn every_subcommand_writes_results_to_stdout_and_problems_to_stderr() {
         assert!(!se.contains("verdict:") && !se.contains("\"verdict\""), "{args:?}: a result on stderr:\n{se}");
     }
 }
+
+// ---- the SMT stage's sinks and hard limit (issues 8 and 11) ----------------------------
+
+/// A dump that cannot be written is reported (E0430, a warning at the obligation whose
+/// query it was) instead of being dropped; the verdict stands and nothing more is dumped.
+/// (Before, `smt/mod.rs` wrote dumps with `let _ = std::fs::write`: no word, exit 0.)
+#[test]
+fn a_dump_that_cannot_be_written_is_a_warning_not_a_lost_error() {
+    let dir = TempDir::new("dump-fails");
+    let first = dir.0.join("first");
+    let args = |out: &Path| {
+        let out = path_arg(out).to_string();
+        let o = Command::new(env!("CARGO_BIN_EXE_mochi"))
+            .args(["check", "choreographies/pgcd/fetch.chor", "--jobs", "1", "--format", "json", "--dump-smt", &out])
+            .output()
+            .expect("run mochi");
+        o
+    };
+    let o = args(&first);
+    assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
+    // With one worker the queries are numbered in a fixed order: block the first one's
+    // file with a directory of its name, in a fresh dump directory.
+    let mut names: Vec<String> = std::fs::read_dir(&first)
+        .expect("dump directory")
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    let blocked = dir.0.join("blocked");
+    std::fs::create_dir_all(blocked.join(&names[0])).expect("block the first dump");
+    let o = args(&blocked);
+    assert_eq!(o.status.code(), Some(0), "the verdict stands: {}", stdout(&o));
+    let v: Value = serde_json::from_str(&stdout(&o)).expect("json");
+    assert_eq!(v["verdict"], "verified");
+    let warnings: Vec<&Value> =
+        v["diagnostics"].as_array().expect("diagnostics").iter().filter(|d| d["code"] == "E0430").collect();
+    assert_eq!(warnings.len(), 1, "{v}");
+    assert_eq!(warnings[0]["severity"], "warning");
+    let text = warnings[0].to_string();
+    assert!(text.contains(&names[0]) && text.contains("--dump-smt"), "{text}");
+    // Nothing after the failure.
+    let left = std::fs::read_dir(&blocked).expect("dump directory").count();
+    assert_eq!(left, 1, "only the blocking directory");
+}

@@ -67,11 +67,7 @@ fn root() -> PathBuf {
 }
 
 fn cfg(timeout: Duration) -> Config {
-    Config {
-        smt: SmtConfig { timeout, jobs: 1, dump_dir: None, progress: false },
-        structural_only: false,
-        ..Config::default()
-    }
+    Config { smt: SmtConfig { timeout, jobs: 1, ..SmtConfig::default() }, structural_only: false, ..Config::default() }
 }
 
 /// A mutant ready to run: the example (relative to `choreographies/`), the mutated file
@@ -181,8 +177,11 @@ fn jobs_of(filter: Option<&str>, all: bool) -> Vec<Job> {
 }
 
 /// A private copy of the libraries and examples for one worker.
-fn work_tree(n: usize) -> PathBuf {
-    let dir = root().join("target").join("mutation").join(format!("work-{n}"));
+/// Worker `n`'s copy of the examples for run `run`. Each call of [`run`] has its own
+/// directories: two tests of this binary run at once, and one deleting `work-0` while the
+/// other copied into it made the test flaky.
+fn work_tree(run: usize, n: usize) -> PathBuf {
+    let dir = root().join("target").join("mutation").join(format!("work-{run}-{n}"));
     let _ = std::fs::remove_dir_all(&dir);
     for sub in ["choreographies", "motion-primitives", "robots"] {
         copy_dir(&root().join(sub), &dir.join(sub));
@@ -204,6 +203,8 @@ fn copy_dir(from: &Path, to: &Path) {
 }
 
 fn run(jobs: &[Job], workers: usize, timeout: Duration) -> Vec<Outcome> {
+    static RUNS: AtomicUsize = AtomicUsize::new(0);
+    let run_id = RUNS.fetch_add(1, Ordering::SeqCst);
     let next = AtomicUsize::new(0);
     let results = Mutex::new(Vec::new());
     std::thread::scope(|s| {
@@ -212,7 +213,7 @@ fn run(jobs: &[Job], workers: usize, timeout: Duration) -> Vec<Outcome> {
             std::thread::Builder::new()
                 .stack_size(256 << 20)
                 .spawn_scoped(s, move || {
-                    let tree = work_tree(w);
+                    let tree = work_tree(run_id, w);
                     loop {
                         let i = next.fetch_add(1, Ordering::SeqCst);
                         let Some(j) = jobs.get(i) else { break };

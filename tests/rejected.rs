@@ -95,6 +95,11 @@ fn each_rejected_file_fails_with_exactly_its_code_at_its_position() {
 /// can fire (see the named test).
 const NOT_ALONE: &[(&str, &str)] = &[
     (
+        "E0430",
+        "a warning about the environment, not the source: an SMT dump that cannot be written \
+         (`--dump-smt`). Tested in tests/cli.rs::a_dump_that_cannot_be_written_is_a_warning_not_a_lost_error",
+    ),
+    (
         "E0710",
         "[T-SESS] compares first footprints at time 0; every participant moves in the first motion \
          of its scope (total motion), so a collision there is also an [AGCOMP] (E0404) or separation \

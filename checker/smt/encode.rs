@@ -82,6 +82,15 @@ struct TrigPair {
     cos: Real,
 }
 
+/// Which solver a query needs ([`crate::smt::solver_for`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Logic {
+    /// Real variables only: quantifier-free nonlinear real arithmetic (nlsat).
+    Nra,
+    /// Some integer variable: Z3's default solver.
+    WithIntegers,
+}
+
 pub struct Encoder<'p> {
     prog: &'p Program,
     /// Free variables by their user-facing name, for the counterexample.
@@ -181,6 +190,16 @@ impl<'p> Encoder<'p> {
         };
         self.vars.insert(name.to_string(), t.clone());
         Ok(t)
+    }
+
+    /// The logic of the query: whether it declared an integer variable (those are
+    /// declared only by [`Encoder::named`]).
+    pub fn logic(&self) -> Logic {
+        if self.vars.values().any(|t| matches!(t, Term::I(_))) {
+            Logic::WithIntegers
+        } else {
+            Logic::Nra
+        }
     }
 
     /// The values of this query that share their name with another of its values: their

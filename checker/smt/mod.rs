@@ -10,14 +10,16 @@
 //!   first tried with boxes from interval arithmetic ([`crate::bounds`]).
 //! - **Caching.** Results are cached by the query's SMT-LIB text.
 //! - **Parallelism.** Obligations are discharged on `jobs` worker threads, each with
-//!   its own Z3 context (the `z3` crate's thread-local context).
-//! - **Timeouts.** Each query has a deadline enforced by a watchdog that interrupts
-//!   the context (see [`Watchdog`] for why not Z3's own `timeout`).
-//! - **Dumping.** With a dump directory, every query is written as an `.smt2` file
-//!   named after its rule and source position.
+//!   its own Z3 context (the `z3` crate's thread-local context), in a [`pool`].
+//! - **Timeouts.** Each query has a limit enforced by a watchdog that interrupts the
+//!   context (see [`Watchdog`] for why not Z3's own `timeout`), and, when Z3 does not
+//!   stop, by abandoning its worker ([`pool`]): the limit holds whatever Z3 does.
+//! - **No IO.** Dumps and progress go through callbacks in [`SmtConfig`] ([`DumpSink`],
+//!   [`ProgressSink`]); the IO edge provides them (`crate::io`).
 
 mod encode;
 pub mod goals;
+pub mod pool;
 pub mod replay;
 
 use crate::hir::{Expr, Program};
@@ -25,24 +27,55 @@ use crate::obligation::{Goal, Obligation};
 use goals::{Part, Plan, Query};
 use serde::Serialize;
 use std::collections::{HashMap, HashSet};
-use std::path::PathBuf;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-pub use encode::Unsupported;
+pub use encode::{Logic, Unsupported};
+pub(crate) use pool::Watchdog;
+
+/// Receives every query as it is asked: a label naming it (unique within a run, in the
+/// order the queries were made: `00007-agcomp-fetch-chor-12-3-0`) and its SMT-LIB text (a
+/// whole script, ending with `(check-sat)`). An error stops the dumping and is reported
+/// with the obligation whose query it was ([`Stats::dump_error`]).
+pub type DumpSink = Arc<dyn Fn(&str, &str) -> Result<(), String> + Send + Sync>;
+
+/// Receives the progress of a run (on the thread that called [`discharge`]).
+pub type ProgressSink = Arc<dyn Fn(ProgressEvent) + Send + Sync>;
+
+/// What a [`ProgressSink`] is told.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ProgressEvent {
+    /// `total` obligations are about to be decided.
+    Start { total: usize },
+    /// `done` of `total` are decided.
+    Decided { done: usize, total: usize },
+    /// All are decided.
+    Finish,
+}
 
 /// How the solver is run.
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 pub struct SmtConfig {
     /// Per query; Z3 gives up and the part is unknown.
     pub timeout: Duration,
     /// Worker threads (each with its own Z3 context).
     pub jobs: usize,
-    /// Write every query as SMT-LIB into this directory.
-    pub dump_dir: Option<PathBuf>,
-    /// Show a progress bar on a terminal.
-    pub progress: bool,
+    /// Where queries are dumped (none: not dumped).
+    pub dump: Option<DumpSink>,
+    /// Where progress is reported (none: not reported).
+    pub on_progress: Option<ProgressSink>,
+}
+
+impl std::fmt::Debug for SmtConfig {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SmtConfig")
+            .field("timeout", &self.timeout)
+            .field("jobs", &self.jobs)
+            .field("dump", &self.dump.is_some())
+            .field("on_progress", &self.on_progress.is_some())
+            .finish()
+    }
 }
 
 /// The default per-query timeout: generous for the small queries mochi makes, short
@@ -54,8 +87,8 @@ impl Default for SmtConfig {
         SmtConfig {
             timeout: DEFAULT_TIMEOUT,
             jobs: std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1),
-            dump_dir: None,
-            progress: false,
+            dump: None,
+            on_progress: None,
         }
     }
 }
@@ -68,6 +101,11 @@ pub enum Why {
     Incomplete(String),
     /// A construct the encoding does not support.
     Unsupported(String),
+    /// Z3 did not stop when interrupted at the limit: its worker was abandoned after this
+    /// long ([`pool`]).
+    Abandoned(Duration),
+    /// Not asked: the run gave up on the solver (why).
+    NotRun(String),
 }
 
 impl std::fmt::Display for Why {
@@ -76,6 +114,12 @@ impl std::fmt::Display for Why {
             Why::Timeout(d) => write!(f, "Z3 timed out after {} ms (raise it with --timeout)", d.as_millis()),
             Why::Incomplete(s) => write!(f, "Z3 could not decide it: {s}"),
             Why::Unsupported(s) => write!(f, "the SMT encoding does not support {s}"),
+            Why::Abandoned(d) => write!(
+                f,
+                "Z3 did not stop when asked at the time limit and was abandoned after {:.1} s",
+                d.as_secs_f64()
+            ),
+            Why::NotRun(s) => write!(f, "not asked: {s}"),
         }
     }
 }
@@ -131,6 +175,10 @@ pub struct Stats {
     pub vacuous: usize,
     /// Obligations that held but whose hypotheses could not be shown satisfiable.
     pub unsure: usize,
+    /// The first error of the [`DumpSink`] (set on the obligation whose query it was;
+    /// nothing is dumped after it).
+    #[serde(skip)]
+    pub dump_error: Option<String>,
 }
 
 impl Stats {
@@ -141,6 +189,9 @@ impl Stats {
         self.millis += o.millis;
         self.vacuous += o.vacuous;
         self.unsure += o.unsure;
+        if self.dump_error.is_none() {
+            self.dump_error.clone_from(&o.dump_error);
+        }
     }
 }
 
@@ -161,93 +212,77 @@ pub fn check_valid(prog: &Program, hyps: &[Expr], goal: &Expr, cfg: &SmtConfig) 
 }
 
 /// Decides every obligation, in parallel, and says how each went. `labels[i]` names
-/// obligation `i` in dumped files (rule and position).
+/// obligation `i` in dumped queries (rule and position).
 pub fn discharge(
     prog: &Program,
     obligations: &[Obligation],
     labels: &[String],
     cfg: &SmtConfig,
 ) -> Vec<(Decision, Stats)> {
-    let cache = Mutex::new(HashMap::new());
-    let contexts = Mutex::new(HashMap::new());
-    let dumped = AtomicUsize::new(0);
-    if let Some(dir) = &cfg.dump_dir {
-        let _ = std::fs::create_dir_all(dir);
-    }
-    let next = AtomicUsize::new(0);
-    let results: Mutex<Vec<Option<(Decision, Stats)>>> = Mutex::new(vec![None; obligations.len()]);
-    let bar = progress_bar(cfg, obligations.len());
+    let cfg = cfg.clone();
+    let progress = cfg.on_progress.clone();
+    let report = |e: ProgressEvent| {
+        if let Some(p) = &progress {
+            p(e)
+        }
+    };
+    let total = obligations.len();
+    report(ProgressEvent::Start { total });
     // A thread and its Z3 context cost milliseconds to start: no more workers than
     // there is work for.
-    let jobs = cfg.jobs.clamp(1, obligations.len().div_ceil(4).max(1));
-    // Primitives some obligation has shown able to end: a `dt` whose can-end question had a
-    // witness, or a refinement whose concrete primitive was realisable.
-    let witnessed: Mutex<HashSet<crate::hir::PrimId>> = Mutex::new(HashSet::new());
-    let work = || {
-        let watchdog = Watchdog::default();
-        let ctx = z3::Context::thread_local();
-        let handle = ctx.handle();
-        std::thread::scope(|s| {
-            s.spawn(|| watchdog.run(handle));
-            let w =
-                Worker { prog, cfg, cache: &cache, contexts: &contexts, labels, dumped: &dumped, watchdog: &watchdog };
-            loop {
-                let i = next.fetch_add(1, Ordering::Relaxed);
-                let Some(ob) = obligations.get(i) else { break };
-                let t = std::time::Instant::now();
-                let (d, mut st) = match &ob.goal {
-                    // A primitive's contract (E0409) is witnessed by any use of it that
-                    // could end (the driver puts these obligations last).
-                    Goal::CanEnd { prim }
-                        if ob.rule == crate::obligation::Rule::Contract
-                            && witnessed.lock().is_ok_and(|w| w.contains(prim)) =>
-                    {
-                        (Decision::Holds(None), Stats { folded: 1, ..Stats::default() })
-                    }
-                    _ => w.decide(i, ob),
-                };
-                if matches!(d, Decision::Holds(_)) && st.vacuous == 0 {
-                    let shown = witnesses(ob);
-                    if !shown.is_empty() {
-                        if let Ok(mut w) = witnessed.lock() {
-                            w.extend(shown);
-                        }
-                    }
-                }
-                st.millis = t.elapsed().as_secs_f64() * 1000.0;
-                if let Ok(mut rs) = results.lock() {
-                    rs[i] = Some((d, st));
-                }
-                if let Some(b) = &bar {
-                    b.inc(1);
-                }
-            }
-            watchdog.stop();
-        });
-    };
-    if jobs == 1 {
-        work();
-    } else {
-        std::thread::scope(|s| {
-            for _ in 0..jobs {
-                s.spawn(work);
-            }
-        });
-    }
-    if let Some(b) = bar {
-        b.finish_and_clear();
-    }
+    let jobs = cfg.jobs.clamp(1, total.div_ceil(4).max(1));
+    // The workers own what they read (an abandoned one may outlive this call).
+    let shared = pool::Shared::new(prog.clone(), obligations.to_vec(), labels.to_vec(), cfg, Caches::default());
+    let results = pool::run(shared, jobs, work, &|done, total| report(ProgressEvent::Decided { done, total }));
+    report(ProgressEvent::Finish);
     results
-        .into_inner()
-        .unwrap_or_default()
-        .into_iter()
-        .map(|r| {
-            r.unwrap_or((
-                Decision::Unknown { part: String::new(), why: Why::Incomplete("a worker thread stopped".into()) },
-                Stats::default(),
-            ))
-        })
-        .collect()
+}
+
+/// What the workers of one [`discharge`] share besides the pool.
+#[derive(Default)]
+struct Caches {
+    /// Answers by query text (exact, and up to renaming).
+    cache: Mutex<HashMap<String, Answer>>,
+    /// The vacuity guard's answers, by hypotheses.
+    contexts: Mutex<HashMap<Vec<Expr>, Answer>>,
+    /// Primitives some obligation has shown able to end: a `dt` whose can-end question had a
+    /// witness, or a refinement whose concrete primitive was realisable.
+    witnessed: Mutex<HashSet<crate::hir::PrimId>>,
+    /// Queries dumped so far (numbers the dump labels).
+    dumped: AtomicUsize,
+    /// Set when the dump sink failed: nothing more is dumped.
+    dump_failed: AtomicBool,
+}
+
+/// One worker: decides obligations from the pool until there are none.
+fn work(lease: &pool::Lease<Caches>) {
+    let sh = lease.shared;
+    let w = Worker { prog: &sh.prog, cfg: &sh.cfg, caches: &sh.extra, labels: &sh.labels, watchdog: lease.watchdog };
+    while let Some(i) = lease.take() {
+        let ob = &sh.obligations[i];
+        let t = std::time::Instant::now();
+        let (d, mut st) = match &ob.goal {
+            // A primitive's contract (E0409) is witnessed by any use of it that
+            // could end (the driver puts these obligations last).
+            Goal::CanEnd { prim }
+                if ob.rule == crate::obligation::Rule::Contract
+                    && sh.extra.witnessed.lock().is_ok_and(|w| w.contains(prim)) =>
+            {
+                (Decision::Holds(None), Stats { folded: 1, ..Stats::default() })
+            }
+            _ => w.decide(i, ob),
+        };
+        if matches!(d, Decision::Holds(_)) && st.vacuous == 0 {
+            let shown = witnesses(ob);
+            if !shown.is_empty() {
+                if let Ok(mut w) = sh.extra.witnessed.lock() {
+                    w.extend(shown);
+                }
+            }
+        }
+        st.millis = t.elapsed().as_secs_f64() * 1000.0;
+        lease.finish(i, (d, st));
+    }
 }
 
 /// The primitives whose contracts an obligation that held non-vacuously has shown able to
@@ -262,100 +297,6 @@ fn witnesses(ob: &Obligation) -> Vec<crate::hir::PrimId> {
         }
         _ => Vec::new(),
     }
-}
-
-/// Interrupts the worker's Z3 context when a query runs past its deadline.
-///
-/// Z3's own `timeout` parameter is not used: in Z3 4.8.10-4.8.12 (Debian's libz3 is
-/// 4.8.12) its thread-pool `scoped_timer` can deadlock (Z3Prover/z3 PR #5371, fixed
-/// after 4.8.12); we saw `check()` hang forever with a 1 ms timeout. `Z3_interrupt` on
-/// the context needs no timer thread of Z3's. One watchdog thread serves all of a
-/// worker's queries (starting a thread per query cost more than most queries).
-#[derive(Default)]
-struct Watchdog {
-    state: std::sync::Mutex<WatchState>,
-    wake: std::sync::Condvar,
-}
-
-#[derive(Default)]
-struct WatchState {
-    /// The running query's number and deadline.
-    armed: Option<(u64, std::time::Instant)>,
-    /// Queries that were interrupted.
-    fired: Option<u64>,
-    seq: u64,
-    stop: bool,
-}
-
-impl Watchdog {
-    fn run(&self, handle: z3::ContextHandle) {
-        let Ok(mut st) = self.state.lock() else { return };
-        loop {
-            if st.stop {
-                return;
-            }
-            match st.armed {
-                None => {
-                    st = match self.wake.wait(st) {
-                        Ok(g) => g,
-                        Err(_) => return,
-                    };
-                }
-                Some((seq, deadline)) => {
-                    let now = std::time::Instant::now();
-                    if now >= deadline {
-                        // An interrupt that lands before Z3 has entered the check is
-                        // lost (Z3 clears the flag when a check starts), so keep
-                        // interrupting every 10 ms until the worker disarms.
-                        handle.interrupt();
-                        st.fired = Some(seq);
-                        st.armed = Some((seq, now + Duration::from_millis(10)));
-                        continue;
-                    }
-                    st = match self.wake.wait_timeout(st, deadline - now) {
-                        Ok((g, _)) => g,
-                        Err(_) => return,
-                    };
-                }
-            }
-        }
-    }
-
-    fn arm(&self, timeout: Duration) -> u64 {
-        let Ok(mut st) = self.state.lock() else { return 0 };
-        st.seq += 1;
-        st.armed = Some((st.seq, std::time::Instant::now() + timeout));
-        self.wake.notify_all();
-        st.seq
-    }
-
-    /// Disarms; whether the query `seq` was interrupted.
-    fn disarm(&self, seq: u64) -> bool {
-        let Ok(mut st) = self.state.lock() else { return false };
-        st.armed = None;
-        st.fired == Some(seq)
-    }
-
-    fn stop(&self) {
-        if let Ok(mut st) = self.state.lock() {
-            st.stop = true;
-        }
-        self.wake.notify_all();
-    }
-}
-
-fn progress_bar(cfg: &SmtConfig, n: usize) -> Option<indicatif::ProgressBar> {
-    use std::io::IsTerminal;
-    if !cfg.progress || n < 20 || !std::io::stderr().is_terminal() {
-        return None;
-    }
-    let bar = indicatif::ProgressBar::new(n as u64);
-    if let Ok(style) =
-        indicatif::ProgressStyle::with_template("{spinner} checking obligations {pos}/{len} {wide_bar} {elapsed}")
-    {
-        bar.set_style(style);
-    }
-    Some(bar)
 }
 
 /// A cached answer to one query.
@@ -376,11 +317,8 @@ enum Answer {
 struct Worker<'a> {
     prog: &'a Program,
     cfg: &'a SmtConfig,
-    cache: &'a Mutex<HashMap<String, Answer>>,
-    /// The vacuity guard's answers, by hypotheses.
-    contexts: &'a Mutex<HashMap<Vec<Expr>, Answer>>,
+    caches: &'a Caches,
     labels: &'a [String],
-    dumped: &'a AtomicUsize,
     watchdog: &'a Watchdog,
 }
 
@@ -535,7 +473,7 @@ impl Worker<'_> {
         if !vacuous && !sat && !covered && !ob.hyps.is_empty() {
             // Obligations with the same hypotheses share the answer.
             let context = goals::context_of(self.prog, ob);
-            let known = self.contexts.lock().ok().and_then(|c| c.get(&context).cloned());
+            let known = self.caches.contexts.lock().ok().and_then(|c| c.get(&context).cloned());
             let answer = match known {
                 Some(a) => {
                     stats.cached += 1;
@@ -544,7 +482,7 @@ impl Worker<'_> {
                 None => {
                     let a = self.ask(ob, index, parts.len(), &Part::Context, &mut stats);
                     if !matches!(a, Answer::Unknown(Why::Timeout(_))) {
-                        if let Ok(mut c) = self.contexts.lock() {
+                        if let Ok(mut c) = self.caches.contexts.lock() {
                             c.insert(context, a.clone());
                         }
                     }
@@ -590,26 +528,27 @@ impl Worker<'_> {
                 solver.assert(a);
             }
         };
-        // Z3's default solver spends ~5 ms per check choosing a strategy; naming the logic
-        // skips that (nlsat: complete for nonlinear real arithmetic). Queries with integer
-        // variables keep the default solver.
-        let mut solver = z3::Solver::new_for_logic("QF_NRA").unwrap_or_default();
+        let solver = solver_for(&q);
         assert_all(&solver);
         let text = solver.to_string();
-        if text.contains(" () Int)") {
-            solver = z3::Solver::new();
-            assert_all(&solver);
-        }
-        if let Some(dir) = &self.cfg.dump_dir {
-            let label = self.labels.get(index).cloned().unwrap_or_else(|| format!("obligation-{index}"));
-            let n = self.dumped.fetch_add(1, Ordering::Relaxed);
-            let path = dir.join(format!("{n:05}-{label}-{k}.smt2"));
-            let _ = std::fs::write(path, format!("; mochi: {label}, part {k}\n{text}(check-sat)\n"));
+        let label = self.labels.get(index).cloned().unwrap_or_else(|| format!("obligation-{index}"));
+        if let Some(dump) = &self.cfg.dump {
+            if !self.caches.dump_failed.load(Ordering::Relaxed) {
+                let n = self.caches.dumped.fetch_add(1, Ordering::Relaxed);
+                let name = format!("{n:05}-{label}-{k}");
+                if let Err(e) = dump(&name, &format!("; mochi: {label}, part {k}\n{text}(check-sat)\n")) {
+                    // The first failure is reported (with this obligation); later ones
+                    // would only repeat it.
+                    if !self.caches.dump_failed.swap(true, Ordering::Relaxed) {
+                        stats.dump_error = Some(format!("{name}: {e}"));
+                    }
+                }
+            }
         }
         // Exact text first (any answer); then the text up to renaming of its variables,
         // which only answers without a model carry over (the model's names differ).
         let canonical = canonical(&text);
-        if let Some(a) = self.cache.lock().ok().and_then(|c| c.get(&text).cloned()) {
+        if let Some(a) = self.caches.cache.lock().ok().and_then(|c| c.get(&text).cloned()) {
             stats.cached += 1;
             // The same text may come from other values of the same names: where this
             // query's values are bound is this query's.
@@ -620,13 +559,15 @@ impl Worker<'_> {
                 other => other,
             };
         }
-        if let Some(a) = self.cache.lock().ok().and_then(|c| c.get(&canonical).cloned()) {
+        if let Some(a) = self.caches.cache.lock().ok().and_then(|c| c.get(&canonical).cloned()) {
             if !model || !matches!(a, Answer::Sat { .. }) {
                 stats.cached += 1;
                 return a;
             }
         }
         let seq = self.watchdog.arm(self.cfg.timeout);
+        #[cfg(test)]
+        pool::maybe_hang(&label);
         let mut result = solver.check();
         let mut timed_out = self.watchdog.disarm(seq);
         // A sat question needs a genuine witness: when the model's sin/cos values are
@@ -673,12 +614,23 @@ impl Worker<'_> {
         };
         // A timeout depends on the machine's load: do not cache it.
         if !matches!(answer, Answer::Unknown(Why::Timeout(_))) {
-            if let Ok(mut c) = self.cache.lock() {
+            if let Ok(mut c) = self.caches.cache.lock() {
                 c.insert(canonical, answer.clone());
                 c.insert(text, answer.clone());
             }
         }
         answer
+    }
+}
+
+/// A solver for `q`. Z3's default solver spends ~5 ms per check choosing a strategy;
+/// naming the logic skips that (nlsat: complete for nonlinear real arithmetic). Queries
+/// with integer variables keep the default solver. The encoder says which (it declared
+/// the variables), not the query's text.
+pub(crate) fn solver_for(q: &Query) -> z3::Solver {
+    match q.enc.logic() {
+        Logic::Nra => z3::Solver::new_for_logic("QF_NRA").unwrap_or_default(),
+        Logic::WithIntegers => z3::Solver::new(),
     }
 }
 
@@ -1054,6 +1006,87 @@ pub(crate) mod tests {
         let c = "(declare-fun |C2.x| () Real)\n(assert (<= |C2.x| 11.0))\n";
         assert_eq!(canonical(a), canonical(b));
         assert_ne!(canonical(a), canonical(c));
+    }
+
+    /// The hard limit: a query during which Z3 ignores the watchdog (the test hook hangs
+    /// the worker inside its armed query) is abandoned at its limit plus the grace, its
+    /// obligation is unknown with a note saying so, and a replacement worker decides the
+    /// rest. Once [`pool::MAX_ABANDONED`] workers are abandoned, the obligations not yet
+    /// started are unknown without running. (Before the pool, `discharge` never returned.)
+    #[test]
+    fn a_query_that_ignores_the_interrupt_is_abandoned_at_the_limit() {
+        use std::time::Instant;
+        let (prog, e) = pred("", "x > 1 => x > 0");
+        let ob = Obligation {
+            rule: crate::obligation::Rule::TOut,
+            span: Default::default(),
+            what: "a guard".into(),
+            hyps: Vec::new(),
+            goal: Goal::Valid(e),
+        };
+        if let Ok(mut h) = pool::HANG.lock() {
+            *h = Some("hang-me".into());
+        }
+        let limit = Duration::from_millis(300);
+        let cfg = SmtConfig { timeout: limit, jobs: 1, ..SmtConfig::default() };
+        let bound = limit + pool::grace(limit);
+        // Slack for a loaded machine: the pool wakes at the bound, then reports.
+        let slack = Duration::from_millis(1500);
+        let abandoned = |d: &Decision| match d {
+            Decision::Unknown { why: w @ Why::Abandoned(after), .. } => {
+                assert!(*after >= bound && *after < bound + slack, "{after:?}");
+                assert!(w.to_string().contains("did not stop when asked"), "{w}");
+                true
+            }
+            _ => false,
+        };
+        // One hung query among good ones: abandoned; the others still decided.
+        let labels: Vec<String> = ["hang-me-1", "fine-1", "fine-2"].map(String::from).to_vec();
+        let t = Instant::now();
+        let r = discharge(&prog, &[ob.clone(), ob.clone(), ob.clone()], &labels, &cfg);
+        let took = t.elapsed();
+        assert!(took >= bound && took < bound + slack, "{took:?}");
+        assert!(abandoned(&r[0].0), "{:?}", r[0].0);
+        assert!(matches!(r[1].0, Decision::Holds(_)) && matches!(r[2].0, Decision::Holds(_)), "{r:?}");
+        // As many hung queries as the cap: the rest is not run.
+        let mut labels: Vec<String> = (0..pool::MAX_ABANDONED).map(|i| format!("hang-me-{i}")).collect();
+        labels.extend(["fine-1".to_string(), "fine-2".to_string()]);
+        let obs = vec![ob; labels.len()];
+        let t = Instant::now();
+        let r = discharge(&prog, &obs, &labels, &cfg);
+        let took = t.elapsed();
+        pool::release_hung();
+        assert!(took < (bound + slack) * pool::MAX_ABANDONED as u32, "{took:?}");
+        for d in &r[..pool::MAX_ABANDONED] {
+            assert!(abandoned(&d.0), "{d:?}");
+        }
+        for d in &r[pool::MAX_ABANDONED..] {
+            assert!(matches!(&d.0, Decision::Unknown { why: Why::NotRun(s), .. } if s.contains("abandoned")), "{d:?}");
+        }
+    }
+
+    /// The solver is chosen from the variables the encoder declared (an `Int`: the default
+    /// solver; reals only: nlsat), and agrees with what the query's text declares.
+    #[test]
+    fn the_logic_is_the_encoders_decision() {
+        for (p, ints) in [("x > 1 => x > 0", false), ("n > 1 => 2 * n >= 4", true), ("x > 0 || n >= 0 || b", true)] {
+            let (prog, e) = pred("", p);
+            let ob = Obligation {
+                rule: crate::obligation::Rule::TOut,
+                span: Default::default(),
+                what: String::new(),
+                hyps: Vec::new(),
+                goal: Goal::Valid(e),
+            };
+            let q = goals::build(&prog, &ob, &Part::Valid).unwrap_or_else(|_| panic!("{p} encodes"));
+            let logic = q.enc.logic();
+            assert_eq!(logic == Logic::WithIntegers, ints, "{p}");
+            let solver = solver_for(&q);
+            for a in q.assertions.iter().chain(q.enc.side_conditions()) {
+                solver.assert(a);
+            }
+            assert_eq!(solver.to_string().contains(" () Int)"), ints, "{p}");
+        }
     }
 
     #[test]

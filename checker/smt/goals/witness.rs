@@ -89,12 +89,8 @@ impl Session<'_> {
                 s.assert(a);
             }
         };
-        let mut solver = z3::Solver::new_for_logic("QF_NRA").unwrap_or_default();
+        let solver = super::super::solver_for(q);
         assert_all(&solver);
-        if solver.to_string().contains(" () Int)") {
-            solver = z3::Solver::new();
-            assert_all(&solver);
-        }
         let seq = self.watchdog.arm(self.timeout);
         let r = solver.check();
         let timed_out = self.watchdog.disarm(seq);
