@@ -679,6 +679,9 @@ struct Part<'g> {
     end_of_motion: usize,
     /// When this participant leaves it; `None` if it never does on this path.
     left: Option<usize>,
+    /// Every part from this index on starts after this one is left (see
+    /// [`Checker::retire`]); `usize::MAX` if not known.
+    retired: usize,
 }
 
 /// A participant's last event on the path so far.
@@ -747,9 +750,12 @@ impl<'g> Checker<'_, 'g> {
         let mut inst = Instants::new();
         let mut parts: Vec<Part<'g>> = Vec::new();
         let mut last: HashMap<RoleId, Last> = HashMap::new();
+        let roles: HashSet<RoleId> = path.iter().flat_map(|&e| ev[e].participants()).collect();
+        let mut live: std::collections::VecDeque<usize> = std::collections::VecDeque::new();
         for &e in path {
             match ev[e].kind {
                 EventKind::Motion(m) => {
+                    Self::retire(&mut parts, &mut live, &last, &inst, roles.len());
                     // Where each participant starts (E0317: all at once).
                     let starts: Vec<(RoleId, usize, Option<usize>)> = m
                         .parts
@@ -773,8 +779,17 @@ impl<'g> Checker<'_, 'g> {
                     }
                     let end = inst.add(&[start]);
                     for (r, app) in &m.parts {
-                        parts.push(Part { ev: e, role: *r, app, start, end_of_motion: end, left: None });
+                        parts.push(Part {
+                            ev: e,
+                            role: *r,
+                            app,
+                            start,
+                            end_of_motion: end,
+                            left: None,
+                            retired: usize::MAX,
+                        });
                         last.insert(*r, Last::Part(parts.len() - 1));
+                        live.push_back(parts.len() - 1);
                     }
                 }
                 EventKind::Msg(msg) => {
@@ -822,6 +837,40 @@ impl<'g> Checker<'_, 'g> {
             }
         }
         self.overlaps(&parts, &inst, ends_here);
+    }
+
+    /// Marks the oldest parts that every later part starts after as retired from the
+    /// E0318 pair search (so that a long sequence compares each part with its few
+    /// neighbours only, not with every other part).
+    ///
+    /// A participant's later parts start no earlier than its current floor: the instant
+    /// of its last message, or the start of its current part (a part starts at its
+    /// participant's last message or at the end of its previous motion, and a message
+    /// comes no earlier than each party is ready). So if a part was left at an instant
+    /// not later than every participant's floor, and every participant of the path has
+    /// appeared (one yet to appear starts at 0), it is before every later part. The
+    /// oldest parts are tried first, up to the first that fails: a cheap, sound
+    /// under-approximation (a part kept is only compared exactly).
+    fn retire(
+        parts: &mut [Part],
+        live: &mut std::collections::VecDeque<usize>,
+        last: &HashMap<RoleId, Last>,
+        inst: &Instants,
+        roles: usize,
+    ) {
+        while let Some(&x) = live.front() {
+            let Some(left) = parts[x].left else { break };
+            let floor = |l: &Last| match l {
+                Last::Msg(i, _) => *i,
+                Last::Part(p) => parts[*p].start,
+            };
+            let after_all = (last.len() == roles || left == 0) && last.values().all(|l| inst.le(left, floor(l)));
+            if !after_all {
+                break;
+            }
+            parts[x].retired = parts.len();
+            live.pop_front();
+        }
     }
 
     fn never_interrupted(&mut self, p: &Part) {
@@ -979,31 +1028,48 @@ impl<'g> Checker<'_, 'g> {
         let covered =
             |a: &[(usize, u32)], b: &[(usize, u32)]| a.iter().any(|(n, s)| b.iter().any(|(m, t)| n == m && s != t));
         let before = |x: &Part, y: &Part| x.left.is_some_and(|l| inst.le(l, y.start));
+        // Each part's group and position in it, and each group's uncovered groups.
+        let mut slot = vec![(0, 0); parts.len()];
+        for (g, (_, members)) in groups.iter().enumerate() {
+            for (k, &i) in members.iter().enumerate() {
+                slot[i] = (g, k);
+            }
+        }
+        let open: Vec<Vec<usize>> =
+            groups.iter().map(|(a, _)| (0..groups.len()).filter(|&h| !covered(a, groups[h].0)).collect()).collect();
+        // Sweep the parts in order, each against the earlier ones of uncovered groups not
+        // retired before it (a retired part is before every later one).
+        let mut live: Vec<Vec<usize>> = vec![Vec::new(); groups.len()];
+        // (Sort key: groups then positions of the two parts; the two parts.)
+        type Hit = ((usize, usize, usize, usize), usize, usize);
+        let mut hits: Vec<Hit> = Vec::new();
+        for (b, y) in parts.iter().enumerate() {
+            let (gb, kb) = slot[b];
+            for &g in &open[gb] {
+                live[g].retain(|&a| parts[a].retired > b);
+                for &a in &live[g] {
+                    let x = &parts[a];
+                    if x.role == y.role || x.ev == y.ev || before(x, y) || before(y, x) {
+                        continue;
+                    }
+                    // The order of the former all-pairs loop: groups, then positions.
+                    let (ga, ka) = slot[a];
+                    let (first, second) = if (ga, ka) < (gb, kb) { (a, b) } else { (b, a) };
+                    let (g1, k1) = slot[first];
+                    let (g2, k2) = slot[second];
+                    hits.push(((g1, g2, k1, k2), first, second));
+                }
+            }
+            live[gb].push(b);
+        }
+        hits.sort_unstable_by_key(|h| h.0);
         // Per pair of motions (earlier, later), the pairs of parts that may overlap.
         type Pairs = Vec<(String, String, RoleId, RoleId)>;
         let mut found: std::collections::BTreeMap<(usize, usize), Pairs> = std::collections::BTreeMap::new();
-        for gi in 0..groups.len() {
-            for gj in gi..groups.len() {
-                if covered(groups[gi].0, groups[gj].0) {
-                    continue;
-                }
-                for (k, &a) in groups[gi].1.iter().enumerate() {
-                    let from = if gi == gj { k + 1 } else { 0 };
-                    for &b in &groups[gj].1[from..] {
-                        let (x, y) = (&parts[a], &parts[b]);
-                        if x.role == y.role || x.ev == y.ev || before(x, y) || before(y, x) {
-                            continue;
-                        }
-                        let (x, y) = if x.ev < y.ev { (x, y) } else { (y, x) };
-                        found.entry((x.ev, y.ev)).or_default().push((
-                            self.part_name(x),
-                            self.part_name(y),
-                            x.role,
-                            y.role,
-                        ));
-                    }
-                }
-            }
+        for (_, a, b) in hits {
+            let (x, y) = (&parts[a], &parts[b]);
+            let (x, y) = if x.ev < y.ev { (x, y) } else { (y, x) };
+            found.entry((x.ev, y.ev)).or_default().push((self.part_name(x), self.part_name(y), x.role, y.role));
         }
         for ((xe, ye), pairs) in found {
             let list: Vec<String> = pairs.iter().map(|(a, b, _, _)| format!("`{b}` with `{a}`")).collect();
