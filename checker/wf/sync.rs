@@ -984,13 +984,12 @@ impl<'g> Checker<'_, 'g> {
                 continue;
             }
             let mine = same[i].clone();
-            for (j, y) in
+            // Whether a third part bounds the time: count them once per motion.
+            let bounding = parts[mine.clone()].iter().filter(|q| bounds_time(q)).count();
+            for (_, y) in
                 parts.iter().enumerate().take(mine.end).skip(i + 1).filter(|(_, y)| y.ev == x.ev && overruns(y))
             {
-                let bounded = parts[mine.clone()]
-                    .iter()
-                    .zip(mine.clone())
-                    .any(|(q, k)| q.ev == x.ev && k != i && k != j && bounds_time(q));
+                let bounded = bounding > usize::from(bounds_time(x)) + usize::from(bounds_time(y));
                 if bounded {
                     together.entry(x.ev).or_default().push(format!(
                         "`{}` with `{}`",
