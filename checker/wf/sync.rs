@@ -566,14 +566,24 @@ impl Checker<'_, '_> {
 /// Past this many paths through choices the timing checks give up with an error.
 const MAX_PATHS: usize = 4096;
 
-/// A path: its events in tree order, and the branch taken at each choice node.
-type SchedulePath = (Vec<usize>, HashMap<u32, u32>);
+/// The paths of the once-unfolded tree, one after the other: `visit` gets, for each, the
+/// events on it in tree order and the branch it takes at each choice it meets. Returns
+/// `false` (before visiting any) if there are more than [`MAX_PATHS`].
+///
+/// A first pass only counts (the decision depends on the counts alone), so that the paths
+/// are then visited as they are found rather than all held at once (4,096 copies of a long
+/// sequence took gigabytes).
+fn paths(ev: &[Event], branches: &HashMap<u32, u32>, mut visit: impl FnMut(&[usize], &HashMap<u32, u32>)) -> bool {
+    walk_paths(ev, branches, None) && walk_paths(ev, branches, Some(&mut visit))
+}
 
-/// The paths of the once-unfolded tree: for each, the events on it in tree order and the
-/// branch it takes at each choice it meets.
-/// `None` if there are more than [`MAX_PATHS`].
-fn paths(ev: &[Event], branches: &HashMap<u32, u32>) -> Option<Vec<SchedulePath>> {
-    let mut done: Vec<SchedulePath> = Vec::new();
+/// What [`paths`] calls on each path.
+type Visit<'v> = &'v mut dyn FnMut(&[usize], &HashMap<u32, u32>);
+
+/// One pass of [`paths`]; without `visit`, only the count is checked.
+fn walk_paths(ev: &[Event], branches: &HashMap<u32, u32>, mut visit: Option<Visit>) -> bool {
+    let keep = visit.is_some();
+    let mut done = 0usize;
     let mut work: Vec<(HashMap<u32, u32>, Vec<usize>, usize)> = vec![(HashMap::new(), Vec::new(), 0)];
     while let Some((mut assign, mut list, mut i)) = work.pop() {
         'ev: while i < ev.len() {
@@ -585,13 +595,13 @@ fn paths(ev: &[Event], branches: &HashMap<u32, u32>) -> Option<Vec<SchedulePath>
                     Some(&x) => x,
                     None => {
                         let n = branches.get(&node).copied().unwrap_or(1);
-                        if done.len() + work.len() + n as usize > MAX_PATHS {
-                            return None;
+                        if done + work.len() + n as usize > MAX_PATHS {
+                            return false;
                         }
                         for k in 1..n {
                             let mut a = assign.clone();
                             a.insert(node, k);
-                            work.push((a, list.clone(), i));
+                            work.push((a, if keep { list.clone() } else { Vec::new() }, i));
                         }
                         assign.insert(node, 0);
                         0
@@ -602,12 +612,17 @@ fn paths(ev: &[Event], branches: &HashMap<u32, u32>) -> Option<Vec<SchedulePath>
                     continue 'ev;
                 }
             }
-            list.push(i);
+            if keep {
+                list.push(i);
+            }
             i += 1;
         }
-        done.push((list, assign));
+        done += 1;
+        if let Some(f) = visit.as_mut() {
+            f(&list, &assign);
+        }
     }
-    Some(done)
+    true
 }
 
 /// Instants and the order "not later than" between them; node 0 is the start.
@@ -719,7 +734,15 @@ fn reads_input(prim: &Primitive) -> bool {
 
 impl<'g> Checker<'_, 'g> {
     fn timing(&mut self, branches: &HashMap<u32, u32>, ends: &[Vec<(u32, u32, bool)>]) {
-        let Some(paths) = paths(self.ev, branches) else {
+        // Whether a path reaches an `end` (rather than only a recursion variable, whose next
+        // round the unfolded copy already shows).
+        let ev = self.ev;
+        let all = paths(ev, branches, |path, assign| {
+            let ends_here =
+                ends.iter().any(|e| e.iter().filter(|n| n.2).all(|(node, b, _)| assign.get(node) == Some(b)));
+            self.timing_path(path, ends_here);
+        });
+        if !all {
             let loc = self.ev.first().map(Event::loc).unwrap_or_default();
             self.push(
                 Diagnostic::error(
@@ -730,14 +753,6 @@ impl<'g> Checker<'_, 'g> {
                 .with_note("the timing checks read each path of the once-unfolded type separately")
                 .with_help("split the choreography, or reduce the nesting of choices"),
             );
-            return;
-        };
-        for (path, assign) in &paths {
-            // Whether the path reaches an `end` (rather than only a recursion variable,
-            // whose next round the unfolded copy already shows).
-            let ends_here =
-                ends.iter().any(|e| e.iter().filter(|n| n.2).all(|(node, b, _)| assign.get(node) == Some(b)));
-            self.timing_path(path, ends_here);
         }
     }
 
