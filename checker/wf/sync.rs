@@ -680,6 +680,44 @@ impl Instants {
     }
 }
 
+/// Whether two events' enclosing `*` sides put them on two sides of one `*` (so that a
+/// separation obligation compares them).
+fn covered(a: &[(usize, u32)], b: &[(usize, u32)]) -> bool {
+    a.iter().any(|(n, s)| b.iter().any(|(m, t)| n == m && s != t))
+}
+
+/// For the `*` sides of a part, the participants of a path with a motion on sides not
+/// covering them: the only ones whose parts the pair search may pair with it.
+struct Relevant<'e> {
+    /// Each participant of the path with a motion, and the distinct sides of its motions.
+    sides: Vec<(RoleId, Vec<Sides<'e>>)>,
+    cache: HashMap<&'e [(usize, u32)], Vec<RoleId>>,
+}
+
+impl<'e> Relevant<'e> {
+    fn new(ev: &'e [Event], path: &[usize]) -> Relevant<'e> {
+        let mut by_role: HashMap<RoleId, Vec<&'e [(usize, u32)]>> = HashMap::new();
+        for &e in path.iter().filter(|&&e| ev[e].is_motion()) {
+            for r in ev[e].participants() {
+                let v = by_role.entry(r).or_default();
+                if !v.contains(&ev[e].pars.as_slice()) {
+                    v.push(&ev[e].pars);
+                }
+            }
+        }
+        let mut sides: Vec<_> = by_role.into_iter().collect();
+        sides.sort_unstable_by_key(|(r, _)| *r);
+        Relevant { sides, cache: HashMap::new() }
+    }
+
+    fn of(&mut self, sig: &'e [(usize, u32)]) -> &[RoleId] {
+        let sides = &self.sides;
+        self.cache.entry(sig).or_insert_with(|| {
+            sides.iter().filter(|(_, ss)| ss.iter().any(|s| !covered(sig, s))).map(|(r, _)| *r).collect()
+        })
+    }
+}
+
 /// The `*` sides enclosing an event (see [`Event::pars`]).
 type Sides<'e> = &'e [(usize, u32)];
 
@@ -765,12 +803,12 @@ impl<'g> Checker<'_, 'g> {
         let mut inst = Instants::new();
         let mut parts: Vec<Part<'g>> = Vec::new();
         let mut last: HashMap<RoleId, Last> = HashMap::new();
-        let roles: HashSet<RoleId> = path.iter().flat_map(|&e| ev[e].participants()).collect();
+        let mut relevant = Relevant::new(ev, path);
         let mut live: std::collections::VecDeque<usize> = std::collections::VecDeque::new();
         for &e in path {
             match ev[e].kind {
                 EventKind::Motion(m) => {
-                    Self::retire(&mut parts, &mut live, &last, &inst, roles.len());
+                    Self::retire(ev, &mut parts, &mut live, &last, &inst, &mut relevant);
                     // Where each participant starts (E0317: all at once).
                     let starts: Vec<(RoleId, usize, Option<usize>)> = m
                         .parts
@@ -854,33 +892,36 @@ impl<'g> Checker<'_, 'g> {
         self.overlaps(&parts, &inst, ends_here);
     }
 
-    /// Marks the oldest parts that every later part starts after as retired from the
-    /// E0318 pair search (so that a long sequence compares each part with its few
-    /// neighbours only, not with every other part).
+    /// Marks the oldest parts that every later part they could be paired with starts
+    /// after as retired from the E0318 pair search (so that a long sequence compares each
+    /// part with its few neighbours only, not with every other part).
     ///
     /// A participant's later parts start no earlier than its current floor: the instant
     /// of its last message, or the start of its current part (a part starts at its
     /// participant's last message or at the end of its previous motion, and a message
-    /// comes no earlier than each party is ready). So if a part was left at an instant
-    /// not later than every participant's floor, and every participant of the path has
-    /// appeared (one yet to appear starts at 0), it is before every later part. The
-    /// oldest parts are tried first, up to the first that fails: a cheap, sound
-    /// under-approximation (a part kept is only compared exactly).
-    fn retire(
+    /// comes no earlier than each party is ready); one yet to appear starts no earlier
+    /// than 0. The pair search only pairs parts whose enclosing `*` sides do not cover
+    /// each other, so only the participants with an event on such sides count (see
+    /// [`Relevant`]). So if a part was left at an instant not later than each of their
+    /// floors, it is before every later part it could be paired with. The oldest parts
+    /// are tried first, up to the first that fails: a cheap, sound under-approximation (a
+    /// part kept is only compared exactly).
+    fn retire<'e>(
+        ev: &'e [Event],
         parts: &mut [Part],
         live: &mut std::collections::VecDeque<usize>,
         last: &HashMap<RoleId, Last>,
         inst: &Instants,
-        roles: usize,
+        relevant: &mut Relevant<'e>,
     ) {
         while let Some(&x) = live.front() {
             let Some(left) = parts[x].left else { break };
-            let floor = |l: &Last| match l {
-                Last::Msg(i, _) => *i,
-                Last::Part(p) => parts[*p].start,
+            let floor = |r: &RoleId| match last.get(r) {
+                None => 0,
+                Some(Last::Msg(i, _)) => *i,
+                Some(Last::Part(p)) => parts[*p].start,
             };
-            let after_all = (last.len() == roles || left == 0) && last.values().all(|l| inst.le(left, floor(l)));
-            if !after_all {
+            if !relevant.of(&ev[parts[x].ev].pars).iter().all(|r| inst.le(left, floor(r))) {
                 break;
             }
             parts[x].retired = parts.len();
@@ -1039,8 +1080,6 @@ impl<'g> Checker<'_, 'g> {
             });
             groups[g].1.push(i);
         }
-        let covered =
-            |a: &[(usize, u32)], b: &[(usize, u32)]| a.iter().any(|(n, s)| b.iter().any(|(m, t)| n == m && s != t));
         let before = |x: &Part, y: &Part| x.left.is_some_and(|l| inst.le(l, y.start));
         // Each part's group and position in it, and each group's uncovered groups.
         let mut slot = vec![(0, 0); parts.len()];
