@@ -273,9 +273,12 @@ fn shapes() {
             Depth::Names => ("skipped".into(), "-".into(), "-".into()),
             Depth::WellFormed => {
                 let t = Instant::now();
-                let wf = mochi::wf::check(&prog);
+                let body = &prog.choreography.as_ref().expect("a choreography").body;
+                let side = mochi::wf::side::check(&prog, body);
+                let (scope, _) = mochi::wf::scope::check(&prog, body);
+                let sync = mochi::wf::sync::check(&prog, body);
                 let ms = t.elapsed().as_secs_f64() * 1000.0;
-                let errors = wf.side.iter().chain(&wf.scope).chain(&wf.sync).filter(|d| d.is_error()).count();
+                let errors = side.iter().chain(&scope).chain(&sync).filter(|d| d.is_error()).count();
                 (format!("{ms:.1}"), "-".into(), format!("well-formedness only: {errors} error(s)"))
             }
             Depth::Full => {
