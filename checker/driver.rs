@@ -510,7 +510,7 @@ fn where_(db: &SourceDb, ob: &Obligation) -> String {
 
 /// A file-name-safe label for dumped queries: `agcomp-cart-and-arms-37-9`.
 fn label(db: &SourceDb, ob: &Obligation) -> String {
-    let rule = format!("{:?}", ob.rule).to_lowercase();
+    let rule = ob.rule.slug();
     let at = where_(db, ob);
     let file = at.rsplit('/').next().unwrap_or(&at);
     let clean: String = file.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '-' }).collect();
