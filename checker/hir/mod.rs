@@ -78,7 +78,9 @@ pub struct RobotKind {
     pub name: String,
     pub state: Vec<(String, Sort)>,
     pub inputs: Vec<(String, Sort)>,
-    /// Shape and arguments as written; interpreted by the geometry stage (a later part).
+    /// Shape and arguments as written, not interpreted yet: real robot geometry (URDF,
+    /// shapes) is a later part, and until then footprints are the predicates written in
+    /// the primitives (LANGUAGE.md). A kind with no geometry may be bodiless (E0412).
     pub geometry: Option<crate::syntax::ast::Geometry>,
     pub invariant: Option<Expr>,
     pub span: Span,

@@ -83,8 +83,8 @@ pub struct RobotDecl {
     pub span: Span,
 }
 
-/// `geometry: box(l, w, h);` or `geometry: urdf("file.urdf");`. Interpreted by the
-/// geometry stage (a later part); kept verbatim here.
+/// `geometry: box(l, w, h);` or `geometry: urdf("file.urdf");`, kept verbatim: no stage
+/// interprets it yet (real robot geometry is a later part; see `hir::Kind::geometry`).
 #[derive(Clone, Debug)]
 pub struct Geometry {
     pub shape: Ident,
