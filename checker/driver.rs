@@ -152,7 +152,7 @@ pub use crate::fsload::{check_file, check_source, check_stdin};
 /// The report of a root file that could be read but not taken as source (not UTF-8: its
 /// E0107): rejected at the parse check, nothing else runs.
 pub fn unreadable_root(d: Diagnostic) -> Report {
-    let mut run = Run::default();
+    let mut run = Pipeline::default();
     run.record("parse", vec![d]);
     run.finish()
 }
@@ -160,7 +160,7 @@ pub fn unreadable_root(d: Diagnostic) -> Report {
 /// Runs the pipeline on a file already in `db`; its imports come from `load` (the file
 /// system's loader is [`crate::fsload::read_source`]). The pipeline does no IO of its own.
 pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut syntax::Loader<'_>) -> Report {
-    let mut run = Run::default();
+    let mut run = Pipeline::default();
     let (parsed, diags) = run.stage(|| syntax::parse_with_imports(db, root, load));
     if !run.record("parse", diags) {
         return run.finish();
@@ -249,7 +249,7 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut sy
 
 /// Accumulates diagnostics and check results while the stages run.
 #[derive(Default)]
-struct Run {
+struct Pipeline {
     diagnostics: Vec<Diagnostic>,
     checks: Vec<CheckResult>,
     projections: BTreeMap<String, String>,
@@ -260,8 +260,8 @@ struct Run {
     planned: Option<Planned>,
 }
 
-impl Run {
-    /// Times `f`; the time is attached by the next [`Run::record`].
+impl Pipeline {
+    /// Times `f`; the time is attached by the next [`Pipeline::record`].
     fn stage<T>(&mut self, f: impl FnOnce() -> T) -> T {
         let t = Instant::now();
         let r = f();
@@ -335,7 +335,7 @@ impl Run {
                 match d {
                     Decision::Holds(note) => {
                         self.separations.extend(separation(db, prog, ob, note.is_some()));
-                        self.partitions.extend(note.map(|n| format!("{}: {n}", where_(db, ob))));
+                        self.partitions.extend(note.map(|n| format!("{}: {n}", obligation_site(db, ob))));
                     }
                     // A guard that cannot hold where it is offered: a dead branch, a
                     // warning (its checks hold vacuously and prove nothing).
@@ -432,7 +432,7 @@ impl Run {
                             "{} obligation(s) held only because their context is unsatisfiable, first {} ({})",
                             vacuous.len(),
                             first.what,
-                            where_(db, first)
+                            obligation_site(db, first)
                         ),
                     )
                 }
@@ -500,7 +500,8 @@ fn separation(db: &SourceDb, prog: &crate::hir::Program, ob: &Obligation, by_box
     Some(Separation { file, line, column, how, point: written.map(|p| p.point.clone()), sides })
 }
 
-fn where_(db: &SourceDb, ob: &Obligation) -> String {
+/// `file:line:col` of an obligation (`?` when its file is not in the database).
+fn obligation_site(db: &SourceDb, ob: &Obligation) -> String {
     if db.files().nth(ob.span.file.0 as usize).is_none() {
         return "?".into();
     }
@@ -511,7 +512,7 @@ fn where_(db: &SourceDb, ob: &Obligation) -> String {
 /// A file-name-safe label for dumped queries: `agcomp-cart-and-arms-37-9`.
 fn label(db: &SourceDb, ob: &Obligation) -> String {
     let rule = format!("{:?}", ob.rule).to_lowercase();
-    let at = where_(db, ob);
+    let at = obligation_site(db, ob);
     let file = at.rsplit('/').next().unwrap_or(&at);
     let clean: String = file.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '-' }).collect();
     format!("{rule}-{clean}")

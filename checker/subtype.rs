@@ -38,7 +38,7 @@ use std::sync::Arc;
 
 /// Checks `sub <= sup` for local types of `role` (the role instantiates the refinement
 /// obligations). Returns the predicate obligations, or the first structural failure.
-pub fn subtype(prog: &Program, role: RoleId, sub: &LocalRc, sup: &LocalRc) -> Result<Vec<Obligation>, Diagnostic> {
+pub fn subtype(prog: &Program, role: RoleId, sub: &LocalArc, sup: &LocalArc) -> Result<Vec<Obligation>, Diagnostic> {
     subtype_named(prog, role, sub, sup, ["the sub type", "the super type"])
 }
 
@@ -46,8 +46,8 @@ pub fn subtype(prog: &Program, role: RoleId, sub: &LocalRc, sup: &LocalRc) -> Re
 fn subtype_named(
     prog: &Program,
     role: RoleId,
-    sub: &LocalRc,
-    sup: &LocalRc,
+    sub: &LocalArc,
+    sup: &LocalArc,
     names: [&str; 2],
 ) -> Result<Vec<Obligation>, Diagnostic> {
     let names = names.map(str::to_string);
@@ -70,8 +70,8 @@ fn subtype_named(
 /// `unknown` like any other.
 pub fn check_declared(
     prog: &Program,
-    projections: &BTreeMap<RoleId, LocalRc>,
-) -> (Vec<Diagnostic>, Vec<Obligation>, BTreeMap<RoleId, LocalRc>) {
+    projections: &BTreeMap<RoleId, LocalArc>,
+) -> (Vec<Diagnostic>, Vec<Obligation>, BTreeMap<RoleId, LocalArc>) {
     let mut diags = Vec::new();
     let mut obligations = Vec::new();
     let mut types = projections.clone();
@@ -118,7 +118,7 @@ pub fn check_declared(
 }
 
 /// The enclosing `mu t. T` nodes of a local type, innermost last.
-pub(crate) type RecEnv = Vec<(String, LocalRc)>;
+pub(crate) type RecEnv = Vec<(String, LocalArc)>;
 
 /// How many `mu`/variable steps may follow each other before recursion counts as
 /// unguarded.
@@ -127,7 +127,7 @@ const UNFOLD_LIMIT: usize = 256;
 /// Unfolds `mu t. T` (binding `t`) and `t` (jumping back to the body of its `mu`) until
 /// an action or `end` comes first. Returns that node and, when the last step was a
 /// jump back, the variable it went through and where it is written.
-pub(crate) fn unfold(t: &LocalRc, env: &mut RecEnv) -> Result<(LocalRc, Option<(String, Loc)>), Diagnostic> {
+pub(crate) fn unfold(t: &LocalArc, env: &mut RecEnv) -> Result<(LocalArc, Option<(String, Loc)>), Diagnostic> {
     unfold_with(t, env, &mut |_| {})
 }
 
@@ -142,10 +142,10 @@ pub(crate) enum RecStep<'t> {
 /// [`unfold`], telling `step` about each step through a recursion with parameters
 /// (process typing follows the type's parameters' values).
 pub(crate) fn unfold_with(
-    t: &LocalRc,
+    t: &LocalArc,
     env: &mut RecEnv,
     step: &mut dyn FnMut(RecStep),
-) -> Result<(LocalRc, Option<(String, Loc)>), Diagnostic> {
+) -> Result<(LocalArc, Option<(String, Loc)>), Diagnostic> {
     let mut t = t.clone();
     let mut looped = None;
     for _ in 0..UNFOLD_LIMIT {
@@ -206,9 +206,9 @@ struct Sub<'a> {
 impl Sub<'_> {
     fn check(
         &mut self,
-        s: &LocalRc,
+        s: &LocalArc,
         senv: &mut RecEnv,
-        t: &LocalRc,
+        t: &LocalArc,
         tenv: &mut RecEnv,
         ren: &Renaming,
     ) -> Result<(), Diagnostic> {
@@ -217,9 +217,9 @@ impl Sub<'_> {
 
     fn check_inner(
         &mut self,
-        s: &LocalRc,
+        s: &LocalArc,
         senv: &mut RecEnv,
-        t: &LocalRc,
+        t: &LocalArc,
         tenv: &mut RecEnv,
         ren: &Renaming,
     ) -> Result<(), Diagnostic> {

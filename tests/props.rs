@@ -140,7 +140,7 @@ fn check_does_not_panic(name: &str, text: &str) {
         let file = db.file(d.span.file);
         assert!(d.span.start <= d.span.end && d.span.end as usize <= file.text.len(), "span out of range: {d:?}");
     }
-    // "Verified implies no error" is not asserted here: `driver::Run::finish` computes the
+    // "Verified implies no error" is not asserted here: `driver::Pipeline::finish` computes the
     // verdict from the very same diagnostics, so it could not fail. tests/cli.rs checks it
     // where it can: on what the `mochi` binary prints and the exit code it returns.
 }

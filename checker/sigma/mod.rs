@@ -6,7 +6,7 @@
 //!
 //! Facts speak about participants' variables ([`Var::Role`]), value variables (payload
 //! fields, received values, recursion parameters) and constants. A motion makes time
-//! pass, so what held before it must be re-read afterwards. [`Sigma::run`] computes the
+//! pass, so what held before it must be re-read afterwards. [`Sigma::apply_motion`] computes the
 //! strongest postcondition of a motion, syntactically, with one level of snapshots:
 //!
 //! 1. facts that mention an older snapshot of a moving participant `r` ([`Var::Snap`]) are

@@ -13,13 +13,13 @@ use std::collections::HashSet;
 impl Sigma {
     /// The effect of participant `role` running `prim` with `args` (evaluated when it
     /// starts): see the module documentation.
-    pub fn run(&mut self, prog: &Program, role: RoleId, prim: PrimId, args: &[Expr]) {
+    pub fn apply_motion(&mut self, prog: &Program, role: RoleId, prim: PrimId, args: &[Expr]) {
         self.effect(prog, &[(role, prim, args)]);
     }
 
     /// The effect of a joint motion `dt<p: a(..), q: b(..)>`: every part's effect at
     /// once (all arguments are evaluated when the motion starts).
-    pub fn run_joint(&mut self, prog: &Program, parts: &[(RoleId, PrimApp)]) {
+    pub fn apply_joint_motion(&mut self, prog: &Program, parts: &[(RoleId, PrimApp)]) {
         let parts: Vec<(RoleId, PrimId, &[Expr])> = parts.iter().map(|(r, a)| (*r, a.prim, &a.args[..])).collect();
         self.effect(prog, &parts);
     }

@@ -4,7 +4,7 @@
 
 use crate::hir::{print, Program};
 use crate::obligation::{Goal, Obligation};
-use crate::smt::{check_valid, SmtConfig, Verdict};
+use crate::smt::{check_valid, SmtConfig, Validity};
 use crate::source::SourceDb;
 use std::path::Path;
 
@@ -29,7 +29,7 @@ fn example_obligations(path: &str) -> (Program, Vec<Obligation>) {
 }
 
 /// Decides every `Goal::Valid` obligation; returns one line per obligation.
-fn decide(path: &str) -> Vec<(String, Verdict)> {
+fn decide(path: &str) -> Vec<(String, Validity)> {
     let (prog, obs) = example_obligations(path);
     obs.iter()
         .filter_map(|ob| match &ob.goal {
@@ -55,7 +55,7 @@ fn all_hold(path: &str, expected: usize) {
     for (line, v) in &results {
         eprintln!("{path}: {v:?}: {line}");
     }
-    let failed: Vec<&(String, Verdict)> = results.iter().filter(|(_, v)| *v != Verdict::Holds).collect();
+    let failed: Vec<&(String, Validity)> = results.iter().filter(|(_, v)| *v != Validity::Holds).collect();
     assert!(failed.is_empty(), "{path}: {failed:#?}");
     assert_eq!(results.len(), expected, "{path}: the number of predicate obligations");
 }

@@ -19,8 +19,8 @@ impl<'a> Checker<'a> {
         default: Option<&'a (PrimApp, Box<Process>)>,
         loc: Loc,
         tb: &[RecvBranch],
-        td: Option<&(Vec<PrimApp>, LocalRc)>,
-        t: &LocalRc,
+        td: Option<&(Vec<PrimApp>, LocalArc)>,
+        t: &LocalArc,
         st: &State<'a>,
     ) {
         let missing: Vec<&RecvBranch> = tb.iter().filter(|b| !arms.iter().any(|a| a.label == b.label)).collect();

@@ -10,7 +10,7 @@
 //!   allowed, [SUB-IN]); each branch continues under `Σ ∧ P_i{x_i/v}`;
 //! - [T-MOTION] a motion matches `dt<a>` (or refines it, [SUB-MOTION]); the obligation
 //!   is `Σ ⇒ Pre`, and afterwards Σ is the strongest postcondition of the motion
-//!   ([`Sigma::run`]): what held of the participant's variables now holds of their
+//!   ([`Sigma::apply_motion`]): what held of the participant's variables now holds of their
 //!   snapshot `old(r.x)`, and the primitive's postcondition (with its `old(x)`) and the
 //!   kind's invariant are added, so `x == old(x)` keeps the position known before.
 //!   Facts about other participants are forgotten: they moved too, in ways this process
@@ -57,7 +57,7 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 
 /// Checks every participant's process against its projection. Participants whose
 /// projection failed are skipped (the projection error is reported already).
-pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalRc>) -> (Vec<Diagnostic>, Vec<Obligation>) {
+pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalArc>) -> (Vec<Diagnostic>, Vec<Obligation>) {
     let mut diags = Vec::new();
     let mut obligations = Vec::new();
     for role in prog.role_ids() {
@@ -176,7 +176,7 @@ pub const WIDEN_AFTER: usize = 8;
 
 /// A process loop body and a type node, with the context and value map they are
 /// checked under.
-type LoopKey<'a> = (NodeRef<&'a Process>, NodeRef<LocalRc>, Vec<Expr>, Vec<(ValueId, Expr)>);
+type LoopKey<'a> = (NodeRef<&'a Process>, NodeRef<LocalArc>, Vec<Expr>, Vec<(ValueId, Expr)>);
 
 struct Checker<'a> {
     prog: &'a Program,
@@ -188,7 +188,7 @@ struct Checker<'a> {
     /// (loop body, type node, context, value map) already checked or being checked.
     assumed: HashSet<LoopKey<'a>>,
     /// How many contexts each (loop body, type node) pair has been checked under.
-    contexts: HashMap<(NodeRef<&'a Process>, NodeRef<LocalRc>), usize>,
+    contexts: HashMap<(NodeRef<&'a Process>, NodeRef<LocalArc>), usize>,
 }
 
 /// What the checker knows at a point of the process.
@@ -256,7 +256,7 @@ impl<'a> Checker<'a> {
         out
     }
 
-    fn check(&mut self, p: &'a Process, t: LocalRc, st: State<'a>) {
+    fn check(&mut self, p: &'a Process, t: LocalArc, st: State<'a>) {
         crate::stack::deep(|| self.check_inner(p, t, st))
     }
 

@@ -48,7 +48,7 @@ impl Checker<'_> {
             });
         }
         // Σ := the strongest postcondition; the others moved meanwhile.
-        st.sigma.run(self.prog, self.role, a.prim, &args);
+        st.sigma.apply_motion(self.prog, self.role, a.prim, &args);
         let me = self.role;
         st.sigma.forget(&|v| matches!(v, Var::Role(r, _) | Var::Snap(r, _) if *r != me));
         st.vals.retain(|_, e| !mentions(e, &is_physical));

@@ -85,7 +85,7 @@ impl<'a> Checker<'a> {
 
     /// Coinduction for process loops: whether `body` still needs checking against `t`
     /// under the current context. Widens the context after [`WIDEN_AFTER`] variants.
-    pub(super) fn enter(&mut self, body: &'a Process, t: &LocalRc, st: &mut State) -> bool {
+    pub(super) fn enter(&mut self, body: &'a Process, t: &LocalArc, st: &mut State) -> bool {
         let pair = (NodeRef::new(body), NodeRef::from(t));
         let n = self.contexts.get(&pair).copied().unwrap_or(0);
         if n >= WIDEN_AFTER {

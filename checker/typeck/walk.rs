@@ -13,7 +13,7 @@ use crate::subtype::{not, subst_values, unfold_with, RecStep};
 
 impl<'a> Checker<'a> {
     /// Checks `p` against `t`. Sequences are followed in a loop; branches recurse.
-    pub(super) fn check_inner(&mut self, mut p: &'a Process, mut t: LocalRc, mut st: State<'a>) {
+    pub(super) fn check_inner(&mut self, mut p: &'a Process, mut t: LocalArc, mut st: State<'a>) {
         loop {
             // The type's loop steps, with the new values of its parameters (type terms).
             let mut steps: Vec<(bool, Vec<RecParam>, Vec<Expr>)> = Vec::new();

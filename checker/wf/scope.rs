@@ -21,7 +21,7 @@
 //!   choice Σ is the join of the branches that continue (what they agree on, with
 //!   literal bounds weakened to cover every branch);
 //! - a joint motion `dt<p: a, q: b>` applies the effect of every part
-//!   ([`Sigma::run_joint`]: strongest postcondition, one level of snapshots);
+//!   ([`Sigma::apply_joint_motion`]: strongest postcondition, one level of snapshots);
 //! - `g1 * g2`: each side starts from the facts of Σ over its own participants (and over
 //!   values and constants only), and afterwards Σ is the conjunction of the sides' ends;
 //! - `mu t(n: S {R} = e). G`: R must hold of `e` at entry (E0414) and of the arguments
@@ -39,7 +39,7 @@
 use crate::diag::{Code, Diagnostic};
 use crate::hir::expr::BinOp;
 use crate::hir::*;
-use crate::obligation::{Goal, Obligation, Rule, Run, Side};
+use crate::obligation::{Goal, Obligation, RoleMotion, Rule, Side};
 use crate::sigma::Sigma;
 use std::collections::HashMap;
 
@@ -329,7 +329,7 @@ struct Contexts<'a> {
     jumps: Vec<(usize, Sigma)>,
     /// The primitives run inside some `*`, in walk order, with the context each starts
     /// in; each side of a `*` takes the ones logged while it was walked.
-    runs: Vec<Run>,
+    runs: Vec<RoleMotion>,
     /// How many `*` enclose the current point.
     in_par: usize,
     steps: usize,
@@ -511,10 +511,10 @@ impl<'a> Contexts<'a> {
         });
         if self.in_par > 0 {
             for (role, app) in &m.parts {
-                self.runs.push(Run { role: *role, app: app.clone(), hyps: sigma.facts().to_vec() });
+                self.runs.push(RoleMotion { role: *role, app: app.clone(), hyps: sigma.facts().to_vec() });
             }
         }
-        sigma.run_joint(self.prog, &m.parts);
+        sigma.apply_joint_motion(self.prog, &m.parts);
     }
 
     /// Def 4.4 (1): under Σ, some guard holds.
