@@ -176,7 +176,7 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut sy
     }
     if library {
         library::synthetic_participants(&mut prog);
-        let (notes, obligations) = run.stage(|| library::plan(&prog, root));
+        let (obligations, notes) = run.stage(|| library::plan(&prog, root));
         run.record("library", notes);
         if cfg.structural_only {
             run.checks.push(CheckResult {
@@ -197,7 +197,7 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut sy
     // on the other two.
     let diags = run.stage(|| wf::side::check(&prog, &chor.body));
     let side_ok = run.record("side-conditions", diags);
-    let (diags, mut obligations) = run.stage(|| wf::scope::check(&prog, &chor.body));
+    let (mut obligations, diags) = run.stage(|| wf::scope::check(&prog, &chor.body));
     let scope_ok = run.record("well-scoped", diags);
     if !(side_ok && scope_ok) {
         return run.finish();
@@ -215,14 +215,14 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut sy
     // is typed against T (`subtype::check_declared`).
     let mut types = locals.clone();
     if projected && !prog.locals.is_empty() {
-        let (diags, obs, declared) = run.stage(|| subtype::check_declared(&prog, &locals));
+        let (obs, declared, diags) = run.stage(|| subtype::check_declared(&prog, &locals));
         if run.record("declared-locals", diags) {
             obligations.extend(obs);
         }
         types = declared;
     }
     if projected {
-        let (diags, obs) = run.stage(|| typeck::check_processes(&prog, &types));
+        let (obs, diags) = run.stage(|| typeck::check_processes(&prog, &types));
         if run.record("typing", diags) {
             obligations.extend(obs);
         }

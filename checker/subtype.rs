@@ -59,11 +59,11 @@ fn subtype_named(
 /// [T-SUB] (Table 1) for the written local types: each `local R = T;` must be a subtype
 /// of the projection `G↾R` (Def 4.10, Fig 5), and `R`'s process is typed against `T`.
 ///
-/// Returns the structural failures (E0602, one per `local` item, at its role name), the
-/// predicate side conditions of Fig 5 (E0711 and, for [SUB-MOTION], E0407 obligations),
-/// and the local type each participant's process is to be typed against: its `local`
-/// when it fits, its projection otherwise. A role without a projection (projection
-/// failed, reported already) is skipped.
+/// Returns the predicate side conditions of Fig 5 (E0711 and, for [SUB-MOTION], E0407
+/// obligations), the local type each participant's process is to be typed against (its
+/// `local` when it fits, its projection otherwise) and, last like every stage, the
+/// structural failures (E0602, one per `local` item, at its role name). A role without a
+/// projection (projection failed, reported already) is skipped.
 ///
 /// Sound: typing `P` against `T` proves `P : T`; the structural part and the obligations
 /// prove `T <= G↾R`; [T-SUB] gives `P : G↾R`. An undecided obligation leaves the verdict
@@ -71,7 +71,7 @@ fn subtype_named(
 pub fn check_declared(
     prog: &Program,
     projections: &BTreeMap<RoleId, LocalArc>,
-) -> (Vec<Diagnostic>, Vec<Obligation>, BTreeMap<RoleId, LocalArc>) {
+) -> (Vec<Obligation>, BTreeMap<RoleId, LocalArc>, Vec<Diagnostic>) {
     let mut diags = Vec::new();
     let mut obligations = Vec::new();
     let mut types = projections.clone();
@@ -114,7 +114,7 @@ pub fn check_declared(
             }
         }
     }
-    (diags, obligations, types)
+    (obligations, types, diags)
 }
 
 /// The enclosing `mu t. T` nodes of a local type, innermost last.

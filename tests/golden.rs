@@ -169,7 +169,7 @@ fn printed_projections_parse_back_to_the_same_type() {
         // as a different one).
         let Some(body) = prog.choreography.as_ref().map(|c| c.body.clone()) else { continue };
         let ill_formed = !mochi::wf::side::check(&prog, &body).is_empty()
-            || !mochi::wf::scope::check(&prog, &body).0.is_empty()
+            || !mochi::wf::scope::check(&prog, &body).1.is_empty()
             || !mochi::wf::sync::check(&prog, &body).is_empty();
         if ill_formed {
             continue;

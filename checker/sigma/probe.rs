@@ -18,11 +18,11 @@ fn example_obligations(path: &str) -> (Program, Vec<Obligation>) {
     let (prog, d) = crate::lower::lower(&parsed);
     assert!(d.is_empty(), "{d:?}");
     let body = prog.choreography.as_ref().map(|c| c.body.clone()).expect("a choreography");
-    let (d, mut obs) = crate::wf::scope::check(&prog, &body);
+    let (mut obs, d) = crate::wf::scope::check(&prog, &body);
     assert!(d.is_empty(), "{d:?}");
     let (locals, d) = crate::project::project_all(&prog);
     assert!(d.is_empty(), "{d:?}");
-    let (d, typing) = crate::typeck::check_processes(&prog, &locals);
+    let (typing, d) = crate::typeck::check_processes(&prog, &locals);
     assert!(d.is_empty(), "{d:?}");
     obs.extend(typing);
     (prog, obs)

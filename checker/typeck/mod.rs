@@ -57,7 +57,7 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 
 /// Checks every participant's process against its projection. Participants whose
 /// projection failed are skipped (the projection error is reported already).
-pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalArc>) -> (Vec<Diagnostic>, Vec<Obligation>) {
+pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalArc>) -> (Vec<Obligation>, Vec<Diagnostic>) {
     let mut diags = Vec::new();
     let mut obligations = Vec::new();
     for role in prog.role_ids() {
@@ -103,7 +103,7 @@ pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalArc>)
     let mut seen = HashSet::new();
     diags.retain(|d| seen.insert((d.code, d.span, d.message.clone())));
     dedupe(&mut obligations);
-    (diags, obligations)
+    (obligations, diags)
 }
 
 /// A loop checked under several contexts may meet the same goal under the same

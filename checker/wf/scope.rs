@@ -43,7 +43,7 @@ use crate::obligation::{Goal, Obligation, RoleMotion, Rule, Side};
 use crate::sigma::Sigma;
 use std::collections::HashMap;
 
-pub fn check(prog: &Program, g: &Global) -> (Vec<Diagnostic>, Vec<Obligation>) {
+pub fn check(prog: &Program, g: &Global) -> (Vec<Obligation>, Vec<Diagnostic>) {
     let mut s = Scope { prog, diags: Vec::new(), recs: HashMap::new(), unfolding: Vec::new() };
     let mut used = Vec::new();
     g.participants(&mut used);
@@ -74,7 +74,7 @@ pub fn check(prog: &Program, g: &Global) -> (Vec<Diagnostic>, Vec<Obligation>) {
     };
     let start = c.initial();
     c.walk(g, start);
-    (s.diags, c.obligations)
+    (c.obligations, s.diags)
 }
 
 struct Scope<'a> {
@@ -692,7 +692,7 @@ mod tests {
         let (p, d) = lower_src(&format!("{SYS} choreography G = {chor};"));
         assert!(d.is_empty(), "{d:?}");
         let c = p.choreography.as_ref().expect("choreography");
-        let (d, o) = super::check(&p, &c.body);
+        let (o, d) = super::check(&p, &c.body);
         (d.into_iter().map(|d| d.code).collect(), o.into_iter().map(|o| o.rule).collect())
     }
 
@@ -738,7 +738,7 @@ mod tests {
             choreography G = dt<P: go> * dt<O: watch>. end;";
         let (p, d) = lower_src(src);
         assert!(d.is_empty(), "{d:?}");
-        let (d, _) = super::check(&p, &p.choreography.as_ref().unwrap().body);
+        let (_, d) = super::check(&p, &p.choreography.as_ref().unwrap().body);
         assert_eq!(d.iter().map(|d| d.code).collect::<Vec<_>>(), vec![Code::CoupledAcrossSeparation]);
     }
 
@@ -776,7 +776,7 @@ mod context_tests {
         let (p, d) = lower_src(&format!("{SYS} choreography G = {chor};"));
         assert!(d.is_empty(), "{d:?}");
         let body = p.choreography.as_ref().map(|c| c.body.clone()).expect("choreography");
-        let (d, o) = super::check(&p, &body);
+        let (o, d) = super::check(&p, &body);
         assert!(d.is_empty(), "{d:?}");
         (p, o)
     }
@@ -918,7 +918,7 @@ mod context_tests {
         let (p, d) = lower_src(&format!("{FREE} choreography G = {chor};"));
         assert!(d.is_empty(), "{d:?}");
         let body = p.choreography.as_ref().map(|c| c.body.clone()).expect("choreography");
-        let (d, o) = super::check(&p, &body);
+        let (o, d) = super::check(&p, &body);
         assert!(d.is_empty(), "{d:?}");
         (p, o)
     }
