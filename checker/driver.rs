@@ -145,10 +145,6 @@ pub struct SeparationSide {
     pub bounds: Option<[[f64; 2]; 3]>,
 }
 
-// The entry points that read from disk live at the IO edge, `fsload`; re-exported at their
-// old paths so that other branches keep compiling (the lead removes this after the merge).
-pub use crate::fsload::{check_file, check_source, check_stdin};
-
 /// The report of a root file that could be read but not taken as source (not UTF-8: its
 /// E0107): rejected at the parse check, nothing else runs.
 pub fn unreadable_root(d: Diagnostic) -> Report {

@@ -89,7 +89,8 @@ pub fn plan(prog: &Program, root: FileId) -> (Vec<Obligation>, Vec<Diagnostic>) 
 #[cfg(test)]
 mod tests {
     use crate::diag::{Code, Severity};
-    use crate::driver::{check_file, check_source, Config, Report, Verdict};
+    use crate::driver::{Config, Report, Verdict};
+    use crate::fsload::{check_file, check_source};
     use crate::source::SourceDb;
     use std::path::Path;
 

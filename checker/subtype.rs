@@ -24,11 +24,9 @@
 //! and `R`'s process is then typed against `T`: `P : T` and `T <= G↾R` give `P : G↾R`
 //! by [T-SUB], which is what [T-SESS] asks. Process typing itself (`typeck.rs`) folds
 //! [T-SUB] into its rules and does not call [`subtype`].
-//!
-//! The predicate helpers process typing shares (`map_vars`, `subst_values`, ...) are
-//! re-exported from `hir::expr`, where they now live.
 
 use crate::diag::{Code, Diagnostic};
+use crate::hir::expr::{and_all, conjuncts, subst_values, value_expr};
 use crate::hir::print::{describe, motion_text, print_bounded, NOTE_NODES};
 use crate::hir::*;
 use crate::obligation::{Goal, Obligation, Rule};
@@ -508,10 +506,6 @@ fn rename_app(a: &PrimApp, ren: &Renaming) -> PrimApp {
     PrimApp { prim: a.prim, args: a.args.iter().map(|e| subst_values(e, ren)).collect(), loc: a.loc }
 }
 
-// The predicate helpers process typing and Σ import from here live in `hir::expr` now,
-// on top of `Expr::map` and `Expr::visit`; re-exported so that their paths keep working.
-pub(crate) use crate::hir::expr::{and_all, conjuncts, map_vars, mentions, not, subst_values, value_expr};
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -656,7 +650,8 @@ mod tests {
 #[cfg(test)]
 mod declared_tests {
     use crate::diag::{Code, Severity};
-    use crate::driver::{check_source, Config, Verdict};
+    use crate::driver::{Config, Verdict};
+    use crate::fsload::check_source;
 
     const FILE: &str = "tests/data/declared-subtype.chor";
 
@@ -676,7 +671,7 @@ mod declared_tests {
     #[test]
     fn the_example_verifies_with_its_subtyping_obligations() {
         let mut db = crate::source::SourceDb::new();
-        let r = crate::driver::check_file(&mut db, std::path::Path::new(FILE), &Config::default()).expect("readable");
+        let r = crate::fsload::check_file(&mut db, std::path::Path::new(FILE), &Config::default()).expect("readable");
         assert_eq!(r.verdict, Verdict::Verified, "{:?}", r.diagnostics);
         let typing = r.checks.iter().find(|c| c.name == "typing-obligations").expect("typing obligations");
         assert!(matches!(typing.detail, crate::driver::Detail::Obligations { total: 5, .. }), "{}", typing.detail);

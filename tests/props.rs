@@ -11,7 +11,8 @@
 //! `target/fuzz-crashes/`; add it to `tests/fuzz-corpus/` with a comment saying what it
 //! broke, and [`the_fuzz_corpus_of_past_crashes_is_handled`] keeps it fixed.
 
-use mochi::driver::{check_source, Config};
+use mochi::driver::Config;
+use mochi::fsload::check_source;
 use mochi::source::SourceDb;
 use proptest::prelude::*;
 use std::path::{Path, PathBuf};

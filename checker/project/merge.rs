@@ -248,7 +248,7 @@ fn rename_local<'t>(
         return r.clone();
     }
     let e = |x: &Expr| {
-        crate::subtype::map_vars(x, &mut |v, sort| match v {
+        crate::hir::expr::map_vars(x, &mut |v, sort| match v {
             Var::Value(id, _) => map.get(id).map(|(to, name)| Expr {
                 kind: ExprKind::Var(Var::Value(*to, name.clone())),
                 sort: sort.clone(),

@@ -26,17 +26,17 @@
 //! The files: `rules.rs` holds the rules of Def 4.8, `merge.rs` the merge of Def 4.7,
 //! `equal.rs` the equality of local types up to renaming that the merge and E0602 use,
 //! `occurs.rs` who occurs in which node of the global type. The printing helpers for
-//! local types in diagnostics are in `hir/print.rs` (re-exported here).
+//! local types in diagnostics are in `hir/print.rs`.
 
 mod equal;
 mod merge;
 mod occurs;
 mod rules;
 
-pub use crate::hir::print::{describe, motion_text, print_bounded};
 pub use equal::{alpha_equal, equal, first_difference};
 
 use crate::diag::{Code, Diagnostic};
+use crate::hir::print::print_bounded;
 use crate::hir::*;
 use occurs::Occurs;
 use std::collections::BTreeMap;

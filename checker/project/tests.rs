@@ -3,7 +3,7 @@
 
 use super::*;
 use crate::diag::Code;
-use crate::hir::print::NOTE_NODES;
+use crate::hir::print::{print_bounded, NOTE_NODES};
 use crate::lower::tests::lower_src;
 
 /// The cart-and-arms example (Fig 2 as corrected in wf-rules.md): the cart tells

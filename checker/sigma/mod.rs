@@ -48,8 +48,8 @@ mod normal;
 pub use contract::{init, initial_values, instantiate, invariant, participants, subst_params};
 use normal::{admissible, normalize};
 
+use crate::hir::expr::{conjuncts, mentions};
 use crate::hir::*;
-use crate::subtype::{conjuncts, mentions};
 use rustc_hash::{FxHashSet, FxHasher};
 use std::collections::HashMap;
 use std::hash::{Hash, Hasher};

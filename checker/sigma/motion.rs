@@ -6,8 +6,8 @@
 use super::normal::{binary, normalize, var, visit};
 use super::{instantiate, invariant, Sigma};
 use crate::hir::expr::BinOp;
+use crate::hir::expr::{map_vars, mentions};
 use crate::hir::*;
-use crate::subtype::{map_vars, mentions};
 use std::collections::HashSet;
 
 impl Sigma {

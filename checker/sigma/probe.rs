@@ -12,7 +12,7 @@ use std::path::Path;
 fn example_obligations(path: &str) -> (Program, Vec<Obligation>) {
     let mut db = SourceDb::new();
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join(path);
-    let root = crate::syntax::load_root(&mut db, &file).expect("example readable");
+    let root = crate::fsload::load_root(&mut db, &file).expect("example readable");
     let (parsed, d) = crate::syntax::parse_with_imports(&mut db, root, &mut |p| std::fs::read_to_string(p));
     assert!(d.is_empty(), "{d:?}");
     let (prog, d) = crate::lower::lower(&parsed);

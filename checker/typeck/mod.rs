@@ -47,12 +47,13 @@ mod report;
 mod walk;
 
 use crate::diag::{Code, Diagnostic};
+use crate::hir::expr::mentions;
 use crate::hir::node::NodeRef;
 use crate::hir::print::{print_bounded, NOTE_NODES};
 use crate::hir::*;
 use crate::obligation::{Goal, Obligation, Rule};
 use crate::sigma::{self, Sigma};
-use crate::subtype::{mentions, RecEnv};
+use crate::subtype::RecEnv;
 use std::collections::{BTreeMap, HashMap, HashSet};
 
 /// Checks every participant's process against its projection. Participants whose

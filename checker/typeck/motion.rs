@@ -3,10 +3,11 @@
 //! context implies the precondition, and Σ becomes the strongest postcondition.
 
 use super::{Checker, State};
+use crate::hir::expr::{and_all, conjuncts, mentions, subst_values};
 use crate::hir::*;
 use crate::obligation::{Goal, Obligation, Rule};
 use crate::sigma::instantiate;
-use crate::subtype::{and_all, conjuncts, mentions, refinement, subst_values};
+use crate::subtype::refinement;
 
 impl Checker<'_> {
     /// [T-MOTION] with [SUB-MOTION]: refinement, `Σ ⇒ Pre`, then Σ := Post.

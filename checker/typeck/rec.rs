@@ -5,11 +5,11 @@
 //! type's parameters (E0714).
 
 use super::{hash_of, Checker, State, WIDEN_AFTER};
+use crate::hir::expr::value_expr;
 use crate::hir::node::NodeRef;
 use crate::hir::*;
 use crate::obligation::{Goal, Obligation, Rule};
 use crate::sigma::{self, Sigma};
-use crate::subtype::value_expr;
 
 impl<'a> Checker<'a> {
     /// The process's loop parameters get `values` (process terms, evaluated now), at

@@ -6,10 +6,11 @@
 
 use super::{Checker, State};
 use crate::diag::{Code, Diagnostic};
+use crate::hir::expr::{not, subst_values};
 use crate::hir::print::describe;
 use crate::hir::*;
 use crate::sigma::{self};
-use crate::subtype::{not, subst_values, unfold_with, RecStep};
+use crate::subtype::{unfold_with, RecStep};
 
 impl<'a> Checker<'a> {
     /// Checks `p` against `t`. Sequences are followed in a loop; branches recurse.

@@ -1571,7 +1571,7 @@ mod tests {
         for path in files {
             let mut db = crate::source::SourceDb::new();
             let root = db.add(path.display().to_string(), std::fs::read_to_string(&path).expect("read"));
-            let (parsed, _) = crate::syntax::parse_with_imports(&mut db, root, &mut |p| crate::syntax::read_source(p));
+            let (parsed, _) = crate::syntax::parse_with_imports(&mut db, root, &mut |p| crate::fsload::read_source(p));
             let (p, _) = crate::lower::lower(&parsed);
             let Some(c) = p.choreography.as_ref() else { continue };
             let new = super::check(&p, &c.body);
