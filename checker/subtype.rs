@@ -210,7 +210,7 @@ impl Sub<'_> {
         tenv: &mut RecEnv,
         ren: &Renaming,
     ) -> Result<(), Diagnostic> {
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.check_inner(s, senv, t, tenv, ren))
+        crate::stack::deep(|| self.check_inner(s, senv, t, tenv, ren))
     }
 
     fn check_inner(

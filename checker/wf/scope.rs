@@ -95,7 +95,7 @@ impl<'a> Scope<'a> {
     /// `original` is false inside an unfolded copy, where per-node errors were already
     /// produced for the original.
     fn walk(&mut self, g: &'a Global, scope: &[RoleId], original: bool) {
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.walk_inner(g, scope, original))
+        crate::stack::deep(|| self.walk_inner(g, scope, original))
     }
 
     fn out_of_scope(&mut self, who: &[RoleId], scope: &[RoleId], loc: Loc, what: &str) {
@@ -339,7 +339,7 @@ impl<'a> Contexts<'a> {
     /// Walks `g` from context `sigma`; the context at its end, or `None` when no path
     /// goes past it (it loops back or ends).
     fn walk(&mut self, g: &'a Global, sigma: Sigma) -> Option<Sigma> {
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.walk_inner(g, sigma))
+        crate::stack::deep(|| self.walk_inner(g, sigma))
     }
 
     fn walk_inner(&mut self, g: &'a Global, mut sigma: Sigma) -> Option<Sigma> {

@@ -185,7 +185,7 @@ impl<'g> Builder<'g> {
     /// (the transitive closure) is therefore the same as with every edge, and so is its
     /// transitive reduction, which every generating edge set contains.
     fn walk(&mut self, g: &'g Global, path: &mut Vec<(u32, u32, bool)>) -> (std::ops::Range<usize>, Frontier) {
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.walk_inner(g, path))
+        crate::stack::deep(|| self.walk_inner(g, path))
     }
 
     fn walk_inner(&mut self, g: &'g Global, path: &mut Vec<(u32, u32, bool)>) -> (std::ops::Range<usize>, Frontier) {
