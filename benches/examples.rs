@@ -15,7 +15,8 @@
 //! the paper's Table 2) are printed beside them for reference; PGCD itself (Python and
 //! dReal) is not run here.
 
-use mochi::driver::{check_file, Config, Report};
+use mochi::driver::{Config, Report};
+use mochi::fsload::check_file;
 use mochi::source::SourceDb;
 use std::path::Path;
 use std::time::Instant;

@@ -30,7 +30,8 @@
 //!
 //! No dependencies (no criterion): the numbers are meant to be read, not tracked.
 
-use mochi::driver::{check_source, Config, Report};
+use mochi::driver::{Config, Report};
+use mochi::fsload::check_source;
 use mochi::source::SourceDb;
 use std::hint::black_box;
 use std::time::{Duration, Instant};
@@ -264,7 +265,7 @@ fn shapes() {
         let mut db = SourceDb::new();
         let root = db.add(format!("{}.chor", name.replace(' ', "-")), src.as_str());
         let t = Instant::now();
-        let (parsed, _) = mochi::syntax::parse_with_imports(&mut db, root, &mut |p| mochi::syntax::read_source(p));
+        let (parsed, _) = mochi::syntax::parse_with_imports(&mut db, root, &mut |p| mochi::fsload::read_source(p));
         let parse_ms = t.elapsed().as_secs_f64() * 1000.0;
         let t = Instant::now();
         let (prog, _) = mochi::lower::lower(&parsed);
@@ -275,7 +276,7 @@ fn shapes() {
                 let t = Instant::now();
                 let body = &prog.choreography.as_ref().expect("a choreography").body;
                 let side = mochi::wf::side::check(&prog, body);
-                let (scope, _) = mochi::wf::scope::check(&prog, body);
+                let (_, scope) = mochi::wf::scope::check(&prog, body);
                 let sync = mochi::wf::sync::check(&prog, body);
                 let ms = t.elapsed().as_secs_f64() * 1000.0;
                 let errors = side.iter().chain(&scope).chain(&sync).filter(|d| d.is_error()).count();

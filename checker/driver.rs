@@ -145,14 +145,10 @@ pub struct SeparationSide {
     pub bounds: Option<[[f64; 2]; 3]>,
 }
 
-// The entry points that read from disk live at the IO edge, `fsload`; re-exported at their
-// old paths so that other branches keep compiling (the lead removes this after the merge).
-pub use crate::fsload::{check_file, check_source, check_stdin};
-
 /// The report of a root file that could be read but not taken as source (not UTF-8: its
 /// E0107): rejected at the parse check, nothing else runs.
 pub fn unreadable_root(d: Diagnostic) -> Report {
-    let mut run = Run::default();
+    let mut run = Pipeline::default();
     run.record("parse", vec![d]);
     run.finish()
 }
@@ -160,7 +156,7 @@ pub fn unreadable_root(d: Diagnostic) -> Report {
 /// Runs the pipeline on a file already in `db`; its imports come from `load` (the file
 /// system's loader is [`crate::fsload::read_source`]). The pipeline does no IO of its own.
 pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut syntax::Loader<'_>) -> Report {
-    let mut run = Run::default();
+    let mut run = Pipeline::default();
     let (parsed, diags) = run.stage(|| syntax::parse_with_imports(db, root, load));
     if !run.record("parse", diags) {
         return run.finish();
@@ -176,7 +172,7 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut sy
     }
     if library {
         library::synthetic_participants(&mut prog);
-        let (notes, obligations) = run.stage(|| library::plan(&prog, root));
+        let (obligations, notes) = run.stage(|| library::plan(&prog, root));
         run.record("library", notes);
         if cfg.structural_only {
             run.checks.push(CheckResult {
@@ -197,7 +193,7 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut sy
     // on the other two.
     let diags = run.stage(|| wf::side::check(&prog, &chor.body));
     let side_ok = run.record("side-conditions", diags);
-    let (diags, mut obligations) = run.stage(|| wf::scope::check(&prog, &chor.body));
+    let (mut obligations, diags) = run.stage(|| wf::scope::check(&prog, &chor.body));
     let scope_ok = run.record("well-scoped", diags);
     if !(side_ok && scope_ok) {
         return run.finish();
@@ -215,14 +211,14 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut sy
     // is typed against T (`subtype::check_declared`).
     let mut types = locals.clone();
     if projected && !prog.locals.is_empty() {
-        let (diags, obs, declared) = run.stage(|| subtype::check_declared(&prog, &locals));
+        let (obs, declared, diags) = run.stage(|| subtype::check_declared(&prog, &locals));
         if run.record("declared-locals", diags) {
             obligations.extend(obs);
         }
         types = declared;
     }
     if projected {
-        let (diags, obs) = run.stage(|| typeck::check_processes(&prog, &types));
+        let (obs, diags) = run.stage(|| typeck::check_processes(&prog, &types));
         if run.record("typing", diags) {
             obligations.extend(obs);
         }
@@ -249,7 +245,7 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut sy
 
 /// Accumulates diagnostics and check results while the stages run.
 #[derive(Default)]
-struct Run {
+struct Pipeline {
     diagnostics: Vec<Diagnostic>,
     checks: Vec<CheckResult>,
     projections: BTreeMap<String, String>,
@@ -260,8 +256,8 @@ struct Run {
     planned: Option<Planned>,
 }
 
-impl Run {
-    /// Times `f`; the time is attached by the next [`Run::record`].
+impl Pipeline {
+    /// Times `f`; the time is attached by the next [`Pipeline::record`].
     fn stage<T>(&mut self, f: impl FnOnce() -> T) -> T {
         let t = Instant::now();
         let r = f();
@@ -335,7 +331,7 @@ impl Run {
                 match d {
                     Decision::Holds(note) => {
                         self.separations.extend(separation(db, prog, ob, note.is_some()));
-                        self.partitions.extend(note.map(|n| format!("{}: {n}", where_(db, ob))));
+                        self.partitions.extend(note.map(|n| format!("{}: {n}", obligation_site(db, ob))));
                     }
                     // A guard that cannot hold where it is offered: a dead branch, a
                     // warning (its checks hold vacuously and prove nothing).
@@ -432,7 +428,7 @@ impl Run {
                             "{} obligation(s) held only because their context is unsatisfiable, first {} ({})",
                             vacuous.len(),
                             first.what,
-                            where_(db, first)
+                            obligation_site(db, first)
                         ),
                     )
                 }
@@ -500,7 +496,8 @@ fn separation(db: &SourceDb, prog: &crate::hir::Program, ob: &Obligation, by_box
     Some(Separation { file, line, column, how, point: written.map(|p| p.point.clone()), sides })
 }
 
-fn where_(db: &SourceDb, ob: &Obligation) -> String {
+/// `file:line:col` of an obligation (`?` when its file is not in the database).
+fn obligation_site(db: &SourceDb, ob: &Obligation) -> String {
     if db.files().nth(ob.span.file.0 as usize).is_none() {
         return "?".into();
     }
@@ -511,7 +508,7 @@ fn where_(db: &SourceDb, ob: &Obligation) -> String {
 /// A file-name-safe label for dumped queries: `agcomp-cart-and-arms-37-9`.
 fn label(db: &SourceDb, ob: &Obligation) -> String {
     let rule = ob.rule.slug();
-    let at = where_(db, ob);
+    let at = obligation_site(db, ob);
     let file = at.rsplit('/').next().unwrap_or(&at);
     let clean: String = file.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '-' }).collect();
     format!("{rule}-{clean}")

@@ -17,7 +17,8 @@
 //! edge: source files from disk) and [`stack`] (stack growth for recursive passes).
 //!
 //! ```
-//! use mochi::driver::{check_source, Config, Verdict};
+//! use mochi::driver::{Config, Verdict};
+//! use mochi::fsload::check_source;
 //! let mut db = mochi::source::SourceDb::new();
 //! // A file with no system and no choreography has nothing to verify: E0210.
 //! let report = check_source(&mut db, "empty.chor", "const k = 1;", &Config::default());

@@ -53,7 +53,7 @@ pub fn synthetic_participants(prog: &mut Program) {
 /// invariant is satisfiable (E0411), each primitive can end (E0409) and each footprint of
 /// a kind with a body holds a point (E0412). The diagnostics are notes: a library with
 /// nothing to check says so, at the start of `root`.
-pub fn plan(prog: &Program, root: FileId) -> (Vec<Diagnostic>, Vec<Obligation>) {
+pub fn plan(prog: &Program, root: FileId) -> (Vec<Obligation>, Vec<Diagnostic>) {
     let mut notes = Vec::new();
     let mut obligations = Vec::new();
     for r in prog.role_ids() {
@@ -83,13 +83,14 @@ pub fn plan(prog: &Program, root: FileId) -> (Vec<Diagnostic>, Vec<Obligation>) 
             .with_help("a library is checked for its kinds' invariants and its primitives' contracts; constants alone have none"),
         );
     }
-    (notes, obligations)
+    (obligations, notes)
 }
 
 #[cfg(test)]
 mod tests {
     use crate::diag::{Code, Severity};
-    use crate::driver::{check_file, check_source, Config, Report, Verdict};
+    use crate::driver::{Config, Report, Verdict};
+    use crate::fsload::{check_file, check_source};
     use crate::source::SourceDb;
     use std::path::Path;
 

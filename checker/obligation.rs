@@ -149,13 +149,13 @@ pub enum Goal {
 #[derive(Clone, Debug, Default)]
 pub struct Side {
     pub roles: Vec<RoleId>,
-    pub runs: Vec<Run>,
+    pub runs: Vec<RoleMotion>,
 }
 
 /// A primitive run by one participant, with the logical context (conjuncts over the
 /// participants' variables, `Var::Role`/`Var::Snap`, and values) when it starts.
 #[derive(Clone, Debug)]
-pub struct Run {
+pub struct RoleMotion {
     pub role: RoleId,
     pub app: PrimApp,
     pub hyps: Vec<Expr>,

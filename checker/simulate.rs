@@ -28,12 +28,12 @@
 //! their next event are not placed (they have no footprint then).
 
 use crate::exact::{self, Num, Rat, Tri, Value};
+use crate::hir::expr::map_vars;
 use crate::hir::{
     Builtin, Expr, ExprKind, Global, Loc, Motion, Msg, PrimApp, Program, RoleId, Slot, Sort, ValueId, Var,
 };
 use crate::smt::goals::witness::{self, Mover, Occupant, Session};
 use crate::smt::Why;
-use crate::subtype::map_vars;
 use num_bigint::BigInt;
 use num_traits::{ToPrimitive, Zero};
 use serde::Serialize;

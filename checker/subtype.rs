@@ -24,11 +24,9 @@
 //! and `R`'s process is then typed against `T`: `P : T` and `T <= G↾R` give `P : G↾R`
 //! by [T-SUB], which is what [T-SESS] asks. Process typing itself (`typeck.rs`) folds
 //! [T-SUB] into its rules and does not call [`subtype`].
-//!
-//! The predicate helpers process typing shares (`map_vars`, `subst_values`, ...) are
-//! re-exported from `hir::expr`, where they now live.
 
 use crate::diag::{Code, Diagnostic};
+use crate::hir::expr::{and_all, conjuncts, subst_values, value_expr};
 use crate::hir::print::{describe, motion_text, print_bounded, NOTE_NODES};
 use crate::hir::*;
 use crate::obligation::{Goal, Obligation, Rule};
@@ -38,7 +36,7 @@ use std::sync::Arc;
 
 /// Checks `sub <= sup` for local types of `role` (the role instantiates the refinement
 /// obligations). Returns the predicate obligations, or the first structural failure.
-pub fn subtype(prog: &Program, role: RoleId, sub: &LocalRc, sup: &LocalRc) -> Result<Vec<Obligation>, Diagnostic> {
+pub fn subtype(prog: &Program, role: RoleId, sub: &LocalArc, sup: &LocalArc) -> Result<Vec<Obligation>, Diagnostic> {
     subtype_named(prog, role, sub, sup, ["the sub type", "the super type"])
 }
 
@@ -46,8 +44,8 @@ pub fn subtype(prog: &Program, role: RoleId, sub: &LocalRc, sup: &LocalRc) -> Re
 fn subtype_named(
     prog: &Program,
     role: RoleId,
-    sub: &LocalRc,
-    sup: &LocalRc,
+    sub: &LocalArc,
+    sup: &LocalArc,
     names: [&str; 2],
 ) -> Result<Vec<Obligation>, Diagnostic> {
     let names = names.map(str::to_string);
@@ -59,19 +57,19 @@ fn subtype_named(
 /// [T-SUB] (Table 1) for the written local types: each `local R = T;` must be a subtype
 /// of the projection `G↾R` (Def 4.10, Fig 5), and `R`'s process is typed against `T`.
 ///
-/// Returns the structural failures (E0602, one per `local` item, at its role name), the
-/// predicate side conditions of Fig 5 (E0711 and, for [SUB-MOTION], E0407 obligations),
-/// and the local type each participant's process is to be typed against: its `local`
-/// when it fits, its projection otherwise. A role without a projection (projection
-/// failed, reported already) is skipped.
+/// Returns the predicate side conditions of Fig 5 (E0711 and, for [SUB-MOTION], E0407
+/// obligations), the local type each participant's process is to be typed against (its
+/// `local` when it fits, its projection otherwise) and, last like every stage, the
+/// structural failures (E0602, one per `local` item, at its role name). A role without a
+/// projection (projection failed, reported already) is skipped.
 ///
 /// Sound: typing `P` against `T` proves `P : T`; the structural part and the obligations
 /// prove `T <= G↾R`; [T-SUB] gives `P : G↾R`. An undecided obligation leaves the verdict
 /// `unknown` like any other.
 pub fn check_declared(
     prog: &Program,
-    projections: &BTreeMap<RoleId, LocalRc>,
-) -> (Vec<Diagnostic>, Vec<Obligation>, BTreeMap<RoleId, LocalRc>) {
+    projections: &BTreeMap<RoleId, LocalArc>,
+) -> (Vec<Obligation>, BTreeMap<RoleId, LocalArc>, Vec<Diagnostic>) {
     let mut diags = Vec::new();
     let mut obligations = Vec::new();
     let mut types = projections.clone();
@@ -114,11 +112,11 @@ pub fn check_declared(
             }
         }
     }
-    (diags, obligations, types)
+    (obligations, types, diags)
 }
 
 /// The enclosing `mu t. T` nodes of a local type, innermost last.
-pub(crate) type RecEnv = Vec<(String, LocalRc)>;
+pub(crate) type RecEnv = Vec<(String, LocalArc)>;
 
 /// How many `mu`/variable steps may follow each other before recursion counts as
 /// unguarded.
@@ -127,7 +125,7 @@ const UNFOLD_LIMIT: usize = 256;
 /// Unfolds `mu t. T` (binding `t`) and `t` (jumping back to the body of its `mu`) until
 /// an action or `end` comes first. Returns that node and, when the last step was a
 /// jump back, the variable it went through and where it is written.
-pub(crate) fn unfold(t: &LocalRc, env: &mut RecEnv) -> Result<(LocalRc, Option<(String, Loc)>), Diagnostic> {
+pub(crate) fn unfold(t: &LocalArc, env: &mut RecEnv) -> Result<(LocalArc, Option<(String, Loc)>), Diagnostic> {
     unfold_with(t, env, &mut |_| {})
 }
 
@@ -142,10 +140,10 @@ pub(crate) enum RecStep<'t> {
 /// [`unfold`], telling `step` about each step through a recursion with parameters
 /// (process typing follows the type's parameters' values).
 pub(crate) fn unfold_with(
-    t: &LocalRc,
+    t: &LocalArc,
     env: &mut RecEnv,
     step: &mut dyn FnMut(RecStep),
-) -> Result<(LocalRc, Option<(String, Loc)>), Diagnostic> {
+) -> Result<(LocalArc, Option<(String, Loc)>), Diagnostic> {
     let mut t = t.clone();
     let mut looped = None;
     for _ in 0..UNFOLD_LIMIT {
@@ -206,20 +204,20 @@ struct Sub<'a> {
 impl Sub<'_> {
     fn check(
         &mut self,
-        s: &LocalRc,
+        s: &LocalArc,
         senv: &mut RecEnv,
-        t: &LocalRc,
+        t: &LocalArc,
         tenv: &mut RecEnv,
         ren: &Renaming,
     ) -> Result<(), Diagnostic> {
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.check_inner(s, senv, t, tenv, ren))
+        crate::stack::deep(|| self.check_inner(s, senv, t, tenv, ren))
     }
 
     fn check_inner(
         &mut self,
-        s: &LocalRc,
+        s: &LocalArc,
         senv: &mut RecEnv,
-        t: &LocalRc,
+        t: &LocalArc,
         tenv: &mut RecEnv,
         ren: &Renaming,
     ) -> Result<(), Diagnostic> {
@@ -508,10 +506,6 @@ fn rename_app(a: &PrimApp, ren: &Renaming) -> PrimApp {
     PrimApp { prim: a.prim, args: a.args.iter().map(|e| subst_values(e, ren)).collect(), loc: a.loc }
 }
 
-// The predicate helpers process typing and Σ import from here live in `hir::expr` now,
-// on top of `Expr::map` and `Expr::visit`; re-exported so that their paths keep working.
-pub(crate) use crate::hir::expr::{and_all, conjuncts, map_vars, mentions, not, subst_values, value_expr};
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -656,7 +650,8 @@ mod tests {
 #[cfg(test)]
 mod declared_tests {
     use crate::diag::{Code, Severity};
-    use crate::driver::{check_source, Config, Verdict};
+    use crate::driver::{Config, Verdict};
+    use crate::fsload::check_source;
 
     const FILE: &str = "tests/data/declared-subtype.chor";
 
@@ -676,7 +671,7 @@ mod declared_tests {
     #[test]
     fn the_example_verifies_with_its_subtyping_obligations() {
         let mut db = crate::source::SourceDb::new();
-        let r = crate::driver::check_file(&mut db, std::path::Path::new(FILE), &Config::default()).expect("readable");
+        let r = crate::fsload::check_file(&mut db, std::path::Path::new(FILE), &Config::default()).expect("readable");
         assert_eq!(r.verdict, Verdict::Verified, "{:?}", r.diagnostics);
         let typing = r.checks.iter().find(|c| c.name == "typing-obligations").expect("typing obligations");
         assert!(matches!(typing.detail, crate::driver::Detail::Obligations { total: 5, .. }), "{}", typing.detail);

@@ -9,7 +9,8 @@
 //! copy with a slip in it, and prints each verdict, the checks that ran and every
 //! diagnostic with its code and `file:line:column`.
 
-use mochi::driver::{check_source, Config, Report};
+use mochi::driver::{Config, Report};
+use mochi::fsload::check_source;
 use mochi::source::SourceDb;
 
 /// A tiny two-robot choreography, assembled from pieces the way a tool would.

@@ -657,7 +657,7 @@ fn imports_from(dir: &Path, text: &str) -> String {
 ///   (README, "exit code");
 /// - never any other verdict or exit code (2 is a usage error, 101 a crash).
 ///
-/// In-process, this is a restatement of `driver::Run::finish`; through the binary it can
+/// In-process, this is a restatement of `driver::Pipeline::finish`; through the binary it can
 /// fail: `main` maps outcomes to exit codes (`Outcome::exit_code`) and `render::json`
 /// writes the verdict and severities, so an unknown run exiting 0, a JSON report that
 /// drops or renames a severity, a verdict printed from a different report than the one

@@ -16,7 +16,8 @@
 //!   only in the summary text; they come back when the report carries them as numbers.)
 
 use mochi::diag::{Counterexample, Diagnostic};
-use mochi::driver::{check_file, Config};
+use mochi::driver::Config;
+use mochi::fsload::check_file;
 use mochi::render;
 use mochi::source::SourceDb;
 use std::fmt::Write;
@@ -153,7 +154,7 @@ fn printed_projections_parse_back_to_the_same_type() {
     let mut failures = Vec::new();
     for path in chor_files() {
         let mut db = SourceDb::new();
-        let root = mochi::syntax::load_root(&mut db, &path).expect("readable");
+        let root = mochi::fsload::load_root(&mut db, &path).expect("readable");
         let (parsed, d) = parse_with_imports(&mut db, root, &mut |p| std::fs::read_to_string(p));
         // The rejected corpus holds syntax errors on purpose; every other file parses.
         if path.starts_with("choreographies/rejected") && !d.is_empty() {
@@ -169,7 +170,7 @@ fn printed_projections_parse_back_to_the_same_type() {
         // as a different one).
         let Some(body) = prog.choreography.as_ref().map(|c| c.body.clone()) else { continue };
         let ill_formed = !mochi::wf::side::check(&prog, &body).is_empty()
-            || !mochi::wf::scope::check(&prog, &body).0.is_empty()
+            || !mochi::wf::scope::check(&prog, &body).1.is_empty()
             || !mochi::wf::sync::check(&prog, &body).is_empty();
         if ill_formed {
             continue;

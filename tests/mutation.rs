@@ -35,7 +35,8 @@
 #[path = "mutation/ops.rs"]
 mod ops;
 
-use mochi::driver::{check_file, Config, Verdict};
+use mochi::driver::{Config, Verdict};
+use mochi::fsload::check_file;
 use mochi::smt::SmtConfig;
 use mochi::source::SourceDb;
 use std::collections::BTreeMap;

@@ -11,7 +11,8 @@
 //! `target/fuzz-crashes/`; add it to `tests/fuzz-corpus/` with a comment saying what it
 //! broke, and [`the_fuzz_corpus_of_past_crashes_is_handled`] keeps it fixed.
 
-use mochi::driver::{check_source, Config};
+use mochi::driver::Config;
+use mochi::fsload::check_source;
 use mochi::source::SourceDb;
 use proptest::prelude::*;
 use std::path::{Path, PathBuf};
@@ -140,7 +141,7 @@ fn check_does_not_panic(name: &str, text: &str) {
         let file = db.file(d.span.file);
         assert!(d.span.start <= d.span.end && d.span.end as usize <= file.text.len(), "span out of range: {d:?}");
     }
-    // "Verified implies no error" is not asserted here: `driver::Run::finish` computes the
+    // "Verified implies no error" is not asserted here: `driver::Pipeline::finish` computes the
     // verdict from the very same diagnostics, so it could not fail. tests/cli.rs checks it
     // where it can: on what the `mochi` binary prints and the exit code it returns.
 }

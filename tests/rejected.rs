@@ -10,7 +10,8 @@
 //! or marked reserved in `diag.rs` (no check produces it).
 
 use mochi::diag::{Code, Severity};
-use mochi::driver::{check_file, Config, Verdict};
+use mochi::driver::{Config, Verdict};
+use mochi::fsload::check_file;
 use mochi::source::SourceDb;
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};

@@ -3,7 +3,8 @@
 //! stuck state, a violated guard or refinement, or a model that does not replay. And
 //! the simulator must be able to fail: it finds the collisions of rejected examples.
 
-use mochi::driver::{check_file, check_source, Config, Verdict};
+use mochi::driver::{Config, Verdict};
+use mochi::fsload::{check_file, check_source};
 use mochi::fsload::{read_source, simulate_file};
 use mochi::simulate::{simulate_loaded, Kind, SimConfig, SimReport};
 use mochi::source::SourceDb;

@@ -6,14 +6,14 @@
 use super::{Expr, Field, Loc, PrimApp, RecParam, RoleId};
 use std::sync::Arc;
 
-pub type LocalRc = Arc<Local>;
+pub type LocalArc = Arc<Local>;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Local {
     /// `dt<a>.T`; more than one primitive is the merge `a ⊓ a'` of Def 4.7.
     Motion {
         prims: Vec<PrimApp>,
-        cont: LocalRc,
+        cont: LocalArc,
         loc: Loc,
     },
     Send {
@@ -22,13 +22,13 @@ pub enum Local {
     },
     Recv {
         branches: Vec<RecvBranch>,
-        default: Option<(Vec<PrimApp>, LocalRc)>,
+        default: Option<(Vec<PrimApp>, LocalArc)>,
         loc: Loc,
     },
     Rec {
         var: String,
         params: Vec<RecParam>,
-        body: LocalRc,
+        body: LocalArc,
         loc: Loc,
     },
     Var {
@@ -45,7 +45,7 @@ pub struct SendBranch {
     pub to: RoleId,
     pub label: String,
     pub payload: Vec<Field>,
-    pub cont: LocalRc,
+    pub cont: LocalArc,
     pub loc: Loc,
 }
 
@@ -54,7 +54,7 @@ pub struct RecvBranch {
     pub from: RoleId,
     pub label: String,
     pub payload: Vec<Field>,
-    pub cont: LocalRc,
+    pub cont: LocalArc,
     pub loc: Loc,
 }
 
@@ -71,7 +71,7 @@ impl Local {
     }
 
     /// Structural equality with a pointer shortcut for shared tails.
-    pub fn same(a: &LocalRc, b: &LocalRc) -> bool {
+    pub fn same(a: &LocalArc, b: &LocalArc) -> bool {
         Arc::ptr_eq(a, b) || a == b
     }
 }

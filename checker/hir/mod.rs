@@ -15,7 +15,7 @@ pub mod process;
 
 pub use expr::{Builtin, Expr, ExprKind, Slot, Sort, Var};
 pub use global::{Field, Global, Motion, Msg, PrimApp, RecParam, RecVar};
-pub use local::{Local, LocalRc, RecvBranch, SendBranch};
+pub use local::{Local, LocalArc, RecvBranch, SendBranch};
 pub use process::{Process, RecvArm};
 
 use crate::source::Span;
@@ -188,7 +188,7 @@ pub struct ProcessDef {
 #[derive(Clone, Debug)]
 pub struct LocalDef {
     pub role: RoleId,
-    pub body: LocalRc,
+    pub body: LocalArc,
     pub span: Span,
 }
 

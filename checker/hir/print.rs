@@ -557,7 +557,7 @@ pub fn describe(prog: &Program, t: &Local) -> String {
 /// Prints a local type for a diagnostic. Shared tails make a local type a DAG whose
 /// printed tree can be exponentially larger, so a type that would print more than
 /// `max_nodes` nodes is summarised by its first action.
-pub fn print_bounded(prog: &Program, t: &LocalRc, max_nodes: usize) -> String {
+pub fn print_bounded(prog: &Program, t: &LocalArc, max_nodes: usize) -> String {
     if tree_size(t, max_nodes + 1, &mut HashMap::new()) <= max_nodes {
         local(prog, t)
     } else {
@@ -566,14 +566,14 @@ pub fn print_bounded(prog: &Program, t: &LocalRc, max_nodes: usize) -> String {
 }
 
 /// The number of nodes of `t` printed as a tree, saturating at `cap`.
-fn tree_size<'t>(t: &'t LocalRc, cap: usize, memo: &mut HashMap<NodeRef<&'t Local>, usize>) -> usize {
+fn tree_size<'t>(t: &'t LocalArc, cap: usize, memo: &mut HashMap<NodeRef<&'t Local>, usize>) -> usize {
     let key = NodeRef::new(&**t);
     if let Some(&n) = memo.get(&key) {
         return n;
     }
     let n = crate::stack::deep(|| {
         let mut n = 1usize;
-        let mut add = |c: &'t LocalRc, memo: &mut HashMap<NodeRef<&'t Local>, usize>| {
+        let mut add = |c: &'t LocalArc, memo: &mut HashMap<NodeRef<&'t Local>, usize>| {
             n = n.saturating_add(tree_size(c, cap, memo)).min(cap);
         };
         match &**t {

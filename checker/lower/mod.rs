@@ -89,7 +89,7 @@ pub fn lower(parsed: &Parsed) -> (Program, Vec<Diagnostic>) {
 
 /// Lowers a local type written for `role` in the context of an already lowered
 /// program; `mochi project`'s output goes back through this in the round-trip tests.
-pub fn lower_local(prog: &Program, role: RoleId, t: &ast::Local) -> (LocalRc, Vec<Diagnostic>) {
+pub fn lower_local(prog: &Program, role: RoleId, t: &ast::Local) -> (LocalArc, Vec<Diagnostic>) {
     let mut l = Lowerer { prog: prog.clone(), ..Lowerer::default() };
     l.consts = prog.consts.iter().enumerate().map(|(i, c)| (c.name.clone(), ConstId(i as u32))).collect();
     l.kinds = prog.kinds.iter().enumerate().map(|(i, k)| (k.name.clone(), KindId(i as u32))).collect();

@@ -199,7 +199,7 @@ fn a_component_of_a_received_value_is_no_condition() {
     let src = src.replace(before, "mu loop. (p?more(j).(if j.x then p!half.dt<hold>.loop else p!full.dt<hold>.loop)");
     let mut db = SourceDb::new();
     let cfg = crate::driver::Config::default();
-    let report = crate::driver::check_source(&mut db, "choreographies/binder-component.chor", &src, &cfg);
+    let report = crate::fsload::check_source(&mut db, "choreographies/binder-component.chor", &src, &cfg);
     assert_eq!(report.verdict, crate::driver::Verdict::Rejected);
     assert_eq!(codes(&report.diagnostics), vec![Code::SortMismatch], "{:?}", report.diagnostics);
 }

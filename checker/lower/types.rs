@@ -197,7 +197,7 @@ impl Lowerer {
         self.prog.locals.push(LocalDef { role, body, span: t.role.span });
     }
 
-    pub(super) fn local(&mut self, t: &ast::Local, me: RoleId, cx: &mut Scopes) -> LocalRc {
+    pub(super) fn local(&mut self, t: &ast::Local, me: RoleId, cx: &mut Scopes) -> LocalArc {
         crate::stack::deep(|| Arc::new(self.local_inner(t, me, cx)))
     }
 

@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 /// Whether two local types are equal up to locations, the renaming of value binders
 /// (alpha-equivalence) and the order of choice branches.
-pub fn equal(a: &LocalRc, b: &LocalRc) -> bool {
+pub fn equal(a: &LocalArc, b: &LocalArc) -> bool {
     first_difference(a, b).is_none()
 }
 
@@ -18,12 +18,12 @@ pub fn equal(a: &LocalRc, b: &LocalRc) -> bool {
 /// the binders are called (alpha-equivalence proper). `mochi project` prints a binder
 /// that hides a value still read under a fresh name (`v_2`): what it prints reads back
 /// to a type `alpha_equal` to the projection, though not [`equal`] to it.
-pub fn alpha_equal(a: &LocalRc, b: &LocalRc) -> bool {
+pub fn alpha_equal(a: &LocalArc, b: &LocalArc) -> bool {
     Differ { names: false, ..Differ::new() }.diff(a, b).is_none()
 }
 
 /// The locations of the first pair of nodes where `a` and `b` differ, if any.
-pub fn first_difference(a: &LocalRc, b: &LocalRc) -> Option<(Loc, Loc)> {
+pub fn first_difference(a: &LocalArc, b: &LocalArc) -> Option<(Loc, Loc)> {
     Differ::new().diff(a, b)
 }
 
@@ -157,7 +157,7 @@ impl<'t> Differ<'t> {
         })
     }
 
-    pub(super) fn diff(&mut self, a: &'t LocalRc, b: &'t LocalRc) -> Option<(Loc, Loc)> {
+    pub(super) fn diff(&mut self, a: &'t LocalArc, b: &'t LocalArc) -> Option<(Loc, Loc)> {
         let renamed = self.renamed();
         if renamed.is_empty() && Arc::ptr_eq(a, b) {
             return None;
@@ -168,7 +168,7 @@ impl<'t> Differ<'t> {
         crate::stack::deep(|| self.diff_inner(a, b))
     }
 
-    pub(super) fn diff_inner(&mut self, a: &'t LocalRc, b: &'t LocalRc) -> Option<(Loc, Loc)> {
+    pub(super) fn diff_inner(&mut self, a: &'t LocalArc, b: &'t LocalArc) -> Option<(Loc, Loc)> {
         let here = Some((a.loc(), b.loc()));
         let mark = self.ren.len();
         match (&**a, &**b) {

@@ -28,8 +28,8 @@ impl Projector<'_> {
     pub(super) fn unmergeable(
         &self,
         choice: &Msg,
-        left: (&str, &LocalRc),
-        right: (&str, &LocalRc),
+        left: (&str, &LocalArc),
+        right: (&str, &LocalArc),
         c: Clash,
     ) -> Diagnostic {
         let r = self.name();
@@ -56,11 +56,11 @@ impl Projector<'_> {
     }
 
     /// The merge `T1 ⊓ T2` of Def 4.7.
-    pub(super) fn merge(&self, a: &LocalRc, b: &LocalRc) -> Result<LocalRc, Clash> {
+    pub(super) fn merge(&self, a: &LocalArc, b: &LocalArc) -> Result<LocalArc, Clash> {
         crate::stack::deep(|| self.merge_inner(a, b))
     }
 
-    pub(super) fn merge_inner(&self, a: &LocalRc, b: &LocalRc) -> Result<LocalRc, Clash> {
+    pub(super) fn merge_inner(&self, a: &LocalArc, b: &LocalArc) -> Result<LocalArc, Clash> {
         if equal(a, b) {
             return Ok(a.clone());
         }
@@ -106,10 +106,10 @@ impl Projector<'_> {
     pub(super) fn merge_default(
         &self,
         p1: &[PrimApp],
-        c1: &LocalRc,
+        c1: &LocalArc,
         p2: &[PrimApp],
-        c2: &LocalRc,
-    ) -> Result<(Vec<PrimApp>, LocalRc), Clash> {
+        c2: &LocalArc,
+    ) -> Result<(Vec<PrimApp>, LocalArc), Clash> {
         if !equal(c1, c2) {
             let why = "the default motions of the two branches continue differently; Def 4.7 merges them only when the continuations are equal".to_string();
             let (l, r) = first_difference(c1, c2).unwrap_or((c1.loc(), c2.loc()));
@@ -237,10 +237,10 @@ fn payloads_differ(a: &[Field], b: &[Field]) -> bool {
 /// their identity). Used by the merge to read one branch's continuation in terms of
 /// the other branch's binders of the same message. Shared tails stay shared.
 fn rename_local<'t>(
-    t: &'t LocalRc,
+    t: &'t LocalArc,
     map: &HashMap<ValueId, (ValueId, String)>,
-    memo: &mut HashMap<NodeRef<&'t Local>, LocalRc>,
-) -> LocalRc {
+    memo: &mut HashMap<NodeRef<&'t Local>, LocalArc>,
+) -> LocalArc {
     if map.is_empty() {
         return t.clone();
     }
@@ -248,7 +248,7 @@ fn rename_local<'t>(
         return r.clone();
     }
     let e = |x: &Expr| {
-        crate::subtype::map_vars(x, &mut |v, sort| match v {
+        crate::hir::expr::map_vars(x, &mut |v, sort| match v {
             Var::Value(id, _) => map.get(id).map(|(to, name)| Expr {
                 kind: ExprKind::Var(Var::Value(*to, name.clone())),
                 sort: sort.clone(),

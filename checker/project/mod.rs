@@ -26,17 +26,17 @@
 //! The files: `rules.rs` holds the rules of Def 4.8, `merge.rs` the merge of Def 4.7,
 //! `equal.rs` the equality of local types up to renaming that the merge and E0602 use,
 //! `occurs.rs` who occurs in which node of the global type. The printing helpers for
-//! local types in diagnostics are in `hir/print.rs` (re-exported here).
+//! local types in diagnostics are in `hir/print.rs`.
 
 mod equal;
 mod merge;
 mod occurs;
 mod rules;
 
-pub use crate::hir::print::{describe, motion_text, print_bounded};
 pub use equal::{alpha_equal, equal, first_difference};
 
 use crate::diag::{Code, Diagnostic};
+use crate::hir::print::print_bounded;
 use crate::hir::*;
 use occurs::Occurs;
 use std::collections::BTreeMap;
@@ -44,13 +44,13 @@ use std::sync::Arc;
 
 /// Projects the choreography onto every participant of the system. A participant whose
 /// projection fails is missing from the map and has a diagnostic (E0601) instead.
-pub fn project_all(prog: &Program) -> (BTreeMap<RoleId, LocalRc>, Vec<Diagnostic>) {
+pub fn project_all(prog: &Program) -> (BTreeMap<RoleId, LocalArc>, Vec<Diagnostic>) {
     let mut out = BTreeMap::new();
     let mut diags = Vec::new();
     let Some(chor) = &prog.choreography else {
         return (out, diags);
     };
-    let tail: LocalRc = Arc::new(Local::End(Loc(chor.span)));
+    let tail: LocalArc = Arc::new(Local::End(Loc(chor.span)));
     // Who occurs where, computed once for all roles: projecting n roles must not walk
     // the whole type n times to find each role's side of every `*`.
     let occurs = Occurs::new(prog, &chor.body);
@@ -67,7 +67,7 @@ pub fn project_all(prog: &Program) -> (BTreeMap<RoleId, LocalRc>, Vec<Diagnostic
 
 /// Checks every `local R = T;` item against the projection onto `R` (E0602). Roles
 /// whose projection failed are skipped: their error is already reported.
-pub fn check_declared(prog: &Program, projections: &BTreeMap<RoleId, LocalRc>) -> Vec<Diagnostic> {
+pub fn check_declared(prog: &Program, projections: &BTreeMap<RoleId, LocalArc>) -> Vec<Diagnostic> {
     let mut diags = Vec::new();
     for def in &prog.locals {
         let Some(proj) = projections.get(&def.role) else {
@@ -95,7 +95,7 @@ pub fn check_declared(prog: &Program, projections: &BTreeMap<RoleId, LocalRc>) -
 }
 
 /// The projection of `g` onto `role`, followed by `tail` (Def 4.8).
-pub fn project(prog: &Program, g: &Global, role: RoleId, tail: LocalRc) -> Result<LocalRc, Diagnostic> {
+pub fn project(prog: &Program, g: &Global, role: RoleId, tail: LocalArc) -> Result<LocalArc, Diagnostic> {
     let occurs = Occurs::new(prog, g);
     Projector { prog, role, occurs: &occurs }.project(g, tail)
 }

@@ -8,11 +8,11 @@ use crate::hir::*;
 use std::sync::Arc;
 
 impl Projector<'_> {
-    pub(super) fn project(&self, g: &Global, tail: LocalRc) -> Result<LocalRc, Diagnostic> {
+    pub(super) fn project(&self, g: &Global, tail: LocalArc) -> Result<LocalArc, Diagnostic> {
         crate::stack::deep(|| self.project_inner(g, tail))
     }
 
-    pub(super) fn project_inner(&self, g: &Global, tail: LocalRc) -> Result<LocalRc, Diagnostic> {
+    pub(super) fn project_inner(&self, g: &Global, tail: LocalArc) -> Result<LocalArc, Diagnostic> {
         match g {
             Global::Msg(m) => self.choice(std::slice::from_ref(g), m.loc, tail),
             Global::Choice(branches, loc) => self.choice(branches, *loc, tail),
@@ -72,7 +72,7 @@ impl Projector<'_> {
     }
 
     /// Projects the items of a sequence, right to left, in front of `tail`.
-    pub(super) fn seq(&self, items: &[&Global], tail: LocalRc) -> Result<LocalRc, Diagnostic> {
+    pub(super) fn seq(&self, items: &[&Global], tail: LocalArc) -> Result<LocalArc, Diagnostic> {
         let mut t = tail;
         for item in items.iter().rev() {
             t = self.project(item, t)?;
@@ -81,7 +81,7 @@ impl Projector<'_> {
     }
 
     /// Def 4.8 (1)-(3): a choice whose branches each start with a message `p -> q`.
-    pub(super) fn choice(&self, branches: &[Global], loc: Loc, tail: LocalRc) -> Result<LocalRc, Diagnostic> {
+    pub(super) fn choice(&self, branches: &[Global], loc: Loc, tail: LocalArc) -> Result<LocalArc, Diagnostic> {
         let mut split: Vec<(&Msg, Vec<&Global>)> = Vec::new();
         for b in branches {
             split_branch(b, &[], &mut split).map_err(not_a_choice)?;
@@ -120,7 +120,7 @@ impl Projector<'_> {
             return Ok(Arc::new(Local::Recv { branches: out, default: None, loc: first.loc }));
         }
         // Def 4.8 (3) with the merge of Def 4.7.
-        let mut acc: Option<(LocalRc, Vec<&str>)> = None;
+        let mut acc: Option<(LocalArc, Vec<&str>)> = None;
         for (m, rest) in &split {
             let t = self.seq(rest, tail.clone())?;
             acc = Some(match acc {

@@ -3,7 +3,7 @@
 
 use super::*;
 use crate::diag::Code;
-use crate::hir::print::NOTE_NODES;
+use crate::hir::print::{print_bounded, NOTE_NODES};
 use crate::lower::tests::lower_src;
 
 /// The cart-and-arms example (Fig 2 as corrected in wf-rules.md): the cart tells
@@ -30,14 +30,14 @@ pub(crate) const CART_ARMS: &str = "
     );
 ";
 
-fn projections(src: &str) -> (Program, BTreeMap<RoleId, LocalRc>, Vec<Diagnostic>) {
+fn projections(src: &str) -> (Program, BTreeMap<RoleId, LocalArc>, Vec<Diagnostic>) {
     let (prog, d) = lower_src(src);
     assert!(d.is_empty(), "{d:?}");
     let (map, diags) = project_all(&prog);
     (prog, map, diags)
 }
 
-fn printed(prog: &Program, map: &BTreeMap<RoleId, LocalRc>, role: &str) -> String {
+fn printed(prog: &Program, map: &BTreeMap<RoleId, LocalArc>, role: &str) -> String {
     let r = prog.role_by_name(role).expect("role exists");
     print::local(prog, map.get(&r).expect("projection exists"))
 }

@@ -3,8 +3,8 @@
 //! motion ([T-MOTION]); see "The logical context Σ" in ARCHITECTURE.md.
 
 use super::normal::var;
+use crate::hir::expr::{conjuncts, map_vars};
 use crate::hir::*;
-use crate::subtype::{conjuncts, map_vars};
 
 /// A primitive's predicate from participant `role`'s view: its own variables become
 /// `role`'s ([`Var::Role`]), `old(x)` the snapshot ([`Var::Snap`]), parameters the

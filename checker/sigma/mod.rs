@@ -6,7 +6,7 @@
 //!
 //! Facts speak about participants' variables ([`Var::Role`]), value variables (payload
 //! fields, received values, recursion parameters) and constants. A motion makes time
-//! pass, so what held before it must be re-read afterwards. [`Sigma::run`] computes the
+//! pass, so what held before it must be re-read afterwards. [`Sigma::apply_motion`] computes the
 //! strongest postcondition of a motion, syntactically, with one level of snapshots:
 //!
 //! 1. facts that mention an older snapshot of a moving participant `r` ([`Var::Snap`]) are
@@ -48,8 +48,8 @@ mod normal;
 pub use contract::{init, initial_values, instantiate, invariant, participants, subst_params};
 use normal::{admissible, normalize};
 
+use crate::hir::expr::{conjuncts, mentions};
 use crate::hir::*;
-use crate::subtype::{conjuncts, mentions};
 use rustc_hash::{FxHashSet, FxHasher};
 use std::collections::HashMap;
 use std::hash::{Hash, Hasher};

@@ -3,23 +3,23 @@
 //! with one level of snapshots. Every step is an equivalence or a weakening, so Σ after
 //! a motion over-approximates the states the motion may end in.
 
-use super::normal::{binary, normalize, var, visit};
+use super::normal::{binary, normalize, var};
 use super::{instantiate, invariant, Sigma};
 use crate::hir::expr::BinOp;
+use crate::hir::expr::{map_vars, mentions};
 use crate::hir::*;
-use crate::subtype::{map_vars, mentions};
 use std::collections::HashSet;
 
 impl Sigma {
     /// The effect of participant `role` running `prim` with `args` (evaluated when it
     /// starts): see the module documentation.
-    pub fn run(&mut self, prog: &Program, role: RoleId, prim: PrimId, args: &[Expr]) {
+    pub fn apply_motion(&mut self, prog: &Program, role: RoleId, prim: PrimId, args: &[Expr]) {
         self.effect(prog, &[(role, prim, args)]);
     }
 
     /// The effect of a joint motion `dt<p: a(..), q: b(..)>`: every part's effect at
     /// once (all arguments are evaluated when the motion starts).
-    pub fn run_joint(&mut self, prog: &Program, parts: &[(RoleId, PrimApp)]) {
+    pub fn apply_joint_motion(&mut self, prog: &Program, parts: &[(RoleId, PrimApp)]) {
         let parts: Vec<(RoleId, PrimId, &[Expr])> = parts.iter().map(|(r, a)| (*r, a.prim, &a.args[..])).collect();
         self.effect(prog, &parts);
     }
@@ -155,11 +155,7 @@ impl Sigma {
     /// Rewrites `min(a, b)` to `a` (and `max(a, b)` to `b`) when Σ holds `a <= b`,
     /// `a < b` or `a == b`, and symmetrically.
     fn simplify_min_max(&mut self) -> bool {
-        let has_min_max = |e: &Expr| {
-            let mut found = false;
-            visit(e, &mut |x| found |= matches!(x.kind, ExprKind::Call(Builtin::Min | Builtin::Max, _)));
-            found
-        };
+        let has_min_max = |e: &Expr| e.any(|x| matches!(x.kind, ExprKind::Call(Builtin::Min | Builtin::Max, _)));
         if !self.facts.iter().any(has_min_max) {
             return false;
         }
@@ -184,40 +180,24 @@ impl Sigma {
         changed
     }
 
+    /// `min`/`max` of two arguments that Σ orders, replaced by the argument it picks,
+    /// bottom-up (the arguments are rewritten first).
     fn rewrite_min_max(&self, e: &Expr) -> Expr {
-        crate::stack::deep(|| self.rewrite_min_max_inner(e))
-    }
-
-    fn rewrite_min_max_inner(&self, e: &Expr) -> Expr {
-        let kind = match &e.kind {
+        e.map(&mut |n| match &n.kind {
             ExprKind::Call(f @ (Builtin::Min | Builtin::Max), args) if args.len() == 2 => {
-                let a = self.rewrite_min_max(&args[0]);
-                let b = self.rewrite_min_max(&args[1]);
-                let (lo, hi) = if self.known_le(&a, &b) {
+                let (a, b) = (&args[0], &args[1]);
+                let (lo, hi) = if self.known_le(a, b) {
                     (a, b)
-                } else if self.known_le(&b, &a) {
+                } else if self.known_le(b, a) {
                     (b, a)
                 } else {
-                    return Expr { kind: ExprKind::Call(*f, vec![a, b]), sort: e.sort.clone(), loc: e.loc };
+                    return n;
                 };
                 let pick = if *f == Builtin::Min { lo } else { hi };
-                return Expr { loc: e.loc, ..pick };
+                Expr { loc: n.loc, ..pick.clone() }
             }
-            ExprKind::Call(f, args) => ExprKind::Call(*f, args.iter().map(|a| self.rewrite_min_max(a)).collect()),
-            ExprKind::Unary(op, a) => ExprKind::Unary(*op, Box::new(self.rewrite_min_max(a))),
-            ExprKind::Component(a, i) => ExprKind::Component(Box::new(self.rewrite_min_max(a)), *i),
-            ExprKind::Binary(op, a, b) => {
-                ExprKind::Binary(*op, Box::new(self.rewrite_min_max(a)), Box::new(self.rewrite_min_max(b)))
-            }
-            ExprKind::If(a, b, c) => ExprKind::If(
-                Box::new(self.rewrite_min_max(a)),
-                Box::new(self.rewrite_min_max(b)),
-                Box::new(self.rewrite_min_max(c)),
-            ),
-            ExprKind::Tuple(xs) => ExprKind::Tuple(xs.iter().map(|a| self.rewrite_min_max(a)).collect()),
-            ExprKind::Int(_) | ExprKind::Real(_) | ExprKind::Bool(_) | ExprKind::Var(_) => return e.clone(),
-        };
-        Expr { kind, sort: e.sort.clone(), loc: e.loc }
+            _ => n,
+        })
     }
 
     /// Whether Σ literally orders `a <= b`.
@@ -225,5 +205,38 @@ impl Sigma {
         a == b
             || [BinOp::Le, BinOp::Lt, BinOp::Eq].into_iter().any(|op| self.set.contains(&binary(op, a, b)))
             || self.set.contains(&binary(BinOp::Eq, b, a))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn value(i: u32, name: &str) -> Expr {
+        var(Var::Value(ValueId(i), name.to_string()), &Sort::Real)
+    }
+
+    fn call(f: Builtin, a: Expr, b: Expr) -> Expr {
+        Expr { kind: ExprKind::Call(f, vec![a, b]), sort: Sort::Real, loc: Loc::default() }
+    }
+
+    /// The rewrite goes bottom-up: an inner `min` is settled first, and the outer call then
+    /// sees the picked argument; a call whose arguments Σ does not order is left alone.
+    #[test]
+    fn nested_min_max_are_rewritten_bottom_up() {
+        let (a, b, c) = (value(0, "a"), value(1, "b"), value(2, "c"));
+        let s = Sigma::from_facts(&[binary(BinOp::Le, &a, &b), binary(BinOp::Lt, &a, &c)]);
+        // min(a, b) is a; max(a, c) is c.
+        let e = call(Builtin::Max, call(Builtin::Min, a.clone(), b.clone()), c.clone());
+        assert_eq!(s.rewrite_min_max(&e), c);
+        // b and c are not ordered: max(min(a, b), ...) keeps its shape around the rewritten part.
+        let e = call(Builtin::Max, call(Builtin::Max, b.clone(), a.clone()), c.clone());
+        assert_eq!(s.rewrite_min_max(&e), call(Builtin::Max, b.clone(), c.clone()));
+        // Under another operator, and the argument keeps the call's location.
+        let at = Loc(crate::source::Span::new(crate::source::FileId(0), 3, 9));
+        let inner = Expr { loc: at, ..call(Builtin::Min, b.clone(), a.clone()) };
+        let e = Expr { kind: ExprKind::Unary(crate::hir::expr::UnOp::Neg, Box::new(inner)), sort: Sort::Real, loc: at };
+        let ExprKind::Unary(_, out) = s.rewrite_min_max(&e).kind else { panic!("still a negation") };
+        assert_eq!((out.kind.clone(), out.loc), (a.kind.clone(), at));
     }
 }

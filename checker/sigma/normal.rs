@@ -44,29 +44,19 @@ pub(super) fn normalize(e: Expr) -> Expr {
 /// Results are written as the parser would read them: an integer as an `int` literal, a
 /// negative number as `-` applied to a literal. What would overflow is left as it is.
 fn fold(e: &Expr) -> Expr {
-    crate::stack::deep(|| {
-        let kind = match &e.kind {
-            ExprKind::Binary(op, a, b) => {
-                let (a, b) = (fold(a), fold(b));
-                let value = match (literal(&a), literal(&b), op) {
-                    (Some(x), Some(y), BinOp::Add) => x.add(y),
-                    (Some(x), Some(y), BinOp::Sub) => y.neg().and_then(|n| x.add(n)),
-                    (Some(x), Some(y), BinOp::Mul) => x.mul(y),
-                    _ => None,
-                };
-                if let Some(v) = value.and_then(|v| v.expr(e.loc)) {
-                    return v;
-                }
-                ExprKind::Binary(*op, Box::new(a), Box::new(b))
+    e.map(&mut |n| {
+        if let ExprKind::Binary(op, a, b) = &n.kind {
+            let value = match (literal(a), literal(b), op) {
+                (Some(x), Some(y), BinOp::Add) => x.add(y),
+                (Some(x), Some(y), BinOp::Sub) => y.neg().and_then(|n| x.add(n)),
+                (Some(x), Some(y), BinOp::Mul) => x.mul(y),
+                _ => None,
+            };
+            if let Some(v) = value.and_then(|v| v.expr(n.loc)) {
+                return v;
             }
-            ExprKind::Unary(op, a) => ExprKind::Unary(*op, Box::new(fold(a))),
-            ExprKind::Component(a, i) => ExprKind::Component(Box::new(fold(a)), *i),
-            ExprKind::If(a, b, c) => ExprKind::If(Box::new(fold(a)), Box::new(fold(b)), Box::new(fold(c))),
-            ExprKind::Call(f, xs) => ExprKind::Call(*f, xs.iter().map(fold).collect()),
-            ExprKind::Tuple(xs) => ExprKind::Tuple(xs.iter().map(fold).collect()),
-            ExprKind::Int(_) | ExprKind::Real(_) | ExprKind::Bool(_) | ExprKind::Var(_) => return e.clone(),
-        };
-        Expr { kind, sort: e.sort.clone(), loc: e.loc }
+        }
+        n
     })
 }
 
@@ -79,11 +69,7 @@ fn needs_fold(e: &Expr) -> bool {
             _ => literal(e).is_some(),
         }
     }
-    let mut found = false;
-    visit(e, &mut |x| {
-        found |= matches!(&x.kind, ExprKind::Binary(BinOp::Add | BinOp::Sub | BinOp::Mul, a, b) if constant(a) && constant(b))
-    });
-    found
+    e.any(|x| matches!(&x.kind, ExprKind::Binary(BinOp::Add | BinOp::Sub | BinOp::Mul, a, b) if constant(a) && constant(b)))
 }
 
 /// A decimal number `num / 10^scale`, exactly.
@@ -180,27 +166,4 @@ pub(super) fn var(v: Var, sort: &Sort) -> Expr {
 
 pub(super) fn binary(op: BinOp, a: &Expr, b: &Expr) -> Expr {
     Expr { kind: ExprKind::Binary(op, Box::new(a.clone()), Box::new(b.clone())), sort: Sort::Bool, loc: Loc::default() }
-}
-
-/// Calls `f` on every subterm of `e`.
-pub(super) fn visit(e: &Expr, f: &mut dyn FnMut(&Expr)) {
-    crate::stack::deep(|| visit_inner(e, f))
-}
-
-fn visit_inner(e: &Expr, f: &mut dyn FnMut(&Expr)) {
-    f(e);
-    match &e.kind {
-        ExprKind::Int(_) | ExprKind::Real(_) | ExprKind::Bool(_) | ExprKind::Var(_) => {}
-        ExprKind::Unary(_, a) | ExprKind::Component(a, _) => visit(a, f),
-        ExprKind::Binary(_, a, b) => {
-            visit(a, f);
-            visit(b, f);
-        }
-        ExprKind::If(a, b, c) => {
-            visit(a, f);
-            visit(b, f);
-            visit(c, f);
-        }
-        ExprKind::Call(_, xs) | ExprKind::Tuple(xs) => xs.iter().for_each(|a| visit(a, f)),
-    }
 }

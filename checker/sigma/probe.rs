@@ -4,7 +4,7 @@
 
 use crate::hir::{print, Program};
 use crate::obligation::{Goal, Obligation};
-use crate::smt::{check_valid, SmtConfig, Verdict};
+use crate::smt::{check_valid, SmtConfig, Validity};
 use crate::source::SourceDb;
 use std::path::Path;
 
@@ -12,24 +12,24 @@ use std::path::Path;
 fn example_obligations(path: &str) -> (Program, Vec<Obligation>) {
     let mut db = SourceDb::new();
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join(path);
-    let root = crate::syntax::load_root(&mut db, &file).expect("example readable");
+    let root = crate::fsload::load_root(&mut db, &file).expect("example readable");
     let (parsed, d) = crate::syntax::parse_with_imports(&mut db, root, &mut |p| std::fs::read_to_string(p));
     assert!(d.is_empty(), "{d:?}");
     let (prog, d) = crate::lower::lower(&parsed);
     assert!(d.is_empty(), "{d:?}");
     let body = prog.choreography.as_ref().map(|c| c.body.clone()).expect("a choreography");
-    let (d, mut obs) = crate::wf::scope::check(&prog, &body);
+    let (mut obs, d) = crate::wf::scope::check(&prog, &body);
     assert!(d.is_empty(), "{d:?}");
     let (locals, d) = crate::project::project_all(&prog);
     assert!(d.is_empty(), "{d:?}");
-    let (d, typing) = crate::typeck::check_processes(&prog, &locals);
+    let (typing, d) = crate::typeck::check_processes(&prog, &locals);
     assert!(d.is_empty(), "{d:?}");
     obs.extend(typing);
     (prog, obs)
 }
 
 /// Decides every `Goal::Valid` obligation; returns one line per obligation.
-fn decide(path: &str) -> Vec<(String, Verdict)> {
+fn decide(path: &str) -> Vec<(String, Validity)> {
     let (prog, obs) = example_obligations(path);
     obs.iter()
         .filter_map(|ob| match &ob.goal {
@@ -55,7 +55,7 @@ fn all_hold(path: &str, expected: usize) {
     for (line, v) in &results {
         eprintln!("{path}: {v:?}: {line}");
     }
-    let failed: Vec<&(String, Verdict)> = results.iter().filter(|(_, v)| *v != Verdict::Holds).collect();
+    let failed: Vec<&(String, Validity)> = results.iter().filter(|(_, v)| *v != Validity::Holds).collect();
     assert!(failed.is_empty(), "{path}: {failed:#?}");
     assert_eq!(results.len(), expected, "{path}: the number of predicate obligations");
 }

@@ -135,7 +135,7 @@ fn a_post_with_old_keeps_what_was_known() {
     let (prog, g) = setup(&["C: x == gx && v == 0 && n > x"]);
     let c = role(&prog, "C");
     let mut s = Sigma::from_facts(&g);
-    s.run(&prog, c, prim(&prog, "idle"), &[]);
+    s.apply_motion(&prog, c, prim(&prog, "idle"), &[]);
     assert_eq!(shown(&prog, &s), vec!["gx < n", "C.x == gx", "C.v == 0", "-10 <= C.x", "C.x <= 10"]);
 }
 
@@ -146,7 +146,7 @@ fn a_move_replaces_the_position_and_keeps_facts_about_values() {
     let mut s = Sigma::initial(&prog, [c]);
     let (_, g) = setup(&["C: n > x"]);
     s.assume(&g[0]);
-    s.run(&prog, c, prim(&prog, "move"), &[constant(&prog, "gx")]);
+    s.apply_motion(&prog, c, prim(&prog, "move"), &[constant(&prog, "gx")]);
     // `old(C.x) == 0` defines the snapshot: `C.x < n` before is `0 < n` now.
     assert_eq!(shown(&prog, &s), vec!["0 < n", "C.x == gx", "C.v == 0", "-10 <= C.x", "C.x <= 10"]);
 }
@@ -158,9 +158,9 @@ fn one_level_of_snapshots() {
     let c = role(&prog, "C");
     let mut s = Sigma::from_facts(&g);
     let one = Expr { kind: ExprKind::Int(1), sort: Sort::Int, loc: Loc::default() };
-    s.run(&prog, c, prim(&prog, "step"), std::slice::from_ref(&one));
+    s.apply_motion(&prog, c, prim(&prog, "step"), std::slice::from_ref(&one));
     assert_eq!(shown(&prog, &s), vec!["1 <= old(C.x)", "C.x == old(C.x) + 1", "-10 <= C.x", "C.x <= 10"]);
-    s.run(&prog, c, prim(&prog, "step"), std::slice::from_ref(&one));
+    s.apply_motion(&prog, c, prim(&prog, "step"), std::slice::from_ref(&one));
     // The first snapshot is gone with every fact about it.
     assert_eq!(
         shown(&prog, &s),
@@ -168,7 +168,7 @@ fn one_level_of_snapshots() {
     );
     let again = {
         let mut t = s.clone();
-        t.run(&prog, c, prim(&prog, "step"), std::slice::from_ref(&one));
+        t.apply_motion(&prog, c, prim(&prog, "step"), std::slice::from_ref(&one));
         t
     };
     assert_eq!(again, s, "a loop of steps reaches a fixpoint");
@@ -181,7 +181,7 @@ fn arguments_are_evaluated_when_the_motion_starts() {
     let c = role(&prog, "C");
     let x = var(Var::Role(c, Slot::State(0)), &Sort::Real);
     let mut s = Sigma::from_facts(&g);
-    s.run(&prog, c, prim(&prog, "step"), &[x]);
+    s.apply_motion(&prog, c, prim(&prog, "step"), &[x]);
     assert_eq!(shown(&prog, &s), vec!["C.x == 4", "-10 <= C.x", "C.x <= 10"]);
 }
 
@@ -226,13 +226,13 @@ fn number_literals_are_computed_exactly() {
     };
     let start = {
         let mut t = s.clone();
-        t.run(&prog, c, prim(&prog, "step"), &[half(true)]);
-        t.run(&prog, c, prim(&prog, "step"), &[half(false)]);
+        t.apply_motion(&prog, c, prim(&prog, "step"), &[half(true)]);
+        t.apply_motion(&prog, c, prim(&prog, "step"), &[half(false)]);
         t
     };
-    s.run(&prog, c, prim(&prog, "step"), &[half(false)]);
+    s.apply_motion(&prog, c, prim(&prog, "step"), &[half(false)]);
     assert_eq!(shown(&prog, &s), vec!["C.x == 0.5", "-10 <= C.x", "C.x <= 10"]);
-    s.run(&prog, c, prim(&prog, "step"), &[half(true)]);
+    s.apply_motion(&prog, c, prim(&prog, "step"), &[half(true)]);
     assert_eq!(shown(&prog, &s), vec!["C.x == 0", "-10 <= C.x", "C.x <= 10"]);
     assert_eq!(s, start);
 }
@@ -242,7 +242,7 @@ fn min_and_max_simplify_where_the_context_orders_them() {
     let (prog, _) = setup(&[]);
     let a = role(&prog, "A");
     let mut s = Sigma::initial(&prog, [a]);
-    s.run(&prog, a, prim(&prog, "work"), &[]);
+    s.apply_motion(&prog, a, prim(&prog, "work"), &[]);
     // `cz <= old(A.ze)` makes `min(cz, old(A.ze))` just `cz`.
     assert_eq!(
         shown(&prog, &s),
@@ -257,7 +257,7 @@ fn min_and_max_simplify_where_the_context_orders_them() {
         ]
     );
     // A second motion forgets `cz <= old(A.ze)` but `cz <= A.ze` survived, as `cz <= old(A.ze)`.
-    s.run(&prog, a, prim(&prog, "work"), &[]);
+    s.apply_motion(&prog, a, prim(&prog, "work"), &[]);
     assert!(shown(&prog, &s).contains(&"cz <= A.ze".to_string()), "{:?}", shown(&prog, &s));
 }
 
@@ -268,7 +268,7 @@ fn joint_motions_move_every_part() {
     let mut s = Sigma::initial(&prog, prog.role_ids());
     let idle = PrimApp { prim: prim(&prog, "idle"), args: vec![], loc: Loc::default() };
     let work = PrimApp { prim: prim(&prog, "work"), args: vec![], loc: Loc::default() };
-    s.run_joint(&prog, &[(c, idle), (a, work)]);
+    s.apply_joint_motion(&prog, &[(c, idle), (a, work)]);
     let facts = shown(&prog, &s);
     for f in ["C.x == 0", "C.v == 0", "cz <= A.ze"] {
         assert!(facts.contains(&f.to_string()), "{f} in {facts:?}");

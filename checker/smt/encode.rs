@@ -323,7 +323,7 @@ impl<'p> Encoder<'p> {
     }
 
     fn term(&mut self, e: &Expr) -> Result<Term, Unsupported> {
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.term_inner(e))
+        crate::stack::deep(|| self.term_inner(e))
     }
 
     fn term_inner(&mut self, e: &Expr) -> Result<Term, Unsupported> {

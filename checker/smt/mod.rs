@@ -141,8 +141,9 @@ pub struct Failure {
     pub bound: Vec<(String, String, crate::source::Span)>,
 }
 
+/// Whether a formula is valid: the answer to [`check_valid`].
 #[derive(Clone, Debug, PartialEq)]
-pub enum Verdict {
+pub enum Validity {
     Holds,
     Fails(Vec<Assignment>),
     Unknown(Why),
@@ -196,7 +197,7 @@ impl Stats {
 }
 
 /// Decides whether `hyps ⇒ goal` is valid (one query, no cache).
-pub fn check_valid(prog: &Program, hyps: &[Expr], goal: &Expr, cfg: &SmtConfig) -> Verdict {
+pub fn check_valid(prog: &Program, hyps: &[Expr], goal: &Expr, cfg: &SmtConfig) -> Validity {
     let ob = Obligation {
         rule: crate::obligation::Rule::TOut,
         span: Default::default(),
@@ -205,9 +206,9 @@ pub fn check_valid(prog: &Program, hyps: &[Expr], goal: &Expr, cfg: &SmtConfig) 
         goal: Goal::Valid(goal.clone()),
     };
     match discharge(prog, &[ob], &[], &SmtConfig { jobs: 1, ..cfg.clone() }).remove(0).0 {
-        Decision::Holds(_) => Verdict::Holds,
-        Decision::Fails(f) => Verdict::Fails(f.values),
-        Decision::Unknown { why, .. } => Verdict::Unknown(why),
+        Decision::Holds(_) => Validity::Holds,
+        Decision::Fails(f) => Validity::Fails(f.values),
+        Decision::Unknown { why, .. } => Validity::Unknown(why),
     }
 }
 
@@ -805,19 +806,19 @@ pub(crate) mod tests {
         (prog, g)
     }
 
-    fn valid(consts: &str, p: &str) -> Verdict {
+    fn valid(consts: &str, p: &str) -> Validity {
         let (prog, e) = pred(consts, p);
         check_valid(&prog, &[], &e, &SmtConfig::default())
     }
 
     #[test]
     fn linear_arithmetic_is_decided() {
-        assert_eq!(valid("", "x > 1 => x > 0"), Verdict::Holds);
-        assert_eq!(valid("const lane = 0.65;", "x >= lane => x > 0.6"), Verdict::Holds);
-        assert_eq!(valid("", "n > 1 => 2 * n >= 4"), Verdict::Holds);
-        assert_eq!(valid("", "(if b then x else 0 - x) >= 0 || (b && x < 0) || (!b && x > 0)"), Verdict::Holds);
-        assert_eq!(valid("", "min(x, 1) <= 1 && abs(x) >= 0"), Verdict::Holds);
-        assert_eq!(valid("", "x == -0.5 => x < 0"), Verdict::Holds);
+        assert_eq!(valid("", "x > 1 => x > 0"), Validity::Holds);
+        assert_eq!(valid("const lane = 0.65;", "x >= lane => x > 0.6"), Validity::Holds);
+        assert_eq!(valid("", "n > 1 => 2 * n >= 4"), Validity::Holds);
+        assert_eq!(valid("", "(if b then x else 0 - x) >= 0 || (b && x < 0) || (!b && x > 0)"), Validity::Holds);
+        assert_eq!(valid("", "min(x, 1) <= 1 && abs(x) >= 0"), Validity::Holds);
+        assert_eq!(valid("", "x == -0.5 => x < 0"), Validity::Holds);
     }
 
     /// Two payload fields named `v` are two values: two Z3 constants, shown as `v` and
@@ -856,7 +857,7 @@ pub(crate) mod tests {
         };
         let two = Expr { kind: crate::hir::ExprKind::Int(2), sort: Sort::Int, loc: crate::hir::Loc::default() };
         let goal = bin(BinOp::Eq, bin(BinOp::Add, lhs(&hyps[0]), lhs(&hyps[1])), two);
-        let Verdict::Fails(model) = check_valid(&prog, &hyps, &goal, &SmtConfig::default()) else {
+        let Validity::Fails(model) = check_valid(&prog, &hyps, &goal, &SmtConfig::default()) else {
             panic!("v + v#2 == 2 does not follow from v == 1 and v#2 == 2: two values, not one")
         };
         let value = |n: &str| model.iter().find(|a| a.name == n).map(|a| a.value.clone());
@@ -866,7 +867,7 @@ pub(crate) mod tests {
 
     #[test]
     fn a_counterexample_names_the_variables() {
-        let Verdict::Fails(model) = valid("", "x > 0") else { panic!("x > 0 is not valid") };
+        let Validity::Fails(model) = valid("", "x > 0") else { panic!("x > 0 is not valid") };
         let x = model.iter().find(|a| a.name == "A.x").expect("A.x in the model");
         let v: f64 = x.value.parse().unwrap_or(1.0);
         assert!(v <= 0.0, "the counterexample must falsify x > 0: {model:?}");
@@ -874,25 +875,25 @@ pub(crate) mod tests {
 
     #[test]
     fn sqrt_and_powers_are_encoded_soundly() {
-        assert_eq!(valid("", "x >= 0 => sqrt(x)^2 == x"), Verdict::Holds);
-        assert_eq!(valid("", "x^2 >= 0"), Verdict::Holds);
-        assert!(matches!(valid("", "sqrt(x) >= 1"), Verdict::Fails(_)));
+        assert_eq!(valid("", "x >= 0 => sqrt(x)^2 == x"), Validity::Holds);
+        assert_eq!(valid("", "x^2 >= 0"), Validity::Holds);
+        assert!(matches!(valid("", "sqrt(x) >= 1"), Validity::Fails(_)));
     }
 
     #[test]
     fn trigonometry_is_enclosed_soundly() {
-        assert_eq!(valid("", "sin(x)^2 + cos(x)^2 == 1"), Verdict::Holds);
-        assert_eq!(valid("", "-1 <= sin(x) <= 1 && cos(x) <= 1"), Verdict::Holds);
-        assert_eq!(valid("", "0 <= x <= 0.1 => sin(x) >= 0 && cos(x) >= 0.99"), Verdict::Holds);
-        assert_eq!(valid("const yaw = 1.5708;", "cos(yaw) < 0.0001 && sin(yaw) > 0.9999"), Verdict::Holds);
+        assert_eq!(valid("", "sin(x)^2 + cos(x)^2 == 1"), Validity::Holds);
+        assert_eq!(valid("", "-1 <= sin(x) <= 1 && cos(x) <= 1"), Validity::Holds);
+        assert_eq!(valid("", "0 <= x <= 0.1 => sin(x) >= 0 && cos(x) >= 0.99"), Validity::Holds);
+        assert_eq!(valid("const yaw = 1.5708;", "cos(yaw) < 0.0001 && sin(yaw) > 0.9999"), Validity::Holds);
         // False, with a real counterexample near 0 (the enclosure is tight there).
-        assert!(matches!(valid("", "0 <= x <= 0.1 => sin(x) >= 0.05"), Verdict::Fails(_)));
+        assert!(matches!(valid("", "0 <= x <= 0.1 => sin(x) >= 0.05"), Validity::Fails(_)));
         // True of the real functions but beyond the polynomial enclosure: never "fails".
         assert!(matches!(
             valid("", "sin(x) <= 0.999 || cos(x) <= 0.5 || cos(x) >= 0"),
-            Verdict::Holds | Verdict::Unknown(_)
+            Validity::Holds | Validity::Unknown(_)
         ));
-        assert!(!matches!(valid("", "cos(x) >= -0.5 || x^2 >= 4"), Verdict::Fails(_)));
+        assert!(!matches!(valid("", "cos(x) >= -0.5 || x^2 >= 4"), Validity::Fails(_)));
     }
 
     #[test]
@@ -900,20 +901,20 @@ pub(crate) mod tests {
         // The argument mentions `x` but simplifies to the rational 0.7853981633974483,
         // whose denominator (10^16) exceeds 2^53: before, only the Taylor bounds applied
         // (cos <= 0.70745) and this was not proved; now the numeral is read exactly.
-        assert_eq!(valid("", "cos(x - x + 0.7853981633974483) <= 0.7072"), Verdict::Holds);
-        assert_eq!(valid("", "sin(x - x + 0.7853981633974483) >= 0.7071"), Verdict::Holds);
+        assert_eq!(valid("", "cos(x - x + 0.7853981633974483) <= 0.7072"), Validity::Holds);
+        assert_eq!(valid("", "sin(x - x + 0.7853981633974483) >= 0.7071"), Validity::Holds);
         // The enclosure stays sound: cos(pi/4) is 0.70710678..., not below 0.70710678.
         assert!(matches!(
             valid("", "cos(x - x + 0.7853981633974483) < 0.70710678"),
-            Verdict::Fails(_) | Verdict::Unknown(_)
+            Validity::Fails(_) | Validity::Unknown(_)
         ));
     }
 
     #[test]
     fn points_and_vectors_are_triples() {
-        assert_eq!(valid("", "norm2(vector(x, 0, 0)) == x^2"), Verdict::Holds);
-        assert_eq!(valid("", "dot(point(1, 2, 3), vector(x, x, x)) == 6 * x"), Verdict::Holds);
-        assert_eq!(valid("", "(point(x, 1, 2) - point(0, 1, 2)).x == x"), Verdict::Holds);
+        assert_eq!(valid("", "norm2(vector(x, 0, 0)) == x^2"), Validity::Holds);
+        assert_eq!(valid("", "dot(point(1, 2, 3), vector(x, x, x)) == 6 * x"), Validity::Holds);
+        assert_eq!(valid("", "(point(x, 1, 2) - point(0, 1, 2)).x == x"), Validity::Holds);
     }
 
     /// [T-SESS] on two bots (radius 0.1, footprint the ball) placed `gap` apart.
@@ -967,8 +968,8 @@ pub(crate) mod tests {
             _ => panic!("expected a message"),
         };
         let (car_d, env_d) = (guard(0), guard(1));
-        assert_eq!(check_valid(&prog, std::slice::from_ref(&car_d), &env_d, &SmtConfig::default()), Verdict::Holds);
-        assert_eq!(check_valid(&prog, &[env_d], &car_d, &SmtConfig::default()), Verdict::Holds);
+        assert_eq!(check_valid(&prog, std::slice::from_ref(&car_d), &env_d, &SmtConfig::default()), Validity::Holds);
+        assert_eq!(check_valid(&prog, &[env_d], &car_d, &SmtConfig::default()), Validity::Holds);
     }
 
     /// The vacuity guard's witness point never calls an unsatisfiable context
@@ -994,7 +995,7 @@ pub(crate) mod tests {
             if shown {
                 // A witness is a model: Z3 agrees the facts are satisfiable.
                 let none = Expr::bool(false, crate::hir::Loc::default());
-                assert!(matches!(check_valid(&prog, &facts, &none, &SmtConfig::default()), Verdict::Fails(_)), "{p}");
+                assert!(matches!(check_valid(&prog, &facts, &none, &SmtConfig::default()), Validity::Fails(_)), "{p}");
             }
         }
     }
@@ -1096,7 +1097,7 @@ pub(crate) mod tests {
         let (prog, e) = pred("", "n > 0 && m > 0 && k > 0 => n^3 + m^3 != k^3");
         let cfg = SmtConfig { timeout: Duration::from_millis(1), ..SmtConfig::default() };
         match check_valid(&prog, &[], &e, &cfg) {
-            Verdict::Unknown(_) => {}
+            Validity::Unknown(_) => {}
             other => panic!("expected unknown, got {other:?}"),
         }
     }

@@ -11,10 +11,6 @@ use crate::diag::{Code, Diagnostic};
 use crate::source::{FileId, SourceDb};
 use std::path::{Path, PathBuf};
 
-// The file-system readers moved to the IO edge, `fsload`; re-exported at their old paths
-// so that other branches keep compiling (the lead removes this after the merge).
-pub use crate::fsload::{load, load_root, load_stdin, read_source};
-
 /// Where imports come from: the text of the file at a path (already joined to the
 /// importer's directory and normalised), or why it cannot be had. A [`SourceError`] inside
 /// the `io::Error` ([`source_error`]) becomes E0106 or E0107 at the import; any other

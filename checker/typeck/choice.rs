@@ -5,9 +5,9 @@
 use super::out::fields_text;
 use super::{Checker, State};
 use crate::diag::{Code, Diagnostic};
+use crate::hir::expr::{subst_values, value_expr};
 use crate::hir::print::{describe, motion_text};
 use crate::hir::*;
-use crate::subtype::{subst_values, value_expr};
 
 impl<'a> Checker<'a> {
     /// [T-CHOICE1,2] with [SUB-IN1,2]: every label of the type is handled; each branch
@@ -19,8 +19,8 @@ impl<'a> Checker<'a> {
         default: Option<&'a (PrimApp, Box<Process>)>,
         loc: Loc,
         tb: &[RecvBranch],
-        td: Option<&(Vec<PrimApp>, LocalRc)>,
-        t: &LocalRc,
+        td: Option<&(Vec<PrimApp>, LocalArc)>,
+        t: &LocalArc,
         st: &State<'a>,
     ) {
         let missing: Vec<&RecvBranch> = tb.iter().filter(|b| !arms.iter().any(|a| a.label == b.label)).collect();

@@ -10,7 +10,7 @@
 //!   allowed, [SUB-IN]); each branch continues under `Σ ∧ P_i{x_i/v}`;
 //! - [T-MOTION] a motion matches `dt<a>` (or refines it, [SUB-MOTION]); the obligation
 //!   is `Σ ⇒ Pre`, and afterwards Σ is the strongest postcondition of the motion
-//!   ([`Sigma::run`]): what held of the participant's variables now holds of their
+//!   ([`Sigma::apply_motion`]): what held of the participant's variables now holds of their
 //!   snapshot `old(r.x)`, and the primitive's postcondition (with its `old(x)`) and the
 //!   kind's invariant are added, so `x == old(x)` keeps the position known before.
 //!   Facts about other participants are forgotten: they moved too, in ways this process
@@ -47,17 +47,18 @@ mod report;
 mod walk;
 
 use crate::diag::{Code, Diagnostic};
+use crate::hir::expr::mentions;
 use crate::hir::node::NodeRef;
 use crate::hir::print::{print_bounded, NOTE_NODES};
 use crate::hir::*;
 use crate::obligation::{Goal, Obligation, Rule};
 use crate::sigma::{self, Sigma};
-use crate::subtype::{mentions, RecEnv};
+use crate::subtype::RecEnv;
 use std::collections::{BTreeMap, HashMap, HashSet};
 
 /// Checks every participant's process against its projection. Participants whose
 /// projection failed are skipped (the projection error is reported already).
-pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalRc>) -> (Vec<Diagnostic>, Vec<Obligation>) {
+pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalArc>) -> (Vec<Obligation>, Vec<Diagnostic>) {
     let mut diags = Vec::new();
     let mut obligations = Vec::new();
     for role in prog.role_ids() {
@@ -103,7 +104,7 @@ pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalRc>) 
     let mut seen = HashSet::new();
     diags.retain(|d| seen.insert((d.code, d.span, d.message.clone())));
     dedupe(&mut obligations);
-    (diags, obligations)
+    (obligations, diags)
 }
 
 /// A loop checked under several contexts may meet the same goal under the same
@@ -176,7 +177,7 @@ pub const WIDEN_AFTER: usize = 8;
 
 /// A process loop body and a type node, with the context and value map they are
 /// checked under.
-type LoopKey<'a> = (NodeRef<&'a Process>, NodeRef<LocalRc>, Vec<Expr>, Vec<(ValueId, Expr)>);
+type LoopKey<'a> = (NodeRef<&'a Process>, NodeRef<LocalArc>, Vec<Expr>, Vec<(ValueId, Expr)>);
 
 struct Checker<'a> {
     prog: &'a Program,
@@ -188,7 +189,7 @@ struct Checker<'a> {
     /// (loop body, type node, context, value map) already checked or being checked.
     assumed: HashSet<LoopKey<'a>>,
     /// How many contexts each (loop body, type node) pair has been checked under.
-    contexts: HashMap<(NodeRef<&'a Process>, NodeRef<LocalRc>), usize>,
+    contexts: HashMap<(NodeRef<&'a Process>, NodeRef<LocalArc>), usize>,
 }
 
 /// What the checker knows at a point of the process.
@@ -256,7 +257,7 @@ impl<'a> Checker<'a> {
         out
     }
 
-    fn check(&mut self, p: &'a Process, t: LocalRc, st: State<'a>) {
+    fn check(&mut self, p: &'a Process, t: LocalArc, st: State<'a>) {
         crate::stack::deep(|| self.check_inner(p, t, st))
     }
 

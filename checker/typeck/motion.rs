@@ -3,10 +3,11 @@
 //! context implies the precondition, and Σ becomes the strongest postcondition.
 
 use super::{Checker, State};
+use crate::hir::expr::{and_all, conjuncts, mentions, subst_values};
 use crate::hir::*;
 use crate::obligation::{Goal, Obligation, Rule};
 use crate::sigma::instantiate;
-use crate::subtype::{and_all, conjuncts, mentions, refinement, subst_values};
+use crate::subtype::refinement;
 
 impl Checker<'_> {
     /// [T-MOTION] with [SUB-MOTION]: refinement, `Σ ⇒ Pre`, then Σ := Post.
@@ -48,7 +49,7 @@ impl Checker<'_> {
             });
         }
         // Σ := the strongest postcondition; the others moved meanwhile.
-        st.sigma.run(self.prog, self.role, a.prim, &args);
+        st.sigma.apply_motion(self.prog, self.role, a.prim, &args);
         let me = self.role;
         st.sigma.forget(&|v| matches!(v, Var::Role(r, _) | Var::Snap(r, _) if *r != me));
         st.vals.retain(|_, e| !mentions(e, &is_physical));

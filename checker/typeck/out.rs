@@ -4,9 +4,9 @@
 
 use super::{Checker, State};
 use crate::diag::{Code, Diagnostic};
+use crate::hir::expr::{and_all, conjuncts, subst_values};
 use crate::hir::*;
 use crate::obligation::{Goal, Obligation, Rule};
-use crate::subtype::{and_all, conjuncts, subst_values};
 
 impl Checker<'_> {
     /// [T-OUT]: arity, sorts, and the obligation `Σ ⇒ guard ∧ refinement{args/fields}`.

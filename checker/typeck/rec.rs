@@ -5,11 +5,11 @@
 //! type's parameters (E0714).
 
 use super::{hash_of, Checker, State, WIDEN_AFTER};
+use crate::hir::expr::value_expr;
 use crate::hir::node::NodeRef;
 use crate::hir::*;
 use crate::obligation::{Goal, Obligation, Rule};
 use crate::sigma::{self, Sigma};
-use crate::subtype::value_expr;
 
 impl<'a> Checker<'a> {
     /// The process's loop parameters get `values` (process terms, evaluated now), at
@@ -85,7 +85,7 @@ impl<'a> Checker<'a> {
 
     /// Coinduction for process loops: whether `body` still needs checking against `t`
     /// under the current context. Widens the context after [`WIDEN_AFTER`] variants.
-    pub(super) fn enter(&mut self, body: &'a Process, t: &LocalRc, st: &mut State) -> bool {
+    pub(super) fn enter(&mut self, body: &'a Process, t: &LocalArc, st: &mut State) -> bool {
         let pair = (NodeRef::new(body), NodeRef::from(t));
         let n = self.contexts.get(&pair).copied().unwrap_or(0);
         if n >= WIDEN_AFTER {

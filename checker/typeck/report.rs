@@ -9,7 +9,7 @@ use crate::hir::*;
 
 impl Checker<'_> {
     /// E0702: the process and the type disagree on the kind of the next action.
-    pub(super) fn mismatch(&mut self, p: &Process, t: &LocalRc, looped: Option<&(String, Loc)>) {
+    pub(super) fn mismatch(&mut self, p: &Process, t: &LocalArc, looped: Option<&(String, Loc)>) {
         let expected = describe(self.prog, t);
         if let (Process::End(loc), Some((var, var_loc))) = (p, looped) {
             return self.diags.push(
@@ -47,7 +47,7 @@ impl Checker<'_> {
     }
 
     /// E0706: looping back to `var` does not fit the type at this point.
-    pub(super) fn loop_mismatch(&mut self, var: &str, loc: Loc, body: &Process, t: &LocalRc) {
+    pub(super) fn loop_mismatch(&mut self, var: &str, loc: Loc, body: &Process, t: &LocalArc) {
         let msg = match &**t {
             Local::End(_) => format!("the process loops back to `{var}` here, but the local type ends"),
             _ => format!(

@@ -26,7 +26,7 @@ fn check_src(src: &str) -> (Program, Vec<Diagnostic>, Vec<Obligation>) {
     assert!(d.is_empty(), "{d:?}");
     let (map, d) = project_all(&prog);
     assert!(d.is_empty(), "{d:?}");
-    let (diags, obs) = check_processes(&prog, &map);
+    let (obs, diags) = check_processes(&prog, &map);
     (prog, diags, obs)
 }
 

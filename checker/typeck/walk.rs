@@ -6,14 +6,15 @@
 
 use super::{Checker, State};
 use crate::diag::{Code, Diagnostic};
+use crate::hir::expr::{not, subst_values};
 use crate::hir::print::describe;
 use crate::hir::*;
 use crate::sigma::{self};
-use crate::subtype::{not, subst_values, unfold_with, RecStep};
+use crate::subtype::{unfold_with, RecStep};
 
 impl<'a> Checker<'a> {
     /// Checks `p` against `t`. Sequences are followed in a loop; branches recurse.
-    pub(super) fn check_inner(&mut self, mut p: &'a Process, mut t: LocalRc, mut st: State<'a>) {
+    pub(super) fn check_inner(&mut self, mut p: &'a Process, mut t: LocalArc, mut st: State<'a>) {
         loop {
             // The type's loop steps, with the new values of its parameters (type terms).
             let mut steps: Vec<(bool, Vec<RecParam>, Vec<Expr>)> = Vec::new();

@@ -21,7 +21,7 @@
 //!   choice Σ is the join of the branches that continue (what they agree on, with
 //!   literal bounds weakened to cover every branch);
 //! - a joint motion `dt<p: a, q: b>` applies the effect of every part
-//!   ([`Sigma::run_joint`]: strongest postcondition, one level of snapshots);
+//!   ([`Sigma::apply_joint_motion`]: strongest postcondition, one level of snapshots);
 //! - `g1 * g2`: each side starts from the facts of Σ over its own participants (and over
 //!   values and constants only), and afterwards Σ is the conjunction of the sides' ends;
 //! - `mu t(n: S {R} = e). G`: R must hold of `e` at entry (E0414) and of the arguments
@@ -39,11 +39,11 @@
 use crate::diag::{Code, Diagnostic};
 use crate::hir::expr::BinOp;
 use crate::hir::*;
-use crate::obligation::{Goal, Obligation, Rule, Run, Side};
+use crate::obligation::{Goal, Obligation, RoleMotion, Rule, Side};
 use crate::sigma::Sigma;
 use std::collections::HashMap;
 
-pub fn check(prog: &Program, g: &Global) -> (Vec<Diagnostic>, Vec<Obligation>) {
+pub fn check(prog: &Program, g: &Global) -> (Vec<Obligation>, Vec<Diagnostic>) {
     let mut s = Scope { prog, diags: Vec::new(), recs: HashMap::new(), unfolding: Vec::new() };
     let mut used = Vec::new();
     g.participants(&mut used);
@@ -74,7 +74,7 @@ pub fn check(prog: &Program, g: &Global) -> (Vec<Diagnostic>, Vec<Obligation>) {
     };
     let start = c.initial();
     c.walk(g, start);
-    (s.diags, c.obligations)
+    (c.obligations, s.diags)
 }
 
 struct Scope<'a> {
@@ -95,7 +95,7 @@ impl<'a> Scope<'a> {
     /// `original` is false inside an unfolded copy, where per-node errors were already
     /// produced for the original.
     fn walk(&mut self, g: &'a Global, scope: &[RoleId], original: bool) {
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.walk_inner(g, scope, original))
+        crate::stack::deep(|| self.walk_inner(g, scope, original))
     }
 
     fn out_of_scope(&mut self, who: &[RoleId], scope: &[RoleId], loc: Loc, what: &str) {
@@ -329,7 +329,7 @@ struct Contexts<'a> {
     jumps: Vec<(usize, Sigma)>,
     /// The primitives run inside some `*`, in walk order, with the context each starts
     /// in; each side of a `*` takes the ones logged while it was walked.
-    runs: Vec<Run>,
+    runs: Vec<RoleMotion>,
     /// How many `*` enclose the current point.
     in_par: usize,
     steps: usize,
@@ -339,7 +339,7 @@ impl<'a> Contexts<'a> {
     /// Walks `g` from context `sigma`; the context at its end, or `None` when no path
     /// goes past it (it loops back or ends).
     fn walk(&mut self, g: &'a Global, sigma: Sigma) -> Option<Sigma> {
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.walk_inner(g, sigma))
+        crate::stack::deep(|| self.walk_inner(g, sigma))
     }
 
     fn walk_inner(&mut self, g: &'a Global, mut sigma: Sigma) -> Option<Sigma> {
@@ -511,10 +511,10 @@ impl<'a> Contexts<'a> {
         });
         if self.in_par > 0 {
             for (role, app) in &m.parts {
-                self.runs.push(Run { role: *role, app: app.clone(), hyps: sigma.facts().to_vec() });
+                self.runs.push(RoleMotion { role: *role, app: app.clone(), hyps: sigma.facts().to_vec() });
             }
         }
-        sigma.run_joint(self.prog, &m.parts);
+        sigma.apply_joint_motion(self.prog, &m.parts);
     }
 
     /// Def 4.4 (1): under Σ, some guard holds.
@@ -692,7 +692,7 @@ mod tests {
         let (p, d) = lower_src(&format!("{SYS} choreography G = {chor};"));
         assert!(d.is_empty(), "{d:?}");
         let c = p.choreography.as_ref().expect("choreography");
-        let (d, o) = super::check(&p, &c.body);
+        let (o, d) = super::check(&p, &c.body);
         (d.into_iter().map(|d| d.code).collect(), o.into_iter().map(|o| o.rule).collect())
     }
 
@@ -738,7 +738,7 @@ mod tests {
             choreography G = dt<P: go> * dt<O: watch>. end;";
         let (p, d) = lower_src(src);
         assert!(d.is_empty(), "{d:?}");
-        let (d, _) = super::check(&p, &p.choreography.as_ref().unwrap().body);
+        let (_, d) = super::check(&p, &p.choreography.as_ref().unwrap().body);
         assert_eq!(d.iter().map(|d| d.code).collect::<Vec<_>>(), vec![Code::CoupledAcrossSeparation]);
     }
 
@@ -776,7 +776,7 @@ mod context_tests {
         let (p, d) = lower_src(&format!("{SYS} choreography G = {chor};"));
         assert!(d.is_empty(), "{d:?}");
         let body = p.choreography.as_ref().map(|c| c.body.clone()).expect("choreography");
-        let (d, o) = super::check(&p, &body);
+        let (o, d) = super::check(&p, &body);
         assert!(d.is_empty(), "{d:?}");
         (p, o)
     }
@@ -918,7 +918,7 @@ mod context_tests {
         let (p, d) = lower_src(&format!("{FREE} choreography G = {chor};"));
         assert!(d.is_empty(), "{d:?}");
         let body = p.choreography.as_ref().map(|c| c.body.clone()).expect("choreography");
-        let (d, o) = super::check(&p, &body);
+        let (o, d) = super::check(&p, &body);
         assert!(d.is_empty(), "{d:?}");
         (p, o)
     }

@@ -32,7 +32,7 @@ pub fn first_message(g: &Global) -> Option<&Msg> {
 
 impl Side<'_> {
     fn walk(&mut self, g: &Global, tail: bool, in_par: bool) {
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.walk_inner(g, tail, in_par))
+        crate::stack::deep(|| self.walk_inner(g, tail, in_par))
     }
 
     fn walk_inner(&mut self, g: &Global, tail: bool, in_par: bool) {

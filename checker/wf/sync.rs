@@ -185,7 +185,7 @@ impl<'g> Builder<'g> {
     /// (the transitive closure) is therefore the same as with every edge, and so is its
     /// transitive reduction, which every generating edge set contains.
     fn walk(&mut self, g: &'g Global, path: &mut Vec<(u32, u32, bool)>) -> (std::ops::Range<usize>, Frontier) {
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.walk_inner(g, path))
+        crate::stack::deep(|| self.walk_inner(g, path))
     }
 
     fn walk_inner(&mut self, g: &'g Global, path: &mut Vec<(u32, u32, bool)>) -> (std::ops::Range<usize>, Frontier) {
@@ -1177,7 +1177,7 @@ mod tests {
         let (p, d) = lower_src(&format!("{sys} choreography G = {chor};"));
         assert!(d.is_empty(), "{d:?}");
         let c = p.choreography.as_ref().expect("choreography");
-        let (side, (scope, _)) = (super::super::side::check(&p, &c.body), super::super::scope::check(&p, &c.body));
+        let (side, (_, scope)) = (super::super::side::check(&p, &c.body), super::super::scope::check(&p, &c.body));
         assert!(side.is_empty() && scope.is_empty(), "{side:?} {scope:?}");
         super::check(&p, &c.body).into_iter().map(|d| d.code).collect()
     }
@@ -1515,7 +1515,7 @@ mod tests {
             return None;
         }
         let c = p.choreography.as_ref()?;
-        let (side, (scope, _)) = (super::super::side::check(&p, &c.body), super::super::scope::check(&p, &c.body));
+        let (side, (_, scope)) = (super::super::side::check(&p, &c.body), super::super::scope::check(&p, &c.body));
         let clean = !side.iter().chain(&scope).any(crate::diag::Diagnostic::is_error);
         let show = |v: Vec<crate::diag::Diagnostic>| v.iter().map(|d| format!("{d:?}")).collect::<Vec<_>>();
         Some((show(super::check(&p, &c.body)), show(super::oracle::check(&p, &c.body)), clean))
@@ -1571,7 +1571,7 @@ mod tests {
         for path in files {
             let mut db = crate::source::SourceDb::new();
             let root = db.add(path.display().to_string(), std::fs::read_to_string(&path).expect("read"));
-            let (parsed, _) = crate::syntax::parse_with_imports(&mut db, root, &mut |p| crate::syntax::read_source(p));
+            let (parsed, _) = crate::syntax::parse_with_imports(&mut db, root, &mut |p| crate::fsload::read_source(p));
             let (p, _) = crate::lower::lower(&parsed);
             let Some(c) = p.choreography.as_ref() else { continue };
             let new = super::check(&p, &c.body);

@@ -139,7 +139,7 @@ impl<'g> Builder<'g> {
     /// Appends the events of `g` (in tree order, which is a topological order of the
     /// edges) and returns the range of their indices.
     fn walk(&mut self, g: &'g Global, path: &mut Vec<(u32, u32, bool)>) -> std::ops::Range<usize> {
-        stacker::maybe_grow(64 * 1024, 4 * 1024 * 1024, || self.walk_inner(g, path))
+        crate::stack::deep(|| self.walk_inner(g, path))
     }
 
     fn walk_inner(&mut self, g: &'g Global, path: &mut Vec<(u32, u32, bool)>) -> std::ops::Range<usize> {

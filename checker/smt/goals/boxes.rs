@@ -10,7 +10,7 @@ use super::super::encode::Unsupported;
 use super::{Part, Plan};
 use crate::bounds::{self, Interval};
 use crate::hir::{Builtin, Expr, PrimApp, Program, RoleId, Slot, Var};
-use crate::obligation::{Obligation, Run, Side};
+use crate::obligation::{Obligation, RoleMotion, Side};
 use std::collections::HashMap;
 
 /// [T-SESS]: the first motions of every two participants start with disjoint footprints;
@@ -107,7 +107,7 @@ pub(super) fn hull_all(boxes: &[Option<[Interval; 3]>]) -> Option<[Interval; 3]>
 
 /// A world box around one run's footprint, from the ranges its context, precondition,
 /// guarantee and invariant give the variables.
-pub fn run_box(prog: &Program, run: &Run) -> Option<[Interval; 3]> {
+pub fn run_box(prog: &Program, run: &RoleMotion) -> Option<[Interval; 3]> {
     // Ranges of the shared vocabulary (start state, values) from the context.
     let start: Vec<&Expr> = run.hyps.iter().collect();
     let shared = bounds::ranges_from(prog, &start, &bounds::closed);
