@@ -112,7 +112,12 @@ impl Lowerer {
         values: &mut Vec<ValueId>,
     ) -> Vec<Field> {
         let mut out = Vec::new();
-        for f in fields {
+        for (i, f) in fields.iter().enumerate() {
+            // Two fields of one message with one name: the second hides the first from
+            // everything after it (E0206, as for a receive's binders).
+            if let Some(first) = fields[..i].iter().find(|g| g.name.name == f.name.name) {
+                self.diags.push(super::dup(f.name.span, "payload field", &f.name.name, first.name.span));
+            }
             let sort = self.sort(&f.sort);
             let v = self.new_value(&f.name, sort.clone(), origin.clone());
             values.push(v);
@@ -139,7 +144,10 @@ impl Lowerer {
         values: &mut Vec<ValueId>,
     ) -> Vec<RecParam> {
         let mut out = Vec::new();
-        for p in params {
+        for (i, p) in params.iter().enumerate() {
+            if let Some(first) = params[..i].iter().find(|q| q.name.name == p.name.name) {
+                self.diags.push(super::dup(p.name.span, "recursion parameter", &p.name.name, first.name.span));
+            }
             let sort = self.sort(&p.sort);
             let outer = values.clone();
             let env =
