@@ -430,7 +430,7 @@ fn wide_dt(n: usize) -> (Program, Vec<(RoleId, PrimApp)>) {
 
 /// The effect of a joint motion grows linearly with its participants: eliminating the
 /// snapshot of each of n carts touches the facts about that cart, not all of Σ. (With
-/// the plain loop, four times the carts took about sixteen times as long.)
+/// the plain loop, in a debug build, 200 carts took 0.64 s and 800 carts 11.8 s.)
 #[test]
 fn a_wide_joint_motion_takes_time_linear_in_its_participants() {
     let time = |n: usize| {
@@ -450,7 +450,15 @@ fn a_wide_joint_motion_takes_time_linear_in_its_participants() {
         assert_eq!(after.len(), 6 * n, "{:?}", shown(&prog, &after).iter().take(12).collect::<Vec<_>>());
         best
     };
-    let (small, big) = (time(200), time(800));
-    eprintln!("200 carts: {small:?}, 800 carts: {big:?}");
-    assert!(big < small * 9, "200 carts: {small:?}, 800 carts: {big:?}");
+    // Eight times the carts: linear is x8, the plain loop was x64. Timings on a loaded
+    // machine stray: a linear implementation passes one of three attempts.
+    let mut seen = Vec::new();
+    for _ in 0..3 {
+        let (small, big) = (time(100), time(800));
+        seen.push((small, big));
+        if big < small * 24 {
+            return;
+        }
+    }
+    panic!("100 carts, 800 carts: {seen:?}");
 }

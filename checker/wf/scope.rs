@@ -819,9 +819,17 @@ mod scale_tests {
             best
         };
         // Eight times the parts: linear is x8, the pairwise comparisons were x40 and more.
-        let (small, big) = (time(1000), time(8000));
-        eprintln!("1000 parts: {small:?}, 8000 parts: {big:?}");
-        assert!(big < small * 24, "1000 parts: {small:?}, 8000 parts: {big:?}");
+        // Timings on a loaded machine stray: a linear implementation passes one of three
+        // attempts.
+        let mut seen = Vec::new();
+        for _ in 0..3 {
+            let (small, big) = (time(1000), time(8000));
+            seen.push((small, big));
+            if big < small * 24 {
+                return;
+            }
+        }
+        panic!("1000 parts, 8000 parts: {seen:?}");
     }
 }
 

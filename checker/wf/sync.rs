@@ -1625,9 +1625,17 @@ mod tests {
             }
             best
         };
-        let (small, big) = (check(1000), check(4000));
-        eprintln!("1000 parts: {small:?}, 4000 parts: {big:?}");
-        assert!(big < small * 9, "1000 parts: {small:?}, 4000 parts: {big:?}");
+        // Eight times the parts: linear is x8, the pairwise sweep was x64. Timings on a
+        // loaded machine stray: a linear implementation passes one of three attempts.
+        let mut seen = Vec::new();
+        for _ in 0..3 {
+            let (small, big) = (check(500), check(4000));
+            seen.push((small, big));
+            if big < small * 24 {
+                return;
+            }
+        }
+        panic!("500 parts, 4000 parts: {seen:?}");
     }
 
     #[test]
