@@ -3,12 +3,15 @@
 //! with one level of snapshots. Every step is an equivalence or a weakening, so Σ after
 //! a motion over-approximates the states the motion may end in.
 
+use super::fact_hash;
+use super::normal::admissible;
 use super::normal::{binary, normalize, var};
 use super::{instantiate, invariant, Sigma};
 use crate::hir::expr::BinOp;
 use crate::hir::expr::{map_vars, mentions};
 use crate::hir::*;
-use std::collections::HashSet;
+use rustc_hash::{FxHashMap, FxHashSet};
+use std::collections::{BTreeSet, HashSet};
 
 impl Sigma {
     /// The effect of participant `role` running `prim` with `args` (evaluated when it
@@ -26,16 +29,18 @@ impl Sigma {
 
     fn effect(&mut self, prog: &Program, parts: &[(RoleId, PrimId, &[Expr])]) {
         let movers: Vec<RoleId> = parts.iter().map(|(r, _, _)| *r).collect();
+        // Looked up for every variable of every fact: a set, not the list (a wide `dt`).
+        let moving: FxHashSet<RoleId> = movers.iter().copied().collect();
         // 1. One level of snapshots: forget the previous one.
-        self.forget(&|v| matches!(v, Var::Snap(r, _) if movers.contains(r)));
+        self.forget(&|v| matches!(v, Var::Snap(r, _) if moving.contains(r)));
         // 2. What was true of the movers' variables is now true of their snapshots.
         let snap = |e: &Expr| {
             map_vars(e, &mut |v, sort| match v {
-                Var::Role(r, s) if movers.contains(r) => Some(var(Var::Snap(*r, *s), sort)),
+                Var::Role(r, s) if moving.contains(r) => Some(var(Var::Snap(*r, *s), sort)),
                 _ => None,
             })
         };
-        let moved = |v: &Var| matches!(v, Var::Role(r, _) if movers.contains(r));
+        let moved = |v: &Var| matches!(v, Var::Role(r, _) if moving.contains(r));
         let before = std::mem::take(&mut self.facts);
         self.set.clear();
         for f in before {
@@ -117,39 +122,88 @@ impl Sigma {
     /// While some fact is `old(r.x) == e` with `e` free of `old(r.x)`, drops it and
     /// replaces `old(r.x)` by `e` everywhere else. Definitions free of any snapshot are
     /// used first, so the result speaks of the current state where it can.
-    fn eliminate_snapshots(&mut self) -> bool {
-        let mut changed = false;
-        while let Some((i, v, def)) = self.definition(true).or_else(|| self.definition(false)) {
-            changed = true;
-            let facts = std::mem::take(&mut self.facts);
-            self.set.clear();
-            for (j, f) in facts.into_iter().enumerate() {
-                if j == i {
+    ///
+    /// The result is that of the plain loop (take the first definition in the order of
+    /// the facts, rewrite every fact, keep the first of equal facts), computed with an
+    /// index from each snapshot to the facts that mention it: each elimination touches
+    /// only those facts, not all of Σ (a wide `dt` of n participants eliminates about 2n
+    /// snapshots from a context of about 5n facts; the plain loop was quadratic).
+    pub(super) fn eliminate_snapshots(&mut self) -> bool {
+        // Positions are those of the facts at entry; a dropped fact leaves `None`, so the
+        // order of the facts is the order of their positions.
+        let mut ground: BTreeSet<usize> = BTreeSet::new();
+        let mut any: BTreeSet<usize> = BTreeSet::new();
+        for (i, f) in self.facts.iter().enumerate() {
+            classify(f, i, &mut ground, &mut any);
+        }
+        if any.is_empty() {
+            return false;
+        }
+        let mut facts: Vec<Option<Expr>> = std::mem::take(&mut self.facts).into_iter().map(Some).collect();
+        self.set.clear();
+        // Each fact's position by its hash (equal facts hash equally), and the facts
+        // that mention each snapshot (entries may be stale: checked when used).
+        let mut by_hash: FxHashMap<u64, Vec<usize>> = FxHashMap::default();
+        let mut uses: FxHashMap<Var, Vec<usize>> = FxHashMap::default();
+        for (i, f) in facts.iter().enumerate() {
+            let Some(f) = f else { continue };
+            by_hash.entry(fact_hash(f)).or_default().push(i);
+            index_snapshots(f, i, &mut uses);
+        }
+        let unlink = |by_hash: &mut FxHashMap<u64, Vec<usize>>, f: &Expr, i: usize| {
+            if let Some(b) = by_hash.get_mut(&fact_hash(f)) {
+                b.retain(|k| *k != i);
+            }
+        };
+        while let Some((i, is_ground)) = ground.first().map(|i| (*i, true)).or_else(|| any.first().map(|i| (*i, false)))
+        {
+            ground.remove(&i);
+            any.remove(&i);
+            let Some(f) = facts[i].take() else { continue };
+            unlink(&mut by_hash, &f, i);
+            let Some((v, def)) = definition_of(&f, is_ground) else { continue };
+            // The facts that mention `v`, taken out in order, then rewritten and put back
+            // in order: a rewritten fact equal to an earlier fact is dropped; equal to a
+            // later one, it takes that one's place (the first of equal facts stays).
+            let mut hit: Vec<usize> = uses.remove(&v).unwrap_or_default();
+            hit.sort_unstable();
+            hit.dedup();
+            let mut taken = Vec::with_capacity(hit.len());
+            for j in hit {
+                let Some(g) = facts[j].take_if(|g| mentions(g, &|w| *w == v)) else { continue };
+                unlink(&mut by_hash, &g, j);
+                ground.remove(&j);
+                any.remove(&j);
+                taken.push((j, g));
+            }
+            for (j, g) in taken {
+                let g = normalize(map_vars(&g, &mut |w, _| if *w == v { Some(def.clone()) } else { None }));
+                if !admissible(&g) {
                     continue;
                 }
-                if !mentions(&f, &|w| *w == v) {
-                    self.insert(f);
-                    continue;
+                let h = fact_hash(&g);
+                let same = by_hash.get(&h).and_then(|b| b.iter().copied().find(|k| facts[*k].as_ref() == Some(&g)));
+                match same {
+                    Some(k) if k < j => continue,
+                    Some(k) => {
+                        if let Some(old) = facts[k].take() {
+                            unlink(&mut by_hash, &old, k);
+                        }
+                        ground.remove(&k);
+                        any.remove(&k);
+                    }
+                    None => {}
                 }
-                let g = map_vars(&f, &mut |w, _| if *w == v { Some(def.clone()) } else { None });
-                self.insert(normalize(g));
+                by_hash.entry(h).or_default().push(j);
+                index_snapshots(&g, j, &mut uses);
+                classify(&g, j, &mut ground, &mut any);
+                facts[j] = Some(g);
             }
         }
-        changed
-    }
-
-    /// The first fact `old(r.x) == e` (either way round) with `e` free of `old(r.x)`;
-    /// with `ground`, `e` must be free of every snapshot.
-    fn definition(&self, ground: bool) -> Option<(usize, Var, Expr)> {
-        let is_snap = |v: &Var| matches!(v, Var::Snap(..));
-        self.facts.iter().enumerate().find_map(|(i, f)| {
-            let ExprKind::Binary(BinOp::Eq, a, b) = &f.kind else { return None };
-            [(a, b), (b, a)].into_iter().find_map(|(x, e)| {
-                let ExprKind::Var(v @ Var::Snap(..)) = &x.kind else { return None };
-                let free = if ground { !mentions(e, &is_snap) } else { !mentions(e, &|w| w == v) };
-                free.then(|| (i, v.clone(), (**e).clone()))
-            })
-        })
+        for f in facts.into_iter().flatten() {
+            self.insert(f);
+        }
+        true
     }
 
     /// Rewrites `min(a, b)` to `a` (and `max(a, b)` to `b`) when Σ holds `a <= b`,
@@ -206,6 +260,40 @@ impl Sigma {
             || [BinOp::Le, BinOp::Lt, BinOp::Eq].into_iter().any(|op| self.set.contains(&binary(op, a, b)))
             || self.set.contains(&binary(BinOp::Eq, b, a))
     }
+}
+
+/// `f` as a definition `old(r.x) == e` (either way round, left first) with `e` free of
+/// `old(r.x)`; with `ground`, `e` must be free of every snapshot.
+fn definition_of(f: &Expr, ground: bool) -> Option<(Var, Expr)> {
+    let is_snap = |v: &Var| matches!(v, Var::Snap(..));
+    let ExprKind::Binary(BinOp::Eq, a, b) = &f.kind else { return None };
+    [(a, b), (b, a)].into_iter().find_map(|(x, e)| {
+        let ExprKind::Var(v @ Var::Snap(..)) = &x.kind else { return None };
+        let free = if ground { !mentions(e, &is_snap) } else { !mentions(e, &|w| w == v) };
+        free.then(|| (v.clone(), (**e).clone()))
+    })
+}
+
+/// Files the fact at position `i` among the definitions it is (of either kind).
+fn classify(f: &Expr, i: usize, ground: &mut BTreeSet<usize>, any: &mut BTreeSet<usize>) {
+    if definition_of(f, false).is_some() {
+        any.insert(i);
+        if definition_of(f, true).is_some() {
+            ground.insert(i);
+        }
+    }
+}
+
+/// Records position `i` under each snapshot the fact mentions.
+fn index_snapshots(f: &Expr, i: usize, uses: &mut FxHashMap<Var, Vec<usize>>) {
+    f.visit_vars(&mut |v, _| {
+        if matches!(v, Var::Snap(..)) {
+            let at = uses.entry(v.clone()).or_default();
+            if at.last() != Some(&i) {
+                at.push(i);
+            }
+        }
+    });
 }
 
 #[cfg(test)]
