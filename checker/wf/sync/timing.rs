@@ -1,0 +1,618 @@
+//! Timing: motions that overlap in time (E0317, E0318) and interruptions outside the
+//! interrupted primitive's duration (E0319). See ARCHITECTURE.md, "Timing".
+//!
+//! Each path of the once-unfolded tree (one branch per choice) is read as a schedule.
+//! Time is named by *instants*: the start (time 0), the end of each motion `n` (its
+//! non-interruptible primitive's end, or the moment its unique minimal sender sends, Sec
+//! 4.1), and the moment of a message whose two parties become ready at instants that
+//! nothing orders. Communication takes no time and happens as soon as both parties are
+//! ready (Fig 3: time passes only by [M-PAR], with every process in a motion), so a
+//! message happens at the later of: its sender's readiness (its previous message, or the
+//! end of the motion it was running) and its receiver's (its previous message, or the
+//! start of the interruptible motion it is running). A participant starts a motion at its
+//! previous message, or where its previous (non-interruptible, lone) motion ends. Instants
+//! are ordered by a DAG whose edges say "not later than"; the same instant is one node.
+
+use super::*;
+
+/// Past this many paths through choices the timing checks give up with an error.
+const MAX_PATHS: usize = 4096;
+
+/// The paths of the once-unfolded tree, one after the other: `visit` gets, for each, the
+/// events on it in tree order and the branch it takes at each choice it meets. Returns
+/// `false` (before visiting any) if there are more than [`MAX_PATHS`].
+///
+/// A first pass only counts (the decision depends on the counts alone), so that the paths
+/// are then visited as they are found rather than all held at once (4,096 copies of a long
+/// sequence took gigabytes).
+fn paths(ev: &[Event], branches: &HashMap<u32, u32>, mut visit: impl FnMut(&[usize], &HashMap<u32, u32>)) -> bool {
+    walk_paths(ev, branches, None) && walk_paths(ev, branches, Some(&mut visit))
+}
+
+/// What [`paths`] calls on each path.
+type Visit<'v> = &'v mut dyn FnMut(&[usize], &HashMap<u32, u32>);
+
+/// One pass of [`paths`]; without `visit`, only the count is checked.
+fn walk_paths(ev: &[Event], branches: &HashMap<u32, u32>, mut visit: Option<Visit>) -> bool {
+    let keep = visit.is_some();
+    let mut done = 0usize;
+    let mut work: Vec<(HashMap<u32, u32>, Vec<usize>, usize)> = vec![(HashMap::new(), Vec::new(), 0)];
+    while let Some((mut assign, mut list, mut i)) = work.pop() {
+        'ev: while i < ev.len() {
+            for &(node, b, choice) in &ev[i].path {
+                if !choice {
+                    continue;
+                }
+                let taken = match assign.get(&node) {
+                    Some(&x) => x,
+                    None => {
+                        let n = branches.get(&node).copied().unwrap_or(1);
+                        if done + work.len() + n as usize > MAX_PATHS {
+                            return false;
+                        }
+                        for k in 1..n {
+                            let mut a = assign.clone();
+                            a.insert(node, k);
+                            work.push((a, if keep { list.clone() } else { Vec::new() }, i));
+                        }
+                        assign.insert(node, 0);
+                        0
+                    }
+                };
+                if taken != b {
+                    i += 1;
+                    continue 'ev;
+                }
+            }
+            if keep {
+                list.push(i);
+            }
+            i += 1;
+        }
+        done += 1;
+        if let Some(f) = visit.as_mut() {
+            f(&list, &assign);
+        }
+    }
+    true
+}
+
+/// Instants and the order "not later than" between them; node 0 is the start.
+///
+/// An instant is only ever below instants created after it, and tree order puts the
+/// instants of one stretch of the schedule next to each other, so each down-set is kept
+/// as a short list of index ranges (one range on a sequence) rather than a bit set per
+/// instant (`n²` bits on a path of `n` motions).
+struct Instants {
+    /// `below[i]`: the instants not later than `i` (other than `i`), as sorted, disjoint,
+    /// non-adjacent half-open ranges.
+    below: Vec<Vec<(usize, usize)>>,
+}
+
+impl Instants {
+    fn new() -> Instants {
+        Instants { below: vec![Vec::new()] }
+    }
+    /// A new instant not earlier than each of `after`.
+    fn add(&mut self, after: &[usize]) -> usize {
+        let mut ranges: Vec<(usize, usize)> = Vec::new();
+        for &a in after {
+            ranges.extend_from_slice(&self.below[a]);
+            ranges.push((a, a + 1));
+        }
+        ranges.sort_unstable();
+        let mut set: Vec<(usize, usize)> = Vec::with_capacity(ranges.len());
+        for (lo, hi) in ranges {
+            match set.last_mut() {
+                Some(last) if lo <= last.1 => last.1 = last.1.max(hi),
+                _ => set.push((lo, hi)),
+            }
+        }
+        self.below.push(set);
+        self.below.len() - 1
+    }
+    fn le(&self, a: usize, b: usize) -> bool {
+        if a == b {
+            return true;
+        }
+        let set = &self.below[b];
+        // The last range starting at or before `a`.
+        let k = set.partition_point(|r| r.0 <= a);
+        k > 0 && a < set[k - 1].1
+    }
+    /// The later of two instants: one of them when they are ordered, else a new one.
+    fn max(&mut self, a: usize, b: usize) -> usize {
+        if self.le(a, b) {
+            b
+        } else if self.le(b, a) {
+            a
+        } else {
+            self.add(&[a, b])
+        }
+    }
+}
+
+/// Whether two events' enclosing `*` sides put them on two sides of one `*` (so that a
+/// separation obligation compares them).
+fn covered(a: &[(usize, u32)], b: &[(usize, u32)]) -> bool {
+    a.iter().any(|(n, s)| b.iter().any(|(m, t)| n == m && s != t))
+}
+
+/// For the `*` sides of a part, the participants of a path with a motion on sides not
+/// covering them: the only ones whose parts the pair search may pair with it.
+struct Relevant<'e> {
+    /// Each participant of the path with a motion, and the distinct sides of its motions.
+    sides: Vec<(RoleId, Vec<Sides<'e>>)>,
+    cache: HashMap<&'e [(usize, u32)], Vec<RoleId>>,
+}
+
+impl<'e> Relevant<'e> {
+    fn new(ev: &'e [Event], path: &[usize]) -> Relevant<'e> {
+        let mut by_role: HashMap<RoleId, Vec<&'e [(usize, u32)]>> = HashMap::new();
+        for &e in path.iter().filter(|&&e| ev[e].is_motion()) {
+            for r in ev[e].participants() {
+                let v = by_role.entry(r).or_default();
+                if !v.contains(&ev[e].pars.as_slice()) {
+                    v.push(&ev[e].pars);
+                }
+            }
+        }
+        let mut sides: Vec<_> = by_role.into_iter().collect();
+        sides.sort_unstable_by_key(|(r, _)| *r);
+        Relevant { sides, cache: HashMap::new() }
+    }
+
+    fn of(&mut self, sig: &'e [(usize, u32)]) -> &[RoleId] {
+        let sides = &self.sides;
+        self.cache.entry(sig).or_insert_with(|| {
+            sides.iter().filter(|(_, ss)| ss.iter().any(|s| !covered(sig, s))).map(|(r, _)| *r).collect()
+        })
+    }
+}
+
+/// The `*` sides enclosing an event (see [`Event::pars`]).
+type Sides<'e> = &'e [(usize, u32)];
+
+/// One participant's part of a joint motion on a path.
+struct Part<'g> {
+    /// The motion's event.
+    ev: usize,
+    role: RoleId,
+    app: &'g PrimApp,
+    start: usize,
+    /// The motion's end (see the module comment).
+    end_of_motion: usize,
+    /// When this participant leaves it; `None` if it never does on this path.
+    left: Option<usize>,
+    /// Every part from this index on starts after this one is left (see
+    /// [`Checker::retire`]); `usize::MAX` if not known.
+    retired: usize,
+}
+
+/// A participant's last event on the path so far.
+#[derive(Clone, Copy)]
+enum Last {
+    /// A message: its instant and its event.
+    Msg(usize, usize),
+    /// A part of a motion (index into the parts).
+    Part(usize),
+}
+
+fn names(prog: &Program, rs: &[RoleId]) -> String {
+    let v: Vec<_> = rs.iter().map(|r| format!("`{}`", prog.role_name(*r))).collect();
+    v.join(", ")
+}
+
+/// Whether a primitive may be interrupted at any time after it starts, with an assumption
+/// that does not depend on the other participants: `D = [0, inf]` (a literal bound `<= 0`)
+/// and no input read by `A`.
+fn open_ended(prim: &Primitive) -> bool {
+    let lo_zero = match &prim.duration.lo.kind {
+        crate::hir::expr::ExprKind::Int(i) => *i <= 0,
+        crate::hir::expr::ExprKind::Real(r) => r.parse::<f64>().is_ok_and(|v| v <= 0.0),
+        _ => false,
+    };
+    lo_zero && prim.duration.hi.is_none() && !reads_input(prim)
+}
+
+/// Whether the assumption of `prim` reads an input (a partner's guarantee discharges it).
+fn reads_input(prim: &Primitive) -> bool {
+    let mut reads = false;
+    prim.assume.visit_vars(&mut |v, _| reads |= matches!(v, Var::Own(Slot::Input(_))));
+    reads
+}
+
+impl<'g> Checker<'_, 'g> {
+    pub(super) fn timing(&mut self, branches: &HashMap<u32, u32>, ends: &[Vec<(u32, u32, bool)>]) {
+        // Whether a path reaches an `end` (rather than only a recursion variable, whose next
+        // round the unfolded copy already shows).
+        let ev = self.ev;
+        let all = paths(ev, branches, |path, assign| {
+            let ends_here =
+                ends.iter().any(|e| e.iter().filter(|n| n.2).all(|(node, b, _)| assign.get(node) == Some(b)));
+            self.timing_path(path, ends_here);
+        });
+        if !all {
+            let loc = self.ev.first().map(Event::loc).unwrap_or_default();
+            self.push(
+                Diagnostic::error(
+                    Code::UncheckedOverlap,
+                    loc.0,
+                    format!("more than {MAX_PATHS} paths through the choices: mochi cannot check which motions overlap in time"),
+                )
+                .with_note("the timing checks read each path of the once-unfolded type separately")
+                .with_help("split the choreography, or reduce the nesting of choices"),
+            );
+        }
+    }
+
+    fn part_name(&self, p: &Part) -> String {
+        format!("{}: {}", self.prog.role_name(p.role), self.prog.prim(p.app.prim).name)
+    }
+
+    fn timing_path(&mut self, path: &[usize], ends_here: bool) {
+        let ev = self.ev;
+        let mut inst = Instants::new();
+        let mut parts: Vec<Part<'g>> = Vec::new();
+        let mut last: HashMap<RoleId, Last> = HashMap::new();
+        let mut relevant = Relevant::new(ev, path);
+        let mut live: std::collections::VecDeque<usize> = std::collections::VecDeque::new();
+        for &e in path {
+            match ev[e].kind {
+                EventKind::Motion(m) => {
+                    Self::retire(ev, &mut parts, &mut live, &last, &inst, &mut relevant);
+                    // Where each participant starts (E0317: all at once).
+                    let starts: Vec<(RoleId, usize, Option<usize>)> = m
+                        .parts
+                        .iter()
+                        .map(|(r, _)| match last.get(r) {
+                            None => (*r, 0, None),
+                            Some(Last::Msg(i, by)) => (*r, *i, Some(*by)),
+                            Some(Last::Part(x)) => (*r, parts[*x].end_of_motion, Some(parts[*x].ev)),
+                        })
+                        .collect();
+                    if starts.iter().any(|s| s.1 != starts[0].1) {
+                        self.unsynchronised_start(e, &starts);
+                        return;
+                    }
+                    let start = starts.first().map(|s| s.1).unwrap_or(0);
+                    for (r, _) in &m.parts {
+                        if let Some(Last::Part(x)) = last.get(r) {
+                            let x = *x;
+                            parts[x].left = Some(start);
+                        }
+                    }
+                    let end = inst.add(&[start]);
+                    for (r, app) in &m.parts {
+                        parts.push(Part {
+                            ev: e,
+                            role: *r,
+                            app,
+                            start,
+                            end_of_motion: end,
+                            left: None,
+                            retired: usize::MAX,
+                        });
+                        last.insert(*r, Last::Part(parts.len() - 1));
+                        live.push_back(parts.len() - 1);
+                    }
+                }
+                EventKind::Msg(msg) => {
+                    let ready = |who: RoleId, sender: bool, parts: &[Part]| match last.get(&who) {
+                        None => 0,
+                        Some(Last::Msg(i, _)) => *i,
+                        Some(Last::Part(x)) => {
+                            let p = &parts[*x];
+                            if !sender && self.prog.prim(p.app.prim).interruptible {
+                                p.start
+                            } else {
+                                p.end_of_motion
+                            }
+                        }
+                    };
+                    let s = ready(msg.from, true, &parts);
+                    let r = ready(msg.to, false, &parts);
+                    let at = inst.max(s, r);
+                    for who in [msg.from, msg.to] {
+                        if let Some(Last::Part(x)) = last.get(&who) {
+                            let x = *x;
+                            let interruptible = self.prog.prim(parts[x].app.prim).interruptible;
+                            parts[x].left = Some(if interruptible { at } else { parts[x].end_of_motion });
+                            let prim = self.prog.prim(parts[x].app.prim);
+                            if interruptible && at != parts[x].end_of_motion && !open_ended(prim) {
+                                self.interrupted_untied(e, &parts[x]);
+                            }
+                        }
+                        last.insert(who, Last::Msg(at, e));
+                    }
+                }
+            }
+        }
+        if ends_here {
+            // An interruptible motion that nothing interrupts runs on after `end`.
+            // It needs `hi = inf`, and if its assumption reads inputs, partners that keep
+            // guaranteeing: every other part of its dt left running too ([AGCOMP] checked
+            // the assumption at every time from their guarantees).
+            // The motions some part of which was left (one pass: a wide dt has many parts).
+            let left: std::collections::HashSet<usize> =
+                parts.iter().filter(|q| q.left.is_some()).map(|q| q.ev).collect();
+            for p in parts.iter().filter(|p| p.left.is_none()) {
+                let prim = self.prog.prim(p.app.prim);
+                let partners_left = left.contains(&p.ev);
+                if prim.interruptible && (prim.duration.hi.is_some() || (reads_input(prim) && partners_left)) {
+                    self.never_interrupted(p);
+                }
+            }
+        }
+        self.overlaps(&parts, &inst, ends_here);
+    }
+
+    /// Marks the oldest parts that every later part they could be paired with starts
+    /// after as retired from the E0318 pair search (so that a long sequence compares each
+    /// part with its few neighbours only, not with every other part).
+    ///
+    /// A participant's later parts start no earlier than its current floor: the instant
+    /// of its last message, or the start of its current part (a part starts at its
+    /// participant's last message or at the end of its previous motion, and a message
+    /// comes no earlier than each party is ready); one yet to appear starts no earlier
+    /// than 0. The pair search only pairs parts whose enclosing `*` sides do not cover
+    /// each other, so only the participants with an event on such sides count (see
+    /// [`Relevant`]). So if a part was left at an instant not later than each of their
+    /// floors, it is before every later part it could be paired with. The oldest parts
+    /// are tried first, up to the first that fails: a cheap, sound under-approximation (a
+    /// part kept is only compared exactly).
+    fn retire<'e>(
+        ev: &'e [Event],
+        parts: &mut [Part],
+        live: &mut std::collections::VecDeque<usize>,
+        last: &HashMap<RoleId, Last>,
+        inst: &Instants,
+        relevant: &mut Relevant<'e>,
+    ) {
+        while let Some(&x) = live.front() {
+            let Some(left) = parts[x].left else { break };
+            let floor = |r: &RoleId| match last.get(r) {
+                None => 0,
+                Some(Last::Msg(i, _)) => *i,
+                Some(Last::Part(p)) => parts[*p].start,
+            };
+            if !relevant.of(&ev[parts[x].ev].pars).iter().all(|r| inst.le(left, floor(r))) {
+                break;
+            }
+            parts[x].retired = parts.len();
+            live.pop_front();
+        }
+    }
+
+    fn never_interrupted(&mut self, p: &Part) {
+        let prim = self.prog.prim(p.app.prim);
+        let (lo, hi) = self.duration_text(prim);
+        let d = Diagnostic::error(
+            Code::InterruptOutsideDuration,
+            p.app.loc.0,
+            format!(
+                "nothing interrupts `{}` before `end`, so it runs on past its duration [{lo}, {hi}]",
+                self.part_name(p)
+            ),
+        )
+        .with_note("Fig 3 [INTERRUPT] and Def 4.11 (5): an interruptible motion is consumed only while t ∈ D; its contract (and every check of its footprint) says nothing after D. Sec 4.1 reads `end` as idling forever")
+        .with_help(format!(
+            "end with a primitive whose duration has no upper bound (and whose assumption reads no input, if its partners stop first), or interrupt `{}` with a message before `end`",
+            self.prog.role_name(p.role)
+        ));
+        self.push(d);
+    }
+
+    fn duration_text(&self, prim: &Primitive) -> (String, String) {
+        let lo = print::expr(self.prog, None, &prim.duration.lo);
+        let hi = prim.duration.hi.as_ref().map(|h| print::expr(self.prog, None, h)).unwrap_or_else(|| "inf".into());
+        (lo, hi)
+    }
+
+    fn unsynchronised_start(&mut self, e: usize, starts: &[(RoleId, usize, Option<usize>)]) {
+        let first = starts[0].1;
+        let (same, other): (Vec<_>, Vec<_>) = starts.iter().partition(|s| s.1 == first);
+        let who = |v: &[&(RoleId, usize, Option<usize>)]| names(self.prog, &v.iter().map(|s| s.0).collect::<Vec<_>>());
+        let mut d = Diagnostic::error(
+            Code::UnsynchronisedStart,
+            self.ev[e].loc().0,
+            format!(
+                "{} and {} may start this joint motion at different times: nothing ties the moments they are released",
+                who(&same),
+                who(&other)
+            ),
+        );
+        let mut bys: Vec<usize> = starts.iter().filter_map(|s| s.2).collect();
+        bys.sort_unstable();
+        bys.dedup();
+        for by in bys {
+            let rs: Vec<RoleId> = starts.iter().filter(|s| s.2 == Some(by)).map(|s| s.0).collect();
+            let what = if self.ev[by].is_motion() { "when this motion ends" } else { "this message" };
+            d = d.with_label(self.ev[by].loc().0, format!("{} start(s) after {what}", names(self.prog, &rs)));
+        }
+        d = d
+            .with_note("[AGCOMP] composes the primitives of a dt from a common start (Sec 3.4), and Def 4.11 (6) consumes a joint motion at one time for all; after `*` the sides run at independent times (Sec 4.1)")
+            .with_help("release all its participants from the same instant: end the other sides in interruptible motions and let one side's last sender tell each of them (as in Example 4.2 (4)), or keep the motion on one side of the `*`");
+        self.push(d);
+    }
+
+    fn interrupted_untied(&mut self, msg: usize, p: &Part) {
+        let prim = self.prog.prim(p.app.prim);
+        let (lo, hi) = self.duration_text(prim);
+        let d = Diagnostic::error(
+            Code::InterruptOutsideDuration,
+            self.ev[msg].loc().0,
+            format!(
+                "{} may interrupt `{}` at any time, not only within its duration [{lo}, {hi}]: its timing is not tied to the end of that motion",
+                self.describe(msg),
+                self.part_name(p)
+            ),
+        )
+        .with_label(p.app.loc.0, "the interrupted primitive")
+        .with_note("Fig 3 [INTERRUPT] and Def 4.11 (5), (8b): an interruptible motion is consumed only while t ∈ D; its contract (and every check of its footprint) says nothing after D")
+        .with_help(format!(
+            "send the message in the burst that ends `{}`'s own motion, or give `{}` the duration [0, inf] and an assumption that reads no input",
+            self.prog.role_name(p.role),
+            prim.name
+        ));
+        self.push(d);
+    }
+
+    /// E0318: two parts of different participants that may run at the same time and that
+    /// neither [AGCOMP] (one dt) nor a separation obligation (two sides of one `*`) covers.
+    fn overlaps(&mut self, parts: &[Part], inst: &Instants, ends_here: bool) {
+        // Parts of one dt are compared by [AGCOMP] while all of them run (its query bounds
+        // the time by every part's duration and assumes every guarantee). Two interruptible
+        // parts that run on after the motion ends (left later, or never before `end`) are
+        // not compared after that when a third part bounds the query.
+        let overruns = |p: &Part| {
+            self.prog.prim(p.app.prim).interruptible
+                && match p.left {
+                    Some(l) => l != p.end_of_motion,
+                    None => ends_here,
+                }
+        };
+        // A part bounds the query in time when its duration has an upper bound or its
+        // guarantee reads the clock (its other variables are its own, fresh at each time).
+        let bounds_time = |p: &Part| {
+            let prim = self.prog.prim(p.app.prim);
+            let mut clock = false;
+            prim.guarantee.visit_vars(&mut |v, _| clock |= matches!(v, Var::Clock));
+            prim.duration.hi.is_some() || clock
+        };
+        let mut together: std::collections::BTreeMap<usize, Vec<String>> = std::collections::BTreeMap::new();
+        // The parts of one motion are pushed together: `same[i]` is the range of `i`'s.
+        let mut same: Vec<std::ops::Range<usize>> = Vec::with_capacity(parts.len());
+        let mut lo = 0;
+        for i in 0..parts.len() {
+            if i + 1 == parts.len() || parts[i + 1].ev != parts[i].ev {
+                same.extend(std::iter::repeat_n(lo..i + 1, i + 1 - lo));
+                lo = i + 1;
+            }
+        }
+        // Each part's two properties, and per motion (by its first part) how many parts
+        // bound the time, computed once: the pairs of a wide dt are many.
+        let over: Vec<bool> = parts.iter().map(overruns).collect();
+        let bt: Vec<usize> = parts.iter().map(|p| usize::from(bounds_time(p))).collect();
+        let mut bounding_of: HashMap<usize, usize> = HashMap::new();
+        for (i, x) in parts.iter().enumerate() {
+            if !over[i] {
+                continue;
+            }
+            let mine = same[i].clone();
+            // Whether a third part bounds the time: count them once per motion.
+            let bounding = *bounding_of.entry(mine.start).or_insert_with(|| bt[mine.clone()].iter().sum());
+            // A pair with `x` needs bounding > bt(x) + bt(y) >= bt(x): none without.
+            if bounding <= bt[i] {
+                continue;
+            }
+            for (j, y) in parts.iter().enumerate().take(mine.end).skip(i + 1).filter(|(j, y)| y.ev == x.ev && over[*j])
+            {
+                let bounded = bounding > bt[i] + bt[j];
+                if bounded {
+                    together.entry(x.ev).or_default().push(format!(
+                        "`{}` with `{}`",
+                        self.part_name(x),
+                        self.part_name(y)
+                    ));
+                }
+            }
+        }
+        for (e, pairs) in together {
+            let d = Diagnostic::error(
+                Code::UncheckedOverlap,
+                self.ev[e].loc().0,
+                format!(
+                    "some primitives of this motion may run on together after the others stop, and no check compares them then: {}",
+                    pairs.join(", ")
+                ),
+            )
+            .with_note("they are interrupted later than the motion ends (or not before `end`); [AGCOMP] compares the footprints of a dt only while all its primitives run")
+            .with_help("interrupt them in the burst of messages that ends the motion, or give them a dt (or `*` sides) of their own");
+            self.push(d);
+        }
+
+        // Group by enclosing `*` sides: whether a pair is covered depends only on them.
+        let mut groups: Vec<(Sides, Vec<usize>)> = Vec::new();
+        let mut index: HashMap<&[(usize, u32)], usize> = HashMap::new();
+        for (i, p) in parts.iter().enumerate() {
+            let sig: &[(usize, u32)] = &self.ev[p.ev].pars;
+            let g = *index.entry(sig).or_insert_with(|| {
+                groups.push((sig, Vec::new()));
+                groups.len() - 1
+            });
+            groups[g].1.push(i);
+        }
+        let before = |x: &Part, y: &Part| x.left.is_some_and(|l| inst.le(l, y.start));
+        // Each part's group and position in it, and each group's uncovered groups.
+        let mut slot = vec![(0, 0); parts.len()];
+        for (g, (_, members)) in groups.iter().enumerate() {
+            for (k, &i) in members.iter().enumerate() {
+                slot[i] = (g, k);
+            }
+        }
+        let open: Vec<Vec<usize>> =
+            groups.iter().map(|(a, _)| (0..groups.len()).filter(|&h| !covered(a, groups[h].0)).collect()).collect();
+        // Sweep the parts in order, each against the earlier ones of uncovered groups not
+        // retired before it (a retired part is before every later one).
+        let mut live: Vec<Vec<usize>> = vec![Vec::new(); groups.len()];
+        // (Sort key: groups then positions of the two parts; the two parts.)
+        type Hit = ((usize, usize, usize, usize), usize, usize);
+        let mut hits: Vec<Hit> = Vec::new();
+        for (b, y) in parts.iter().enumerate() {
+            let (gb, kb) = slot[b];
+            for &g in &open[gb] {
+                live[g].retain(|&a| parts[a].retired > b);
+                for &a in &live[g] {
+                    let x = &parts[a];
+                    if x.role == y.role || x.ev == y.ev || before(x, y) || before(y, x) {
+                        continue;
+                    }
+                    // The order of the former all-pairs loop: groups, then positions.
+                    let (ga, ka) = slot[a];
+                    let (first, second) = if (ga, ka) < (gb, kb) { (a, b) } else { (b, a) };
+                    let (g1, k1) = slot[first];
+                    let (g2, k2) = slot[second];
+                    hits.push(((g1, g2, k1, k2), first, second));
+                }
+            }
+            // A motion's parts join the sweep once all of them have been swept: parts of
+            // one dt are never paired here ([AGCOMP] compares them), so they need not see
+            // each other (a wide dt's parts were n² skipped pairs). None of them is retired
+            // before the next motion, so the later sweeps keep them as before.
+            if b + 1 == parts.len() || parts[b + 1].ev != y.ev {
+                live[gb].extend(same[b].clone());
+            }
+        }
+        hits.sort_unstable_by_key(|h| h.0);
+        // Per pair of motions (earlier, later), the pairs of parts that may overlap.
+        type Pairs = Vec<(String, String, RoleId, RoleId)>;
+        let mut found: std::collections::BTreeMap<(usize, usize), Pairs> = std::collections::BTreeMap::new();
+        for (_, a, b) in hits {
+            let (x, y) = (&parts[a], &parts[b]);
+            let (x, y) = if x.ev < y.ev { (x, y) } else { (y, x) };
+            found.entry((x.ev, y.ev)).or_default().push((self.part_name(x), self.part_name(y), x.role, y.role));
+        }
+        for ((xe, ye), pairs) in found {
+            let list: Vec<String> = pairs.iter().map(|(a, b, _, _)| format!("`{b}` with `{a}`")).collect();
+            let (_, _, xr, yr) = pairs[0];
+            let d = Diagnostic::error(
+                Code::UncheckedOverlap,
+                self.ev[ye].loc().0,
+                format!(
+                    "this motion may start while {} is still running, and no check compares them: {}",
+                    self.describe(xe),
+                    list.join(", ")
+                ),
+            )
+            .with_label(self.ev[xe].loc().0, "may still be running")
+            .with_note("nothing orders the two in time, and they are neither one dt ([AGCOMP]) nor the two sides of one `*` (full separation, Sec 4.1), so their footprints are never compared")
+            .with_help(format!(
+                "order them with a message (e.g. let `{}` tell `{}` when it is done), or put them on the two sides of one `*`",
+                self.prog.role_name(xr),
+                self.prog.role_name(yr)
+            ));
+            self.push(d);
+        }
+    }
+}
