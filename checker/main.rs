@@ -501,6 +501,11 @@ fn project(args: &ProjectArgs, color: ColorChoice) -> Outcome {
         let role = args.role.as_deref().unwrap_or_default();
         if !errors.is_empty() {
             eprint_safe(&errors);
+        } else if report.projections.is_empty() && name.ends_with(".mochi") {
+            eprintln_safe(&format!(
+                "error: {name} is a library: it has no choreography to project (`mochi check {name}` checks \
+                 its kinds and primitives)"
+            ));
         } else if report.projections.is_empty() {
             eprintln_safe(&format!("error: no local types were computed for {name}: it has no participants"));
         } else {

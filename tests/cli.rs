@@ -832,3 +832,12 @@ fn a_dump_that_cannot_be_written_is_a_warning_not_a_lost_error() {
     let left = std::fs::read_dir(&blocked).expect("dump directory").count();
     assert_eq!(left, 1, "only the blocking directory");
 }
+
+/// `mochi project` of a library says what a library is and what to run instead.
+#[test]
+fn projecting_a_library_says_it_is_one() {
+    let o = mochi(&["project", "motion-primitives/bot.mochi"]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(e.contains("is a library") && e.contains("mochi check"), "{e}");
+}
