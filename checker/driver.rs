@@ -174,18 +174,7 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut sy
         library::synthetic_participants(&mut prog);
         let (obligations, notes) = run.stage(|| library::plan(&prog, root));
         run.record("library", notes);
-        if cfg.structural_only {
-            run.checks.push(CheckResult {
-                name: "obligations",
-                status: Status::Unknown,
-                millis: 0.0,
-                detail: Detail::NotDecided(obligations.len()),
-                queries: 0,
-            });
-        } else {
-            run.obligations(db, &prog, &obligations, cfg);
-            run.planned = Some(Planned { program: prog, obligations });
-        }
+        run.decide(db, prog, obligations, cfg);
         return run.finish();
     }
     let Some(chor) = &prog.choreography else { return run.finish() };
@@ -223,23 +212,14 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut sy
             obligations.extend(obs);
         }
     }
-    if !run.checks.iter().any(|c| c.status == Status::Fail) && !cfg.structural_only {
+    if !cfg.structural_only {
         // The contract (E0409) of every primitive the protocol runs, decided last in the same worker pool
         // as the rest (a second pool would cost a Z3 context per worker, ~15 ms): a contract
         // that some use has already shown able to end needs no question of its own.
         let used = used_primitives(&obligations);
         obligations.extend(contracts(&prog, &used));
-        run.obligations(db, &prog, &obligations, cfg);
-        run.planned = Some(Planned { program: prog, obligations });
-    } else if !obligations.is_empty() && !run.checks.iter().any(|c| c.status == Status::Fail) {
-        run.checks.push(CheckResult {
-            name: "obligations",
-            status: Status::Unknown,
-            millis: 0.0,
-            detail: Detail::NotDecided(obligations.len()),
-            queries: 0,
-        });
     }
+    run.decide(db, prog, obligations, cfg);
     run.finish()
 }
 
@@ -278,6 +258,29 @@ impl Pipeline {
         });
         self.diagnostics.extend(diags);
         ok
+    }
+
+    /// The end of every pipeline: unless a check failed, the obligations go to the SMT
+    /// stage (and are handed out in the report, [`Report::planned`]), or, with
+    /// `structural_only` (`mochi project`), are counted as not decided.
+    fn decide(&mut self, db: &SourceDb, prog: crate::hir::Program, obligations: Vec<Obligation>, cfg: &Config) {
+        if self.checks.iter().any(|c| c.status == Status::Fail) {
+            return;
+        }
+        if cfg.structural_only {
+            if !obligations.is_empty() {
+                self.checks.push(CheckResult {
+                    name: "obligations",
+                    status: Status::Unknown,
+                    millis: 0.0,
+                    detail: Detail::NotDecided(obligations.len()),
+                    queries: 0,
+                });
+            }
+            return;
+        }
+        self.obligations(db, &prog, &obligations, cfg);
+        self.planned = Some(Planned { program: prog, obligations });
     }
 
     /// Decides the obligations with the SMT stage, one check per rule family (total
