@@ -112,11 +112,7 @@ impl Lowerer {
     /// The three coordinates of a footprint's or partition's point are three names:
     /// `partition(py, py, pz)` would read both `py`s as the first coordinate (x).
     pub(super) fn distinct_coordinates(&mut self, point: &[ast::Ident]) {
-        for (i, b) in point.iter().enumerate() {
-            if let Some(first) = point[..i].iter().find(|f| f.name == b.name) {
-                self.diags.push(dup(b.span, "coordinate", &b.name, first.span));
-            }
-        }
+        super::distinct("coordinate", point, &mut self.diags);
     }
 
     /// Resolves `p: a(args)` (or a process's `a(args)`) for the kind of `role`.

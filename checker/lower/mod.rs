@@ -163,6 +163,22 @@ impl<'a> Env<'a> {
     }
 }
 
+/// E0206 for each name of one binder list (a receive's binders, a message's fields, a
+/// `mu`'s parameters, a point's coordinates) that repeats an earlier one: the second would
+/// hide the first from everything after it. Returns whether the names are distinct.
+fn distinct<'i>(what: &str, names: impl IntoIterator<Item = &'i ast::Ident>, diags: &mut Vec<Diagnostic>) -> bool {
+    let mut seen: Vec<&ast::Ident> = Vec::new();
+    let mut ok = true;
+    for b in names {
+        if let Some(first) = seen.iter().find(|f| f.name == b.name) {
+            diags.push(dup(b.span, what, &b.name, first.span));
+            ok = false;
+        }
+        seen.push(b);
+    }
+    ok
+}
+
 fn dup(span: Span, what: &str, name: &str, first: Span) -> Diagnostic {
     Diagnostic::error(Code::Duplicate, span, format!("{what} `{name}` is defined twice"))
         .with_label(first, "first defined here")

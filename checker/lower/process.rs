@@ -123,12 +123,7 @@ impl Lowerer {
                     }
                     // One receive binds each name once: `C?grab(ty, ty, tz)` would leave the
                     // first value unreachable (the second shadows it), which is never meant.
-                    for (i, b) in binders.iter().enumerate() {
-                        if let Some(first) = binders[..i].iter().find(|f| f.name == b.name) {
-                            self.diags.push(dup(b.span, "binder", &b.name, first.span));
-                            ok = false;
-                        }
-                    }
+                    ok &= super::distinct("binder", binders, &mut self.diags);
                     let binders: Vec<ValueId> =
                         binders.iter().map(|b| self.new_value(b, Sort::Any, ValueOrigin::Bound { role: me })).collect();
                     cx.values.extend(&binders);

@@ -111,13 +111,9 @@ impl Lowerer {
         origin: ValueOrigin,
         values: &mut Vec<ValueId>,
     ) -> Vec<Field> {
+        super::distinct("payload field", fields.iter().map(|f| &f.name), &mut self.diags);
         let mut out = Vec::new();
-        for (i, f) in fields.iter().enumerate() {
-            // Two fields of one message with one name: the second hides the first from
-            // everything after it (E0206, as for a receive's binders).
-            if let Some(first) = fields[..i].iter().find(|g| g.name.name == f.name.name) {
-                self.diags.push(super::dup(f.name.span, "payload field", &f.name.name, first.name.span));
-            }
+        for f in fields {
             let sort = self.sort(&f.sort);
             let v = self.new_value(&f.name, sort.clone(), origin.clone());
             values.push(v);
@@ -143,11 +139,9 @@ impl Lowerer {
         who: Who,
         values: &mut Vec<ValueId>,
     ) -> Vec<RecParam> {
+        super::distinct("recursion parameter", params.iter().map(|p| &p.name), &mut self.diags);
         let mut out = Vec::new();
-        for (i, p) in params.iter().enumerate() {
-            if let Some(first) = params[..i].iter().find(|q| q.name.name == p.name.name) {
-                self.diags.push(super::dup(p.name.span, "recursion parameter", &p.name.name, first.name.span));
-            }
+        for p in params {
             let sort = self.sort(&p.sort);
             let outer = values.clone();
             let env =
