@@ -45,6 +45,8 @@ pub mod source;
 pub mod stack;
 pub mod subtype;
 pub mod syntax;
+#[cfg(test)]
+pub(crate) mod testing;
 pub mod typeck;
 pub mod wf;
 
