@@ -44,6 +44,7 @@ pub fn synthetic_participants(prog: &mut Program) {
             init: None,
             pose: Vec::new(),
             input_sources: vec![None; k.inputs.len()],
+            mounted_on: None,
             span: k.span,
         });
     }

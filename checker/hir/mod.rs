@@ -6,6 +6,7 @@
 //! Submodules follow the paper: [`expr`] (predicates and sorts), [`global`] (Def 4.1),
 //! [`local`] (Def 4.6), [`process`] (Sec 3.1), [`print`] (mochi's ASCII notation).
 
+pub mod body;
 pub mod expr;
 pub mod global;
 pub mod local;
@@ -82,6 +83,10 @@ pub struct RobotKind {
     /// shapes) is a later part, and until then footprints are the predicates written in
     /// the primitives (LANGUAGE.md). A kind with no geometry may be bodiless (E0412).
     pub geometry: Option<crate::syntax::ast::Geometry>,
+    /// The robot's body as a function of its state (`geom(p)` of Sec 3.1), in its frame.
+    pub body: Option<body::Body>,
+    /// Frames other participants can be mounted on (`on: Carrier.mount`).
+    pub mounts: Vec<body::Mount>,
     pub invariant: Option<Expr>,
     pub span: Span,
 }
@@ -132,6 +137,10 @@ pub struct Primitive {
     pub guarantee: Expr,
     pub post: Expr,
     pub footprint: Option<Footprint>,
+    /// A geometric footprint (`footprint: geometry;` is the kind's body): at time `t` the
+    /// primitive occupies this body placed by the state at `t` (poses may read X,
+    /// `old(X)`, parameters and `clock`). When set, `footprint` is `None`.
+    pub footprint_body: Option<body::Body>,
     pub duration: Duration,
     pub interruptible: bool,
     pub span: Span,
@@ -149,6 +158,9 @@ pub struct Participant {
     pub pose: Vec<Expr>,
     /// For each input variable of the kind, the participant whose state feeds it.
     pub input_sources: Vec<Option<RoleId>>,
+    /// `on: Carrier.mount`: the participant rides on another; its `pose` is then relative
+    /// to the mount's frame, which moves with the carrier's state.
+    pub mounted_on: Option<body::MountedOn>,
     pub span: Span,
 }
 
@@ -215,6 +227,8 @@ pub struct Program {
     pub processes: Vec<ProcessDef>,
     pub locals: Vec<LocalDef>,
     pub partitions: Vec<Partition>,
+    /// The system's static obstacles.
+    pub obstacles: Vec<body::Obstacle>,
 }
 
 impl Program {

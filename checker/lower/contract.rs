@@ -25,6 +25,7 @@ impl Lowerer {
             guarantee: Expr::bool(true, loc),
             post: Expr::bool(true, loc),
             footprint: None,
+            footprint_body: None,
             duration: Duration { lo: Expr { kind: ExprKind::Int(0), sort: Sort::Int, loc }, hi: None },
             interruptible: false,
             span: m.span,

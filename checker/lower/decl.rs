@@ -138,6 +138,8 @@ impl Lowerer {
             state,
             inputs,
             geometry: r.geometry.clone(),
+            body: None,
+            mounts: Vec::new(),
             invariant: None,
             span: r.span,
         });
@@ -195,6 +197,7 @@ impl Lowerer {
                 init: None,
                 pose: Vec::new(),
                 input_sources: vec![None; n_inputs],
+                mounted_on: None,
                 span: p.name.span,
             });
             ok.push((RoleId(self.prog.roles.len() as u32 - 1), p));
