@@ -42,6 +42,7 @@ pub mod sigma;
 pub mod simulate;
 pub mod smt;
 pub mod source;
+pub mod space;
 pub mod stack;
 pub mod subtype;
 pub mod syntax;
