@@ -2,3 +2,4 @@
 //! predicates ([`region`]) where the SMT solver can decide them.
 
 pub mod region;
+pub mod truth;
