@@ -391,6 +391,15 @@ codes! {
          during the run), mochi says so once, at the obligation whose query it was, and dumps no \
          more; the checks themselves are not affected (this is a warning, the verdict stands). \
          Make DIR writable, free space, or run without `--dump-smt`.";
+    ObstacleHit = "E0510", "a footprint may meet a static obstacle",
+        "A system's obstacles (`obstacle Name { geometry: ...; at: pose(...); }`) are there at \
+         every time, whatever the protocol does. Every primitive a joint motion runs is checked \
+         against every obstacle, like the parts of the motion against each other ([AGCOMP], Sec \
+         3.4): its footprint, at every time its guarantee allows, must not contain a point of the \
+         obstacle. The counterexample is a point of the world (x, y, z, in metres) and a time \
+         (seconds since the motion started) at which the footprint reaches into the obstacle, \
+         with the state that puts it there. Change the motion's target or the participant's \
+         pose, or tighten the footprint if it is larger than the robot needs.";
     MotionPrecondition = "E0708", "a motion's precondition may not hold in the process",
         "[T-MOTION] (Table 1): when a process starts a motion, what it knows (Σ: its initial state, \
          the postconditions of its earlier motions, the refinements of values it received, the \

@@ -737,6 +737,12 @@ fn describe(prog: &Program, ob: &Obligation, part: &Part) -> String {
             prim(&parts[*j].1),
             prog.role_name(parts[*j].0)
         ),
+        (Goal::Compatible { parts }, Part::ClearOf { i, o }) => format!(
+            "the footprint of `{}` ({}) never meets obstacle `{}`",
+            prim(&parts[*i].1),
+            prog.role_name(parts[*i].0),
+            prog.obstacles.get(*o).map_or("?", |x| x.name.as_str())
+        ),
         (Goal::Compatible { parts }, Part::Within(n, j)) => format!(
             "the duration of the non-interruptible `{}` ({}) lies within that of `{}` ({})",
             prim(&parts[*n].1),

@@ -83,6 +83,28 @@ pub fn refutes(prog: &Program, ob: &Obligation, part: &Part, m: &Valuation) -> O
             }
             None
         }),
+        (Goal::Compatible { parts }, Part::ClearOf { i, o }) => false_hyp(&ob.hyps).or_else(|| {
+            let point = ["point.x", "point.y", "point.z"].map(|n| m.get(n).and_then(|v| v.num().ok().cloned()));
+            let [Some(px), Some(py), Some(pz)] = point else { return None };
+            let world = [px, py, pz];
+            let (r, app) = parts.get(*i)?;
+            let prim = prog.prim(app.prim);
+            let fp = prim.footprint.as_ref()?;
+            let local = to_local(prog, *r, &world)?;
+            let args = app.args.iter().map(|a| exact::eval(prog, a, &shared).ok()).collect::<Vec<_>>();
+            let env = frame(prog, *r, m, Some("t"), &args, Some(local));
+            if exact::holds(prog, &fp.pred, &env) == Tri::False {
+                return Some(format!("its point is not in the footprint of `{}`", prim.name));
+            }
+            let obstacle = prog.obstacles.get(*o)?;
+            let region = crate::space::region::obstacle_region(prog, obstacle)?;
+            let at = |v: &Var| match v {
+                Var::Point(k) => world.get(*k).cloned().map(Value::Num),
+                other => shared_var(prog, other, m),
+            };
+            (exact::holds(prog, &region, &at) == Tri::False)
+                .then(|| format!("its point is not in obstacle `{}`", obstacle.name))
+        }),
         (Goal::Separated { sides }, Part::Apart { a, ra, b, rb }) => {
             let hs: Vec<Expr> = [(a, ra), (b, rb)]
                 .iter()
@@ -141,6 +163,9 @@ fn frame<'m>(
 /// The world point in `role`'s frame, `R^T (p - o)`, with enclosures of the pose's
 /// sines and cosines (the encoding rounds them; see ARCHITECTURE.md, "Pose rotations").
 pub fn to_local(prog: &Program, role: RoleId, p: &[Num; 3]) -> Option<[Num; 3]> {
+    if prog.role(role).mounted_on.is_some() {
+        return None;
+    }
     let pose = &prog.role(role).pose;
     let num = |i: usize| -> Option<Num> {
         match pose.get(i) {

@@ -74,6 +74,19 @@ fn part_region(prog: &Program, part: &Part, p: &[Expr; 3]) -> Option<Expr> {
     })
 }
 
+/// The predicate "the world point `(Point(0), Point(1), Point(2))` is in the obstacle":
+/// the obstacle's body moved into the world by its `at:` pose. `None` for a body with a
+/// URDF or mesh part.
+pub fn obstacle_region(prog: &Program, o: &crate::hir::body::Obstacle) -> Option<Expr> {
+    let loc = Loc(o.span);
+    let p = [0, 1, 2].map(|k| Expr { kind: ExprKind::Var(crate::hir::Var::Point(k)), sort: Sort::Real, loc });
+    let local = match &o.pose {
+        Some(pose) => to_part_frame(prog, pose, &p),
+        None => p,
+    };
+    region(prog, &o.body, &local)
+}
+
 /// `R^T (p - t)` for `pose(t, roll, pitch, yaw)`, `R = Rz(yaw) Ry(pitch) Rx(roll)`: undo
 /// the translation, then yaw, pitch and roll (as `smt::goals::frames` does for a
 /// participant's pose). An angle that is exactly 0 is skipped; an exact quarter turn

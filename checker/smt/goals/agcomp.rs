@@ -6,7 +6,7 @@
 //! and builds their queries; pairs of footprints whose boxes are apart are proved by
 //! [`super::boxes`] without a query.
 
-use super::super::encode::Unsupported;
+use super::super::encode::{Frame, Unsupported};
 use super::boxes::{app_box, meeting_pairs};
 use super::frames::world_point;
 use super::motion::{ends, Inst};
@@ -53,6 +53,25 @@ pub(super) fn plan(prog: &Program, hyps: &[Expr], parts: &[(RoleId, PrimApp)]) -
     let shared = bounds::ranges_from(prog, &facts, &bounds::closed);
     let boxes: Vec<_> = parts.iter().map(|(r, app)| app_box(prog, *r, app, &shared)).collect();
     out.extend(meeting_pairs(&boxes).into_iter().map(|(i, j)| Part::Disjoint(i, j)));
+    // Every part against every static obstacle, at every time: the obstacle is there
+    // whatever the protocol does. Pairs whose boxes are apart need no query.
+    if !prog.obstacles.is_empty() {
+        if let Some(who) = parts.iter().find(|(_, app)| prog.prim(app.prim).footprint.is_none()) {
+            return Plan::Fails(format!(
+                "`{}` of `{}` declares no footprint, so it may occupy all space and meets every obstacle",
+                prog.prim(who.1.prim).name,
+                prog.role_name(who.0)
+            ));
+        }
+        let obstacle_boxes: Vec<_> = prog.obstacles.iter().map(|o| obstacle_box(prog, o)).collect();
+        for (i, b) in boxes.iter().enumerate() {
+            for (o, ob) in obstacle_boxes.iter().enumerate() {
+                if !super::boxes::apart(b, ob) {
+                    out.push(Part::ClearOf { i, o });
+                }
+            }
+        }
+    }
     // One can-end question for the whole `dt`: the parts end together.
     out.push(Part::CanEnd);
     let non: Vec<usize> = (0..parts.len()).filter(|&i| !prog.prim(parts[i].1.prim).interruptible).collect();
@@ -81,6 +100,7 @@ pub(super) fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], pa
         // guarantees can discharge it are the ones its inputs read (transitively).
         Part::Assume(i) => with_sources(prog, parts, &[*i]),
         Part::Within(n, j) => with_sources(prog, parts, &[*n, *j]),
+        Part::ClearOf { i, .. } => with_sources(prog, parts, &[*i]),
         _ => (0..parts.len()).collect(),
     };
     let mut at = vec![None; parts.len()];
@@ -142,6 +162,26 @@ pub(super) fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], pa
             q.point = Some(p);
             q.times = vec![t];
         }
+        Part::ClearOf { i, o } => {
+            for inst in &insts {
+                inst.started(q)?;
+                inst.running(q)?;
+            }
+            let obstacle = prog.obstacles.get(*o).ok_or_else(|| Unsupported("an obstacle out of range".into()))?;
+            let region = crate::space::region::obstacle_region(prog, obstacle).ok_or_else(|| {
+                Unsupported(format!(
+                    "obstacle `{}` has a URDF or mesh part, which the SMT solver cannot represent",
+                    obstacle.name
+                ))
+            })?;
+            let p = world_point(q);
+            insts[at(*i)?].occupies(q, &p)?;
+            let frame = Frame { point: Some(p.clone()), ..Frame::default() };
+            let inside = q.enc.in_frame(&frame, |enc| enc.boolean(&region))?;
+            q.assertions.push(inside);
+            q.point = Some(p);
+            q.times = vec![t];
+        }
         Part::Within(n, j) => {
             for inst in &insts {
                 inst.started(q)?;
@@ -188,6 +228,18 @@ pub(super) fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], pa
         _ => return Err(Unsupported("an [AGCOMP] obligation split into a part of another kind".into())),
     }
     Ok(())
+}
+
+/// A world box around a static obstacle (its region's point box: constants only), or
+/// `None` when it cannot be bounded (a URDF or mesh part: every footprint is then asked).
+fn obstacle_box(prog: &Program, o: &crate::hir::body::Obstacle) -> Option<[Interval; 3]> {
+    let region = crate::space::region::obstacle_region(prog, o)?;
+    let point = |v: &Var| match v {
+        Var::Point(k) => Some(*k),
+        _ => None,
+    };
+    let b = bounds::point_box(prog, &region, &point, &bounds::closed);
+    b.iter().all(Interval::is_finite).then_some(b)
 }
 
 /// Whether the precondition of `app`, run by `role`, holds at every state in the ranges
@@ -456,5 +508,50 @@ mod tests {
         assert_eq!(disjoint_parts(&bots(5, "1", &[2])), vec![(0, 2), (1, 2), (2, 3), (2, 4)]);
         let (prog, ob) = first_dt(&bots(5, "1", &[2]));
         assert!(matches!(discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0, Decision::Fails(_)));
+    }
+
+    /// A cart sliding from 0 to `xf` (its footprint the swept box, 0.5 long) and a
+    /// 0.2-wide obstacle box standing at x = 2 (placed by its `at:` pose). The obstacle
+    /// is built by hand: it is checked against every part of every joint motion.
+    fn cart_and_wall(xf: &str) -> Decision {
+        use crate::hir::body::{Body, Obstacle, Part as BodyPart, Pose, Shape};
+        use crate::hir::{Expr, ExprKind, Loc, Sort};
+        let src = format!(
+            "robot Cart {{ state x: real; }}
+             motion Cart.go(xf: real) {{ interruptible: false; guarantee: old(x) <= x <= xf; post: x == xf; duration: [1, 1];
+               footprint(px, py, pz): old(x) - 0.25 <= px <= xf + 0.25 && -0.2 <= py <= 0.2 && 0 <= pz <= 0.1; }}
+             system S {{ participant C: Cart {{ init: x == 0; }} }}
+             choreography G = dt<C: go({xf})>. end;"
+        );
+        let (mut prog, ob) = first_dt(&src);
+        let lit = |v: &str| Expr { kind: ExprKind::Real(v.into()), sort: Sort::Real, loc: Loc::default() };
+        prog.obstacles.push(Obstacle {
+            name: "Wall".into(),
+            body: Body {
+                parts: vec![BodyPart {
+                    shape: Shape::Box([lit("0.2"), lit("2"), lit("1")]),
+                    place: None,
+                    span: Default::default(),
+                }],
+                span: Default::default(),
+            },
+            pose: Some(Pose { args: ["2", "0", "0", "0", "0", "0"].map(lit), span: Default::default() }),
+            span: Default::default(),
+        });
+        discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0
+    }
+
+    #[test]
+    fn a_motion_is_checked_against_every_obstacle() {
+        assert_eq!(cart_and_wall("1"), Decision::Holds(None));
+        // The wall's near face is at x = 1.9; the swept box's front is at xf + 0.25, so
+        // xf = 1.7 reaches 1.95, into the wall.
+        let Decision::Fails(f) = cart_and_wall("1.7") else { panic!("the cart reaches into the wall") };
+        assert_eq!(f.which, Some(Part::ClearOf { i: 0, o: 0 }));
+        let o = f.overlap.expect("a point");
+        assert!((1.9..=1.95).contains(&o.point[0]), "{o:?}");
+        // Touching is meeting: closed sets.
+        assert!(matches!(cart_and_wall("1.65"), Decision::Fails(_)));
+        assert_eq!(cart_and_wall("1.6499"), Decision::Holds(None));
     }
 }

@@ -164,6 +164,10 @@ pub(super) fn app_box(
 
 /// Moves a box from `role`'s frame into the world (interval arithmetic on the pose).
 pub(super) fn to_world(prog: &Program, role: RoleId, b: [Interval; 3]) -> Option<[Interval; 3]> {
+    // A mounted participant's frame moves with its carrier: its pose alone places nothing.
+    if prog.role(role).mounted_on.is_some() {
+        return None;
+    }
     let pose = &prog.role(role).pose;
     let num = |i: usize| -> Option<Interval> {
         match pose.get(i) {

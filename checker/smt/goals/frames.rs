@@ -46,6 +46,15 @@ pub(super) fn world_point(q: &mut Query) -> [Real; 3] {
 /// `u` for both slacks was faster than two (Handover).
 pub(super) fn to_local(enc: &mut Encoder, role: RoleId, p: &[Real; 3]) -> Result<[Real; 3], Unsupported> {
     let prog = enc.prog();
+    // A mounted participant's frame moves with its carrier's state: its `pose` alone does
+    // not place it, so no query may read its footprint as if it did (the geometric
+    // procedure places it through the carrier).
+    if prog.role(role).mounted_on.is_some() {
+        return Err(Unsupported(format!(
+            "`{}` rides on another participant, so its footprint moves with the carrier's state",
+            prog.role_name(role)
+        )));
+    }
     let pose = prog.role(role).pose.clone();
     let mut v = p.clone();
     for (k, c) in v.iter_mut().enumerate() {

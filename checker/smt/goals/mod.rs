@@ -70,6 +70,9 @@ pub enum Part {
     Assume(usize),
     /// [AGCOMP]: the footprints of parts `i` and `j` are disjoint at every time.
     Disjoint(usize, usize),
+    /// [AGCOMP] with the system's static obstacles: part `i`'s footprint never meets
+    /// obstacle `o` (`Program::obstacles`).
+    ClearOf { i: usize, o: usize },
     /// [AGCOMP]: the non-interruptible part `i`'s duration lies within part `j`'s.
     Within(usize, usize),
     /// [AGCOMP] with no non-interruptible part: the durations share a time.
