@@ -391,6 +391,13 @@ codes! {
          during the run), mochi says so once, at the obligation whose query it was, and dumps no \
          more; the checks themselves are not affected (this is a warning, the verdict stands). \
          Make DIR writable, free space, or run without `--dump-smt`.";
+    BadShapeSize = "E0511", "a shape's size is not a positive constant",
+        "A body (a robot's `geometry:`, a geometric `footprint:`, an obstacle) is made of shapes \
+         whose sizes are positive constants, in metres: `box(lx, ly, lz)`, `sphere(r)`, \
+         `cylinder(r, h)`, `capsule(r, h)` with `h >= 2 r`. A negative size describes no body at \
+         all, so every collision check about it would hold for the wrong reason; a size that \
+         reads the state is not a shape (a robot that moves is placed by `at pose(...)`, whose \
+         arguments may read its state). Write the size as a positive number or constant.";
     ObstacleHit = "E0510", "a footprint may meet a static obstacle",
         "A system's obstacles (`obstacle Name { geometry: ...; at: pose(...); }`) are there at \
          every time, whatever the protocol does. Every primitive a joint motion runs is checked \

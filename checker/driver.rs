@@ -11,7 +11,7 @@ use crate::hir::print;
 use crate::obligation::{Goal, Obligation, Rule};
 use crate::smt::{self, goals::Part, Decision, SmtConfig};
 use crate::source::{FileId, SourceDb};
-use crate::{library, lower, project, subtype, syntax, typeck, wf};
+use crate::{library, lower, project, space, subtype, syntax, typeck, wf};
 use serde::Serialize;
 use std::collections::{BTreeMap, HashSet};
 use std::time::Instant;
@@ -168,6 +168,11 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut sy
         diags.retain(|d| d.code != Code::MissingItem);
     }
     if !run.record("names", diags) {
+        return run.finish();
+    }
+    // Bodies: sizes, and geometric footprints as predicates where Z3 can decide them.
+    let diags = run.stage(|| space::prepare(&mut prog));
+    if !run.record("geometry", diags) {
         return run.finish();
     }
     if library {

@@ -1,5 +1,99 @@
-//! The space robots occupy, between the HIR and the checks: bodies as footprint
-//! predicates ([`region`]) where the SMT solver can decide them.
+//! The space robots occupy, between the HIR and the checks (the "geometry" stage of the
+//! pipeline): shapes are checked for sizes that describe a body ([`prepare`], E0511),
+//! and bodies become footprint predicates ([`region`]) where the SMT solver can decide
+//! them, so that a geometric footprint written with boxes, spheres, cylinders and
+//! capsules is checked by the same queries as a written predicate. The remaining ones
+//! (URDF, meshes, rotation by a state variable) are the geometric decision procedure's.
 
 pub mod region;
 pub mod truth;
+
+use crate::bounds;
+use crate::diag::{Code, Diagnostic};
+use crate::hir::body::{Body, Shape};
+use crate::hir::expr::{ExprKind, Sort};
+use crate::hir::{Expr, Footprint, Loc, Program, Var};
+
+/// Checks every body's sizes and gives each geometric footprint a predicate where one
+/// exists (`Primitive::footprint` from `Primitive::footprint_body`).
+pub fn prepare(prog: &mut Program) -> Vec<Diagnostic> {
+    let mut diags = Vec::new();
+    let bodies = prog
+        .kinds
+        .iter()
+        .filter_map(|k| k.body.as_ref())
+        .chain(prog.prims.iter().filter_map(|p| p.footprint_body.as_ref()))
+        .chain(prog.obstacles.iter().map(|o| &o.body));
+    for body in bodies {
+        sizes(prog, body, &mut diags);
+    }
+    if diags.iter().any(Diagnostic::is_error) {
+        return diags;
+    }
+    for i in 0..prog.prims.len() {
+        let prim = &prog.prims[i];
+        let (None, Some(body)) = (&prim.footprint, &prim.footprint_body) else { continue };
+        let loc = Loc(body.span);
+        let point = [0, 1, 2].map(|k| Expr { kind: ExprKind::Var(Var::Point(k)), sort: Sort::Real, loc });
+        if let Some(pred) = region::region(prog, body, &point) {
+            prog.prims[i].footprint = Some(Footprint { point: ["x", "y", "z"].map(String::from), pred });
+        }
+    }
+    diags
+}
+
+/// Every size of a shape is a constant whose enclosure is positive (a negative or zero
+/// size would describe no body, or less of one than meant: a footprint of a box of
+/// length -1 holds no point and would make every collision check about it hold
+/// vacuously); a capsule is at least as tall as it is wide.
+fn sizes(prog: &Program, body: &Body, diags: &mut Vec<Diagnostic>) {
+    for part in &body.parts {
+        let (name, dims): (&str, Vec<(&str, &Expr)>) = match &part.shape {
+            Shape::Box([x, y, z]) => ("box", vec![("length", x), ("width", y), ("height", z)]),
+            Shape::Sphere(r) => ("sphere", vec![("radius", r)]),
+            Shape::Cylinder(r, h) => ("cylinder", vec![("radius", r), ("height", h)]),
+            Shape::Capsule(r, h) => ("capsule", vec![("radius", r), ("height", h)]),
+            Shape::Urdf { .. } | Shape::Mesh { .. } => continue,
+        };
+        let mut ok = true;
+        for (what, e) in &dims {
+            let iv = bounds::eval(prog, e, &bounds::closed);
+            if !iv.is_some_and(|iv| iv.lo > 0.0 && iv.hi.is_finite()) {
+                ok = false;
+                let found = match iv {
+                    Some(iv) if iv.lo == iv.hi => format!("it is {}", iv.lo),
+                    Some(_) | None if !crate::hir::expr::mentions(e, &|v| !matches!(v, Var::Const(_))) => {
+                        "it may not be".to_string()
+                    }
+                    _ => "it reads a variable".to_string(),
+                };
+                diags.push(
+                    Diagnostic::error(
+                        Code::BadShapeSize,
+                        e.loc.0,
+                        format!("the {what} of a {name} must be a positive constant; {found}"),
+                    )
+                    .with_help(
+                        "write a positive number or constant (metres); a shape that changes with the state is placed by `at pose(...)`, not sized by it",
+                    ),
+                );
+            }
+        }
+        if let (true, Shape::Capsule(r, h)) = (ok, &part.shape) {
+            let r = bounds::eval(prog, r, &bounds::closed);
+            let h = bounds::eval(prog, h, &bounds::closed);
+            if let (Some(r), Some(h)) = (r, h) {
+                if h.lo.is_nan() || r.hi.is_nan() || h.lo < 2.0 * r.hi {
+                    diags.push(
+                        Diagnostic::error(
+                            Code::BadShapeSize,
+                            part.span,
+                            format!("a capsule of radius {} is at least {} tall; this one is {}", r.hi, 2.0 * r.hi, h.lo),
+                        )
+                        .with_help("a capsule's height counts both end caps: make it at least twice the radius, or use a sphere"),
+                    );
+                }
+            }
+        }
+    }
+}
