@@ -398,6 +398,15 @@ codes! {
          all, so every collision check about it would hold for the wrong reason; a size that \
          reads the state is not a shape (a robot that moves is placed by `at pose(...)`, whose \
          arguments may read its state). Write the size as a positive number or constant.";
+    FootprintMissesBody = "E0512", "a footprint may not contain the robot's body",
+        "Sec 3.1: a motion primitive's footprint FP is the space the robot may occupy while it \
+         runs, so it must contain the robot's geometry geom(p) at every state the guarantee \
+         allows (Fig 3 [TRAJ-STEP]); every collision check trusts it. mochi checks this for every \
+         primitive the protocol runs whose kind has a `geometry:`, for every argument, start \
+         state its precondition and the invariant allow, and time in its duration. The \
+         counterexample is a point of the body (in the robot's own frame, metres) outside the \
+         footprint, the time and the state that put it there. Widen the footprint, or write \
+         `footprint: geometry;` (the body itself, which contains it by definition).";
     ObstacleHit = "E0510", "a footprint may meet a static obstacle",
         "A system's obstacles (`obstacle Name { geometry: ...; at: pose(...); }`) are there at \
          every time, whatever the protocol does. Every primitive a joint motion runs is checked \

@@ -549,12 +549,14 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
         (Rule::Reachable, _) => Code::StuckContext,
         (Rule::InitInvariant, Some(Part::Before(_))) => Code::StuckContext,
         (Rule::InitInvariant, _) => Code::InitOutsideInvariant,
+        (Rule::Contains, _) => Code::FootprintMissesBody,
     };
     let help = match code {
         Code::ChoiceNotTotal => "add a branch whose guard covers the counterexample's state, or weaken a guard",
         Code::PreconditionAtMotion => "establish the precondition before the motion (an earlier motion's postcondition, a message's refinement), or weaken it",
         Code::AssumptionNotDischarged => "strengthen the partners' guarantees so that they imply the assumption, or weaken the assumption",
         Code::FootprintsOverlap => "keep the participants apart: change a pose or a motion's target, shrink a footprint, or strengthen a guarantee so the footprints stay clear of each other",
+        Code::FootprintMissesBody => "widen the footprint to cover the robot's body wherever the guarantee lets it be, or write it as `footprint: geometry;`",
         Code::ObstacleHit => "keep the motion clear of the obstacle: change its target or the participant's pose, or tighten its footprint",
         Code::MotionCannotEnd => "change the motion's arguments so that it ends inside the robot's invariant, or fix its postcondition",
         Code::DurationsIncompatible => "make the non-interruptible primitive's duration fit within its partners' (or let it be interrupted)",
@@ -645,7 +647,23 @@ pub(crate) fn contracts(prog: &crate::hir::Program, used: &HashSet<crate::hir::P
         hyps: Vec::new(),
         goal: Goal::CanEnd { prim: p },
     });
-    occupies.chain(contracts).collect()
+    // Its footprint contains the body (E0512), for every kind with a `geometry:`: a written
+    // predicate, or the predicate of a geometric footprint (shapes placed by the state,
+    // which must cover the body too; `footprint: geometry` is the body and holds at once).
+    let contains = used
+        .iter()
+        .filter(|p| {
+            let prim = prog.prim(**p);
+            prim.footprint.is_some() && prog.kind(prim.kind).body.is_some()
+        })
+        .map(|&p| Obligation {
+            rule: Rule::Contains,
+            span: prog.prim(p).footprint.as_ref().map_or(prog.prim(p).span, |f| f.pred.loc.0),
+            what: format!("the footprint of `{}` contains the body", prog.prim(p).name),
+            hyps: Vec::new(),
+            goal: Goal::Contains { prim: p },
+        });
+    occupies.chain(contains).chain(contracts).collect()
 }
 
 /// The primitives the protocol runs: every part of a `dt` and both sides of every

@@ -47,6 +47,9 @@ pub enum Rule {
     Reachable,
     /// [T-SESS]: a participant's `init` and its kind's invariant have a state in common.
     InitInvariant,
+    /// Sec 3.1 (`FP` contains `geom(p)`, Fig 3 [TRAJ-STEP]): a primitive's footprint
+    /// contains the robot's body at every state its guarantee allows.
+    Contains,
 }
 
 impl Rule {
@@ -69,6 +72,7 @@ impl Rule {
             Rule::Occupies => "a footprint holds a point (Sec 3.1, FP contains geom(p))",
             Rule::Reachable => "a reachable context is satisfiable (vacuity guard)",
             Rule::InitInvariant => "[T-SESS]: init allows a state within the invariant",
+            Rule::Contains => "a footprint contains the robot's body (Sec 3.1)",
         }
     }
 
@@ -87,7 +91,7 @@ impl Rule {
             | Rule::TRecInit
             | Rule::TRecJump
             | Rule::TRecArgs => "typing-obligations",
-            Rule::Contract | Rule::Occupies => "contracts",
+            Rule::Contract | Rule::Occupies | Rule::Contains => "contracts",
             Rule::Reachable | Rule::InitInvariant => "reachability",
         }
     }
@@ -113,6 +117,7 @@ impl Rule {
             Rule::Occupies => "occupies",
             Rule::Reachable => "reachable",
             Rule::InitInvariant => "initinvariant",
+            Rule::Contains => "contains",
         }
     }
 }
@@ -143,6 +148,10 @@ pub enum Goal {
     /// `dead_branch`, the step is the guard of one branch among several: an unsatisfiable
     /// context there is a dead branch (a warning), not a stuck protocol.
     Reachable { before: Vec<Vec<Expr>>, dead_branch: bool },
+    /// The footprint of `prim` (a predicate) contains its kind's body, at every time and
+    /// state its guarantee and the invariant allow from every start its precondition
+    /// allows, for every argument (the obligation's `hyps` are empty).
+    Contains { prim: PrimId },
 }
 
 /// One side of a `*`: its participants and the primitives they may run on it.
@@ -257,6 +266,7 @@ mod tests {
             Rule::Occupies,
             Rule::Reachable,
             Rule::InitInvariant,
+            Rule::Contains,
         ];
         for r in all {
             assert_eq!(r.slug(), format!("{r:?}").to_lowercase());

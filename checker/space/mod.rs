@@ -97,3 +97,51 @@ fn sizes(prog: &Program, body: &Body, diags: &mut Vec<Diagnostic>) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::hir::body::{Body, Part, Pose, Shape};
+    use crate::hir::{Expr, ExprKind, Loc, Slot, Sort, Var};
+    use crate::smt::{discharge, Decision, SmtConfig};
+
+    fn lit(v: &str) -> Expr {
+        Expr { kind: ExprKind::Real(v.into()), sort: Sort::Real, loc: Loc::default() }
+    }
+
+    /// A cart whose body is a 0.5 x 0.4 x 0.1 box at its position `x`, sliding from
+    /// `old(x)` to `xf`, with a footprint reaching `margin` past the swept segment's ends.
+    /// The body is attached by hand (the test is about the check, not the syntax).
+    fn slide(margin: &str) -> Decision {
+        let src = format!(
+            "robot Cart {{ state x: real; invariant: -10 <= x <= 10; }}
+             motion Cart.go(xf: real) {{ interruptible: false; pre: x < xf; guarantee: old(x) <= x <= xf; post: x == xf; duration: [1, 1];
+               footprint(px, py, pz): old(x) - {margin} <= px <= xf + {margin} && -0.2 <= py <= 0.2 && 0 <= pz <= 0.1; }}
+             system S {{ participant C: Cart {{ init: x == 0; }} }}
+             choreography G = dt<C: go(1)>. end;"
+        );
+        let (mut prog, d) = crate::lower::tests::lower_src(&src);
+        assert!(d.is_empty(), "{d:?}");
+        let x = Expr { kind: ExprKind::Var(Var::Own(Slot::State(0))), sort: Sort::Real, loc: Loc::default() };
+        let at = Pose { args: [x, lit("0"), lit("0"), lit("0"), lit("0"), lit("0")], span: Default::default() };
+        prog.kinds[0].body = Some(Body {
+            parts: vec![Part { shape: Shape::Box([lit("0.5"), lit("0.4"), lit("0.1")]), place: Some(at), span: Default::default() }],
+            span: Default::default(),
+        });
+        let used = std::iter::once(crate::hir::PrimId(0)).collect();
+        let obs: Vec<_> = crate::driver::contracts(&prog, &used)
+            .into_iter()
+            .filter(|o| o.rule == crate::obligation::Rule::Contains)
+            .collect();
+        assert_eq!(obs.len(), 1);
+        discharge(&prog, &obs, &[], &SmtConfig::default()).remove(0).0
+    }
+
+    #[test]
+    fn a_footprint_must_contain_the_body_at_every_state_the_guarantee_allows() {
+        assert_eq!(slide("0.25"), Decision::Holds(None));
+        let Decision::Fails(f) = slide("0.2") else { panic!("the body's ends stick out by 0.05") };
+        let o = f.overlap.expect("a point of the body outside the footprint");
+        // The point sticks out past one end of the swept segment.
+        assert!(o.point[0] < -0.2 || o.point[0] > 1.2, "{o:?}");
+    }
+}

@@ -138,6 +138,7 @@ enum GoalKey<'o> {
     Separated(Vec<(&'o [RoleId], Vec<RunKey<'o>>)>),
     InitiallyDisjoint(Vec<(RoleId, Vec<AppKey<'o>>)>),
     CanEnd(PrimId),
+    Contains(PrimId),
     Reachable(&'o [Vec<Expr>], bool),
 }
 
@@ -166,6 +167,7 @@ impl<'o> GoalKey<'o> {
                 firsts.iter().map(|(r, apps)| (*r, apps.iter().map(app).collect())).collect(),
             ),
             Goal::CanEnd { prim } => GoalKey::CanEnd(*prim),
+            Goal::Contains { prim } => GoalKey::Contains(*prim),
             Goal::Reachable { before, dead_branch } => GoalKey::Reachable(before, *dead_branch),
         }
     }

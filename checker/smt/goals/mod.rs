@@ -64,6 +64,8 @@ pub enum Part {
     /// footprint holds some point when it starts (a footprint no point satisfies would make
     /// every collision check about it hold vacuously).
     Occupies,
+    /// [`Goal::Contains`]: part `k` of the kind's body lies in the footprint.
+    Contains(usize),
     /// Conjunct `k` of a `Valid` goal.
     Conjunct(usize),
     /// [AGCOMP]: the others' guarantees discharge part `i`'s assumption.
@@ -151,6 +153,10 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
         Goal::CanEnd { .. } if ob.rule == crate::obligation::Rule::Occupies => Plan::Parts(vec![Part::Occupies]),
         Goal::CanEnd { .. } => Plan::Parts(vec![Part::Realisable]),
         Goal::Reachable { .. } => Plan::Parts(vec![Part::Context]),
+        Goal::Contains { prim } => {
+            let n = prog.kind(prog.prim(*prim).kind).body.as_ref().map_or(0, |b| b.parts.len());
+            Plan::Parts((0..n).map(Part::Contains).collect())
+        }
     }
 }
 

@@ -139,6 +139,42 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
             let holds = inst.pred(&mut q.enc, &fp.pred, &frame)?;
             q.assertions.push(holds);
         }
+        (Goal::Contains { prim }, Part::Contains(k)) => {
+            // Some arguments, start, time and state the contract allows, and a point of
+            // body part `k` (in the robot's own frame, placed by the state at that time)
+            // outside the footprint. Footprint and body are both in the participant's frame,
+            // so its pose plays no part.
+            let prog = q.enc.prog();
+            let p = prog.prim(*prim);
+            let role = prog.role_ids().find(|r| prog.role(*r).kind == p.kind);
+            let Some(role) = role else { return Err(Unsupported("a primitive of a kind no participant has".into())) };
+            let Some(fp) = p.footprint.clone() else { return Err(Unsupported("a primitive with no footprint".into())) };
+            let body = prog.kind(p.kind).body.as_ref().ok_or_else(|| Unsupported("a kind with no body".into()))?;
+            let part = body.parts.get(*k).ok_or_else(|| Unsupported("a body part out of range".into()))?;
+            let one = crate::hir::body::Body { parts: vec![part.clone()], span: part.span };
+            let point = [0, 1, 2].map(|i| crate::hir::Expr {
+                kind: crate::hir::ExprKind::Var(crate::hir::Var::Point(i)),
+                sort: crate::hir::Sort::Real,
+                loc: Default::default(),
+            });
+            let region = crate::space::region::region(prog, &one, &point).ok_or_else(|| {
+                Unsupported("a URDF or mesh body, which the SMT solver cannot represent".into())
+            })?;
+            let app = PrimApp { prim: *prim, args: Vec::new(), loc: Default::default() };
+            let t = q.enc.named_real("time");
+            let mut inst = Inst::new(&mut q.enc, role, &app, t.clone(), "t")?;
+            inst.frame.params = p.params.iter().map(|(n, sort)| q.enc.named(n, sort)).collect::<Result<_, _>>()?;
+            inst.started(&mut q)?;
+            inst.running(&mut q)?;
+            let local = [q.enc.named_real("point.x"), q.enc.named_real("point.y"), q.enc.named_real("point.z")];
+            let frame = Frame { point: Some(local.clone()), ..inst.frame.clone() };
+            let inside = inst.pred(&mut q.enc, &region, &frame)?;
+            let covered = inst.pred(&mut q.enc, &fp.pred, &frame)?;
+            q.assertions.push(inside);
+            q.assertions.push(covered.not());
+            q.point = Some(local);
+            q.times = vec![t];
+        }
         _ => return Err(Unsupported("an obligation split into a part of another kind".into())),
     }
     Ok(q)
