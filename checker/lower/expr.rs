@@ -80,7 +80,7 @@ impl Lowerer {
                     return self.role_var(r, field, span, env);
                 }
                 if !self.resolves(b, env) {
-                    if !self.poisoned.contains(b) {
+                    if !self.poisoned.contains(b) && !self.obstacle_as_role(b, base.span) {
                         let names: Vec<_> = self.prog.roles.iter().map(|p| format!("`{}`", p.name)).collect();
                         self.err(
                             Code::UnknownParticipant,

@@ -100,9 +100,10 @@ fn visit(
     order: &mut Vec<(FileId, ast::File)>,
     diags: &mut Vec<Diagnostic>,
 ) {
-    let (file, mut d) = parser::parse(id, &db.file(id).text);
+    let (mut file, mut d) = parser::parse(id, &db.file(id).text);
     diags.append(&mut d);
     let base = Path::new(&db.file(id).name).parent().map(Path::to_path_buf).unwrap_or_default();
+    resolve_shape_paths(&mut file, &base);
     for item in &file.items {
         let ast::Item::Import(imp) = item else { continue };
         let path = normalise(&base.join(&imp.path));
@@ -145,6 +146,32 @@ fn visit(
         }
     }
     order.push((id, file));
+}
+
+/// Resolves the file of every `urdf("...")` and `mesh("...")` shape against `base`, the
+/// directory of the file that names it, as imports are: a robot library under `robots/`
+/// names its URDF relative to itself, whichever choreography imports it. Nothing is read
+/// here; the geometry stage loads the files.
+fn resolve_shape_paths(file: &mut ast::File, base: &Path) {
+    let mut bodies: Vec<&mut ast::BodyAst> = Vec::new();
+    for item in &mut file.items {
+        match item {
+            ast::Item::Robot(r) => bodies.extend(r.geometry.iter_mut()),
+            ast::Item::Motion(m) => bodies.extend(m.fields.iter_mut().filter_map(|f| match &mut f.value {
+                ast::FieldValue::Body(b) => Some(b),
+                _ => None,
+            })),
+            ast::Item::System(s) => bodies.extend(s.obstacles.iter_mut().flat_map(|o| o.geometry.iter_mut())),
+            _ => {}
+        }
+    }
+    for body in bodies {
+        for part in &mut body.parts {
+            if let Some((path, _)) = &mut part.shape.path {
+                *path = normalise(&base.join(&*path)).display().to_string();
+            }
+        }
+    }
 }
 
 /// Whether `path` ends in `.mochi` or `.chor`, the only files an import may name.
