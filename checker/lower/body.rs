@@ -329,9 +329,13 @@ impl Lowerer {
             Diagnostic::error(
                 Code::MountCycle,
                 span,
-                format!("participants mounted in a cycle: {} rides on {} ... rides on {}", names[0], names[1], names[0]),
+                format!(
+                    "participants mounted in a cycle: {} rides on {}, which rides on {}",
+                    names[0],
+                    names[1..].join(", which rides on "),
+                    names[0]
+                ),
             )
-            .with_note(format!("the cycle: {} -> {}", names.join(" -> "), names[0]))
         };
         for q in &cycle[1..] {
             if let Some(s) = on_spans.get(q) {

@@ -167,7 +167,8 @@ fn resolve_shape_paths(file: &mut ast::File, base: &Path) {
     }
     for body in bodies {
         for part in &mut body.parts {
-            if let Some((path, _)) = &mut part.shape.path {
+            // An empty path stays empty, for lowering to report (E0214).
+            if let Some((path, _)) = part.shape.path.as_mut().filter(|(p, _)| !p.is_empty()) {
                 *path = normalise(&base.join(&*path)).display().to_string();
             }
         }
@@ -220,6 +221,36 @@ mod tests {
         assert_eq!(reads, vec![PathBuf::from("lib/a.mochi")]);
         assert_eq!(parsed.files.len(), 2);
         assert_eq!(parsed.files[1].0, root, "imports come first");
+    }
+
+    #[test]
+    fn shape_files_are_resolved_against_the_file_that_names_them() {
+        let mut db = SourceDb::new();
+        let root = db.add("dir/main.chor", "import \"../robots/r.mochi\"; system S { obstacle O { geometry: mesh(\"o.stl\"); } }");
+        let mut read = |_: &Path| {
+            Ok("robot R { state q: real; geometry: urdf(\"panda/p.urdf\") + mesh(\"\"); } motion R.m { interruptible: true; footprint: mesh(\"../m.obj\"); }".to_string())
+        };
+        let (parsed, diags) = parse_with_imports(&mut db, root, &mut read);
+        assert!(diags.is_empty(), "{diags:?}");
+        let mut paths = Vec::new();
+        for (_, f) in &parsed.files {
+            for item in &f.items {
+                let bodies: Vec<&ast::BodyAst> = match item {
+                    ast::Item::Robot(r) => r.geometry.iter().collect(),
+                    ast::Item::Motion(m) => m
+                        .fields
+                        .iter()
+                        .filter_map(|f| if let ast::FieldValue::Body(b) = &f.value { Some(b) } else { None })
+                        .collect(),
+                    ast::Item::System(s) => s.obstacles.iter().flat_map(|o| &o.geometry).collect(),
+                    _ => Vec::new(),
+                };
+                for b in bodies {
+                    paths.extend(b.parts.iter().filter_map(|p| p.shape.path.as_ref().map(|(s, _)| s.clone())));
+                }
+            }
+        }
+        assert_eq!(paths, ["robots/panda/p.urdf", "", "m.obj", "dir/o.stl"]);
     }
 
     #[test]
