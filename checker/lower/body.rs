@@ -125,10 +125,15 @@ impl Lowerer {
                 }
             }
             let path = path.clone();
-            return Some(if name == "urdf" { Shape::Urdf { path, span: *span } } else { Shape::Mesh { path, span: *span } });
+            return Some(if name == "urdf" {
+                Shape::Urdf { path, span: *span }
+            } else {
+                Shape::Mesh { path, span: *span }
+            });
         }
         if s.path.is_some() || s.args.len() != arity {
-            let found = if s.path.is_some() { "a file path".to_string() } else { format!("{} argument(s)", s.args.len()) };
+            let found =
+                if s.path.is_some() { "a file path".to_string() } else { format!("{} argument(s)", s.args.len()) };
             self.err(
                 Code::BadShape,
                 s.span,
@@ -181,7 +186,12 @@ impl Lowerer {
 
     /// A primitive's geometric footprint: `footprint: geometry` (the kind's own body) or
     /// shapes placed by its state, `old(...)`, parameters and `clock`.
-    pub(super) fn footprint_body(&mut self, kind: KindId, params: &[(String, Sort)], f: &ast::FieldValue) -> Option<Body> {
+    pub(super) fn footprint_body(
+        &mut self,
+        kind: KindId,
+        params: &[(String, Sort)],
+        f: &ast::FieldValue,
+    ) -> Option<Body> {
         match f {
             ast::FieldValue::OwnGeometry(span) => {
                 if let Some(b) = &self.prog.kind(kind).body {
@@ -280,7 +290,10 @@ impl Lowerer {
                 None => {
                     let kname = ckind.name.clone();
                     let help = if ckind.mounts.is_empty() {
-                        format!("robot kind `{kname}` declares no mounts; add `mount {}: pose(...);` to it", on.mount.name)
+                        format!(
+                            "robot kind `{kname}` declares no mounts; add `mount {}: pose(...);` to it",
+                            on.mount.name
+                        )
                     } else {
                         let names: Vec<_> = ckind.mounts.iter().map(|m| format!("`{}`", m.name)).collect();
                         format!("`{kname}` has {}", names.join(", "))
@@ -349,7 +362,7 @@ impl Lowerer {
     /// E0217 if `name` is an obstacle: it has no process and takes part in no message or
     /// motion. Returns whether it reported.
     pub(super) fn obstacle_as_role(&mut self, name: &str, span: Span) -> bool {
-        if !self.prog.obstacles.iter().any(|o| o.name == name) {
+        if self.prog.obstacle_by_name(name).is_none() {
             return false;
         }
         self.err(
@@ -417,7 +430,8 @@ mod tests {
         obstacle Bridge { geometry: box(0.1, 1.0, 0.6) at pose(0, -0.55, 0) + box(0.1, 1.2, 0.05) at pose(0, 0, 0.6); at: pose(2, 0, 0); }
         obstacle Pillar { geometry: cylinder(0.1, 2); }
     ";
-    const CHOR: &str = "choreography G = dt<C: turn(1), A: idle>. end; process C = dt<turn(1)>. end; process A = dt<idle>. end;";
+    const CHOR: &str =
+        "choreography G = dt<C: turn(1), A: idle>. end; process C = dt<turn(1)>. end; process A = dt<idle>. end;";
 
     #[test]
     fn bodies_mounts_and_obstacles_lower_into_the_hir() {
@@ -435,7 +449,9 @@ mod tests {
         let place = body.parts[1].place.as_ref().expect("placed");
         assert!(matches!(place.args[3].kind, ExprKind::Int(0)));
         assert_eq!(cart.mounts.iter().map(|m| m.name.as_str()).collect::<Vec<_>>(), ["deck", "back"]);
-        assert!(matches!(&p.kinds[1].body.as_ref().unwrap().parts[0].shape, Shape::Urdf { path, .. } if path == "arm.urdf"));
+        assert!(
+            matches!(&p.kinds[1].body.as_ref().unwrap().parts[0].shape, Shape::Urdf { path, .. } if path == "arm.urdf")
+        );
         assert!(p.kinds[2].body.is_none());
         // `footprint: geometry` is the kind's body; a written one reads params, old and clock.
         let turn = &p.prims[0];
@@ -461,7 +477,9 @@ mod tests {
 
     #[test]
     fn a_kind_body_reads_its_state_and_constants_only() {
-        let bad = |geom: &str| codes(&format!("const k = 1; robot R {{ state x: real; input w: real; geometry: {geom}; }} motion R.m(p: real) {{ interruptible: true; }}"));
+        let bad = |geom: &str| {
+            codes(&format!("const k = 1; robot R {{ state x: real; input w: real; geometry: {geom}; }} motion R.m(p: real) {{ interruptible: true; }}"))
+        };
         assert_eq!(bad("sphere(k) at pose(x, 0, 0)"), [Code::MissingItem]);
         assert_eq!(bad("sphere(w)"), [Code::VariableNotAllowed, Code::MissingItem]);
         assert_eq!(bad("sphere(1) at pose(clock, 0, 0)"), [Code::VariableNotAllowed, Code::MissingItem]);
@@ -487,7 +505,9 @@ mod tests {
 
     #[test]
     fn an_obstacle_reads_constants_only() {
-        let sys = |o: &str| with_system(ROBOTS, &format!("participant C: Cart; obstacle O {{ {o} }}"), "choreography G = end;").1;
+        let sys = |o: &str| {
+            with_system(ROBOTS, &format!("participant C: Cart; obstacle O {{ {o} }}"), "choreography G = end;").1
+        };
         assert!(sys("geometry: sphere(cl); at: pose(cl, 0, 0);").is_empty());
         assert_eq!(sys("geometry: sphere(C.x);"), [Code::VariableNotAllowed]);
         assert_eq!(sys("geometry: sphere(1); at: pose(clock, 0, 0);"), [Code::VariableNotAllowed]);
@@ -513,7 +533,9 @@ mod tests {
         let (_, d) = lower_src("robot R { state x: real; geometry: cylindre(1, 2); }");
         assert!(d[0].help.as_deref().unwrap().contains("did you mean `cylinder`?"), "{:?}", d[0].help);
         // A bad shape is one error, not one per use of the body.
-        let d = codes("robot R { state x: real; geometry: cone(1); } motion R.m { interruptible: true; footprint: geometry; }");
+        let d = codes(
+            "robot R { state x: real; geometry: cone(1); } motion R.m { interruptible: true; footprint: geometry; }",
+        );
         assert_eq!(d, [Code::BadShape, Code::MissingItem]);
         assert_eq!(g("sphere(1); geometry: sphere(2)"), [Code::Duplicate, Code::MissingItem]);
     }
@@ -535,10 +557,14 @@ mod tests {
         assert!(d.is_empty(), "{d:?}");
         assert_eq!(p.roles[1].mounted_on, Some(MountedOn { carrier: RoleId(0), mount: 1 }));
         assert_eq!(p.roles[2].mounted_on, Some(MountedOn { carrier: RoleId(1), mount: 0 }));
+        let chain: Vec<RoleId> = p.carriers(RoleId(2)).iter().map(|m| m.carrier).collect();
+        assert_eq!(chain, [RoleId(1), RoleId(0)]);
+        assert!(p.carriers(RoleId(0)).is_empty());
         assert_eq!(sys("participant C: Cart { on: C.deck; }").1, [Code::MountCycle]);
         let (p, d) = sys("participant C: Cart { on: D.deck; } participant D: Cart { on: C.back; } participant A: Arm { on: C.deck; }");
         assert_eq!(d, [Code::MountCycle], "one cycle, one error");
         assert!(p.roles.iter().take(2).all(|r| r.mounted_on.is_none()), "no walk along carriers loops");
+        assert_eq!(p.carriers(RoleId(2)).len(), 1);
         assert_eq!(sys("participant C: Cart; participant A: Arm { on: C.roof; }").1, [Code::UnknownMount]);
         assert_eq!(sys("participant C: Cart; participant A: Arm { on: X.deck; }").1, [Code::UnknownParticipant]);
         assert_eq!(sys("participant C: Cart; participant A: Arm { on: C.deck; on: C.back; }").1, [Code::Duplicate]);
@@ -554,11 +580,18 @@ mod tests {
         let e0217 = [Code::ObstacleAsParticipant];
         assert_eq!(sys("choreography G = C -> Bridge: hi. end;"), e0217);
         assert_eq!(sys("choreography G = C -> A: [Bridge.x > 0] hi. end;").first(), Some(&Code::ObstacleAsParticipant));
-        assert_eq!(sys("choreography G = dt<C: turn(1), Pillar: idle>. end;").first(), Some(&Code::ObstacleAsParticipant));
+        assert_eq!(
+            sys("choreography G = dt<C: turn(1), Pillar: idle>. end;").first(),
+            Some(&Code::ObstacleAsParticipant)
+        );
         assert_eq!(sys("choreography G = end; process Bridge = end;"), e0217);
         assert_eq!(sys("choreography G = end; local Pillar = end;"), e0217);
         assert_eq!(sys("choreography G = end; process C = Bridge!hi.end;"), e0217);
-        let (_, d) = with_system(ROBOTS, "participant C: Cart; participant A: Arm { on: Bridge.deck; } obstacle Bridge { geometry: sphere(1); }", "choreography G = end;");
+        let (_, d) = with_system(
+            ROBOTS,
+            "participant C: Cart; participant A: Arm { on: Bridge.deck; } obstacle Bridge { geometry: sphere(1); }",
+            "choreography G = end;",
+        );
         assert_eq!(d, e0217);
         // Names are distinct from each other and from the participants'.
         let (_, d) = with_system(ROBOTS, "participant C: Cart; obstacle C { geometry: sphere(1); } obstacle O { geometry: sphere(1); } obstacle O { geometry: sphere(1); }", "choreography G = end;");

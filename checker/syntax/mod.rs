@@ -226,7 +226,10 @@ mod tests {
     #[test]
     fn shape_files_are_resolved_against_the_file_that_names_them() {
         let mut db = SourceDb::new();
-        let root = db.add("dir/main.chor", "import \"../robots/r.mochi\"; system S { obstacle O { geometry: mesh(\"o.stl\"); } }");
+        let root = db.add(
+            "dir/main.chor",
+            "import \"../robots/r.mochi\"; system S { obstacle O { geometry: mesh(\"o.stl\"); } }",
+        );
         let mut read = |_: &Path| {
             Ok("robot R { state q: real; geometry: urdf(\"panda/p.urdf\") + mesh(\"\"); } motion R.m { interruptible: true; footprint: mesh(\"../m.obj\"); }".to_string())
         };

@@ -170,7 +170,8 @@ impl Parser {
     }
 
     fn part(&mut self) -> PResult<PartAst> {
-        let name = self.ident("a shape (`box`, `sphere`, `cylinder`, `capsule`, `urdf(\"file\")` or `mesh(\"file\")`)")?;
+        let name =
+            self.ident("a shape (`box`, `sphere`, `cylinder`, `capsule`, `urdf(\"file\")` or `mesh(\"file\")`)")?;
         self.expect_punct("(")?;
         let mut args = Vec::new();
         let mut path = None;
