@@ -485,6 +485,7 @@ mod tests {
         assert_eq!(bad("sphere(1) at pose(clock, 0, 0)"), [Code::VariableNotAllowed, Code::MissingItem]);
         assert_eq!(bad("sphere(1) at pose(old(x), 0, 0)"), [Code::VariableNotAllowed, Code::MissingItem]);
         assert_eq!(bad("sphere(p)"), [Code::UnknownVariable, Code::MissingItem]);
+        assert_eq!(bad("sphere(Other.x)"), [Code::VariableNotAllowed, Code::MissingItem]);
         let (_, d) = lower_src("robot R { state x: real; input w: real; mount m: pose(w, 0, 0); }");
         assert_eq!(d.iter().map(|d| d.code).collect::<Vec<_>>(), [Code::VariableNotAllowed, Code::MissingItem]);
         assert!(d[0].message.contains("a mount cannot read input variable `w`"), "{}", d[0].message);
@@ -501,6 +502,7 @@ mod tests {
         };
         assert!(fp("box(p, 1, 1) at pose(old(x), x, clock)").is_empty());
         assert_eq!(fp("box(1, 1, 1) at pose(w, 0, 0)"), [Code::VariableNotAllowed]);
+        assert_eq!(fp("box(1, 1, 1) at pose(Other.x, 0, 0)"), [Code::VariableNotAllowed]);
     }
 
     #[test]
