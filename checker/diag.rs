@@ -131,12 +131,41 @@ codes! {
     MissingField = "E0212", "missing field",
         "A motion primitive must say whether it can be interrupted by a message \
          (`interruptible: true;`) or not (`interruptible: false;`), Def 3.4. Other fields default \
-         to the weakest contract: `true` predicates, a footprint filling space, duration `[0, inf]`.";
+         to the weakest contract: `true` predicates, a footprint filling space, duration `[0, inf]`. \
+         An obstacle must have a `geometry:` (an obstacle without one would occupy nothing).";
     ConstCycle = "E0213", "constants defined in a cycle",
         "Constants may be declared in any order, but a constant's value cannot depend on itself, \
          directly (`const a = a + 1;`) or through other constants (`const a = b; const b = a;`). \
          The message names the cycle. Give one of the constants a value that does not mention the \
          others.";
+    BadShape = "E0214", "unknown shape or wrong shape arguments",
+        "A body (a robot's `geometry:`, a geometric `footprint:`, an obstacle's `geometry:`) is \
+         a sum of shapes `part + part + ...`, each optionally placed by `at pose(...)`. The shapes \
+         are `box(lx, ly, lz)`, `sphere(r)`, `cylinder(r, h)`, `capsule(r, h)` with real sizes in \
+         metres, and `urdf(\"file.urdf\")` and `mesh(\"file.stl\")` (or `.obj`) naming a file \
+         relative to the file that names it. Any other name, another number of arguments, a path \
+         given to a sized shape or numbers given to a file shape is E0214.";
+    NoOwnGeometry = "E0215", "`footprint: geometry` in a robot kind without geometry",
+        "`footprint: geometry;` makes a primitive's footprint the robot's own body, placed by its \
+         state at every time of the motion. The robot kind declares no `geometry:`, so there is \
+         no body to use. Give the kind a `geometry:` (shapes or a URDF), or write the footprint's \
+         shapes in the primitive (`footprint: box(...) at pose(...);`) or as a predicate \
+         (`footprint(px, py, pz): ...;`).";
+    MountCycle = "E0216", "a participant is mounted on itself or in a cycle of mounts",
+        "`on: Carrier.mount` places a participant on a frame of another participant, which moves \
+         with the carrier's state. A participant cannot ride on itself, and the carriers cannot \
+         form a cycle (`A` on `B` and `B` on `A`): the world pose of each would depend on itself. \
+         The message names the cycle. Mount the robots in a chain that ends at a participant \
+         placed in the world.";
+    ObstacleAsParticipant = "E0217", "an obstacle is named where a participant is expected",
+        "An obstacle (`obstacle Name { ... }` in a system) is static geometry: it has no state, no \
+         process and takes part in no message or motion. Naming it as a sender, a receiver, a \
+         moving participant, the role of a `process` or `local`, or reading `Name.var`, is \
+         E0217. Make it a participant with a robot kind if it must move or communicate.";
+    UnknownMount = "E0218", "unknown mount",
+        "`on: Carrier.mount` names a mount point that the carrier's robot kind does not declare. \
+         A robot offers mounts with `mount name: pose(...);` in its `robot` block; the message \
+         lists the ones it has.";
     SelfMessage = "E0301", "message to oneself",
         "Def 4.1 requires `p != q` in `p -> q : l`. A participant cannot send a message to itself; \
          use a local computation in its process instead.";

@@ -627,7 +627,7 @@ pub(crate) fn contracts(prog: &crate::hir::Program, used: &HashSet<crate::hir::P
         prog.prim(p).footprint.as_ref().is_some_and(|f| matches!(f.pred.kind, crate::hir::ExprKind::Bool(false)))
     };
     let has_body = |k: crate::hir::KindId| {
-        prog.kind(k).geometry.is_some()
+        prog.kind(k).body.is_some()
             || (0..prog.prims.len())
                 .map(|i| crate::hir::PrimId(i as u32))
                 .any(|p| prog.prim(p).kind == k && prog.prim(p).footprint.is_some() && !is_false(p))

@@ -88,3 +88,27 @@ pub struct Obstacle {
     pub pose: Option<Pose>,
     pub span: Span,
 }
+
+impl super::Program {
+    /// The carriers `r` rides on, innermost first: `[(carrier, mount), (its carrier, mount),
+    /// ...]`, empty for a participant placed in the world. Finite: lowering rejects mount
+    /// cycles (E0216) and leaves no participant of a cycle mounted, and the walk is bounded
+    /// by the number of participants besides.
+    pub fn carriers(&self, r: RoleId) -> Vec<MountedOn> {
+        let mut out = Vec::new();
+        let mut at = r;
+        while let Some(m) = self.role(at).mounted_on {
+            if out.len() >= self.roles.len() {
+                break;
+            }
+            out.push(m);
+            at = m.carrier;
+        }
+        out
+    }
+
+    /// The obstacle called `name`.
+    pub fn obstacle_by_name(&self, name: &str) -> Option<&Obstacle> {
+        self.obstacles.iter().find(|o| o.name == name)
+    }
+}

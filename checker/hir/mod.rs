@@ -79,11 +79,9 @@ pub struct RobotKind {
     pub name: String,
     pub state: Vec<(String, Sort)>,
     pub inputs: Vec<(String, Sort)>,
-    /// Shape and arguments as written, not interpreted yet: real robot geometry (URDF,
-    /// shapes) is a later part, and until then footprints are the predicates written in
-    /// the primitives (LANGUAGE.md). A kind with no geometry may be bodiless (E0412).
-    pub geometry: Option<crate::syntax::ast::Geometry>,
-    /// The robot's body as a function of its state (`geom(p)` of Sec 3.1), in its frame.
+    /// The robot's body as a function of its state (`geom(p)` of Sec 3.1), in its frame:
+    /// `geometry:`, whose poses read the kind's state variables ([`Var::Own`]) and
+    /// constants. A kind with no body may be bodiless (E0412).
     pub body: Option<body::Body>,
     /// Frames other participants can be mounted on (`on: Carrier.mount`).
     pub mounts: Vec<body::Mount>,

@@ -72,6 +72,9 @@ impl Lowerer {
                     let pred = self.pred(pred, &env, "a footprint");
                     prim.footprint = Some(Footprint { point: names.clone(), pred });
                 }
+                ("footprint", f @ (ast::FieldValue::OwnGeometry(_) | ast::FieldValue::Body(_))) => {
+                    prim.footprint_body = self.footprint_body(kind, &params, f);
+                }
                 ("duration", ast::FieldValue::Duration { lo, hi }) => {
                     let env = Env { state: true, old: true, part: Some("the duration"), ..base };
                     let lo = self.expr(lo, &env);
@@ -160,7 +163,7 @@ impl Lowerer {
 
 pub(super) fn field_shape(key: &str) -> &'static str {
     match key {
-        "footprint" => "footprint(px, py, pz): PREDICATE;",
+        "footprint" => "footprint(px, py, pz): PREDICATE;` or `footprint: SHAPES;",
         "duration" => "duration: [LO, HI];",
         "interruptible" => "interruptible: true;",
         _ => "KEY: PREDICATE;",

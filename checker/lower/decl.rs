@@ -137,7 +137,6 @@ impl Lowerer {
             name: r.name.name.clone(),
             state,
             inputs,
-            geometry: r.geometry.clone(),
             body: None,
             mounts: Vec::new(),
             invariant: None,
@@ -202,21 +201,16 @@ impl Lowerer {
             });
             ok.push((RoleId(self.prog.roles.len() as u32 - 1), p));
         }
-        for (r, p) in ok {
+        // Obstacles before anything resolves participants, so that naming one is E0217.
+        self.obstacles(s);
+        for &(r, p) in &ok {
             if let Some(init) = &p.init {
                 let env = Env { qualified: false, ..Env::role(r, &[]) };
                 let e = self.pred(init, &env, "an initial-state predicate");
                 self.prog.roles[r.idx()].init = Some(e);
             }
             if let Some(pose) = &p.at {
-                if pose.args.len() != 3 && pose.args.len() != 6 {
-                    self.err(
-                        Code::ArityMismatch,
-                        pose.span,
-                        format!("`pose` takes 3 or 6 arguments, found {}", pose.args.len()),
-                        "write `pose(x, y, z)` or `pose(x, y, z, roll, pitch, yaw)` in metres and radians",
-                    );
-                }
+                self.pose_arity(pose);
                 let args: Vec<Expr> = pose.args.iter().map(|a| self.expr(a, &Env::consts_only())).collect();
                 for a in &args {
                     self.expect_sort(a, &Sort::Real, "pose coordinate");
@@ -224,6 +218,7 @@ impl Lowerer {
                 self.prog.roles[r.idx()].pose = args;
             }
         }
+        self.mounts(&ok);
     }
 
     /// Sec 3.1: each input variable is fed by the unique other participant that has a
@@ -267,6 +262,7 @@ impl Lowerer {
         match self.prog.role_by_name(&name.name) {
             Some(r) => Some(r),
             None if self.poisoned.contains(&name.name) => None,
+            None if self.obstacle_as_role(&name.name, name.span) => None,
             None => {
                 let names: Vec<_> = self.prog.roles.iter().map(|p| format!("`{}`", p.name)).collect();
                 let help = if names.is_empty() {

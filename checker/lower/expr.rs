@@ -79,8 +79,15 @@ impl Lowerer {
                 if let Some(r) = self.prog.role_by_name(b) {
                     return self.role_var(r, field, span, env);
                 }
+                if !self.resolves(b, env) && env.part.is_some_and(super::body::is_body_place) {
+                    // Kinds and primitives are lowered before the participants exist: a
+                    // body reading `Cart.x` is reading another robot, whatever `Cart` is.
+                    let what = format!("`{b}.{}`, another robot's variable", field.name);
+                    self.not_allowed(span, &what, env);
+                    return Expr::error(loc);
+                }
                 if !self.resolves(b, env) {
-                    if !self.poisoned.contains(b) {
+                    if !self.poisoned.contains(b) && !self.obstacle_as_role(b, base.span) {
                         let names: Vec<_> = self.prog.roles.iter().map(|p| format!("`{}`", p.name)).collect();
                         self.err(
                             Code::UnknownParticipant,

@@ -14,11 +14,12 @@
 //! The pass structure: [`lower`] runs over all items in a fixed order, so that every
 //! name is declared before anything resolves it, whatever the order of the files:
 //! constants (`decl`, in dependency order), robot kinds, then their invariants (which
-//! may read constants), primitives (`contract`), the system and its input connections
-//! (`decl`), and last the choreography, local types (`types`) and processes
+//! may read constants) and bodies and mounts (`body`), primitives (`contract`), the system and its input connections
+//! (`decl`; obstacles and mounts in `body`), and last the choreography, local types (`types`) and processes
 //! (`process`). Expressions (`expr`) resolve names through `names` in an `Env`
 //! that says which variables the current position may read.
 
+mod body;
 mod contract;
 mod decl;
 mod expr;
@@ -52,6 +53,7 @@ pub fn lower(parsed: &Parsed) -> (Program, Vec<Diagnostic>) {
     for it in &items {
         if let ast::Item::Robot(r) = it {
             l.robot_invariant(r);
+            l.robot_body(r);
         }
     }
     for it in &items {
@@ -108,6 +110,9 @@ struct Lowerer {
     /// Spans of the declarations, for duplicate reports.
     const_spans: Vec<Span>,
     kind_spans: Vec<Span>,
+    /// Kinds that wrote a `geometry:`, lowered or not (a malformed one is reported at the
+    /// kind, so `footprint: geometry` in its primitives is not E0215 on top).
+    kinds_with_geometry: std::collections::HashSet<KindId>,
     /// Participants whose kind is unknown: already reported, so uses stay silent.
     poisoned: std::collections::HashSet<String>,
     /// Process and local type declarations seen per role.

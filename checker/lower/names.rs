@@ -99,6 +99,16 @@ impl Lowerer {
 
     pub(super) fn not_allowed(&mut self, span: Span, what: &str, env: &Env) {
         let part = env.part.unwrap_or("this expression");
+        if super::body::is_body_place(part) {
+            let help = match part {
+                super::body::OBSTACLE => "an obstacle is static: its geometry and `at:` read constants only",
+                super::body::GEOMETRIC_FOOTPRINT => {
+                    "a geometric footprint is placed by its robot's state variables, `old(x)`, `clock`, the primitive's parameters and constants"
+                }
+                _ => "a body is placed by its own robot's state variables and constants only: it cannot depend on another robot (an input), a motion or time",
+            };
+            return self.err(Code::VariableNotAllowed, span, format!("{part} cannot read {what}"), help);
+        }
         if part == "a partition" {
             return self.err(
                 Code::VariableNotAllowed,
@@ -126,6 +136,11 @@ impl Lowerer {
 
     pub(super) fn role_var(&mut self, r: RoleId, field: &ast::Ident, span: Span, env: &Env) -> Expr {
         let loc = Loc(span);
+        if !env.qualified && env.part.is_some_and(super::body::is_body_place) {
+            let what = format!("`{}.{}`, a participant's variable", self.prog.role_name(r), field.name);
+            self.not_allowed(span, &what, env);
+            return Expr::error(loc);
+        }
         if !env.qualified {
             self.err(
                 Code::UnknownVariable,

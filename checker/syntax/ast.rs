@@ -72,24 +72,54 @@ pub enum SortKind {
     Named(String),
 }
 
-/// `robot Kind { state ...; input ...; geometry: ...; invariant: ...; }` (Sec 3.1: X, W).
+/// `robot Kind { state ...; input ...; geometry: ...; mount m: pose(...); invariant: ...; }`
+/// (Sec 3.1: X, W, `geom(p)`).
 #[derive(Clone, Debug)]
 pub struct RobotDecl {
     pub name: Ident,
     pub state: Vec<VarDecl>,
     pub inputs: Vec<VarDecl>,
-    pub geometry: Option<Geometry>,
+    /// Every `geometry:` written (more than one is E0206, reported by lowering).
+    pub geometry: Vec<BodyAst>,
+    pub mounts: Vec<MountDecl>,
     pub invariant: Option<Expr>,
     pub span: Span,
 }
 
-/// `geometry: box(l, w, h);` or `geometry: urdf("file.urdf");`, kept verbatim: no stage
-/// interprets it yet (real robot geometry is a later part; see `hir::Kind::geometry`).
+/// A body: `part + part + ...` (LANGUAGE.md, Robots).
 #[derive(Clone, Debug)]
-pub struct Geometry {
-    pub shape: Ident,
+pub struct BodyAst {
+    pub parts: Vec<PartAst>,
+    pub span: Span,
+}
+
+/// `shape(args)` optionally followed by `at pose(...)`.
+#[derive(Clone, Debug)]
+pub struct PartAst {
+    pub shape: ShapeAst,
+    pub place: Option<Pose>,
+    pub span: Span,
+}
+
+/// A shape as written: its name and either numeric arguments or one file path (a string).
+/// Which names exist and how many arguments each takes is checked by lowering (E0214),
+/// so a misspelt shape does not cascade into parse errors.
+#[derive(Clone, Debug)]
+pub struct ShapeAst {
+    pub name: Ident,
     pub args: Vec<Expr>,
-    pub path: Option<String>,
+    /// The string argument of `urdf("...")` or `mesh("...")` and its span. After
+    /// [`crate::syntax::parse_with_imports`] the path is resolved against the directory of
+    /// the file that names it (as imports are).
+    pub path: Option<(String, Span)>,
+    pub span: Span,
+}
+
+/// `mount name: pose(...);` in a robot.
+#[derive(Clone, Debug)]
+pub struct MountDecl {
+    pub name: Ident,
+    pub pose: Pose,
     pub span: Span,
 }
 
@@ -120,13 +150,18 @@ pub enum FieldValue {
     Duration { lo: Expr, hi: Option<Expr> },
     /// `interruptible: true|false`.
     Flag(bool),
+    /// `footprint: geometry;`: the kind's own body (the span is `geometry`'s).
+    OwnGeometry(Span),
+    /// `footprint: box(...) at pose(...) + ...;`: a geometric footprint.
+    Body(BodyAst),
 }
 
-/// `system Name { participant P: Kind { init: ...; at: pose(...); } ... }`.
+/// `system Name { participant P: Kind { init: ...; at: pose(...); } obstacle O { ... } ... }`.
 #[derive(Clone, Debug)]
 pub struct SystemDecl {
     pub name: Ident,
     pub participants: Vec<ParticipantDecl>,
+    pub obstacles: Vec<ObstacleDecl>,
     pub span: Span,
 }
 
@@ -136,6 +171,26 @@ pub struct ParticipantDecl {
     pub kind: Ident,
     pub init: Option<Expr>,
     pub at: Option<Pose>,
+    /// Every `on: Carrier.mount` written (more than one is E0206, reported by lowering).
+    pub on: Vec<OnDecl>,
+    pub span: Span,
+}
+
+/// `on: Carrier.mount` in a participant.
+#[derive(Clone, Debug)]
+pub struct OnDecl {
+    pub carrier: Ident,
+    pub mount: Ident,
+    pub span: Span,
+}
+
+/// `obstacle Name { geometry: BODY; at: pose(...); }` in a system. Fields written twice are
+/// kept so that lowering reports them (E0206).
+#[derive(Clone, Debug)]
+pub struct ObstacleDecl {
+    pub name: Ident,
+    pub geometry: Vec<BodyAst>,
+    pub at: Vec<Pose>,
     pub span: Span,
 }
 

@@ -100,9 +100,10 @@ fn visit(
     order: &mut Vec<(FileId, ast::File)>,
     diags: &mut Vec<Diagnostic>,
 ) {
-    let (file, mut d) = parser::parse(id, &db.file(id).text);
+    let (mut file, mut d) = parser::parse(id, &db.file(id).text);
     diags.append(&mut d);
     let base = Path::new(&db.file(id).name).parent().map(Path::to_path_buf).unwrap_or_default();
+    resolve_shape_paths(&mut file, &base);
     for item in &file.items {
         let ast::Item::Import(imp) = item else { continue };
         let path = normalise(&base.join(&imp.path));
@@ -145,6 +146,33 @@ fn visit(
         }
     }
     order.push((id, file));
+}
+
+/// Resolves the file of every `urdf("...")` and `mesh("...")` shape against `base`, the
+/// directory of the file that names it, as imports are: a robot library under `robots/`
+/// names its URDF relative to itself, whichever choreography imports it. Nothing is read
+/// here; the geometry stage loads the files.
+fn resolve_shape_paths(file: &mut ast::File, base: &Path) {
+    let mut bodies: Vec<&mut ast::BodyAst> = Vec::new();
+    for item in &mut file.items {
+        match item {
+            ast::Item::Robot(r) => bodies.extend(r.geometry.iter_mut()),
+            ast::Item::Motion(m) => bodies.extend(m.fields.iter_mut().filter_map(|f| match &mut f.value {
+                ast::FieldValue::Body(b) => Some(b),
+                _ => None,
+            })),
+            ast::Item::System(s) => bodies.extend(s.obstacles.iter_mut().flat_map(|o| o.geometry.iter_mut())),
+            _ => {}
+        }
+    }
+    for body in bodies {
+        for part in &mut body.parts {
+            // An empty path stays empty, for lowering to report (E0214).
+            if let Some((path, _)) = part.shape.path.as_mut().filter(|(p, _)| !p.is_empty()) {
+                *path = normalise(&base.join(&*path)).display().to_string();
+            }
+        }
+    }
 }
 
 /// Whether `path` ends in `.mochi` or `.chor`, the only files an import may name.
@@ -193,6 +221,39 @@ mod tests {
         assert_eq!(reads, vec![PathBuf::from("lib/a.mochi")]);
         assert_eq!(parsed.files.len(), 2);
         assert_eq!(parsed.files[1].0, root, "imports come first");
+    }
+
+    #[test]
+    fn shape_files_are_resolved_against_the_file_that_names_them() {
+        let mut db = SourceDb::new();
+        let root = db.add(
+            "dir/main.chor",
+            "import \"../robots/r.mochi\"; system S { obstacle O { geometry: mesh(\"o.stl\"); } }",
+        );
+        let mut read = |_: &Path| {
+            Ok("robot R { state q: real; geometry: urdf(\"panda/p.urdf\") + mesh(\"\"); } motion R.m { interruptible: true; footprint: mesh(\"../m.obj\"); }".to_string())
+        };
+        let (parsed, diags) = parse_with_imports(&mut db, root, &mut read);
+        assert!(diags.is_empty(), "{diags:?}");
+        let mut paths = Vec::new();
+        for (_, f) in &parsed.files {
+            for item in &f.items {
+                let bodies: Vec<&ast::BodyAst> = match item {
+                    ast::Item::Robot(r) => r.geometry.iter().collect(),
+                    ast::Item::Motion(m) => m
+                        .fields
+                        .iter()
+                        .filter_map(|f| if let ast::FieldValue::Body(b) = &f.value { Some(b) } else { None })
+                        .collect(),
+                    ast::Item::System(s) => s.obstacles.iter().flat_map(|o| &o.geometry).collect(),
+                    _ => Vec::new(),
+                };
+                for b in bodies {
+                    paths.extend(b.parts.iter().filter_map(|p| p.shape.path.as_ref().map(|(s, _)| s.clone())));
+                }
+            }
+        }
+        assert_eq!(paths, ["robots/panda/p.urdf", "", "m.obj", "dir/o.stl"]);
     }
 
     #[test]

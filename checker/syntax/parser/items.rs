@@ -102,9 +102,17 @@ impl Parser {
 
     pub(super) fn robot(&mut self, start: Span) -> PResult<RobotDecl> {
         let name = self.ident("a robot kind name")?;
-        let mut r = RobotDecl { name, state: vec![], inputs: vec![], geometry: None, invariant: None, span: start };
+        let mut r = RobotDecl {
+            name,
+            state: vec![],
+            inputs: vec![],
+            geometry: vec![],
+            mounts: vec![],
+            invariant: None,
+            span: start,
+        };
         self.block(|p| {
-            let key = p.ident("`state`, `input`, `geometry` or `invariant`")?;
+            let key = p.ident("`state`, `input`, `geometry`, `mount` or `invariant`")?;
             match key.name.as_str() {
                 "state" | "input" => {
                     let vars = p.var_decls(";")?;
@@ -117,19 +125,16 @@ impl Parser {
                 }
                 "geometry" => {
                     p.expect_punct(":")?;
-                    let shape = p.ident("a shape (`box`, `sphere`, `cylinder` or `urdf`)")?;
-                    let mut g = Geometry { shape, args: vec![], path: None, span: key.span };
-                    p.expect_punct("(")?;
-                    if let Tok::Str(s) = p.peek().clone() {
-                        p.bump();
-                        g.path = Some(s);
-                    } else if !p.is_punct(")") {
-                        g.args = p.expr_list(")")?;
-                    }
-                    p.expect_punct(")")?;
-                    g.span = key.span.to(p.prev_span());
+                    let body = p.body()?;
                     p.expect_punct(";")?;
-                    r.geometry = Some(g);
+                    r.geometry.push(body);
+                }
+                "mount" => {
+                    let name = p.ident("a mount name")?;
+                    p.expect_punct(":")?;
+                    let pose = p.pose()?;
+                    p.expect_punct(";")?;
+                    r.mounts.push(MountDecl { name, pose, span: key.span.to(p.prev_span()) });
                 }
                 "invariant" => {
                     p.expect_punct(":")?;
@@ -140,9 +145,9 @@ impl Parser {
                     let d = Diagnostic::error(
                         Code::UnexpectedToken,
                         key.span,
-                        format!("expected `state`, `input`, `geometry` or `invariant`, found `{other}`"),
+                        format!("expected `state`, `input`, `geometry`, `mount` or `invariant`, found `{other}`"),
                     )
-                    .with_help("a robot block declares its variables, geometry and invariant");
+                    .with_help("a robot block declares its variables, geometry, mount points and invariant");
                     p.diags.push(d);
                     return Err(());
                 }
@@ -151,6 +156,44 @@ impl Parser {
         })?;
         r.span = start.to(self.prev_span());
         Ok(r)
+    }
+
+    /// A body: `part + part + ...`, each part `shape(args)` or `shape("file")`, optionally
+    /// `at pose(...)`. Shape names and arities are checked by lowering (E0214).
+    pub(super) fn body(&mut self) -> PResult<BodyAst> {
+        let start = self.span();
+        let mut parts = vec![self.part()?];
+        while self.eat_punct("+") {
+            parts.push(self.part()?);
+        }
+        Ok(BodyAst { parts, span: start.to(self.prev_span()) })
+    }
+
+    fn part(&mut self) -> PResult<PartAst> {
+        let name =
+            self.ident("a shape (`box`, `sphere`, `cylinder`, `capsule`, `urdf(\"file\")` or `mesh(\"file\")`)")?;
+        self.expect_punct("(")?;
+        let mut args = Vec::new();
+        let mut path = None;
+        if let Tok::Str(s) = self.peek().clone() {
+            let span = self.bump().span;
+            path = Some((s, span));
+        } else {
+            args = self.expr_list(")")?;
+        }
+        self.expect_punct(")")?;
+        let shape = ShapeAst { span: name.span.to(self.prev_span()), name, args, path };
+        let place = if self.eat_kw("at") { Some(self.pose()?) } else { None };
+        Ok(PartAst { span: shape.span.to(self.prev_span()), shape, place })
+    }
+
+    /// `pose(e, ...)`; the number of arguments (3 or 6) is checked by lowering (E0204).
+    pub(super) fn pose(&mut self) -> PResult<Pose> {
+        let s = self.expect_kw("pose")?;
+        self.expect_punct("(")?;
+        let args = self.expr_list(")")?;
+        self.expect_punct(")")?;
+        Ok(Pose { args, span: s.to(self.prev_span()) })
     }
 
     /// `a: real, b: int` up to (not including) `end`.
@@ -185,6 +228,14 @@ impl Parser {
                 "a contract field (`pre`, `assume`, `guarantee`, `post`, `footprint`, `duration`, `interruptible`)",
             )?;
             let value = match key.name.as_str() {
+                "footprint" if p.eat_punct(":") => {
+                    // A geometric footprint: the kind's own body, or shapes placed by state.
+                    if p.is_kw("geometry") && !matches!(p.peek_at(1), Tok::Punct("(")) {
+                        FieldValue::OwnGeometry(p.bump().span)
+                    } else {
+                        FieldValue::Body(p.body()?)
+                    }
+                }
                 "footprint" => {
                     p.expect_punct("(")?;
                     let a = p.ident("a coordinate name")?;
@@ -235,32 +286,42 @@ impl Parser {
     pub(super) fn system(&mut self, start: Span) -> PResult<SystemDecl> {
         let name = self.ident("a system name")?;
         let mut participants = Vec::new();
+        let mut obstacles = Vec::new();
         self.block(|p| {
-            let pstart = p.expect_kw("participant")?;
+            if p.is_kw("obstacle") {
+                obstacles.push(p.obstacle()?);
+                return Ok(());
+            }
+            if !p.is_kw("participant") {
+                return p.error_expected("`participant` or `obstacle`");
+            }
+            let pstart = p.bump().span;
             let name = p.ident("a participant name")?;
             p.expect_punct(":")?;
             let kind = p.ident("a robot kind")?;
-            let mut part = ParticipantDecl { name, kind, init: None, at: None, span: pstart };
+            let mut part = ParticipantDecl { name, kind, init: None, at: None, on: Vec::new(), span: pstart };
             if !p.eat_punct(";") {
                 p.block(|p| {
-                    let key = p.ident("`init` or `at`")?;
+                    let key = p.ident("`init`, `at` or `on`")?;
                     p.expect_punct(":")?;
                     match key.name.as_str() {
                         "init" => part.init = Some(p.expr()?),
-                        "at" => {
-                            let s = p.expect_kw("pose")?;
-                            p.expect_punct("(")?;
-                            let args = p.expr_list(")")?;
-                            p.expect_punct(")")?;
-                            part.at = Some(Pose { args, span: s.to(p.prev_span()) });
+                        "at" => part.at = Some(p.pose()?),
+                        "on" => {
+                            let carrier = p.ident("a participant name (`on: Carrier.mount`)")?;
+                            p.expect_punct(".")?;
+                            let mount = p.ident("a mount name (`on: Carrier.mount`)")?;
+                            part.on.push(OnDecl { span: key.span.to(mount.span), carrier, mount });
                         }
                         other => {
                             let d = Diagnostic::error(
                                 Code::UnexpectedToken,
                                 key.span,
-                                format!("expected `init` or `at`, found `{other}`"),
+                                format!("expected `init`, `at` or `on`, found `{other}`"),
                             )
-                            .with_help("a participant block holds `init: PREDICATE;` and `at: pose(x, y, z);`");
+                            .with_help(
+                                "a participant block holds `init: PREDICATE;`, `at: pose(x, y, z);` and `on: Carrier.mount;`",
+                            );
                             p.diags.push(d);
                             return Err(());
                         }
@@ -273,7 +334,36 @@ impl Parser {
             participants.push(part);
             Ok(())
         })?;
-        Ok(SystemDecl { name, participants, span: start.to(self.prev_span()) })
+        Ok(SystemDecl { name, participants, obstacles, span: start.to(self.prev_span()) })
+    }
+
+    /// `obstacle Name { geometry: BODY; at: pose(...); }`.
+    fn obstacle(&mut self) -> PResult<ObstacleDecl> {
+        let start = self.expect_kw("obstacle")?;
+        let name = self.ident("an obstacle name")?;
+        let mut o = ObstacleDecl { name, geometry: Vec::new(), at: Vec::new(), span: start };
+        self.block(|p| {
+            let key = p.ident("`geometry` or `at`")?;
+            p.expect_punct(":")?;
+            match key.name.as_str() {
+                "geometry" => o.geometry.push(p.body()?),
+                "at" => o.at.push(p.pose()?),
+                other => {
+                    let d = Diagnostic::error(
+                        Code::UnexpectedToken,
+                        key.span,
+                        format!("expected `geometry` or `at`, found `{other}`"),
+                    )
+                    .with_help("an obstacle block holds `geometry: SHAPES;` and `at: pose(x, y, z);`");
+                    p.diags.push(d);
+                    return Err(());
+                }
+            }
+            p.expect_punct(";")?;
+            Ok(())
+        })?;
+        o.span = start.to(self.prev_span());
+        Ok(o)
     }
 
     pub(super) fn sort(&mut self) -> PResult<SortAst> {

@@ -144,3 +144,89 @@ fn deep_nesting_is_an_error_not_a_crash() {
     let (_, d) = parse(FileId(0), &src);
     assert!(d.iter().any(|d| d.message.contains("nesting deeper") && d.code == Code::TooDeep));
 }
+
+fn file(src: &str) -> (File, Vec<Diagnostic>) {
+    parse(FileId(0), src)
+}
+
+#[test]
+fn robots_have_bodies_of_placed_shapes_and_mounts() {
+    let (f, d) = file(
+        "robot Cart { state x: real, th: real;
+           geometry: box(l, 0.4, 0.1) at pose(x, 0, 0, 0, 0, th) + cylinder(0.05, 0.3) + urdf(\"p.urdf\") at pose(0, 0, 1);
+           mount deck: pose(x, 0, 0.1, 0, 0, th);
+           invariant: x >= 0; }",
+    );
+    assert!(d.is_empty(), "{d:?}");
+    let Item::Robot(r) = &f.items[0] else { panic!("a robot") };
+    let parts = &r.geometry[0].parts;
+    assert_eq!(parts.len(), 3);
+    assert_eq!(parts[0].shape.name.name, "box");
+    assert_eq!(parts[0].shape.args.len(), 3);
+    assert_eq!(parts[0].place.as_ref().map(|p| p.args.len()), Some(6));
+    assert!(parts[1].place.is_none());
+    assert_eq!(parts[2].shape.path.as_ref().map(|(p, _)| p.as_str()), Some("p.urdf"));
+    assert_eq!(r.mounts.len(), 1);
+    assert_eq!(r.mounts[0].name.name, "deck");
+    assert!(r.invariant.is_some());
+}
+
+#[test]
+fn footprints_are_predicates_the_own_geometry_or_shapes() {
+    let (f, d) = file(
+        "motion C.a { footprint: geometry; interruptible: true; }
+         motion C.b { footprint: box(1, 1, 1) at pose(old(x), 0, 0) + sphere(r); }
+         motion C.c { footprint(px, py, pz): px >= 0; }",
+    );
+    assert!(d.is_empty(), "{d:?}");
+    let field = |i: usize| match &f.items[i] {
+        Item::Motion(m) => m.fields[0].value.clone(),
+        _ => panic!("a motion"),
+    };
+    assert!(matches!(field(0), FieldValue::OwnGeometry(_)));
+    assert!(matches!(field(1), FieldValue::Body(b) if b.parts.len() == 2));
+    assert!(matches!(field(2), FieldValue::Footprint { .. }));
+}
+
+#[test]
+fn systems_have_mounted_participants_and_obstacles() {
+    let (f, d) = file(
+        "system S {
+           participant C: Cart { init: x == 0; at: pose(0, 0, 0); }
+           obstacle Bridge { geometry: box(0.1, 1, 0.6) at pose(0, -0.55, 0) + box(0.1, 1.2, 0.05); at: pose(2, 0, 0); }
+           participant A: Arm { on: C.deck; at: pose(0, 0, 0, 0, 0, pi / 2); }
+           obstacle Pillar { geometry: cylinder(0.1, 2); }
+         }",
+    );
+    assert!(d.is_empty(), "{d:?}");
+    let Item::System(s) = &f.items[0] else { panic!("a system") };
+    assert_eq!(s.participants.len(), 2);
+    assert_eq!(s.obstacles.len(), 2);
+    let on = &s.participants[1].on[0];
+    assert_eq!((on.carrier.name.as_str(), on.mount.name.as_str()), ("C", "deck"));
+    assert_eq!(s.obstacles[0].geometry[0].parts.len(), 2);
+    assert_eq!(s.obstacles[0].at.len(), 1);
+    assert!(s.obstacles[1].at.is_empty());
+}
+
+#[test]
+fn a_bad_shape_or_pose_does_not_cascade() {
+    // A malformed part is one error; the rest of the block and the file still parse.
+    let (f, d) = file(
+        "robot R { state x: real; geometry: box(1,, 2) at pose(x); mount m: pos(1, 2, 3); invariant: x >= 0; }
+         system S { obstacle O { geometry: sphere(1) at; at: pose(1, 0, 0); } participant P: R { on: C; } participant Q: R; }",
+    );
+    assert_eq!(d.len(), 4, "{d:?}");
+    assert!(d.iter().all(|d| d.code == Code::UnexpectedToken));
+    let Item::Robot(r) = &f.items[0] else { panic!("a robot") };
+    assert!(r.invariant.is_some());
+    let Item::System(s) = &f.items[1] else { panic!("a system") };
+    assert_eq!(s.obstacles[0].at.len(), 1);
+    assert_eq!(s.participants.len(), 2);
+    // An unknown shape name is not a parse error: lowering says which shapes exist (E0214).
+    let (_, d) = file("robot R { geometry: cone(1, 2) + boxx(1); }");
+    assert!(d.is_empty(), "{d:?}");
+    // A system entry that is neither names both.
+    let (_, d) = file("system S { obstacl O { } }");
+    assert!(d[0].message.contains("`participant` or `obstacle`"), "{}", d[0].message);
+}
