@@ -306,7 +306,17 @@ impl Pipeline {
                 _ => None,
             })
             .collect();
+        // A footprint that holds no point (E0412) contains no body either: said once.
+        let empty: Vec<crate::hir::PrimId> = obligations
+            .iter()
+            .zip(&results)
+            .filter_map(|(ob, (d, _))| match (&ob.goal, d) {
+                (Goal::CanEnd { prim }, Decision::Fails(_)) if ob.rule == Rule::Occupies => Some(*prim),
+                _ => None,
+            })
+            .collect();
         let explained = |ob: &Obligation, f: &smt::Failure| match (&ob.goal, &f.which) {
+            (Goal::Contains { prim }, _) => empty.contains(prim),
             (Goal::Compatible { parts }, Some(Part::CanEnd)) => parts.iter().any(|(_, a)| never_ends.contains(&a.prim)),
             (Goal::Refines { concrete, .. }, Some(Part::Refine(smt::goals::RefineItem::Realisable))) => {
                 never_ends.contains(&concrete.prim)
@@ -583,7 +593,7 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
         d = d.with_label(*span, format!("`{symbol}` in the counterexample is the `{name}` bound here"));
     }
     let cx = Counterexample { values: f.values, overlap: f.overlap };
-    if let Some(text) = counterexample_text(&cx) {
+    if let Some(text) = counterexample_text(&cx, code) {
         d = d.with_note(text);
     }
     d.with_help(help).with_counterexample(cx)
@@ -659,7 +669,7 @@ pub(crate) fn contracts(prog: &crate::hir::Program, used: &HashSet<crate::hir::P
         .map(|&p| Obligation {
             rule: Rule::Contains,
             span: prog.prim(p).footprint.as_ref().map_or(prog.prim(p).span, |f| f.pred.loc.0),
-            what: format!("the footprint of `{}` contains the body", prog.prim(p).name),
+            what: format!("footprint of `{}`", prog.prim(p).name),
             hyps: Vec::new(),
             goal: Goal::Contains { prim: p },
         });
@@ -685,7 +695,7 @@ fn used_primitives(obligations: &[Obligation]) -> HashSet<crate::hir::PrimId> {
 
 /// `counterexample: at time 2.1 s, the point (1.02, 0.2, 0.05) is in both footprints;
 /// Cart.x = 0, tr = 2`.
-fn counterexample_text(cx: &Counterexample) -> Option<String> {
+fn counterexample_text(cx: &Counterexample, code: Code) -> Option<String> {
     let mut parts = Vec::new();
     if let Some(o) = &cx.overlap {
         let p = o.point.map(short);
@@ -694,7 +704,12 @@ fn counterexample_text(cx: &Counterexample) -> Option<String> {
             [t] => format!("at time {} s, ", short(*t)),
             ts => format!("at times {} s, ", ts.iter().map(|t| short(*t)).collect::<Vec<_>>().join(" and ")),
         };
-        parts.push(format!("{at}the point (x, y, z) = ({}, {}, {}) m is in both footprints", p[0], p[1], p[2]));
+        let (frame, where_) = match code {
+            Code::FootprintMissesBody => ("in the robot's own frame ", "is a point of the body outside the footprint"),
+            Code::ObstacleHit => ("", "is in the footprint and in the obstacle"),
+            _ => ("", "is in both footprints"),
+        };
+        parts.push(format!("{at}the point (x, y, z) = ({}, {}, {}) m {frame}{where_}", p[0], p[1], p[2]));
     }
     // The point and the time are shown above when there is an overlap.
     let hidden = |n: &str| cx.overlap.is_some() && (n.starts_with("point.") || n.starts_with("time"));

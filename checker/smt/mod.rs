@@ -713,16 +713,15 @@ fn describe(prog: &Program, ob: &Obligation, part: &Part) -> String {
         }
         (Goal::Contains { prim: p }, Part::Contains(k)) => {
             let prim = prog.prim(*p);
-            let what = prog.kind(prim.kind).body.as_ref().and_then(|b| b.parts.get(*k)).map_or("?", |part| {
-                match part.shape {
+            let what =
+                prog.kind(prim.kind).body.as_ref().and_then(|b| b.parts.get(*k)).map_or("?", |part| match part.shape {
                     crate::hir::body::Shape::Box(_) => "box",
                     crate::hir::body::Shape::Sphere(_) => "sphere",
                     crate::hir::body::Shape::Cylinder(..) => "cylinder",
                     crate::hir::body::Shape::Capsule(..) => "capsule",
                     crate::hir::body::Shape::Urdf { .. } => "URDF",
                     crate::hir::body::Shape::Mesh { .. } => "mesh",
-                }
-            });
+                });
             format!(
                 "the footprint of `{}` contains the robot's body (its {what}, part {} of `geometry:`) at every time and state its guarantee allows",
                 prim.name,

@@ -13,6 +13,7 @@ use crate::diag::{Code, Diagnostic};
 use crate::hir::body::{Body, Shape};
 use crate::hir::expr::{ExprKind, Sort};
 use crate::hir::{Expr, Footprint, Loc, Program, Var};
+use num_traits::ToPrimitive;
 
 /// Checks every body's sizes and gives each geometric footprint a predicate where one
 /// exists (`Primitive::footprint` from `Primitive::footprint_body`).
@@ -60,11 +61,11 @@ fn sizes(prog: &Program, body: &Body, diags: &mut Vec<Diagnostic>) {
             let iv = bounds::eval(prog, e, &bounds::closed);
             if !iv.is_some_and(|iv| iv.lo > 0.0 && iv.hi.is_finite()) {
                 ok = false;
-                let found = match iv {
-                    Some(iv) if iv.lo == iv.hi => format!("it is {}", iv.lo),
-                    Some(_) | None if !crate::hir::expr::mentions(e, &|v| !matches!(v, Var::Const(_))) => {
-                        "it may not be".to_string()
-                    }
+                let constant = !crate::hir::expr::mentions(e, &|v| !matches!(v, Var::Const(_)));
+                let found = match (bounds::exact(prog, e), iv) {
+                    (Some(q), _) => format!("it is {}", q.to_f64().map_or_else(|| q.to_string(), |v| format!("{v}"))),
+                    (None, Some(iv)) if constant && iv.is_finite() => format!("it lies in [{}, {}]", iv.lo, iv.hi),
+                    _ if constant => "it cannot be bounded".to_string(),
                     _ => "it reads a variable".to_string(),
                 };
                 diags.push(
@@ -124,7 +125,11 @@ mod tests {
         let x = Expr { kind: ExprKind::Var(Var::Own(Slot::State(0))), sort: Sort::Real, loc: Loc::default() };
         let at = Pose { args: [x, lit("0"), lit("0"), lit("0"), lit("0"), lit("0")], span: Default::default() };
         prog.kinds[0].body = Some(Body {
-            parts: vec![Part { shape: Shape::Box([lit("0.5"), lit("0.4"), lit("0.1")]), place: Some(at), span: Default::default() }],
+            parts: vec![Part {
+                shape: Shape::Box([lit("0.5"), lit("0.4"), lit("0.1")]),
+                place: Some(at),
+                span: Default::default(),
+            }],
             span: Default::default(),
         });
         let used = std::iter::once(crate::hir::PrimId(0)).collect();

@@ -157,9 +157,8 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
                 sort: crate::hir::Sort::Real,
                 loc: Default::default(),
             });
-            let region = crate::space::region::region(prog, &one, &point).ok_or_else(|| {
-                Unsupported("a URDF or mesh body, which the SMT solver cannot represent".into())
-            })?;
+            let region = crate::space::region::region(prog, &one, &point)
+                .ok_or_else(|| Unsupported("a URDF or mesh body, which the SMT solver cannot represent".into()))?;
             let app = PrimApp { prim: *prim, args: Vec::new(), loc: Default::default() };
             let t = q.enc.named_real("time");
             let mut inst = Inst::new(&mut q.enc, role, &app, t.clone(), "t")?;
