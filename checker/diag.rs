@@ -227,10 +227,16 @@ codes! {
         "Sec 4.1, full separation: the assumption of a primitive in `g_i` may only depend on \
          state variables of participants in `pt{g_i}`. An input variable connected to a \
          participant on the other side couples the two groups. Put both participants on one side.";
-    TwoNonInterruptible = "E0401", "more than one non-interruptible primitive in a joint motion",
-        "[AGCOMP] (Sec 3.4): at most one primitive of a joint motion may be non-interruptible; the \
-         others must be ready to be interrupted by the message that ends the motion. Make all but \
-         one primitive interruptible.";
+    TwoNonInterruptible = "E0401", "non-interruptible primitives of a joint motion that may end apart",
+        "[AGCOMP] (Sec 3.4) as printed allows at most one non-interruptible primitive in a joint \
+         motion (‡1 = ↯ ∨ ‡2 = ↯): the participant running it ends the motion ([NON-INTERRUPT], \
+         Fig 3) and sends next (sender readiness, Sec 4.1); with two, who ends first is unknown. \
+         mochi accepts several when their durations force a common end (joint end): every \
+         non-interruptible part's duration is a single instant [d, d], the same d for all, under \
+         what is known when the motion starts (the context Σ and the preconditions), compared as \
+         exact reals (0.1 + 0.2 is 0.3; 0.30000000000000004 is not). Then all of them end at d, \
+         and any of them may send next. Otherwise this error: give them the same duration \
+         [d, d], or make all but one interruptible.";
     Unmergeable = "E0601", "projection cannot merge two branches",
         "Projection (Def 4.8 (3)) of a choice onto a participant that neither sends nor receives \
          the choosing message merges the projections of the branches (Def 4.7). Merging succeeds \

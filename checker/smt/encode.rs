@@ -8,15 +8,18 @@
 //! - `sin(e)`, `cos(e)` are fresh `s`, `c` (one pair per argument) with side conditions
 //!   that hold of the real functions for every real argument: `s^2 + c^2 == 1`,
 //!   `1 - e^2/2 <= c <= 1 - e^2/2 + e^4/24`, and `e - e^3/6 <= s <= e` for `e >= 0`
-//!   (mirrored for `e <= 0`); for a constant argument (written as one, or a parameter
-//!   bound to one: its numeral is read back exactly, [`rational_value`]), its enclosure
+//!   (mirrored for `e <= 0`); for a constant argument (written as one, or an expression
+//!   of parameters bound to constants at the call site, `go(pi / 4)`: its numeral is read
+//!   back exactly, [`rational_value`], or the closed expression with the arguments put in,
+//!   [`Encoder::constant_args`], is enclosed by [`crate::bounds::eval`]), its enclosure
 //!   from [`crate::bounds::trig`], whose ends enter as the exact rationals of the doubles
 //!   ([`real_of_f64`]). These over-approximate: a proof with them is a proof, but
 //!   a counterexample may not be real, so [`Encoder::spurious_trig`] checks a model's
 //!   trigonometric values against `f64::sin`/`cos` before it is reported as one.
 //! - `pi` is one fresh real per query inside a rational enclosure 1e-20 wide
 //!   ([`Encoder::pi`]); `sin`/`cos` of an exact multiple of π/2
-//!   ([`crate::bounds::quarter_turn`]) are the exact 0 or ±1.
+//!   ([`crate::bounds::quarter_turn`]), written or through constant arguments, are the
+//!   exact 0 or ±1.
 //! - A motion primitive's contract is encoded under a [`Frame`] that says what its own
 //!   variables, `old(x)`, parameters, `clock` and footprint point stand for.
 //!
@@ -66,6 +69,11 @@ pub struct Frame {
     pub old: Vec<Term>,
     /// `Var::Param(i)`: the i-th argument, already encoded.
     pub params: Vec<Term>,
+    /// The i-th argument as written at the call site (in the caller's scope). Read only
+    /// where it is closed (literals, constants, `pi`): then `sin`/`cos` of an expression
+    /// of the parameters are enclosed as that constant's ([`Encoder::constant_args`]).
+    /// Left empty where `params` are not these arguments' terms (free parameters).
+    pub args: Vec<Expr>,
     pub clock: Option<Real>,
     /// The footprint's point in the participant's frame.
     pub point: Option<[Real; 3]>,
@@ -472,11 +480,13 @@ impl<'p> Encoder<'p> {
             }
             Builtin::Sin | Builtin::Cos => {
                 let e = args.first().ok_or_else(|| Unsupported(format!("`{}` without arguments", f.name())))?;
-                if let Some((c, s)) = bounds::quarter_turn(self.prog, e) {
+                // A parameter bound to a constant (`go(pi / 4)`) is read as that constant.
+                let constant = self.constant_args(e);
+                if let Some((c, s)) = bounds::quarter_turn(self.prog, constant.as_ref().unwrap_or(e)) {
                     // An exact multiple of π/2: 0 or ±1, exactly (no fresh pair).
                     return Ok(Term::R(Int::from_i64(if f == Builtin::Sin { s } else { c }).to_real()));
                 }
-                let (s, c) = self.trig_pair(e)?;
+                let (s, c) = self.trig_pair(e, constant.as_ref())?;
                 Term::R(if f == Builtin::Sin { s } else { c })
             }
             Builtin::Point | Builtin::Vector => {
@@ -511,8 +521,34 @@ impl<'p> Encoder<'p> {
         p
     }
 
-    /// The fresh `(sin e, cos e)` pair for `e`, with its enclosing side conditions.
-    fn trig_pair(&mut self, e: &Expr) -> Result<(Real, Real), Unsupported> {
+    /// `e` with each parameter of the current frame replaced by its argument at the call
+    /// site, when that makes it closed (literals, constants and `pi` only) and `e` reads
+    /// some parameter; `None` otherwise. Sound: in a primitive run as `go(a1, ..., an)`
+    /// the parameter `i` *is* `ai` (the frame encodes it as `ai`'s term), so the closed
+    /// expression has the value of `e`, and its enclosures ([`bounds::quarter_turn`],
+    /// [`bounds::eval`]) enclose `e`'s.
+    fn constant_args(&self, e: &Expr) -> Option<Expr> {
+        let frame = self.frame.as_ref()?;
+        // The arguments must be the ones the parameters' terms encode (a frame with free
+        // parameters, as in a declaration's own contract check, has none).
+        if frame.args.len() != frame.params.len() {
+            return None;
+        }
+        let mut reads_param = false;
+        e.visit_vars(&mut |v, _| reads_param |= matches!(v, Var::Param(_)));
+        if !reads_param {
+            return None;
+        }
+        let closed = crate::hir::expr::map_vars(e, &mut |v, _| match v {
+            Var::Param(i) => frame.args.get(*i).cloned(),
+            _ => None,
+        });
+        (!mentions_free(&closed)).then_some(closed)
+    }
+
+    /// The fresh `(sin e, cos e)` pair for `e`, with its enclosing side conditions;
+    /// `constant` is `e` read with constant arguments ([`Encoder::constant_args`]).
+    fn trig_pair(&mut self, e: &Expr, constant: Option<&Expr>) -> Result<(Real, Real), Unsupported> {
         let a = as_real(self.term(e)?)?;
         let key = a.to_string();
         if let Some(&i) = self.trig_by_arg.get(&key) {
@@ -524,10 +560,12 @@ impl<'p> Encoder<'p> {
         // A constant argument, written as one or bound to a parameter (the encoding of
         // `go(0.7853981633974483)`'s parameter simplifies to that rational): enclose its
         // value. The rational is read exactly, whatever its size.
-        let constant = rational_value(&a.simplify()).map(|q| bounds::Interval::of_rational(&q));
-        let closed = !mentions_free(e);
-        let bound = constant
-            .or_else(|| closed.then(|| bounds::eval(self.prog, e, &bounds::closed)).flatten())
+        let constant_value = rational_value(&a.simplify()).map(|q| bounds::Interval::of_rational(&q));
+        // Otherwise a closed expression, as written or through constant arguments (`pi`
+        // among them, which the numeral above cannot show): its interval enclosure.
+        let closed = constant.or_else(|| (!mentions_free(e)).then_some(e));
+        let bound = constant_value
+            .or_else(|| closed.and_then(|e| bounds::eval(self.prog, e, &bounds::closed)))
             .filter(|i| i.is_finite());
         if let Some(iv) = bound {
             for (f, t) in [(Builtin::Sin, &s), (Builtin::Cos, &c)] {
@@ -773,5 +811,73 @@ mod tests {
         let p = enc.named("p", &crate::hir::Sort::Point).expect("a point");
         assert!(matches!(p, Term::V(_)) && p.equals(&p).is_some());
         assert!(as_real(b).is_err() && as_real(p).is_err());
+    }
+}
+
+/// Trigonometry of parameters bound to constants (ARCHITECTURE.md, "Trig of constant
+/// arguments"), through the whole pipeline.
+#[cfg(test)]
+mod constant_arg_tests {
+    use crate::diag::{Code, Severity};
+    use crate::driver::{Config, Verdict};
+    use crate::fsload::check_source;
+
+    const FILE: &str = "choreographies/diagonal.chor";
+
+    fn check(name: &str, text: &str) -> (Verdict, Vec<Code>) {
+        let mut db = crate::source::SourceDb::new();
+        let r = check_source(&mut db, name, text, &Config::default());
+        let codes = r.diagnostics.iter().filter(|d| d.severity == Severity::Error).map(|d| d.code).collect();
+        (r.verdict, codes)
+    }
+
+    fn diagonal(edit: &dyn Fn(String) -> String) -> (Verdict, Vec<Code>) {
+        let text = std::fs::read_to_string(FILE).expect("the example exists");
+        check(FILE, &edit(text))
+    }
+
+    /// `move_cart(0, 0, pi / 4, 1, 5)` reads cos(t), sin(t) of its parameter t = pi / 4:
+    /// enclosed to a few ulps, so the example verifies (it was unknown: the footprint and
+    /// can-end questions of [AGCOMP] saw Taylor bounds of a fresh parameter).
+    #[test]
+    fn a_direction_given_as_pi_over_4_is_enclosed_tightly() {
+        assert_eq!(diagonal(&|t| t), (Verdict::Verified, vec![]));
+    }
+
+    /// A claim false by 2.4e-17 (cos(pi/4) = 0.70710678118654752...), less than the
+    /// enclosure's width, is never verified.
+    #[test]
+    fn a_claim_wrong_by_less_than_the_enclosure_is_not_verified() {
+        let edit = |t: String| t.replace("0.70710678118 <= A.x <= 0.70710678119", "A.x <= 0.7071067811865475");
+        let (verdict, _) = diagonal(&edit);
+        assert_ne!(verdict, Verdict::Verified);
+    }
+
+    /// A quarter turn through a parameter is exact: `edge(pi / 2)`'s footprint ends at
+    /// x <= cos(pi / 2) = 0 exactly, touching q's strip x > 0 nowhere. An enclosure of
+    /// cos(pi / 2), however tight, would let them share a point; with the argument
+    /// 1.5707963267948966 (a rational just below pi / 2, whose cosine is about 6e-17)
+    /// they do share one.
+    #[test]
+    fn a_quarter_turn_through_a_parameter_is_exact() {
+        let src = |arg: &str| {
+            format!(
+                "import \"../motion-primitives/bot.mochi\";
+                 motion Bot.edge(t: real) {{ interruptible: true; guarantee: s == old(s); post: s == old(s);
+                   footprint(px, py, pz): -0.1 <= px <= cos(t) && py == 0 && pz == 0; duration: [0, inf]; }}
+                 motion Bot.strip {{ interruptible: true; guarantee: s == old(s); post: s == old(s);
+                   footprint(px, py, pz): 0 < px <= 0.1 && py == 0 && pz == 0; duration: [0, inf]; }}
+                 system S {{ participant p: Bot {{ init: s == 0; }} participant q: Bot {{ init: s == 0; }} }}
+                 choreography S = dt<p: edge({arg}), q: strip>. end;
+                 process p = dt<edge({arg})>.end;
+                 process q = dt<strip>.end;"
+            )
+        };
+        let name = "choreographies/quarter-turn-test.chor";
+        assert_eq!(check(name, &src("pi / 2")), (Verdict::Verified, vec![]));
+        // (They also share a point at time 0: [T-SESS] reports it too.)
+        let (verdict, codes) = check(name, &src("1.5707963267948966"));
+        assert_eq!(verdict, Verdict::Rejected);
+        assert!(codes.contains(&Code::FootprintsOverlap), "{codes:?}");
     }
 }

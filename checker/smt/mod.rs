@@ -767,6 +767,24 @@ fn describe(prog: &Program, ob: &Obligation, part: &Part) -> String {
             prim(&parts[*j].1),
             prog.role_name(parts[*j].0)
         ),
+        (Goal::Compatible { parts }, Part::CommonEnd(n, j)) => {
+            let lasts = |i: usize| {
+                let p = prog.prim(parts[i].1.prim);
+                let lo = crate::hir::print::expr(prog, Some(parts[i].1.prim), &p.duration.lo);
+                let hi = p.duration.hi.as_ref().map(|h| crate::hir::print::expr(prog, Some(parts[i].1.prim), h));
+                format!(
+                    "`{}` ({}, duration [{lo}, {}])",
+                    prim(&parts[i].1),
+                    prog.role_name(parts[i].0),
+                    hi.as_deref().unwrap_or("inf")
+                )
+            };
+            format!(
+                "the non-interruptible {} and {} end together: both durations are the same single instant (joint end)",
+                lasts(*n),
+                lasts(*j)
+            )
+        }
         (Goal::Compatible { .. }, Part::Meet) => "the durations of the primitives share a time".to_string(),
         (Goal::Separated { sides }, Part::Apart { a, ra, b, rb }) => {
             let (x, y) = (&sides[*a].runs[*ra], &sides[*b].runs[*rb]);

@@ -1,8 +1,9 @@
 //! [AGCOMP] (Sec 3.4): the parts of a joint motion `dt<p1: a1, ..., pn: an>` compose when
 //! each part's precondition holds at the `dt` ("compatible from Pre"), the others'
 //! guarantees discharge each part's assumption, their footprints are pairwise disjoint at
-//! every time, their durations fit (a non-interruptible part's within every other's, or,
-//! with none, a common time), and the joint motion can end. This module plans those parts
+//! every time, their durations fit (a non-interruptible part's within every interruptible
+//! one's, every other non-interruptible part's the same single instant: joint end,
+//! ARCHITECTURE.md; or, with none, a common time), and the joint motion can end. This module plans those parts
 //! and builds their queries; pairs of footprints whose boxes are apart are proved by
 //! [`super::boxes`] without a query.
 
@@ -72,14 +73,25 @@ pub(super) fn plan(prog: &Program, hyps: &[Expr], parts: &[(RoleId, PrimApp)]) -
             }
         }
     }
-    // One can-end question for the whole `dt`: the parts end together.
-    out.push(Part::CanEnd);
+    // The first non-interruptible part ends the motion. Every other non-interruptible
+    // part must end at the same time (joint end: equal singleton durations, E0401), and
+    // every interruptible one be ready then (its duration contains the first's, E0405).
     let non: Vec<usize> = (0..parts.len()).filter(|&i| !prog.prim(parts[i].1.prim).interruptible).collect();
     match non.first() {
-        Some(&n) => out.extend((0..parts.len()).filter(|&j| j != n).map(|j| Part::Within(n, j))),
+        Some(&n) => out.extend((0..parts.len()).filter(|&j| j != n).map(|j| {
+            if non.contains(&j) {
+                Part::CommonEnd(n, j)
+            } else {
+                Part::Within(n, j)
+            }
+        })),
         None if parts.len() > 1 => out.push(Part::Meet),
         None => {}
     }
+    // One can-end question for the whole `dt`: the parts end together. Asked after the
+    // durations, so that durations that cannot fit are reported as such (E0401, E0405)
+    // rather than as a motion that cannot end (E0408); all parts must hold either way.
+    out.push(Part::CanEnd);
     Plan::Parts(out)
 }
 
@@ -99,7 +111,7 @@ pub(super) fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], pa
         // An assumption reads the part's own state and inputs: the partners whose
         // guarantees can discharge it are the ones its inputs read (transitively).
         Part::Assume(i) => with_sources(prog, parts, &[*i]),
-        Part::Within(n, j) => with_sources(prog, parts, &[*n, *j]),
+        Part::Within(n, j) | Part::CommonEnd(n, j) => with_sources(prog, parts, &[*n, *j]),
         Part::ClearOf { i, .. } => with_sources(prog, parts, &[*i]),
         _ => (0..parts.len()).collect(),
     };
@@ -195,6 +207,20 @@ pub(super) fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], pa
                 (None, Some(_)) => Bool::from_bool(false),
             };
             q.assertions.push(inside.not());
+        }
+        Part::CommonEnd(n, j) => {
+            for inst in &insts {
+                inst.started(q)?;
+            }
+            let (nlo, nhi) = insts[at(*n)?].duration(&mut q.enc)?;
+            let (jlo, jhi) = insts[at(*j)?].duration(&mut q.enc)?;
+            let same = match (nhi, jhi) {
+                // Both end exactly at `nlo`: each duration is that one instant.
+                (Some(nhi), Some(jhi)) => Bool::and(&[nlo.eq(&nhi), jlo.eq(&jhi), nlo.eq(&jlo)]),
+                // An unbounded duration is never a single instant.
+                _ => Bool::from_bool(false),
+            };
+            q.assertions.push(same.not());
         }
         Part::Meet => {
             for inst in &insts {
@@ -553,5 +579,85 @@ mod tests {
         // Touching is meeting: closed sets.
         assert!(matches!(cart_and_wall("1.65"), Decision::Fails(_)));
         assert_eq!(cart_and_wall("1.6499"), Decision::Holds(None));
+    }
+}
+
+/// Joint end (ARCHITECTURE.md): several non-interruptible parts compose exactly when
+/// their durations are one and the same instant under Σ and the preconditions.
+#[cfg(test)]
+mod joint_end_tests {
+    use super::super::super::{discharge, Decision, SmtConfig};
+    use super::super::tests::{first_dt, parts};
+    use super::super::Part;
+
+    /// Two bots, each running its own non-interruptible `step` with the given duration
+    /// (over its start state `x` and parameter `d`), from the given `init`s, the first
+    /// with argument `arg`; and a third holding (interruptible, ready at any time).
+    fn two(da: &str, db: &str, ia: &str, ib: &str, arg: &str) -> String {
+        format!(
+            "robot Bot {{ state x: real; }}
+             motion Bot.a(d: real) {{ interruptible: false; guarantee: x == old(x); duration: {da};
+               footprint(px, py, pz): old(x) - 0.1 <= px <= old(x) + 0.1 && -0.1 <= py <= 0.1 && -0.1 <= pz <= 0.1; }}
+             motion Bot.b {{ interruptible: false; guarantee: x == old(x); duration: {db};
+               footprint(px, py, pz): old(x) - 0.1 <= px <= old(x) + 0.1 && -0.1 <= py <= 0.1 && -0.1 <= pz <= 0.1; }}
+             motion Bot.hold {{ interruptible: true; guarantee: x == old(x); duration: [0, inf];
+               footprint(px, py, pz): old(x) - 0.1 <= px <= old(x) + 0.1 && -0.1 <= py <= 0.1 && -0.1 <= pz <= 0.1; }}
+             system S {{ participant A: Bot {{ init: {ia}; }} participant B: Bot {{ init: {ib}; }}
+               participant C: Bot {{ init: x == 5; }} }}
+             choreography G = dt<A: a({arg}), B: b, C: hold>. end;"
+        )
+    }
+
+    /// `None` when the `dt` composes, else the part that failed.
+    fn failing(src: &str) -> Option<Part> {
+        let (prog, ob) = first_dt(src);
+        match discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0 {
+            Decision::Holds { .. } => None,
+            Decision::Fails(f) => Some(f.which.expect("a failed part")),
+            other => panic!("undecided: {other:?}"),
+        }
+    }
+
+    #[test]
+    fn two_non_interruptible_parts_are_asked_to_end_together() {
+        let (prog, ob) = first_dt(&two("[1, 1]", "[1, 1]", "x == 0", "x == 1", "0"));
+        let ps = parts(&prog, &ob).expect("parts");
+        assert!(ps.contains(&Part::CommonEnd(0, 1)), "{ps:?}");
+        assert!(ps.contains(&Part::Within(0, 2)), "{ps:?}");
+    }
+
+    #[test]
+    fn equal_singletons_end_together() {
+        assert_eq!(failing(&two("[5, 5]", "[5, 5]", "x == 0", "x == 1", "0")), None);
+        // Exact reals: 0.1 + 0.2 is 3/10.
+        assert_eq!(failing(&two("[0.1 + 0.2, 0.1 + 0.2]", "[0.3, 0.3]", "x == 0", "x == 1", "0")), None);
+        // Equal under Σ: the parameter and both start states are known.
+        assert_eq!(failing(&two("[d + x, d + x]", "[x, x]", "x == 0", "x == 1", "1")), None);
+    }
+
+    #[test]
+    fn durations_that_may_differ_do_not_end_together() {
+        let end = Some(Part::CommonEnd(0, 1));
+        // 0.30000000000000004 is the double nearest 0.1 + 0.2, not 3/10.
+        assert_eq!(
+            failing(&two(
+                "[0.1 + 0.2, 0.1 + 0.2]",
+                "[0.30000000000000004, 0.30000000000000004]",
+                "x == 0",
+                "x == 1",
+                "0"
+            )),
+            end
+        );
+        // Nested, overlapping, not singletons: who ends first is unknown.
+        assert_eq!(failing(&two("[1, 1]", "[0, 2]", "x == 0", "x == 1", "0")), end);
+        assert_eq!(failing(&two("[1, 2]", "[1, 2]", "x == 0", "x == 1", "0")), end);
+        assert_eq!(failing(&two("[1, inf]", "[1, inf]", "x == 0", "x == 1", "0")), end);
+        // Read in each participant's own start state: B's x is only known to be in [1, 2].
+        assert_eq!(failing(&two("[x + 1, x + 1]", "[x, x]", "x == 0", "1 <= x <= 2", "0")), end);
+        // A singleton only at a start state Σ does not fix (x == 0).
+        assert_eq!(failing(&two("[1, 1 + x]", "[1, 1]", "0 <= x <= 1", "x == 3", "0")), end);
+        // A singleton only for an argument nothing fixes (d == 1).
+        assert_eq!(failing(&two("[1, d]", "[1, 1]", "0 <= x <= 1", "x == 3", "A.x + 1")), end);
     }
 }

@@ -77,6 +77,9 @@ pub enum Part {
     ClearOf { i: usize, o: usize },
     /// [AGCOMP]: the non-interruptible part `i`'s duration lies within part `j`'s.
     Within(usize, usize),
+    /// Joint end (ARCHITECTURE.md): the non-interruptible parts `i` and `j` end at one
+    /// common time, forced by their durations: `Σ ∧ Pre ⇒ lo_i = hi_i = lo_j = hi_j`.
+    CommonEnd(usize, usize),
     /// [AGCOMP] with no non-interruptible part: the durations share a time.
     Meet,
     /// Separation: run `ra` of side `a` and run `rb` of side `b` never overlap.

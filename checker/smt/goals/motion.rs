@@ -60,6 +60,7 @@ impl<'a> Inst<'a> {
             start.insert(slot, s);
         }
         frame.params = app.args.iter().map(|a| enc.any(a)).collect::<Result<_, _>>()?;
+        frame.args = app.args.clone();
         frame.clock = Some(clock);
         Ok(Inst { role, prim, frame, start })
     }

@@ -93,7 +93,7 @@ pub(super) fn refine(
     // that fails from a start only the abstract arguments allow was proved).
     let mut pres = Vec::new();
     for si in &sis {
-        let fr = Frame { params: si.frame.params.clone(), ..sf.clone() };
+        let fr = Frame { params: si.frame.params.clone(), args: si.frame.args.clone(), ..sf.clone() };
         pres.push(si.pred(&mut q.enc, &si.prim.pre, &fr)?);
     }
     let pre_s = Bool::or(&pres);
@@ -101,7 +101,7 @@ pub(super) fn refine(
         |q: &mut Query, f: &dyn Fn(&Primitive) -> &Expr, frame: &Frame, conj: bool| -> Result<Bool, Unsupported> {
             let mut bs = Vec::new();
             for si in &sis {
-                let fr = Frame { params: si.frame.params.clone(), ..frame.clone() };
+                let fr = Frame { params: si.frame.params.clone(), args: si.frame.args.clone(), ..frame.clone() };
                 bs.push(si.pred(&mut q.enc, f(si.prim), &fr)?);
             }
             Ok(if conj { Bool::and(&bs) } else { Bool::or(&bs) })

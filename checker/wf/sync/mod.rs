@@ -15,8 +15,9 @@
 //!
 //! - **Unique minimal communication** (E0310): the immediate successors of a motion that
 //!   are messages are pairwise exclusive (in different branches of a `+`).
-//! - **Sender readiness** (E0311): the sender of such a message runs the only
-//!   non-interruptible primitive of the motion, or all its primitives are interruptible.
+//! - **Sender readiness** (E0311): the sender of such a message runs a non-interruptible
+//!   primitive of the motion (several only under joint end, which [AGCOMP] checks: E0401),
+//!   or all its primitives are interruptible.
 //! - **Total synchronisation** (E0312): between a motion `n` and a later motion `n'`,
 //!   every participant of `n` sends or receives a message that happens after `n` and
 //!   before `n'`. mochi accepts one exception (ARCHITECTURE.md, "consecutive motions"):
@@ -441,8 +442,14 @@ impl Checker<'_, '_> {
         }
         for &m in &msgs {
             let EventKind::Msg(msg) = self.ev[m].kind else { continue };
+            // Joint end: a sender that runs a non-interruptible part ends when every
+            // other non-interruptible part does ([AGCOMP]'s joint-end part, E0401, checks
+            // that their durations force it), so only an interruptible or absent sender
+            // can be blocked by one.
+            let non = |r: &RoleId, a: &PrimApp| *r != msg.from && !self.prog.prim(a.prim).interruptible;
+            let sender_ends = motion.parts.iter().any(|(r, a)| *r == msg.from && !self.prog.prim(a.prim).interruptible);
             let blocking: Vec<&(RoleId, PrimApp)> =
-                motion.parts.iter().filter(|(r, a)| *r != msg.from && !self.prog.prim(a.prim).interruptible).collect();
+                if sender_ends { Vec::new() } else { motion.parts.iter().filter(|(r, a)| non(r, a)).collect() };
             if let Some((r, a)) = blocking.first() {
                 let sender = self.prog.role_name(msg.from);
                 let in_motion = motion.parts.iter().any(|(q, _)| *q == msg.from);
@@ -581,6 +588,15 @@ mod tests {
         let (side, (_, scope)) = (super::super::side::check(&p, &c.body), super::super::scope::check(&p, &c.body));
         assert!(side.is_empty() && scope.is_empty(), "{side:?} {scope:?}");
         super::check(&p, &c.body).into_iter().map(|d| d.code).collect()
+    }
+
+    /// Joint end: with several non-interruptible parts (whose common end [AGCOMP]
+    /// checks, E0401), any of them may send next; an interruptible or absent sender may not.
+    #[test]
+    fn under_joint_end_any_non_interruptible_part_may_send() {
+        assert_eq!(codes("dt<P: go, Q: go, V: wait>. P -> Q : a. Q -> V : b. end"), vec![]);
+        assert_eq!(codes("dt<P: go, Q: go, V: wait>. Q -> P : a. P -> V : b. end"), vec![]);
+        assert_eq!(codes("dt<P: go, Q: go, V: wait>. V -> P : a. P -> Q : b. end"), vec![Code::SenderNotReady]);
     }
 
     #[test]

@@ -315,8 +315,14 @@ impl Checker<'_, '_> {
         }
         for &m in &msgs {
             let EventKind::Msg(msg) = self.ev[m].kind else { continue };
+            // Joint end: a sender that runs a non-interruptible part ends when every
+            // other non-interruptible part does ([AGCOMP]'s joint-end part, E0401, checks
+            // that their durations force it), so only an interruptible or absent sender
+            // can be blocked by one.
+            let non = |r: &RoleId, a: &PrimApp| *r != msg.from && !self.prog.prim(a.prim).interruptible;
+            let sender_ends = motion.parts.iter().any(|(r, a)| *r == msg.from && !self.prog.prim(a.prim).interruptible);
             let blocking: Vec<&(RoleId, PrimApp)> =
-                motion.parts.iter().filter(|(r, a)| *r != msg.from && !self.prog.prim(a.prim).interruptible).collect();
+                if sender_ends { Vec::new() } else { motion.parts.iter().filter(|(r, a)| non(r, a)).collect() };
             if let Some((r, a)) = blocking.first() {
                 let sender = self.prog.role_name(msg.from);
                 let in_motion = motion.parts.iter().any(|(q, _)| *q == msg.from);
