@@ -8,9 +8,11 @@ rims of cylinders, sphere centres minus radii), so a printed clearance is an est
 below the true value by more than the sampling step of cylinder rims (10 degrees, about
 0.4 % of the radius) and exact for mesh vertices and spheres against boxes.
 
-Usage as a library (see the __main__ block for the numbers in the examples):
+Usage as a library (robots/tools/example_clearances.py computes the numbers written in the
+geometry examples' comments):
     robot = Urdf("robots/moveo_urdf/urdf/moveo_urdf.urdf")
-    pts = robot.points({"Joint_1": 0.3, ...}, world_pose)
+    shapes = robot.shapes({"Joint_1": 0.3, ...}, pose(x, y, z, roll, pitch, yaw))
+    shapes_box_distance(shapes, lo, hi)   # (distance, link, nearest point)
 """
 import math
 import os
@@ -209,7 +211,7 @@ def extent(shapes):
     """Bounding box of the shapes and their largest horizontal distance from the z axis."""
     lo, hi, rmax = [float("inf")] * 3, [-float("inf")] * 3, 0.0
     for _, kind, data in shapes:
-        items = [(c, r)] if kind == "sphere" and (c := data[0]) is not None and (r := data[1]) is not None else [(p, 0.0) for p in data]
+        items = [data] if kind == "sphere" else [(p, 0.0) for p in data]
         for p, r in items:
             for i in range(3):
                 lo[i] = min(lo[i], p[i] - r)
