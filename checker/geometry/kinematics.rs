@@ -388,6 +388,47 @@ mod tests {
         assert_eq!(r.displacement_bound(&[0.0, 0.0], &[f64::INFINITY, 0.0])[2], f64::INFINITY);
     }
 
+    /// The bound is tight where the path-length argument is: one revolute joint turning a
+    /// point at its largest distance. Moving j1 of the planar arm by δ moves the tip
+    /// sphere's far point (2.1 from the axis) by the chord 2 · 2.1 · sin(δ/2) ≈ 2.1 δ, the
+    /// bound. A prismatic joint below a revolute one lengthens the revolute's lever by its
+    /// reach over the box.
+    #[test]
+    fn displacement_bound_is_sound_and_tight_on_a_lever() {
+        let r = two_link();
+        let far = |q: &[f64]| (r.link_poses(q)[2] * nalgebra::Point3::new(1.1, 0.0, 0.0)).coords;
+        let b = r.displacement_bound(&[0.0, 0.0], &[0.01, 0.0])[2];
+        let moved = (far(&[0.01, 0.0]) - far(&[0.0, 0.0])).norm();
+        assert!(moved <= b && moved >= 0.999 * b, "moved {moved}, bound {b}");
+
+        // base -(revolute z)-> l1 -(prismatic x)-> l2 with the sphere at x = 1.
+        let tip = Solid::sphere(0.1, Isometry3::translation(1.0, 0.0, 0.0), "tip").unwrap();
+        let link = |name: &str, solids| Link { name: name.into(), solids };
+        let j = |name: &str, kind, p, c| Joint {
+            name: name.into(),
+            kind,
+            parent: p,
+            child: c,
+            origin: Isometry3::identity(),
+            axis: if kind == JointKind::Prismatic { Vector3::x_axis() } else { Vector3::z_axis() },
+            limits: Some((-1.0, 1.0)),
+            mimic: None,
+        };
+        let r = Robot::new(
+            "slide".into(),
+            vec![link("base", vec![]), link("l1", vec![]), link("l2", vec![tip])],
+            vec![j("turn", JointKind::Revolute, 0, 1), j("slide", JointKind::Prismatic, 1, 2)],
+        )
+        .unwrap();
+        let far = |q: &[f64]| (r.link_poses(q)[2] * nalgebra::Point3::new(1.1, 0.0, 0.0)).coords;
+        let b = r.displacement_bound(&[0.0, 0.5], &[0.01, 0.0])[2];
+        let moved = (far(&[0.01, 0.5]) - far(&[0.0, 0.5])).norm();
+        assert!(moved <= b && moved >= 0.999 * b, "moved {moved}, bound {b}");
+        // The slide itself moves every point of l2 by its δ.
+        let b = r.displacement_bound(&[0.0, 0.5], &[0.0, 0.2])[2];
+        assert!((b - 0.2).abs() < 1e-9, "{b}");
+    }
+
     #[test]
     fn tree_errors() {
         let link = |name: &str| Link { name: name.into(), solids: vec![] };

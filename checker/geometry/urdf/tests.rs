@@ -253,3 +253,30 @@ fn each_urdf_error_points_into_the_urdf() {
     .unwrap_err();
     assert_eq!((ds[0].code, ds[0].span), (Code::GeometryFileMissing, at));
 }
+
+/// Distances between real robots: two primitive Pandas 2 m apart are apart, with the closest
+/// points between them; at the same place they are in contact (exact primitives). Two mesh
+/// Pandas at the same place: their convex hulls touch (the meshes may not: hulls say so).
+#[test]
+fn distances_between_real_robots() {
+    use crate::geometry::{distance, Relation};
+    let prim = ok("example-robot-data/robots/panda_description/urdf/panda_collision.urdf");
+    let q = vec![0.0; 8];
+    let here: Vec<_> = prim.solids_at(&q).collect();
+    let shift = Isometry3::translation(2.0, 0.0, 0.0);
+    let there: Vec<_> = prim.solids_at(&q).map(|(p, s)| (shift * p, s)).collect();
+    let c = distance(&here, &there).expect("solids");
+    assert_eq!(c.relation, Relation::Apart);
+    assert!(c.distance > 1.0 && c.distance < 2.0, "{c:?}");
+    assert!(((c.point_b - c.point_a).norm() - c.distance).abs() < 1e-9);
+    assert!(c.certified_clearance() > 0.0 && c.certified_clearance() < c.distance);
+    let c = distance(&here, &here).expect("solids");
+    assert_eq!(c.relation, Relation::Contact);
+    assert!(c.distance <= 0.0);
+    let mesh = ok("pybullet_data/franka_panda/panda.urdf");
+    let m: Vec<_> = mesh.solids_at(&q).collect();
+    let c = distance(&m, &m).expect("solids");
+    assert_eq!(c.relation, Relation::HullsTouch);
+    // Every hull's slack is tiny (quickhull keeps the vertices of these meshes).
+    assert!(mesh.links.iter().flat_map(|l| &l.solids).all(|s| s.slack < 1e-6));
+}
