@@ -209,8 +209,18 @@ pub fn hull_solid(data: &MeshData, scale: [f64; 3], pose: Isometry3<f64>, name: 
     };
     // The slack: how far a vertex lies outside the hull parry built.
     let poly = hull.as_convex_polyhedron()?;
-    // A point below every face's plane is inside (the plane test is cheap); only the
-    // others, the few quickhull dropped, are projected (exact, slower).
+    let slack = slack_of(poly, &pts);
+    // Rounding of the projection itself: a relative 1e-12 of the mesh's extent.
+    let extent = pts.iter().map(|p| p.coords.amax()).fold(0.0, f64::max);
+    let slack = slack + 1e-12 * extent + data.rounding * scale.iter().fold(0.0, |m: f64, s| m.max(s.abs()));
+    let tri = Arc::new(Triangles { vertices: pts, indices: data.triangles.clone() });
+    Some(Solid::with_slack(hull, pose, name, slack, Some(tri)))
+}
+
+/// The largest distance of a point of `pts` outside `poly` (0 if all are inside). A point
+/// on the inner side of every face's plane is inside (cheap); the others, the few quickhull
+/// dropped, are projected onto the hull (exact, slower).
+fn slack_of(poly: &parry3d::shape::ConvexPolyhedron, pts: &[Point3<f64>]) -> f64 {
     let planes: Vec<(nalgebra::Vector3<f64>, f64)> = poly
         .faces()
         .iter()
@@ -220,9 +230,9 @@ pub fn hull_solid(data: &MeshData, scale: [f64; 3], pose: Isometry3<f64>, name: 
             Some((f.normal.into_inner(), f.normal.dot(&q.coords)))
         })
         .collect();
-    let slack = pts
-        .iter()
+    pts.iter()
         .map(|p| {
+            // Written out: nalgebra's generic dot is slow in unoptimised test builds.
             if !planes.is_empty() && planes.iter().all(|(n, d)| n.x * p.x + n.y * p.y + n.z * p.z <= *d) {
                 return 0.0;
             }
@@ -233,12 +243,7 @@ pub fn hull_solid(data: &MeshData, scale: [f64; 3], pose: Isometry3<f64>, name: 
                 (proj.point - p).norm()
             }
         })
-        .fold(0.0, f64::max);
-    // Rounding of the projection itself: a relative 1e-12 of the mesh's extent.
-    let extent = pts.iter().map(|p| p.coords.amax()).fold(0.0, f64::max);
-    let slack = slack + 1e-12 * extent + data.rounding * scale.iter().fold(0.0, |m: f64, s| m.max(s.abs()));
-    let tri = Arc::new(Triangles { vertices: pts, indices: data.triangles.clone() });
-    Some(Solid::with_slack(hull, pose, name, slack, Some(tri)))
+        .fold(0.0, f64::max)
 }
 
 /// A hull with volume: its points span 3 dimensions by a relative margin (parry may
@@ -344,6 +349,31 @@ mod tests {
         assert!(matches!(format_of("noext"), Err(MeshError::Unsupported(_))));
         assert_eq!(parse(b"# nothing\n", Format::Obj).unwrap_err(), MeshError::Empty);
         assert!(parse(b"v 1 2 nan\nv 0 0 0\nv 1 1 1\nf 1 2 3\n", Format::Obj).is_err());
+    }
+
+    /// The slack measures points outside a hull: the cube's hull, and points just outside
+    /// each of its faces and corners (if the face planes were misread, some would count as
+    /// inside and the slack would be 0).
+    #[test]
+    fn slack_measures_points_outside_the_hull() {
+        let d = parse(CUBE_OBJ.as_bytes(), Format::Obj).unwrap();
+        let h = SharedShape::convex_hull(&d.vertices).unwrap();
+        let poly = h.as_convex_polyhedron().unwrap();
+        assert_eq!(slack_of(poly, &d.vertices), 0.0);
+        assert_eq!(slack_of(poly, &[Point3::new(0.5, 0.5, 0.5)]), 0.0);
+        for p in [
+            [0.5, 0.5, 1.01],
+            [0.5, -0.01, 0.5],
+            [1.01, 0.5, 0.5],
+            [0.5, 0.5, -0.01],
+            [-0.01, 0.5, 0.5],
+            [0.5, 1.01, 0.5],
+        ] {
+            let s = slack_of(poly, &[Point3::from(p)]);
+            assert!((s - 0.01).abs() < 1e-9, "{p:?}: {s}");
+        }
+        let s = slack_of(poly, &[Point3::new(1.01, 1.01, 1.01)]);
+        assert!((s - 0.01 * 3f64.sqrt()).abs() < 1e-9, "{s}");
     }
 
     /// A flat mesh (one triangle) becomes a thin solid that still contains the triangle.
