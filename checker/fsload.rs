@@ -26,6 +26,15 @@ use std::path::Path;
 /// a file that grows meanwhile cannot exhaust memory either. This is the file system's
 /// [`Loader`](crate::syntax::Loader).
 pub fn read_source(path: &Path) -> std::io::Result<String> {
+    let bytes = read_bytes(path)?;
+    decode(bytes).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e))
+}
+
+/// Reads any file mochi reads (a source file, a URDF, a mesh) as bytes: only a regular
+/// file (after following links), at most [`MAX_FILE_SIZE`] bytes, checked before and while
+/// reading. The one place that reads a file's contents; [`read_source`] adds UTF-8
+/// decoding. This is the file system's [`ByteLoader`](crate::syntax::ByteLoader).
+pub fn read_bytes(path: &Path) -> std::io::Result<Vec<u8>> {
     use std::io::Read;
     let fail = |e: SourceError| std::io::Error::new(std::io::ErrorKind::InvalidData, e);
     let meta = std::fs::metadata(path)?;
@@ -42,7 +51,7 @@ pub fn read_source(path: &Path) -> std::io::Result<String> {
     if bytes.len() as u64 > MAX_FILE_SIZE {
         return Err(fail(SourceError::TooLarge(bytes.len() as u64)));
     }
-    decode(bytes).map_err(fail)
+    Ok(bytes)
 }
 
 #[cfg(unix)]
@@ -74,7 +83,7 @@ pub fn load(db: &mut SourceDb, path: &Path) -> std::io::Result<(FileId, Option<D
         Ok(text) => Ok((db.add(path.display().to_string(), text), None)),
         Err(e) => match source_error(&e) {
             Some(&SourceError::NotUtf8 { offset, .. }) => {
-                let bytes = std::fs::read(path)?;
+                let bytes = read_bytes(path)?;
                 let err = e.get_ref().map(|e| e.to_string()).unwrap_or_default();
                 // Replacement characters keep the valid prefix, and so the bad offset, as is.
                 let text = String::from_utf8_lossy(&bytes).into_owned();

@@ -7,7 +7,9 @@
 //!   `eprint!`, `eprintln!`, `stdout()`, `stderr()`, `stdin()`);
 //! - (c) every `.rs` file under `checker/` starts with a `//!` module comment;
 //! - (d) only `checker/render.rs` knows output formats and colours: it alone names
-//!   `serde_json`, `termcolor`, `codespan` and `NO_COLOR`.
+//!   `serde_json`, `termcolor`, `codespan` and `NO_COLOR`;
+//! - (e) only files under `checker/geometry/` name the geometry crates (`parry3d`,
+//!   `nalgebra`, `urdf_rs`, `stl_io`, `tobj`, `roxmltree`).
 //!
 //! The rules are textual on purpose: simple to state, simple to audit. Rules (a), (b), (d)
 //! ignore comments (`//` to the end of a line) and everything from the first line that is
@@ -138,6 +140,32 @@ fn only_the_io_edge_does_io() {
     }
     for f in IO_EDGE {
         assert!(files.iter().any(|(g, _)| g == f), "the IO edge {f} is gone: update IO_EDGE");
+    }
+}
+
+/// The crates only the geometry engine may name (rule (e)).
+const GEOMETRY_CRATES: &[&str] = &["parry3d", "nalgebra", "urdf_rs", "stl_io", "tobj", "roxmltree"];
+
+#[test]
+fn only_geometry_names_the_geometry_crates() {
+    let files = code_sources();
+    let bad: Vec<String> = files
+        .iter()
+        .filter(|(f, _)| !f.starts_with("checker/geometry/"))
+        .flat_map(|(f, t)| hits(f, t, GEOMETRY_CRATES))
+        .collect();
+    assert!(
+        bad.is_empty(),
+        "only checker/geometry/ may name parry3d, nalgebra, urdf_rs, stl_io, tobj, roxmltree \
+         (ARCHITECTURE.md); use the engine's own types and functions:\n{}",
+        bad.join("\n")
+    );
+    // The rule is not vacuous: the engine does name each of them.
+    for w in GEOMETRY_CRATES {
+        assert!(
+            files.iter().any(|(f, t)| f.starts_with("checker/geometry/") && !hits(f, t, &[w]).is_empty()),
+            "checker/geometry/ names no `{w}`: is the rule's word list stale?"
+        );
     }
 }
 

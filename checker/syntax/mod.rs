@@ -18,6 +18,12 @@ use std::path::{Path, PathBuf};
 /// library users pass closures over memory.
 pub type Loader<'a> = dyn FnMut(&Path) -> std::io::Result<String> + 'a;
 
+/// Where the bytes of files that are not mochi source come from (URDF files and the meshes
+/// they name, read by `crate::geometry`): the file system at the edge
+/// ([`crate::fsload::read_bytes`], same limits as a [`Loader`]: regular files of at most
+/// [`MAX_FILE_SIZE`] bytes), memory in tests. A [`Loader`] is this plus [`decode`].
+pub type ByteLoader<'a> = dyn FnMut(&Path) -> std::io::Result<Vec<u8>> + 'a;
+
 /// A file and everything it imports, parsed, in dependency order (imports first).
 #[derive(Debug, Default)]
 pub struct Parsed {

@@ -1,0 +1,171 @@
+//! The geometry engine: real shapes, meshes, URDF robots and their kinematics, and exact
+//! distances between placed solids (issue 9). The only module that names parry3d,
+//! nalgebra, urdf-rs, stl_io, tobj and roxmltree (`tests/tidy.rs` checks it), as `smt/`
+//! is for z3. It reads files only through the byte loader it is given
+//! ([`crate::syntax::ByteLoader`]; the file system's is [`crate::fsload::read_bytes`]).
+//!
+//! - [`shape`]: a [`Solid`] is one convex parry shape placed in its owner's frame;
+//! - [`mesh`]: STL and OBJ meshes, as the convex hulls of their vertices;
+//! - [`urdf`]: URDF files to kinematic trees, with diagnostics pointing into the URDF;
+//! - [`kinematics`]: forward kinematics and sound displacement bounds.
+//!
+//! Everything is f64: parry is its f64 build (`parry3d-f64`, imported under the name
+//! `parry3d`), so no f32 rounding enters a clearance proof.
+
+pub mod kinematics;
+pub mod mesh;
+pub mod shape;
+pub mod urdf;
+
+pub use kinematics::Robot;
+pub use shape::Solid;
+pub use urdf::load_robot;
+
+use nalgebra::{Isometry3, Point3};
+
+/// What a caller subtracts from a distance [`distance`] reports before it counts as a
+/// proved clearance, beyond the solids' slacks (metres): 1 µm. parry's f64 GJK stops when
+/// its distance estimate is within a relative ~1e-10 of the true distance (its tolerance
+/// is a few hundred f64 epsilons), and the poses carry rounding of a few ulps of the scene's
+/// size; for scenes within a kilometre of the origin both are far below 1 µm.
+pub const DISTANCE_MARGIN: f64 = 1e-6;
+
+/// How two sets of solids relate at their closest pair.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Relation {
+    /// Apart: [`Closest::distance`] > 0.
+    Apart,
+    /// Touching or penetrating, between exact shapes (primitives): a real contact.
+    Contact,
+    /// Touching or penetrating, with a convex hull of a mesh on one side: the hulls touch,
+    /// the meshes may not ([`Solid::trimesh`] can confirm).
+    HullsTouch,
+}
+
+/// The closest pair between two sets of placed solids.
+#[derive(Clone, Debug)]
+pub struct Closest {
+    /// parry's distance between the closest pair; when they overlap, minus the
+    /// penetration depth (≤ 0).
+    pub distance: f64,
+    /// The closest point of the first set's solid, and of the second's (world frame);
+    /// when they overlap, the deepest points of the contact.
+    pub point_a: Point3<f64>,
+    pub point_b: Point3<f64>,
+    pub name_a: String,
+    pub name_b: String,
+    pub relation: Relation,
+    /// The two solids' slacks, summed (see [`Solid::slack`]).
+    pub slack: f64,
+}
+
+impl Closest {
+    /// A clearance that is proved: `distance − slack − DISTANCE_MARGIN`. Positive means the
+    /// two sets are certainly disjoint.
+    pub fn certified_clearance(&self) -> f64 {
+        self.distance - self.slack - DISTANCE_MARGIN
+    }
+}
+
+/// The closest pair between the solids `a` and the solids `b`, each given with the world
+/// pose of its owner frame (the solid's [`Solid::pose`] places it in that frame). `None`
+/// if either side is empty. Pairs whose bounding spheres are farther apart than the best
+/// distance found so far are skipped (the sphere distance is a lower bound).
+///
+/// Every solid mochi builds is convex with a support map, a pair parry always supports;
+/// a pair it does not support (impossible by construction) is reported as a contact, the
+/// conservative answer for a clearance proof.
+pub fn distance(a: &[(Isometry3<f64>, &Solid)], b: &[(Isometry3<f64>, &Solid)]) -> Option<Closest> {
+    let mut best: Option<Closest> = None;
+    // Bounding spheres: world centre of each owner frame and each solid's radius about it.
+    for (pa, sa) in a {
+        let ca = pa.translation.vector;
+        for (pb, sb) in b {
+            let cb = pb.translation.vector;
+            let lower = (ca - cb).norm() - sa.bounding_radius() - sb.bounding_radius();
+            if let Some(c) = &best {
+                if lower > c.distance {
+                    continue;
+                }
+            }
+            let c = pair(pa, sa, pb, sb);
+            if best.as_ref().is_none_or(|x| c.distance < x.distance) {
+                best = Some(c);
+            }
+        }
+    }
+    best
+}
+
+fn pair(pa: &Isometry3<f64>, sa: &Solid, pb: &Isometry3<f64>, sb: &Solid) -> Closest {
+    use parry3d::query::{self, ClosestPoints};
+    let (wa, wb) = (pa * sa.pose, pb * sb.pose);
+    let touching = if sa.is_hull || sb.is_hull { Relation::HullsTouch } else { Relation::Contact };
+    let mk = |distance: f64, point_a, point_b, relation| Closest {
+        distance,
+        point_a,
+        point_b,
+        name_a: sa.name.clone(),
+        name_b: sb.name.clone(),
+        relation,
+        slack: sa.slack + sb.slack,
+    };
+    match query::closest_points(&wa, sa.shape.as_ref(), &wb, sb.shape.as_ref(), f64::MAX) {
+        Ok(ClosestPoints::WithinMargin(p1, p2)) => {
+            let d = (p2 - p1).norm();
+            mk(d, p1, p2, if d > 0.0 { Relation::Apart } else { touching })
+        }
+        Ok(ClosestPoints::Intersecting) | Ok(ClosestPoints::Disjoint) | Err(_) => {
+            match query::contact(&wa, sa.shape.as_ref(), &wb, sb.shape.as_ref(), 0.0) {
+                Ok(Some(c)) => mk(c.dist.min(0.0), c.point1, c.point2, touching),
+                // Intersecting by one query, no contact by the other (a tangency at the
+                // tolerance): a contact at the first solid's origin, conservatively.
+                _ => {
+                    let p = Point3::from(wa.translation.vector);
+                    mk(0.0, p, p, touching)
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    #[test]
+    fn distance_between_primitives_and_contact() {
+        let id = Isometry3::identity();
+        let a = Solid::mochi_box(1.0, 1.0, 1.0, id, "box").unwrap();
+        let b = Solid::sphere(0.5, id, "ball").unwrap();
+        // The ball's centre at x = 2, z = 0.5: 1.5 from the box's face, 1.0 from its surface.
+        let far = Isometry3::translation(2.0, 0.0, 0.5);
+        let c = distance(&[(id, &a)], &[(far, &b)]).unwrap();
+        assert!((c.distance - 1.0).abs() < 1e-9, "{c:?}");
+        assert_eq!(c.relation, Relation::Apart);
+        assert!((c.point_a - Point3::new(0.5, 0.0, 0.5)).norm() < 1e-9, "{c:?}");
+        assert!((c.point_b - Point3::new(1.5, 0.0, 0.5)).norm() < 1e-9, "{c:?}");
+        assert_eq!((c.name_a.as_str(), c.name_b.as_str()), ("box", "ball"));
+        assert!(c.certified_clearance() < c.distance && c.certified_clearance() > 0.99);
+        // Overlapping by 0.25.
+        let near = Isometry3::translation(0.75, 0.0, 0.5);
+        let c = distance(&[(id, &a)], &[(near, &b)]).unwrap();
+        assert!((c.distance + 0.25).abs() < 1e-9, "{c:?}");
+        assert_eq!(c.relation, Relation::Contact);
+        assert!(distance(&[], &[(near, &b)]).is_none());
+    }
+
+    /// The minimum over pairs, with the sphere pruning: the second solid of `b` is closest.
+    #[test]
+    fn minimum_over_pairs() {
+        let id = Isometry3::identity();
+        let s = Solid::sphere(0.1, id, "s").unwrap();
+        let c1 = Solid::mochi_cylinder(0.1, 1.0, Isometry3::translation(3.0, 0.0, 0.0), "far").unwrap();
+        let c2 = Solid::mochi_cylinder(0.1, 1.0, Isometry3::translation(1.0, 0.0, 0.0), "near").unwrap();
+        let rot = Isometry3::rotation(Vector3::new(0.0, 0.0, 0.3));
+        let c = distance(&[(id, &s)], &[(rot, &c1), (rot, &c2)]).unwrap();
+        assert_eq!(c.name_b, "near");
+        assert!((c.distance - 0.8).abs() < 1e-9, "{c:?}");
+    }
+}
