@@ -31,6 +31,7 @@ pub mod diag;
 pub mod driver;
 pub mod exact;
 pub mod fsload;
+pub mod geometry;
 pub mod hir;
 pub mod io;
 pub mod library;
