@@ -217,33 +217,38 @@ pub struct Decision {
     pub stats: Stats,
 }
 
-/// A box waiting in the queue; ordered for a max-heap so that the least key pops first.
-struct Queued {
-    key: f64,
+/// An entry of a search queue; ordered for a max-heap so that the least key (compared
+/// lexicographically) pops first.
+struct Queued<T> {
+    key: (f64, f64),
     seq: u64,
-    qbox: QBox,
+    item: T,
 }
 
-impl PartialEq for Queued {
+impl<T> PartialEq for Queued<T> {
     fn eq(&self, o: &Self) -> bool {
         self.cmp(o) == Ordering::Equal
     }
 }
-impl Eq for Queued {}
-impl PartialOrd for Queued {
+impl<T> Eq for Queued<T> {}
+impl<T> PartialOrd for Queued<T> {
     fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
         Some(self.cmp(o))
     }
 }
-impl Ord for Queued {
+impl<T> Ord for Queued<T> {
     fn cmp(&self, o: &Self) -> Ordering {
         // Least key first; among equal keys, the most recent first (depth first).
-        o.key.total_cmp(&self.key).then_with(|| self.seq.cmp(&o.seq))
+        o.key.0.total_cmp(&self.key.0).then_with(|| o.key.1.total_cmp(&self.key.1)).then_with(|| self.seq.cmp(&o.seq))
     }
 }
 
+/// Dimension `k` of `b` is at its resolution: no wider than it, or too narrow for f64 to
+/// hold a midpoint strictly inside (so splitting would not shrink it).
 fn widths_ok(b: &QBox, res: &[f64], k: usize) -> bool {
-    b.hi[k] - b.lo[k] <= res.get(k).copied().unwrap_or(0.0)
+    let (l, h) = (b.lo[k], b.hi[k]);
+    let mid = l + 0.5 * (h - l);
+    h - l <= res.get(k).copied().unwrap_or(0.0) || mid <= l || mid >= h
 }
 
 fn at_resolution(b: &QBox, res: &[f64]) -> bool {
@@ -309,8 +314,143 @@ fn confirm(
     (d.distance <= 0.0).then_some((q, d))
 }
 
+/// A box evaluated at its centre.
+struct Node {
+    qbox: QBox,
+    c: Vec<f64>,
+    at_c: Closest,
+    mb: f64,
+    feas: Feasible,
+}
+
+/// What one search pass leaves.
+struct Pass {
+    proved: usize,
+    infeasible: usize,
+    min_lb: f64,
+    unknown: Option<QBox>,
+    unresolved: usize,
+    /// The least time lower bound of the boxes left unknown.
+    unknown_time: f64,
+    /// How the pass ended: `None` = the queue ran empty.
+    end: Option<PassEnd>,
+}
+
+enum PassEnd {
+    Contact {
+        q: Vec<f64>,
+        at: Closest,
+        /// The time lower bound of the box the contact was found in.
+        box_time: f64,
+    },
+    Budget {
+        why: UnknownWhy,
+        qbox: QBox,
+        /// The least time lower bound of the boxes not yet decided.
+        frontier: f64,
+        left: usize,
+    },
+}
+
+/// One branch-and-bound pass over `root`. `earliest`: boxes in order of their time lower
+/// bound, and contacts only from boxes no wider in time than its resolution; otherwise
+/// best first on the lower bound `lower(c) − motion(B)` (the most colliding box first, so
+/// a contact is found quickly). Nodes are counted in `stats` against `max_nodes`.
+fn pass(scene: &dyn Scene, root: &QBox, opts: &Options, earliest: bool, max_nodes: usize, stats: &mut Stats) -> Pass {
+    let time = opts.time_dim.filter(|&t| t < scene.dims());
+    let order_time = if earliest { time } else { None };
+    let margin = opts.margin.max(0.0);
+    let mut out = Pass {
+        proved: 0,
+        infeasible: 0,
+        min_lb: f64::INFINITY,
+        unknown: None,
+        unresolved: 0,
+        unknown_time: f64::INFINITY,
+        end: None,
+    };
+    let mut heap: BinaryHeap<Queued<Node>> = BinaryHeap::new();
+    let mut seq = 0u64;
+    let mut pending = vec![root.clone()];
+    loop {
+        // Evaluate the new boxes: infeasible and proved ones are done, the others queue.
+        for b in pending.drain(..) {
+            let budget = if stats.nodes >= max_nodes {
+                Some(UnknownWhy::Nodes(opts.max_nodes))
+            } else if opts.deadline.is_some_and(|d| Instant::now() >= d) {
+                Some(UnknownWhy::Deadline)
+            } else {
+                None
+            };
+            if let Some(why) = budget {
+                let t = |b: &QBox| time.map_or(f64::NEG_INFINITY, |t| b.lo[t]);
+                let frontier = heap.iter().map(|n| t(&n.item.qbox)).fold(t(&b), f64::min);
+                out.end = Some(PassEnd::Budget { why, left: heap.len() + 1, frontier, qbox: b });
+                return out;
+            }
+            stats.nodes += 1;
+            let feas = scene.feasible(&b.lo, &b.hi);
+            if feas == Feasible::No {
+                out.infeasible += 1;
+                continue;
+            }
+            let c = b.centre();
+            stats.distance_calls += 1;
+            let at_c = scene.distance(&c);
+            let mb = scene.motion_bound(&b.lo, &b.hi, &c);
+            let lb = at_c.lower - mb;
+            if lb > margin {
+                out.proved += 1;
+                out.min_lb = out.min_lb.min(lb);
+                continue;
+            }
+            let lb = if lb.is_nan() { f64::NEG_INFINITY } else { lb };
+            seq += 1;
+            heap.push(Queued {
+                key: (order_time.map_or(0.0, |t| b.lo[t]), lb),
+                seq,
+                item: Node { qbox: b, c, at_c, mb, feas },
+            });
+        }
+        let Some(Queued { item: n, .. }) = heap.pop() else {
+            return out;
+        };
+        let b = &n.qbox;
+        let res_box = at_resolution(b, &opts.resolution);
+        let time_ok = !earliest || time.is_none_or(|t| widths_ok(b, &opts.resolution, t));
+        if (n.at_c.distance <= 0.0 && time_ok) || res_box {
+            if let Some((q, at)) = confirm(scene, b, &n.c, &n.at_c, n.feas, stats) {
+                out.end = Some(PassEnd::Contact { q, at, box_time: time.map_or(f64::NEG_INFINITY, |t| b.lo[t]) });
+                return out;
+            }
+        }
+        match choose_split(scene, b, &n.c, n.mb, opts) {
+            Some(k) => {
+                let (x, y) = b.split(k);
+                pending.push(x);
+                pending.push(y);
+            }
+            None => {
+                out.unresolved += 1;
+                if let Some(t) = time {
+                    out.unknown_time = out.unknown_time.min(b.lo[t]);
+                }
+                if out.unknown.is_none() {
+                    out.unknown = Some(n.qbox);
+                }
+            }
+        }
+    }
+}
+
 /// Decide whether the two sides of `scene` are apart for every `q` in `root` that
 /// satisfies the constraints (module doc).
+///
+/// Search order: best first on the box's lower bound, so that a contact, if any, is
+/// found early. With a time dimension, a contact found at time `t1` is then refined: a
+/// second pass over the part of the box with time ≤ `t1` searches earliest first (boxes
+/// in order of their time lower bound) with the nodes left; [`Contact::clear_before`]
+/// says how far that pass proved the feasible configurations apart.
 pub fn decide(scene: &dyn Scene, root: &QBox, opts: &Options) -> Decision {
     let start = Instant::now();
     let mut stats = Stats::default();
@@ -322,85 +462,51 @@ pub fn decide(scene: &dyn Scene, root: &QBox, opts: &Options) -> Decision {
         return finish(Outcome::Unknown { why: UnknownWhy::BadBox, qbox: root.clone(), unresolved: 1 }, stats);
     }
     let time = opts.time_dim.filter(|&t| t < scene.dims());
-    let margin = opts.margin.max(0.0);
-    let mut heap = BinaryHeap::new();
-    let mut seq = 0u64;
-    let key = |b: &QBox| time.map_or(0.0, |t| b.lo[t]);
-    heap.push(Queued { key: key(root), seq, qbox: root.clone() });
-    let (mut proved, mut infeasible) = (0usize, 0usize);
-    let mut min_lb = f64::INFINITY;
-    let mut unknown: Option<QBox> = None;
-    let mut unresolved = 0usize;
-    let mut unknown_time = f64::INFINITY;
-    while let Some(Queued { qbox: b, .. }) = heap.pop() {
-        stats.nodes += 1;
-        let why = if stats.nodes > opts.max_nodes {
-            Some(UnknownWhy::Nodes(opts.max_nodes))
-        } else if opts.deadline.is_some_and(|d| Instant::now() >= d) {
-            Some(UnknownWhy::Deadline)
-        } else {
-            None
-        };
-        if let Some(why) = why {
-            return finish(Outcome::Unknown { why, qbox: b, unresolved: unresolved + 1 + heap.len() }, stats);
-        }
-        let feas = scene.feasible(&b.lo, &b.hi);
-        if feas == Feasible::No {
-            infeasible += 1;
-            continue;
-        }
-        let c = b.centre();
-        stats.distance_calls += 1;
-        let at_c = scene.distance(&c);
-        let mb = scene.motion_bound(&b.lo, &b.hi, &c);
-        let lb = at_c.lower - mb;
-        if lb > margin {
-            proved += 1;
-            min_lb = min_lb.min(lb);
-            continue;
-        }
-        let res_box = at_resolution(&b, &opts.resolution);
-        let time_ok = time.is_none_or(|t| widths_ok(&b, &opts.resolution, t));
-        if (at_c.distance <= 0.0 && time_ok) || res_box {
-            if let Some((q, d)) = confirm(scene, &b, &c, &at_c, feas, &mut stats) {
-                let clear_before = time.map(|t| b.lo[t].min(unknown_time));
-                return finish(
-                    Outcome::Contact(Contact {
-                        point: midpoint(&d.points),
-                        points: d.points,
-                        distance: d.distance,
-                        names: [scene.solid_name(0, d.solids[0]), scene.solid_name(1, d.solids[1])],
-                        q,
-                        clear_before,
-                    }),
-                    stats,
-                );
-            }
-        }
-        match choose_split(scene, &b, &c, mb, opts) {
-            Some(k) => {
-                let (x, y) = b.split(k);
-                for child in [y, x] {
-                    seq += 1;
-                    heap.push(Queued { key: key(&child), seq, qbox: child });
-                }
-            }
-            None => {
-                unresolved += 1;
-                if let Some(t) = time {
-                    unknown_time = unknown_time.min(b.lo[t]);
-                }
-                if unknown.is_none() {
-                    unknown = Some(b);
-                }
-            }
-        }
-    }
-    let outcome = match unknown {
-        Some(qbox) => Outcome::Unknown { why: UnknownWhy::Resolution, qbox, unresolved },
-        None => Outcome::Apart { boxes: proved, infeasible, min_lower_bound: min_lb },
+    let first = pass(scene, root, opts, false, opts.max_nodes, &mut stats);
+    let contact = |q: Vec<f64>, at: Closest, clear_before: Option<f64>| {
+        Outcome::Contact(Contact {
+            point: midpoint(&at.points),
+            points: at.points,
+            distance: at.distance,
+            names: [scene.solid_name(0, at.solids[0]), scene.solid_name(1, at.solids[1])],
+            q,
+            clear_before,
+        })
     };
-    finish(outcome, stats)
+    match first.end {
+        Some(PassEnd::Contact { q, at, .. }) => {
+            let Some(t) = time else {
+                return finish(contact(q, at, None), stats);
+            };
+            // Refine: the earliest contact with time ≤ q[t], with the nodes left.
+            let mut early = root.clone();
+            early.hi[t] = q[t].max(early.lo[t]);
+            let second = pass(scene, &early, opts, true, opts.max_nodes, &mut stats);
+            let (q, at, clear) = match second.end {
+                Some(PassEnd::Contact { q: q2, at: at2, box_time }) => (q2, at2, box_time.min(second.unknown_time)),
+                Some(PassEnd::Budget { frontier, .. }) => (q, at, frontier.min(second.unknown_time)),
+                // Every feasible q with time below q[t] was decided: none touches, except
+                // perhaps in boxes left unknown.
+                None => {
+                    let t1 = q[t];
+                    (q, at, t1.min(second.unknown_time))
+                }
+            };
+            finish(contact(q, at, Some(clear.max(root.lo[t]))), stats)
+        }
+        Some(PassEnd::Budget { why, qbox, left, .. }) => {
+            finish(Outcome::Unknown { why, qbox, unresolved: first.unresolved + left }, stats)
+        }
+        None => match first.unknown {
+            Some(qbox) => {
+                finish(Outcome::Unknown { why: UnknownWhy::Resolution, qbox, unresolved: first.unresolved }, stats)
+            }
+            None => finish(
+                Outcome::Apart { boxes: first.proved, infeasible: first.infeasible, min_lower_bound: first.min_lb },
+                stats,
+            ),
+        },
+    }
 }
 
 /// The minimum distance over the feasible configurations of a box (Deliver 6).
@@ -466,11 +572,11 @@ pub fn min_distance(scene: &dyn Scene, root: &QBox, tolerance: f64, opts: &Optio
         Some(if lb.is_nan() { f64::NEG_INFINITY } else { lb })
     };
     if let Some(lb) = eval(root, &mut stats, &mut best) {
-        heap.push(Queued { key: lb, seq, qbox: root.clone() });
+        heap.push(Queued { key: (lb, 0.0), seq, item: root.clone() });
     }
     let upper_of = |best: &Option<(Vec<f64>, Closest)>| best.as_ref().map_or(f64::INFINITY, |(_, d)| d.distance);
     loop {
-        let lower = heap.peek().map_or(f64::INFINITY, |q| q.key).min(frozen);
+        let lower = heap.peek().map_or(f64::INFINITY, |q| q.key.0).min(frozen);
         let upper = upper_of(&best);
         if heap.is_empty() || upper - lower <= tolerance {
             out.lower = lower.min(upper);
@@ -483,7 +589,7 @@ pub fn min_distance(scene: &dyn Scene, root: &QBox, tolerance: f64, opts: &Optio
             break;
         }
         stats.nodes += 1;
-        let Some(Queued { qbox: b, key: lb, .. }) = heap.pop() else {
+        let Some(Queued { item: b, key: (lb, _), .. }) = heap.pop() else {
             break;
         };
         let c = b.centre();
@@ -494,7 +600,7 @@ pub fn min_distance(scene: &dyn Scene, root: &QBox, tolerance: f64, opts: &Optio
                 for child in [x, y] {
                     if let Some(lb) = eval(&child, &mut stats, &mut best) {
                         seq += 1;
-                        heap.push(Queued { key: lb, seq, qbox: child });
+                        heap.push(Queued { key: (lb, 0.0), seq, item: child });
                     }
                 }
             }
@@ -622,14 +728,18 @@ pub fn parry_closest(
         + (r1.center().coords.norm() + r1.radius() + r2.center().coords.norm() + r2.radius()) as f64;
     let pad = F32_REL * scale + 1e-9;
     let c = parry3d::query::contact(&i1, s1.as_ref(), &i2, s2.as_ref(), f32::MAX);
+    let unknown = (f64::NAN, f64::NEG_INFINITY, [[0.0; 3]; 2]);
     let Ok(Some(c)) = c else {
-        // Unsupported pair or nothing found: no information (never a pass).
-        let n = f64::NEG_INFINITY;
-        return (n, n, [[0.0; 3]; 2]);
+        // Unsupported pair or nothing found: no information (never a pass, never a
+        // contact).
+        return unknown;
     };
     let pt = |p: PPoint<f32>| [p.x as f64, p.y as f64, p.z as f64];
     let points = [pt(c.point1), pt(c.point2)];
     let dist = c.dist as f64;
+    if dist.is_nan() {
+        return unknown;
+    }
     if !(dist > 0.0) {
         return (dist, dist - pad, points);
     }
@@ -670,8 +780,9 @@ impl Scene for ParryScene {
         for (i, (s1, p1)) in self.sides[0].iter().zip(&a).enumerate() {
             for (j, (s2, p2)) in self.sides[1].iter().zip(&b).enumerate() {
                 let (d, lower, points) = parry_closest(&s1.shape, p1, &s2.shape, p2);
-                best.lower = best.lower.min(lower);
-                if d < best.distance || (i, j) == (0, 0) {
+                // A NaN lower bound is no bound (f64::min would drop it).
+                best.lower = if lower.is_nan() { f64::NEG_INFINITY } else { best.lower.min(lower) };
+                if d < best.distance || (best.distance.is_nan() && !d.is_nan()) || (i, j) == (0, 0) {
                     best.distance = d;
                     best.points = points;
                     best.solids = [i, j];
@@ -1000,5 +1111,77 @@ mod tests {
         }
         eprintln!("random scenes: {apart} apart, {contact} contact, {unknown} unknown");
         assert!(apart > 5 && contact > 5, "{apart} apart, {contact} contact");
+    }
+
+    /// An arm on a cart, in four dimensions `(t, θ1, θ2, θ3)`: the cart drives along x
+    /// (x = -3 + t) while turning (yaw = 0.5 t), the arm's three revolute joints range
+    /// over [-0.5, 0.5] each (shoulder yaw θ1, elbow pitch θ2, wrist pitch θ3), and a
+    /// pillar stands at (0, y, 0). Sampling cross-checks the verdict.
+    fn mounted_arm(pillar_y: f64) -> ParryScene {
+        let cart = || AffinePose::fixed([-3.0, 0.0, 0.1, 0.0, 0.0, 0.0]).with(0, 0, 1.0).with(5, 0, 0.5);
+        let j1 = || AffinePose::fixed([0.0, 0.0, 0.2, 0.0, 0.0, 0.0]).with(5, 1, 1.0);
+        let j2 = || AffinePose::fixed([0.0, 0.0, 0.1, 0.0, 0.0, 0.0]).with(4, 2, 1.0);
+        let j3 = || AffinePose::fixed([0.0, 0.0, 0.4, 0.0, 0.0, 0.0]).with(4, 3, 1.0);
+        // A link: a capsule from its joint's origin up its z axis, `len` long.
+        let link = |len: f64| AffinePose::fixed([0.0, 0.0, len / 2.0, 0.0, 0.0, 0.0]);
+        let side0 = vec![
+            Solid::new("cart", SharedShape::cuboid(0.3, 0.2, 0.1), Box::new(vec![cart()])),
+            Solid::new("base", SharedShape::ball(0.08), Box::new(vec![cart(), j1()])),
+            Solid::new("upper", SharedShape::capsule_z(0.2, 0.05), Box::new(vec![cart(), j1(), j2(), link(0.4)])),
+            Solid::new("fore", SharedShape::capsule_z(0.2, 0.04), Box::new(vec![cart(), j1(), j2(), j3(), link(0.4)])),
+        ];
+        let pillar = Solid::new(
+            "pillar",
+            // parry's cylinder stands on y; roll 90° stands it on z.
+            SharedShape::cylinder(1.0, 0.15),
+            Box::new(vec![AffinePose::fixed([0.0, pillar_y, 1.0, std::f64::consts::FRAC_PI_2, 0.0, 0.0])]),
+        );
+        ParryScene::new(4, [side0, vec![pillar]])
+    }
+
+    fn arm_root() -> QBox {
+        QBox::new(vec![0.0, -0.5, -0.5, -0.5], vec![6.0, 0.5, 0.5, 0.5])
+    }
+
+    fn sampled_min(s: &ParryScene, n: usize) -> f64 {
+        let r = arm_root();
+        let mut m = f64::INFINITY;
+        let mut rng = super::super::placement::tests::Rng::new(5);
+        for _ in 0..n {
+            let q: Vec<f64> = r.lo.iter().zip(&r.hi).map(|(l, h)| rng.range(*l, *h)).collect();
+            m = m.min(s.distance(&q).distance);
+        }
+        m
+    }
+
+    #[test]
+    fn mounted_arm_past_a_pillar() {
+        let mut o = Options::new(vec![1e-3; 4]);
+        o.time_dim = Some(0);
+        let apart = mounted_arm(0.9);
+        let d = decide(&apart, &arm_root(), &o);
+        report("mounted arm, apart", &d);
+        let Outcome::Apart { min_lower_bound, .. } = d.outcome else { panic!("expected apart, got {:?}", d.outcome) };
+        let sampled = sampled_min(&apart, 3000);
+        assert!(min_lower_bound > 0.0 && sampled >= min_lower_bound, "{sampled} {min_lower_bound}");
+        let touching = mounted_arm(0.6);
+        let d = decide(&touching, &arm_root(), &o);
+        report("mounted arm, contact", &d);
+        let Outcome::Contact(c) = &d.outcome else { panic!("expected contact, got {:?}", d.outcome) };
+        eprintln!("  at {:?}, clear before {:?}", c.q, c.clear_before);
+        assert!(touching.distance(&c.q).distance <= 0.0 && c.names[1] == "pillar", "{c:?}");
+        let mut any = o.clone();
+        any.time_dim = None;
+        let d = decide(&touching, &arm_root(), &any);
+        report("mounted arm, any contact", &d);
+        assert!(matches!(d.outcome, Outcome::Contact(_)), "{:?}", d.outcome);
+        let mut o = Options::new(vec![1e-3; 4]);
+        o.max_nodes = 200_000;
+        let c = min_distance(&apart, &arm_root(), 1e-2, &o);
+        eprintln!(
+            "mounted arm clearance: [{}, {}] at {:?} ({:?}), {} nodes, {:?}",
+            c.lower, c.upper, c.at_q, c.names, c.stats.nodes, c.stats.elapsed
+        );
+        assert!(c.lower <= sampled && c.lower > 0.0, "{c:?}");
     }
 }
