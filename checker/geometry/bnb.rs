@@ -203,6 +203,15 @@ pub enum Outcome {
     },
 }
 
+impl Outcome {
+    /// Apart only because no configuration of the box satisfies the constraints (every
+    /// box was pruned as infeasible): like an obligation whose context is false, it proves
+    /// nothing, and the caller should say so (ARCHITECTURE.md, "The vacuity guard").
+    pub fn is_vacuous(&self) -> bool {
+        matches!(self, Outcome::Apart { boxes: 0, infeasible, .. } if *infeasible > 0)
+    }
+}
+
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Stats {
     pub nodes: usize,
@@ -684,7 +693,9 @@ impl Constraints for Unconstrained {
     }
 }
 
-/// Two sides of parry solids, each placed by its own chain.
+/// Two sides of parry solids, each placed by its own chain. A side with no solid is apart
+/// from everything: a caller must reject a body that failed to load rather than pass an
+/// empty side.
 pub struct ParryScene {
     pub dims: usize,
     pub sides: [Vec<Solid>; 2],
@@ -963,6 +974,17 @@ mod tests {
         // Without the constraint it collides (the test can fail).
         let s = passing_balls(0.5);
         assert!(matches!(decide(&s, &root1(), &opts(&[1e-4])).outcome, Outcome::Contact(_)));
+    }
+
+    #[test]
+    fn everywhere_infeasible_is_apart_but_vacuous() {
+        let mut s = passing_balls(0.0);
+        s.constraints = Box::new(Before(-1.0));
+        let d = decide(&s, &root1(), &opts(&[1e-4]));
+        assert!(d.outcome.is_vacuous(), "{:?}", d.outcome);
+        let mut s = passing_balls(0.0);
+        s.constraints = Box::new(Before(4.0));
+        assert!(!decide(&s, &root1(), &opts(&[1e-4])).outcome.is_vacuous());
     }
 
     #[test]
