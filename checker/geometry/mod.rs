@@ -7,13 +7,17 @@
 //! - [`shape`]: a [`Solid`] is one convex parry shape placed in its owner's frame;
 //! - [`mesh`]: STL and OBJ meshes, as the convex hulls of their vertices;
 //! - [`urdf`]: URDF files to kinematic trees, with diagnostics pointing into the URDF;
-//! - [`kinematics`]: forward kinematics and sound displacement bounds.
+//! - [`kinematics`]: forward kinematics and sound displacement bounds;
+//! - [`placement`]: bounds on how far a point placed by a chain of poses moves over a box;
+//! - [`bnb`]: the branch and bound over boxes of configurations (clearance, first contact).
 //!
 //! Everything is f64: parry is its f64 build (`parry3d-f64`, imported under the name
 //! `parry3d`), so no f32 rounding enters a clearance proof.
 
+pub mod bnb;
 pub mod kinematics;
 pub mod mesh;
+pub mod placement;
 pub mod shape;
 pub mod urdf;
 
