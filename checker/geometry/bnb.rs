@@ -671,7 +671,7 @@ impl Solid {
     /// `radius` is computed from the shape's bounding sphere (padded for f32).
     pub fn new(name: &str, shape: SharedShape, place: Box<dyn Placer + Send + Sync>) -> Solid {
         let s = shape.compute_local_bounding_sphere();
-        let radius = (s.center().coords.norm() + s.radius()) as f64;
+        let radius = s.center().coords.norm() + s.radius();
         Solid { name: name.to_string(), shape, radius: radius * (1.0 + 1e-5) + 1e-9, place }
     }
 }
