@@ -443,6 +443,13 @@ codes! {
          counterexample is a point of the body (in the robot's own frame, metres) outside the \
          footprint, the time and the state that put it there. Widen the footprint, or write \
          `footprint: geometry;` (the body itself, which contains it by definition).";
+    JointWithoutState = "E0513", "a urdf joint has no state variable",
+        "A robot whose `geometry:` is a URDF moves its links by its joints, and mochi reads each \
+         movable joint's value from the kind's state variable of the same name (Sec 3.1: the \
+         state X determines geom(p)). A movable joint (revolute, continuous, prismatic; not \
+         fixed, not a mimic joint, which follows another) with no real state variable of its \
+         name would leave the robot's shape undetermined. Declare one real state variable per \
+         movable joint, named exactly as in the URDF.";
     ObstacleHit = "E0510", "a footprint may meet a static obstacle",
         "A system's obstacles (`obstacle Name { geometry: ...; at: pose(...); }`) are there at \
          every time, whatever the protocol does. Every primitive a joint motion runs is checked \

@@ -153,11 +153,15 @@ pub fn unreadable_root(d: Diagnostic) -> Report {
     run.finish()
 }
 
-/// Runs the pipeline on a file already in `db`; its imports come from `load` (the file
-/// system's loader is [`crate::fsload::read_source`]). The pipeline does no IO of its own.
-pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut syntax::Loader<'_>) -> Report {
+/// Runs the pipeline on a file already in `db`; its imports, URDFs and meshes come from
+/// `load` (the file system's loader is [`crate::fsload::read_bytes`]; source files are
+/// decoded as UTF-8 by [`syntax::decode`]). The pipeline does no IO of its own.
+pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut syntax::ByteLoader<'_>) -> Report {
     let mut run = Pipeline::default();
-    let (parsed, diags) = run.stage(|| syntax::parse_with_imports(db, root, load));
+    let mut text = |p: &std::path::Path| {
+        load(p).and_then(|b| syntax::decode(b).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e)))
+    };
+    let (parsed, diags) = run.stage(|| syntax::parse_with_imports(db, root, &mut text));
     if !run.record("parse", diags) {
         return run.finish();
     }
@@ -170,8 +174,14 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut sy
     if !run.record("names", diags) {
         return run.finish();
     }
-    // Bodies: sizes, and geometric footprints as predicates where Z3 can decide them.
-    let diags = run.stage(|| space::prepare(&mut prog));
+    // Bodies: sizes, and geometric footprints as predicates where Z3 can decide them;
+    // then every body as solids (URDFs and meshes read here) for the geometric procedure.
+    let mut diags = run.stage(|| space::prepare(&mut prog));
+    if !diags.iter().any(Diagnostic::is_error) {
+        let (world, more) = space::world::build(&prog, db, load);
+        prog.world = Some(std::sync::Arc::new(world));
+        diags.extend(more);
+    }
     if !run.record("geometry", diags) {
         return run.finish();
     }

@@ -155,12 +155,12 @@ pub fn check_stdin(db: &mut SourceDb, cfg: &Config) -> std::io::Result<Report> {
 /// call [`driver::check_loaded`] with a loader of your own.)
 pub fn check_source(db: &mut SourceDb, name: &str, text: &str, cfg: &Config) -> Report {
     let root = db.add(name, text);
-    driver::check_loaded(db, root, cfg, &mut read_source)
+    driver::check_loaded(db, root, cfg, &mut read_bytes)
 }
 
 fn check_root(db: &mut SourceDb, (root, bad): (FileId, Option<Diagnostic>), cfg: &Config) -> Report {
     match bad {
-        None => driver::check_loaded(db, root, cfg, &mut read_source),
+        None => driver::check_loaded(db, root, cfg, &mut read_bytes),
         Some(d) => driver::unreadable_root(d),
     }
 }
@@ -182,9 +182,9 @@ mod tests {
         let mut memory = |p: &Path| {
             asked.push(p.to_path_buf());
             match p.strip_prefix("virtual") {
-                Ok(rest) if rest == Path::new("nowhere/in-memory.mochi") => Ok(lib.clone()),
+                Ok(rest) if rest == Path::new("nowhere/in-memory.mochi") => Ok(lib.clone().into_bytes()),
                 // What the library imports in turn (`../robots/bot.mochi`): the real file.
-                Ok(rest) => read_source(&dir.join(rest)),
+                Ok(rest) => read_bytes(&dir.join(rest)),
                 Err(_) => Err(std::io::Error::new(std::io::ErrorKind::NotFound, "not in memory")),
             }
         };

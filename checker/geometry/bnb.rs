@@ -1120,11 +1120,7 @@ mod tests {
         for case in 0..60 {
             let shape = |rng: &mut Rng| match (rng.next() * 3.0) as usize {
                 0 => SharedShape::ball(rng.range(0.1, 0.6)),
-                1 => SharedShape::cuboid(
-                    rng.range(0.05, 0.6),
-                    rng.range(0.05, 0.6),
-                    rng.range(0.05, 0.6),
-                ),
+                1 => SharedShape::cuboid(rng.range(0.05, 0.6), rng.range(0.05, 0.6), rng.range(0.05, 0.6)),
                 _ => SharedShape::capsule_z(rng.range(0.05, 0.5), rng.range(0.05, 0.3)),
             };
             let pose = |rng: &mut Rng| {

@@ -27,6 +27,31 @@ pub use urdf::load_robot;
 
 use nalgebra::{Isometry3, Point3};
 
+/// A rigid pose (rotation, then translation), for code outside the engine, which may not
+/// name nalgebra (`tests/tidy.rs`).
+pub type Pose3 = Isometry3<f64>;
+
+/// The identity pose.
+pub fn identity() -> Pose3 {
+    Isometry3::identity()
+}
+
+/// `pose(x, y, z, roll, pitch, yaw)`: `Rz(yaw) Ry(pitch) Rx(roll)`, then the translation.
+pub fn pose6(a: [f64; 6]) -> Pose3 {
+    placement::pose_isometry(&a)
+}
+
+/// The length of a pose's translation.
+pub fn reach(p: &Pose3) -> f64 {
+    p.translation.vector.norm()
+}
+
+/// A pose applied to a point.
+pub fn apply(p: &Pose3, x: [f64; 3]) -> [f64; 3] {
+    let v = p * Point3::new(x[0], x[1], x[2]);
+    [v.x, v.y, v.z]
+}
+
 /// What a caller subtracts from a distance [`distance`] reports before it counts as a
 /// proved clearance, beyond the solids' slacks (metres): 1 µm. parry's f64 GJK stops when
 /// its distance estimate is within a relative ~1e-10 of the true distance (its tolerance

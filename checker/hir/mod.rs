@@ -227,6 +227,8 @@ pub struct Program {
     pub partitions: Vec<Partition>,
     /// The system's static obstacles.
     pub obstacles: Vec<body::Obstacle>,
+    /// Every body as solids (set by the geometry stage, `space::world`).
+    pub world: Option<std::sync::Arc<crate::space::world::World>>,
 }
 
 impl Program {

@@ -7,6 +7,7 @@
 
 pub mod region;
 pub mod truth;
+pub mod world;
 
 use crate::bounds;
 use crate::diag::{Code, Diagnostic};
