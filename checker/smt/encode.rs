@@ -862,12 +862,13 @@ mod constant_arg_tests {
     fn a_quarter_turn_through_a_parameter_is_exact() {
         let src = |arg: &str| {
             format!(
-                "import \"../motion-primitives/bot.mochi\";
-                 motion Bot.edge(t: real) {{ interruptible: true; guarantee: s == old(s); post: s == old(s);
+                // A bodiless kind: the footprints are segments, not a body's space (E0512).
+                "robot Seg {{ state s: real; invariant: 0 <= s <= 1; }}
+                 motion Seg.edge(t: real) {{ interruptible: true; guarantee: s == old(s); post: s == old(s);
                    footprint(px, py, pz): -0.1 <= px <= cos(t) && py == 0 && pz == 0; duration: [0, inf]; }}
-                 motion Bot.strip {{ interruptible: true; guarantee: s == old(s); post: s == old(s);
+                 motion Seg.strip {{ interruptible: true; guarantee: s == old(s); post: s == old(s);
                    footprint(px, py, pz): 0 < px <= 0.1 && py == 0 && pz == 0; duration: [0, inf]; }}
-                 system S {{ participant p: Bot {{ init: s == 0; }} participant q: Bot {{ init: s == 0; }} }}
+                 system S {{ participant p: Seg {{ init: s == 0; }} participant q: Seg {{ init: s == 0; }} }}
                  choreography S = dt<p: edge({arg}), q: strip>. end;
                  process p = dt<edge({arg})>.end;
                  process q = dt<strip>.end;"

@@ -89,13 +89,16 @@ pub fn build(prog: &Program, db: &mut SourceDb, read: &mut ByteLoader<'_>) -> (W
     (world, b.diags)
 }
 
+/// A URDF read for one kind: the robot and its joint variables' state slots.
+type LoadedUrdf = (Arc<Robot>, Arc<Vec<Slot>>);
+
 struct Builder<'a, 'l> {
     prog: &'a Program,
     db: &'a mut SourceDb,
     read: &'a mut ByteLoader<'l>,
     diags: Vec<Diagnostic>,
     /// URDFs already read, by (path, kind): the joint slots depend on the kind.
-    robots: HashMap<(String, Option<KindId>), Option<(Arc<Robot>, Arc<Vec<Slot>>)>>,
+    robots: HashMap<(String, Option<KindId>), Option<LoadedUrdf>>,
     meshes: HashMap<String, Option<Arc<Solid>>>,
 }
 
@@ -170,7 +173,7 @@ impl Builder<'_, '_> {
         solid
     }
 
-    fn urdf(&mut self, path: &str, span: Span, kind: Option<KindId>) -> Option<(Arc<Robot>, Arc<Vec<Slot>>)> {
+    fn urdf(&mut self, path: &str, span: Span, kind: Option<KindId>) -> Option<LoadedUrdf> {
         let key = (path.to_string(), kind);
         if let Some(r) = self.robots.get(&key) {
             return r.clone();
@@ -194,13 +197,8 @@ impl Builder<'_, '_> {
     /// an obstacle's URDF (no kind) has none and stands at its joints' zero.
     fn joint_slots(&mut self, robot: &Robot, span: Span, kind: Option<KindId>) -> Option<Vec<Slot>> {
         let names = robot.joint_names();
-        let Some(k) = kind else {
-            if !names.is_empty() {
-                // Obstacles read constants only: every joint at 0 (LANGUAGE.md).
-                return Some(Vec::new());
-            }
-            return Some(Vec::new());
-        };
+        // An obstacle reads constants only: every joint stands at 0 (LANGUAGE.md).
+        let Some(k) = kind else { return Some(Vec::new()) };
         let kind = self.prog.kind(k);
         let mut slots = Vec::new();
         let mut missing = Vec::new();
