@@ -375,6 +375,47 @@ pub fn exact(prog: &Program, e: &Expr) -> Option<BigRational> {
     value(prog, e, &closed).and_then(|v| v.exact)
 }
 
+thread_local! {
+    /// Values of constants (by index) while a [`ConstCache`] is alive on this thread: the
+    /// geometric procedure evaluates the same predicates over millions of boxes, and a
+    /// constant's exact value (decimal parsing, rational arithmetic) dominated its time.
+    static CONSTS: std::cell::RefCell<Option<HashMap<u32, Option<Val>>>> = const { std::cell::RefCell::new(None) };
+}
+
+/// While alive, constants' values are computed once per thread ([`eval`] of one program
+/// only: create it for one program and drop it before evaluating another's expressions).
+pub struct ConstCache(());
+
+impl ConstCache {
+    pub fn new() -> ConstCache {
+        CONSTS.with(|c| *c.borrow_mut() = Some(HashMap::new()));
+        ConstCache(())
+    }
+}
+
+impl Drop for ConstCache {
+    fn drop(&mut self) {
+        CONSTS.with(|c| *c.borrow_mut() = None);
+    }
+}
+
+fn const_value(prog: &Program, c: crate::hir::ConstId, ranges: &dyn Ranges) -> Option<Val> {
+    let cached = CONSTS.with(|m| m.borrow().as_ref().map(|m| m.get(&(c.idx() as u32)).cloned()));
+    match cached {
+        Some(Some(v)) => v,
+        Some(None) => {
+            let v = value(prog, &prog.consts[c.idx()].value, ranges);
+            CONSTS.with(|m| {
+                if let Some(m) = m.borrow_mut().as_mut() {
+                    m.insert(c.idx() as u32, v.clone());
+                }
+            });
+            v
+        }
+        None => value(prog, &prog.consts[c.idx()].value, ranges),
+    }
+}
+
 fn value(prog: &Program, e: &Expr, ranges: &dyn Ranges) -> Option<Val> {
     crate::stack::deep(|| value_inner(prog, e, ranges))
 }
@@ -390,7 +431,7 @@ fn value_inner(prog: &Program, e: &Expr, ranges: &dyn Ranges) -> Option<Val> {
                 Val::interval(Interval { lo, hi })
             }
         },
-        ExprKind::Var(Var::Const(c)) => value(prog, &prog.consts[c.idx()].value, ranges)?,
+        ExprKind::Var(Var::Const(c)) => const_value(prog, *c, ranges)?,
         ExprKind::Var(v) => Val::interval(ranges.range(v)?),
         ExprKind::Unary(UnOp::Neg, a) => {
             let x = value(prog, a, ranges)?;

@@ -427,7 +427,10 @@ fn pass(scene: &dyn Scene, root: &QBox, opts: &Options, earliest: bool, max_node
         let b = &n.qbox;
         let res_box = at_resolution(b, &opts.resolution);
         let time_ok = !earliest || time.is_none_or(|t| widths_ok(b, &opts.resolution, t));
-        if (n.at_c.distance <= 0.0 && time_ok) || res_box {
+        // A touching centre that itself breaks the constraints (cheap to tell) asks no
+        // witness: the box is split, and its feasible parts are asked in their turn.
+        let centre_possible = || scene.feasible(&n.c, &n.c) != Feasible::No;
+        if (n.at_c.distance <= 0.0 && time_ok && centre_possible()) || res_box {
             if let Some((q, at)) = confirm(scene, b, &n.c, &n.at_c, n.feas, stats) {
                 out.end = Some(PassEnd::Contact { q, at, box_time: time.map_or(f64::NEG_INFINITY, |t| b.lo[t]) });
                 return out;

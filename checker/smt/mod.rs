@@ -170,6 +170,8 @@ pub struct Stats {
     pub cached: usize,
     /// Obligations settled without Z3 (trivial, or separated by boxes).
     pub folded: usize,
+    /// Parts decided by the geometric procedure (branch and bound; Z3 only for witnesses).
+    pub geometric: usize,
     /// Time spent deciding (on the worker thread that did it).
     pub millis: f64,
     /// Obligations that held only because their hypotheses are unsatisfiable.
@@ -186,6 +188,7 @@ impl Stats {
     pub fn add(&mut self, o: &Stats) {
         self.queries += o.queries;
         self.cached += o.cached;
+        self.geometric += o.geometric;
         self.folded += o.folded;
         self.millis += o.millis;
         self.vacuous += o.vacuous;
@@ -513,6 +516,21 @@ impl Worker<'_> {
         };
         if context.is_some_and(|c| goals::witnessed(self.prog, &c)) {
             return Answer::Sat { values: Vec::new(), overlap: None, bound: Vec::new(), exact: Default::default() };
+        }
+        // Bodies the solver cannot represent (URDF links, meshes, a participant riding on
+        // another): the geometric procedure, Z3 asked only for witnesses.
+        if goals::geo::applies(self.prog, ob, part) {
+            stats.geometric += 1;
+            return match goals::geo::decide(self.prog, ob, part, self.cfg.timeout) {
+                goals::geo::GeoAnswer::Apart => Answer::Unsat,
+                goals::geo::GeoAnswer::Contact { values, overlap } => Answer::Sat {
+                    values,
+                    overlap: Some(overlap),
+                    bound: Vec::new(),
+                    exact: Default::default(),
+                },
+                goals::geo::GeoAnswer::Unknown(why) => Answer::Unknown(Why::Incomplete(why)),
+            };
         }
         stats.queries += 1;
         match goals::build(self.prog, ob, part) {

@@ -1,0 +1,900 @@
+//! The geometric decision procedure's side of the SMT stage: collision questions whose
+//! bodies the solver cannot represent (a URDF robot, a mesh, a participant mounted on a
+//! moving carrier) are decided by branch and bound over boxes of configurations
+//! ([`crate::geometry::bnb`]), with Z3 asked only for witnesses.
+//!
+//! A configuration `q` holds each motion's clock and the state variables the bodies are
+//! placed by (a cart's `x` and heading, a robot's joints, its carrier's state). A box of
+//! configurations is
+//! - **infeasible** when some guarantee, invariant or the context cannot hold anywhere in
+//!   it (three-valued interval truth, [`crate::space::truth`]), or
+//! - **apart** when parry's certified distance between the two sides placed at the box's
+//!   centre exceeds how far any of their points can move within the box (the pose
+//!   chains' bounds, [`crate::geometry::placement`], and forward kinematics' displacement
+//!   bounds, [`crate::geometry::Robot::displacement_bound`]);
+//!
+//! otherwise it is split. A box at the resolution where the centre's solids touch becomes
+//! a counterexample only once Z3 finds a configuration in it that satisfies every
+//! constraint exactly and parry confirms the contact there; anything else is unknown,
+//! never apart. ARCHITECTURE.md ("Geometric decision procedure") has the argument.
+
+use super::motion::Inst;
+use super::query::{hyps, seeds_of, slice};
+use super::Part;
+use super::Query;
+use crate::bounds::{self, Interval};
+use crate::diag::{Assignment, Overlap};
+use crate::geometry::bnb::{self, Closest, Feasible, Options, QBox, Scene};
+use crate::geometry::placement::{chain_motion_bound, ArgBounds, FrameBound};
+use crate::geometry::{self, Pose3};
+use crate::hir::body::Pose;
+use crate::hir::{Expr, PrimApp, Program, RoleId, Slot, Var};
+use crate::obligation::{Goal, Obligation};
+use crate::smt::encode::{real_of_f64, Encoder};
+use crate::space::truth::truth;
+use crate::space::world::{Piece, World};
+use std::collections::HashMap;
+use std::time::{Duration, Instant};
+use z3::ast::{Bool, Real};
+
+/// What the procedure found.
+pub(crate) enum GeoAnswer {
+    Apart,
+    /// A configuration satisfying every constraint (a Z3 model) where the sides touch.
+    Contact {
+        values: Vec<Assignment>,
+        overlap: Overlap,
+    },
+    Unknown(String),
+}
+
+/// Whether `part` of `ob` is the geometric procedure's: some body in it has no predicate
+/// (a URDF or a mesh), or a participant in it rides on another.
+pub(crate) fn applies(prog: &Program, ob: &Obligation, part: &Part) -> bool {
+    let Some(world) = prog.world.as_deref() else { return false };
+    // A geometric footprint turned by a variable (a heading): its predicate has the
+    // cosine and sine of a state variable, which Z3 decides only partially.
+    let turns = |pieces: &[Piece]| {
+        pieces.iter().any(|p| {
+            p.place.as_ref().is_some_and(|pose| {
+                pose.args[3..].iter().any(|a| crate::hir::expr::mentions(a, &|v| !matches!(v, Var::Const(_))))
+            })
+        })
+    };
+    let run = |r: RoleId, app: &PrimApp| {
+        let prim = prog.prim(app.prim);
+        let pieces = world.prims.get(app.prim.idx()).and_then(|p| p.as_deref());
+        (prim.footprint.is_none() && pieces.is_some())
+            || pieces.is_some_and(turns)
+            || prog.role(r).mounted_on.is_some()
+    };
+    match (&ob.goal, part) {
+        (Goal::Compatible { parts }, Part::Disjoint(i, j)) => [i, j].iter().any(|k| run(parts[**k].0, &parts[**k].1)),
+        (Goal::Compatible { parts }, Part::ClearOf { i, o }) => {
+            run(parts[*i].0, &parts[*i].1)
+                || prog.obstacles.get(*o).is_some_and(|x| crate::space::region::obstacle_region(prog, x).is_none())
+        }
+        (Goal::Separated { sides }, Part::Apart { a, ra, b, rb }) => {
+            [(a, ra), (b, rb)].iter().any(|(s, r)| sides[**s].runs.get(**r).is_some_and(|x| run(x.role, &x.app)))
+        }
+        (Goal::InitiallyDisjoint { firsts }, Part::InitiallyApart { r, s }) => [r, s].iter().any(|k| {
+            let (role, _) = &firsts[**k];
+            prog.role(*role).mounted_on.is_some()
+                || world.kinds.get(prog.role(*role).kind.idx()).is_some_and(|p| World::has_solid_only(p))
+        }),
+        _ => false,
+    }
+}
+
+/// Decides `part` of `ob` geometrically, within `limit`.
+pub(crate) fn decide(prog: &Program, ob: &Obligation, part: &Part, limit: Duration) -> GeoAnswer {
+    let Some(world) = prog.world.as_deref() else { return GeoAnswer::Unknown("no geometry was built".into()) };
+    let built = match (&ob.goal, part) {
+        (Goal::Compatible { parts }, Part::Disjoint(i, j)) => {
+            let (a, b) = (parts[*i].0, parts[*j].0);
+            // A mounted robot and its carrier are attached at the mount, like two links of
+            // one robot: their mutual clearance is not a question of the protocol.
+            if prog.carriers(a).iter().any(|m| m.carrier == b) || prog.carriers(b).iter().any(|m| m.carrier == a) {
+                return GeoAnswer::Apart;
+            }
+            let mut runs = vec![run(&parts[*i], &ob.hyps, 0), run(&parts[*j], &ob.hyps, 0)];
+            runs.extend(carrier_runs(prog, parts, &[a, b], &ob.hyps));
+            Geo::new(prog, world, ob, runs, [Who::Run(0), Who::Run(1)], false)
+        }
+        (Goal::Compatible { parts }, Part::ClearOf { i, o }) => {
+            let mut runs = vec![run(&parts[*i], &ob.hyps, 0)];
+            runs.extend(carrier_runs(prog, parts, &[parts[*i].0], &ob.hyps));
+            Geo::new(prog, world, ob, runs, [Who::Run(0), Who::Obstacle(*o)], false)
+        }
+        (Goal::Separated { sides }, Part::Apart { a, ra, b, rb }) => {
+            let (x, y) = (&sides[*a].runs[*ra], &sides[*b].runs[*rb]);
+            let runs = vec![
+                Run { role: x.role, app: x.app.clone(), hyps: x.hyps.clone(), clock: 0 },
+                Run { role: y.role, app: y.app.clone(), hyps: y.hyps.clone(), clock: 1 },
+            ];
+            Geo::new(prog, world, ob, runs, [Who::Run(0), Who::Run(1)], false)
+        }
+        (Goal::InitiallyDisjoint { firsts }, Part::InitiallyApart { r, s }) => {
+            let first = |k: usize| firsts[k].1.first().cloned();
+            let (Some(ar), Some(as_)) = (first(*r), first(*s)) else {
+                return GeoAnswer::Unknown("a participant with no first motion".into());
+            };
+            let runs = vec![
+                Run { role: firsts[*r].0, app: ar, hyps: ob.hyps.clone(), clock: 0 },
+                Run { role: firsts[*s].0, app: as_, hyps: ob.hyps.clone(), clock: 0 },
+            ];
+            Geo::new(prog, world, ob, runs, [Who::Run(0), Who::Run(1)], true)
+        }
+        _ => return GeoAnswer::Unknown("not a collision question".into()),
+    };
+    let geo = match built {
+        Ok(g) => g,
+        Err(why) => return GeoAnswer::Unknown(why),
+    };
+    geo.solve(limit)
+}
+
+/// The parts of the same joint motion that carry one of `roles`: their guarantees say
+/// where the carriers are while it runs (on the same clock).
+fn carrier_runs(prog: &Program, parts: &[(RoleId, PrimApp)], roles: &[RoleId], hyps: &[Expr]) -> Vec<Run> {
+    let mut out: Vec<Run> = Vec::new();
+    for r in roles {
+        for m in prog.carriers(*r) {
+            if roles.contains(&m.carrier) || out.iter().any(|x| x.role == m.carrier) {
+                continue;
+            }
+            if let Some(p) = parts.iter().find(|(role, _)| *role == m.carrier) {
+                out.push(run(p, hyps, 0));
+            }
+        }
+    }
+    out
+}
+
+fn run(p: &(RoleId, PrimApp), hyps: &[Expr], clock: usize) -> Run {
+    Run { role: p.0, app: p.1.clone(), hyps: hyps.to_vec(), clock }
+}
+
+/// A participant in the question: running `app` from the context `hyps` on clock `clock`,
+/// or (at the start, [T-SESS]) standing in a state `hyps` allows.
+struct Run {
+    role: RoleId,
+    app: PrimApp,
+    hyps: Vec<Expr>,
+    clock: usize,
+}
+
+#[derive(Clone, Copy)]
+enum Who {
+    Run(usize),
+    Obstacle(usize),
+}
+
+/// A dimension of the configuration space.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum Dim {
+    Clock(usize),
+    Now(RoleId, Slot),
+}
+
+/// One solid of a side, with who places it.
+struct Placed<'a> {
+    piece: &'a Piece,
+    /// The participant whose frame it is in (`None`: an obstacle).
+    role: Option<RoleId>,
+    /// The run whose variables its pose reads (a geometric footprint's pose may read
+    /// `old(x)`, parameters and `clock`).
+    run: Option<usize>,
+    /// An obstacle's `at:`.
+    at: Option<&'a Pose>,
+    /// The obstacle, by index.
+    obstacle: Option<usize>,
+}
+
+struct Geo<'a> {
+    prog: &'a Program,
+    ob: &'a Obligation,
+    runs: Vec<Run>,
+    dims: Vec<Dim>,
+    root: QBox,
+    /// The context's ranges of the start state and values, per run.
+    shared: Vec<HashMap<Var, Interval>>,
+    /// Per run: the ranges its guarantee and invariant give its own variables.
+    own: Vec<HashMap<Var, Interval>>,
+    /// Per run: its arguments' ranges.
+    params: Vec<Vec<Option<Interval>>>,
+    /// Per participant placed only as a carrier: its invariant's ranges.
+    carrier: HashMap<RoleId, HashMap<Var, Interval>>,
+    sides: [Vec<Placed<'a>>; 2],
+    /// [T-SESS]: the state is the start state.
+    initial: bool,
+}
+
+impl<'a> Geo<'a> {
+    fn new(
+        prog: &'a Program,
+        world: &'a World,
+        ob: &'a Obligation,
+        runs: Vec<Run>,
+        who: [Who; 2],
+        initial: bool,
+    ) -> Result<Geo<'a>, String> {
+        let mut sides: [Vec<Placed<'a>>; 2] = [Vec::new(), Vec::new()];
+        for (side, w) in sides.iter_mut().zip(who) {
+            match w {
+                Who::Run(k) => {
+                    let r = &runs[k];
+                    let kind = prog.role(r.role).kind;
+                    let pieces = if initial {
+                        &world.kinds[kind.idx()]
+                    } else {
+                        match world.prims.get(r.app.prim.idx()).and_then(|p| p.as_ref()) {
+                            Some(p) => p,
+                            // A predicate footprint of a mounted participant: its body stands
+                            // for it only if the predicate is the body (not known): unknown.
+                            None => {
+                                return Err(format!(
+                                    "`{}` of `{}` has a footprint written as a predicate, which the geometric procedure cannot place; write it as `footprint: geometry;` or shapes",
+                                    prog.prim(r.app.prim).name,
+                                    prog.role_name(r.role)
+                                ))
+                            }
+                        }
+                    };
+                    let run = (!initial).then_some(k);
+                    side.extend(pieces.iter().map(|piece| Placed { piece, role: Some(r.role), run, at: None, obstacle: None }));
+                }
+                Who::Obstacle(o) => {
+                    let obstacle = &prog.obstacles[o];
+                    side.extend(world.obstacles[o].iter().map(|piece| Placed {
+                        piece,
+                        role: None,
+                        run: None,
+                        at: obstacle.pose.as_ref(),
+                        obstacle: Some(o),
+                    }));
+                }
+            }
+            if side.is_empty() {
+                return Err("a side with no solid (a body that failed to load, or an empty one)".into());
+            }
+        }
+        // The context's ranges, and each run's own ranges and arguments.
+        let mut shared = Vec::new();
+        let mut own = Vec::new();
+        let mut params = Vec::new();
+        for r in &runs {
+            let facts: Vec<&Expr> = r.hyps.iter().collect();
+            let s = bounds::ranges_from(prog, &facts, &bounds::closed);
+            if initial {
+                own.push(HashMap::new());
+                params.push(Vec::new());
+            } else {
+                let prim = prog.prim(r.app.prim);
+                let lookup = |v: &Var| s.get(v).copied();
+                let ps: Vec<Option<Interval>> =
+                    r.app.args.iter().map(|a| bounds::eval(prog, a, &lookup)).collect();
+                let role = r.role;
+                let lift = |v: &Var| -> Option<Interval> {
+                    match v {
+                        Var::Old(i) => s.get(&Var::Role(role, Slot::State(*i))).copied(),
+                        Var::Param(i) => ps.get(*i).copied().flatten(),
+                        Var::Clock => Some(Interval::new(0.0, f64::INFINITY)),
+                        _ => None,
+                    }
+                };
+                let mut facts: Vec<&Expr> = vec![&prim.guarantee];
+                facts.extend(prog.kind(prim.kind).invariant.as_ref());
+                own.push(bounds::ranges_from(prog, &facts, &lift));
+                params.push(ps);
+            }
+            shared.push(s);
+        }
+        let mut geo = Geo {
+            prog,
+            ob,
+            runs,
+            dims: Vec::new(),
+            root: QBox::new(Vec::new(), Vec::new()),
+            shared,
+            own,
+            params,
+            carrier: HashMap::new(),
+            sides,
+            initial,
+        };
+        geo.layout()?;
+        Ok(geo)
+    }
+
+    /// The dimensions (clocks, then the state variables the bodies are placed by) and the
+    /// root box.
+    fn layout(&mut self) -> Result<(), String> {
+        let prog = self.prog;
+        let clocks = self.runs.iter().map(|r| r.clock).max().map_or(0, |m| m + 1);
+        let mut dims: Vec<Dim> = (0..clocks).map(Dim::Clock).collect();
+        let add = |d: Dim, dims: &mut Vec<Dim>| {
+            if !dims.contains(&d) {
+                dims.push(d);
+            }
+        };
+        for side in &self.sides {
+            for p in side {
+                let Some(role) = p.role else { continue };
+                let mut placing = vec![role];
+                for m in prog.carriers(role) {
+                    let mount = &prog.kind_of(m.carrier).mounts[m.mount];
+                    for e in &mount.pose.args {
+                        e.visit_vars(&mut |v, _| {
+                            if let Var::Own(slot) = v {
+                                add(Dim::Now(m.carrier, *slot), &mut dims);
+                            }
+                        });
+                    }
+                    placing.push(m.carrier);
+                }
+                if let Some(pose) = &p.piece.place {
+                    for e in &pose.args {
+                        e.visit_vars(&mut |v, _| {
+                            if let Var::Own(slot) = v {
+                                add(Dim::Now(role, *slot), &mut dims);
+                            }
+                        });
+                    }
+                }
+                if let Some(link) = &p.piece.link {
+                    for slot in link.joints.iter() {
+                        add(Dim::Now(role, *slot), &mut dims);
+                    }
+                }
+            }
+        }
+        // Carriers that run nothing here: their state ranges over their invariant.
+        for d in &dims {
+            if let Dim::Now(r, _) = d {
+                if !self.runs.iter().any(|x| x.role == *r) && !self.carrier.contains_key(r) {
+                    let inv = prog.kind_of(*r).invariant.as_ref();
+                    let facts: Vec<&Expr> = inv.into_iter().collect();
+                    self.carrier.insert(*r, bounds::ranges_from(prog, &facts, &bounds::closed));
+                }
+            }
+        }
+        self.dims = dims;
+        let mut lo = Vec::new();
+        let mut hi = Vec::new();
+        for d in &self.dims.clone() {
+            let iv = match d {
+                Dim::Clock(k) => self.clock_range(*k)?,
+                Dim::Now(r, slot) => self.state_range(*r, *slot),
+            };
+            if !iv.is_finite() || iv.lo > iv.hi {
+                let what = match d {
+                    Dim::Clock(_) => "the time of a motion whose guarantee reads `clock` and whose duration has no upper end".to_string(),
+                    Dim::Now(r, slot) => format!(
+                        "`{}.{}`, which places a body",
+                        prog.role_name(*r),
+                        prog.kind_of(*r).var(*slot).0
+                    ),
+                };
+                return Err(format!(
+                    "{what} is not bounded: the geometric procedure searches a bounded box (give the kind an invariant that bounds it)"
+                ));
+            }
+            lo.push(iv.lo);
+            hi.push(iv.hi);
+        }
+        self.root = QBox::new(lo, hi);
+        Ok(())
+    }
+
+    /// `[0, T]`: T the least upper end of the durations of the runs on clock `k` (they run
+    /// together for one elapsed time); `[0, 0]` when none of their guarantees, invariants
+    /// or bodies reads `clock` (every time is then alike) and no duration bounds it.
+    fn clock_range(&self, k: usize) -> Result<Interval, String> {
+        if self.initial {
+            return Ok(Interval::point(0.0));
+        }
+        let mut hi = f64::INFINITY;
+        let mut reads = false;
+        for (i, r) in self.runs.iter().enumerate().filter(|(_, r)| r.clock == k) {
+            let prim = self.prog.prim(r.app.prim);
+            if let Some(h) = &prim.duration.hi {
+                let v = bounds::eval(self.prog, h, &|v: &Var| self.var_range(i, r.role, v, None));
+                if let Some(v) = v {
+                    hi = hi.min(v.hi);
+                }
+            }
+            let clocky = |e: &Expr| crate::hir::expr::mentions(e, &|v| matches!(v, Var::Clock));
+            reads |= clocky(&prim.guarantee)
+                || self.prog.kind(prim.kind).invariant.as_ref().is_some_and(clocky)
+                || self
+                    .prog
+                    .world
+                    .as_deref()
+                    .and_then(|w| w.prims.get(r.app.prim.idx()).cloned().flatten())
+                    .is_some_and(|ps| ps.iter().any(|p| p.place.as_ref().is_some_and(|pose| pose.args.iter().any(clocky))));
+        }
+        if hi.is_finite() {
+            Ok(Interval::new(0.0, hi.max(0.0)))
+        } else if reads {
+            Ok(Interval::new(0.0, f64::INFINITY))
+        } else {
+            Ok(Interval::point(0.0))
+        }
+    }
+
+    fn state_range(&self, r: RoleId, slot: Slot) -> Interval {
+        let all = Interval::new(f64::NEG_INFINITY, f64::INFINITY);
+        if let Some((k, run)) = self.runs.iter().enumerate().find(|(_, x)| x.role == r) {
+            if self.initial {
+                return self.shared[k].get(&Var::Role(r, slot)).copied().unwrap_or(all);
+            }
+            let _ = run;
+            let a = self.own[k].get(&Var::Own(slot)).copied();
+            return a.unwrap_or(all);
+        }
+        if self.initial {
+            // At the start a carrier is where the context (its `init`) puts it.
+            if let Some(iv) = self.shared.first().and_then(|s| s.get(&Var::Role(r, slot)).copied()) {
+                return iv;
+            }
+        }
+        self.carrier.get(&r).and_then(|m| m.get(&Var::Own(slot)).copied()).unwrap_or(all)
+    }
+
+    /// The range of variable `v` of participant `role`, read in run `run`'s frame (or as a
+    /// carrier), with the dimensions taken from `q` (a box) when given.
+    fn var_range(&self, run: usize, role: RoleId, v: &Var, q: Option<(&[f64], &[f64])>) -> Option<Interval> {
+        let dim = |d: Dim| self.dims.iter().position(|x| *x == d);
+        let from_q = |i: usize| q.map(|(lo, hi)| Interval::new(lo[i], hi[i]));
+        match v {
+            Var::Own(slot) => {
+                if let Some(i) = dim(Dim::Now(role, *slot)) {
+                    if let Some(iv) = from_q(i) {
+                        return Some(iv);
+                    }
+                }
+                Some(self.state_range(role, *slot)).filter(|i| i.is_finite())
+            }
+            Var::Old(i) => self.shared.get(run)?.get(&Var::Role(role, Slot::State(*i))).copied(),
+            Var::Param(i) => self.params.get(run)?.get(*i).copied().flatten(),
+            Var::Clock => {
+                let k = self.runs.get(run)?.clock;
+                dim(Dim::Clock(k)).and_then(from_q).or(Some(Interval::new(0.0, f64::INFINITY)))
+            }
+            Var::Point(_) => None,
+            other => self.shared.get(run)?.get(other).copied(),
+        }
+    }
+
+    /// One pose frame `pose(...)` whose arguments read `role`'s variables (in run `run`'s
+    /// frame), over the box `[lo, hi]` with centre `c`: the frame at `c` and its bound.
+    fn pose_frame(&self, role: Option<RoleId>, run: usize, pose: &Pose, lo: &[f64], hi: &[f64], c: &[f64]) -> Option<(Pose3, FrameBound)> {
+        let mut ab = ArgBounds::fixed([0.0; 6]);
+        for (k, e) in pose.args.iter().enumerate() {
+            let range = |v: &Var| role.and_then(|r| self.var_range(run, r, v, Some((lo, hi))));
+            let at = |v: &Var| role.and_then(|r| self.var_range(run, r, v, Some((c, c))));
+            let box_iv = bounds::eval(self.prog, e, &range)?;
+            let mid = bounds::eval(self.prog, e, &at)?;
+            ab.lo[k] = box_iv.lo;
+            ab.hi[k] = box_iv.hi;
+            ab.centre[k] = mid.lo / 2.0 + mid.hi / 2.0;
+        }
+        Some((geometry::pose6(ab.centre), FrameBound::pose(&ab)))
+    }
+
+    /// The frames placing `role`'s own frame in the world (outermost first): each
+    /// carrier's `at:` and mount, then its own `at:`.
+    fn role_chain(&self, role: RoleId, lo: &[f64], hi: &[f64], c: &[f64]) -> Option<Vec<(Pose3, FrameBound)>> {
+        let mut out = Vec::new();
+        let mounts = self.prog.carriers(role);
+        for m in mounts.iter().rev() {
+            out.push(self.at_pose(m.carrier)?);
+            let mount = &self.prog.kind_of(m.carrier).mounts[m.mount];
+            let run = self.runs.iter().position(|x| x.role == m.carrier).unwrap_or(usize::MAX);
+            out.push(self.pose_frame(Some(m.carrier), run, &mount.pose, lo, hi, c)?);
+        }
+        out.push(self.at_pose(role)?);
+        Some(out)
+    }
+
+    /// The frames placing every solid of side `side` (outermost first; the solid's own
+    /// pose in its owner frame is not included), over the box `[lo, hi]` with centre `c`.
+    /// Chains of participants and forward kinematics are computed once per call.
+    fn side_frames(&self, side: usize, lo: &[f64], hi: &[f64], c: &[f64]) -> Vec<Option<Vec<(Pose3, FrameBound)>>> {
+        let mut chains: HashMap<Option<RoleId>, Option<Vec<(Pose3, FrameBound)>>> = HashMap::new();
+        let mut fk: HashMap<(RoleId, usize), Option<(Vec<Pose3>, Vec<f64>)>> = HashMap::new();
+        let mut out = Vec::new();
+        for p in &self.sides[side] {
+            let chain = chains
+                .entry(p.role)
+                .or_insert_with(|| match p.role {
+                    Some(r) => self.role_chain(r, lo, hi, c),
+                    None => match p.at {
+                        Some(at) => self.pose_frame(None, 0, at, lo, hi, c).map(|f| vec![f]),
+                        None => Some(Vec::new()),
+                    },
+                })
+                .clone();
+            let Some(mut frames) = chain else {
+                out.push(None);
+                continue;
+            };
+            if let Some(place) = &p.piece.place {
+                match self.pose_frame(p.role, p.run.unwrap_or(usize::MAX), place, lo, hi, c) {
+                    Some(f) => frames.push(f),
+                    None => {
+                        out.push(None);
+                        continue;
+                    }
+                }
+            }
+            if let Some(link) = &p.piece.link {
+                let key = (p.role.unwrap_or(RoleId(u32::MAX)), std::sync::Arc::as_ptr(&link.robot) as usize);
+                let got = fk
+                    .entry(key)
+                    .or_insert_with(|| {
+                        let nvars = link.robot.joint_names().len();
+                        let mut qc = vec![0.0; nvars];
+                        let mut half = vec![0.0; nvars];
+                        for (k, s) in link.joints.iter().enumerate() {
+                            let i = p.role.and_then(|r| self.dims.iter().position(|d| *d == Dim::Now(r, *s)))?;
+                            qc[k] = c[i];
+                            half[k] = (hi[i] - c[i]).max(c[i] - lo[i]);
+                        }
+                        Some((link.robot.link_poses(&qc), link.robot.displacement_bound(&qc, &half)))
+                    })
+                    .clone();
+                let Some((poses, disp)) = got else {
+                    out.push(None);
+                    continue;
+                };
+                let (lp, d) = (poses[link.link], disp[link.link]);
+                frames.push((lp, FrameBound { dt: d, drot: 0.0, reach: geometry::reach(&lp) + d }));
+            }
+            out.push(Some(frames));
+        }
+        out
+    }
+
+    fn at_pose(&self, role: RoleId) -> Option<(Pose3, FrameBound)> {
+        let pose = &self.prog.role(role).pose;
+        let mut a = [0.0; 6];
+        let mut ab = ArgBounds::fixed([0.0; 6]);
+        for (k, e) in pose.iter().enumerate().take(6) {
+            let iv = bounds::eval(self.prog, e, &bounds::closed)?;
+            a[k] = iv.lo / 2.0 + iv.hi / 2.0;
+            ab.lo[k] = iv.lo;
+            ab.hi[k] = iv.hi;
+        }
+        ab.centre = a;
+        // The enclosure's width (a few ulps of an irrational angle) is the bound's.
+        Some((geometry::pose6(a), FrameBound::pose(&ab)))
+    }
+
+    fn solve(&self, limit: Duration) -> GeoAnswer {
+        // One program on this thread for the whole search: its constants are evaluated once.
+        let _consts = bounds::ConstCache::new();
+        let n = self.dims.len();
+        let res: Vec<f64> = (0..n).map(|i| ((self.root.hi[i] - self.root.lo[i]) * 1e-4).max(1e-6)).collect();
+        let mut opts = Options::new(res);
+        opts.deadline = Some(Instant::now() + limit);
+        opts.max_nodes = 400_000;
+        opts.time_dim = self.dims.iter().position(|d| *d == Dim::Clock(0));
+        let d = bnb::decide(self, &self.root, &opts);
+        match d.outcome {
+            bnb::Outcome::Apart { .. } => GeoAnswer::Apart,
+            bnb::Outcome::Contact(c) => {
+                let hull = c.names.iter().any(|n| n.contains("(hull)"));
+                if hull {
+                    return GeoAnswer::Unknown(format!(
+                        "the convex hulls of `{}` and `{}` touch at ({:.4}, {:.4}, {:.4}); the meshes themselves may not",
+                        c.names[0], c.names[1], c.point[0], c.point[1], c.point[2]
+                    ));
+                }
+                let times: Vec<f64> = self
+                    .dims
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(i, d)| matches!(d, Dim::Clock(_)).then_some(c.q[i]))
+                    .collect();
+                let values = self.assignments(&c.q).unwrap_or_default();
+                GeoAnswer::Contact {
+                    values,
+                    overlap: Overlap { point: c.point, times: if self.initial { Vec::new() } else { times } },
+                }
+            }
+            bnb::Outcome::Unknown { why, qbox, unresolved } => {
+                let at: Vec<String> = self
+                    .dims
+                    .iter()
+                    .enumerate()
+                    .map(|(i, d)| format!("{} in [{:.4}, {:.4}]", self.dim_name(*d), qbox.lo[i], qbox.hi[i]))
+                    .collect();
+                GeoAnswer::Unknown(format!(
+                    "the geometric search did not decide ({}; {} box(es) searched in {:.1} s, {} left, e.g. {})",
+                    match why {
+                        bnb::UnknownWhy::Resolution => "boxes at the resolution limit touch or are too close to call".to_string(),
+                        bnb::UnknownWhy::Nodes(n) => format!("{n} boxes searched"),
+                        bnb::UnknownWhy::Deadline => "time limit reached".to_string(),
+                        bnb::UnknownWhy::BadBox => "the search box is malformed".to_string(),
+                    },
+                    d.stats.nodes,
+                    d.stats.elapsed.as_secs_f64(),
+                    unresolved,
+                    at.join(", ")
+                ))
+            }
+        }
+    }
+
+    /// The box narrowed to where the runs' guarantees and invariants can hold: bounds
+    /// read off conjuncts `x <= e`, `e <= x`, `x == e` ([`bounds::ranges_from`], outward
+    /// rounded) with the box's ranges for everything else. Sound: every configuration of
+    /// the box that satisfies the constraints lies in the narrowed box. `None` when it is
+    /// empty (no configuration of the box satisfies them).
+    fn contract(&self, lo: &[f64], hi: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
+        let (mut lo, mut hi) = (lo.to_vec(), hi.to_vec());
+        if self.initial {
+            return Some((lo, hi));
+        }
+        for (k, r) in self.runs.iter().enumerate() {
+            let prim = self.prog.prim(r.app.prim);
+            let mut facts: Vec<&Expr> = vec![&prim.guarantee];
+            facts.extend(self.prog.kind(prim.kind).invariant.as_ref());
+            let (l0, h0) = (lo.clone(), hi.clone());
+            let start = |v: &Var| self.var_range(k, r.role, v, Some((&l0, &h0)));
+            let got = bounds::ranges_from(self.prog, &facts, &start);
+            for (i, d) in self.dims.iter().enumerate() {
+                let Dim::Now(role, slot) = d else { continue };
+                if *role != r.role {
+                    continue;
+                }
+                if let Some(iv) = got.get(&Var::Own(*slot)) {
+                    if iv.lo.is_nan() || iv.hi.is_nan() {
+                        continue;
+                    }
+                    lo[i] = lo[i].max(iv.lo);
+                    hi[i] = hi[i].min(iv.hi);
+                    if lo[i] > hi[i] {
+                        return None;
+                    }
+                }
+            }
+        }
+        Some((lo, hi))
+    }
+
+    fn dim_name(&self, d: Dim) -> String {
+        match d {
+            Dim::Clock(k) if self.runs.iter().any(|r| r.clock == 1) => format!("time {}", k + 1),
+            Dim::Clock(_) => "time".to_string(),
+            Dim::Now(r, slot) => format!("{}.{}", self.prog.role_name(r), self.prog.kind_of(r).var(slot).0),
+        }
+    }
+
+    /// The Z3 query of the constraints: the context, each run started and running, and
+    /// the dimensions within `[lo, hi]`. Returns it with the terms of the dimensions.
+    fn constraints(&self, lo: &[f64], hi: &[f64]) -> Option<(Query<'a>, Vec<Real>)> {
+        let prog = self.prog;
+        let mut q = Query { enc: Encoder::new(prog), assertions: Vec::new(), point: None, times: Vec::new() };
+        let mut terms: Vec<Option<Real>> = vec![None; self.dims.len()];
+        if self.initial {
+            hyps(&mut q, &self.ob.hyps).ok()?;
+            for (i, d) in self.dims.iter().enumerate() {
+                if let Dim::Now(r, slot) = d {
+                    let t = q.enc.role_var(*r, *slot).ok()?;
+                    terms[i] = Some(crate::smt::encode::as_real(t).ok()?);
+                }
+            }
+        } else {
+            let mut insts = Vec::new();
+            let clocks: Vec<Real> = (0..self.runs.iter().map(|r| r.clock + 1).max().unwrap_or(1))
+                .map(|k| q.enc.named_real(if self.runs.iter().any(|r| r.clock == 1) { ["time 1", "time 2"][k.min(1)] } else { "time" }))
+                .collect();
+            for r in &self.runs {
+                let seeds = seeds_of(prog, &[(r.role, r.app.clone())]);
+                hyps(&mut q, &slice(prog, &r.hyps, seeds)).ok()?;
+            }
+            for (k, r) in self.runs.iter().enumerate() {
+                let tag = if clocks.len() > 1 { ["t1", "t2"][r.clock.min(1)] } else { "t" };
+                let inst = Inst::new(&mut q.enc, r.role, &r.app, clocks[r.clock].clone(), tag).ok()?;
+                let _ = k;
+                insts.push(inst);
+            }
+            if clocks.len() == 1 {
+                super::agcomp::connect(&mut q, &mut insts);
+            }
+            for inst in &insts {
+                inst.started(&mut q).ok()?;
+                inst.running(&mut q).ok()?;
+            }
+            for (i, d) in self.dims.iter().enumerate() {
+                match d {
+                    Dim::Clock(k) => terms[i] = clocks.get(*k).cloned(),
+                    Dim::Now(r, slot) => {
+                        // A carrier that runs nothing here is not in the query: no witness.
+                        let inst = insts.iter().find(|x| x.role == *r)?;
+                        terms[i] = Some(crate::smt::encode::as_real(inst.frame.own.get(slot)?.clone()).ok()?);
+                    }
+                }
+            }
+        }
+        let terms: Vec<Real> = terms.into_iter().collect::<Option<_>>()?;
+        for (i, t) in terms.iter().enumerate() {
+            let (l, h) = (real_of_f64(lo[i])?, real_of_f64(hi[i])?);
+            q.assertions.push(Bool::and(&[t.ge(&l), t.le(&h)]));
+        }
+        Some((q, terms))
+    }
+
+    /// The counterexample's values at the configuration `q` (a model of the constraints
+    /// with the dimensions pinned near `q`).
+    fn assignments(&self, q: &[f64]) -> Option<Vec<Assignment>> {
+        let (query, _) = self.constraints(q, q)?;
+        let solver = crate::smt::solver_for(&query);
+        for a in query.assertions.iter().chain(query.enc.side_conditions()) {
+            solver.assert(a);
+        }
+        match solver.check() {
+            z3::SatResult::Sat => Some(query.enc.assignments(&solver.get_model()?)),
+            _ => None,
+        }
+    }
+}
+
+impl Scene for Geo<'_> {
+    fn dims(&self) -> usize {
+        self.dims.len()
+    }
+
+    fn distance(&self, q: &[f64]) -> Closest {
+        let place = |side: usize| -> Vec<Option<Pose3>> {
+            self.side_frames(side, q, q, q)
+                .into_iter()
+                .zip(&self.sides[side])
+                .map(|(frames, p)| {
+                    let mut pose = geometry::identity();
+                    for (f, _) in frames? {
+                        pose *= f;
+                    }
+                    Some(pose * p.piece.solid.pose)
+                })
+                .collect()
+        };
+        let (a, b) = (place(0), place(1));
+        let mut best = Closest { distance: f64::INFINITY, lower: f64::INFINITY, points: [[0.0; 3]; 2], solids: [0, 0] };
+        // Pairs in order of their bounding spheres' gap (a lower bound of the pair's
+        // distance): once a gap exceeds the best lower bound found, no later pair can lower
+        // the minimum, and parry is not asked about it.
+        let origin = |p: &Pose3, s: &geometry::Solid| geometry::apply(&(*p * s.pose.inverse()), [0.0; 3]);
+        let mut pairs = Vec::new();
+        for (i, pa) in a.iter().enumerate() {
+            for (j, pb) in b.iter().enumerate() {
+                let (Some(pa), Some(pb)) = (pa, pb) else {
+                    // A pose that cannot be evaluated: no bound.
+                    best.lower = f64::NEG_INFINITY;
+                    best.distance = f64::NAN;
+                    return best;
+                };
+                let (sa, sb) = (&self.sides[0][i].piece.solid, &self.sides[1][j].piece.solid);
+                let (ca, cb) = (origin(pa, sa), origin(pb, sb));
+                let d2: f64 = ca.iter().zip(cb).map(|(x, y)| (x - y) * (x - y)).sum();
+                pairs.push((d2.sqrt() - sa.bounding_radius() - sb.bounding_radius(), i, j));
+            }
+        }
+        pairs.sort_by(|x, y| x.0.total_cmp(&y.0));
+        for (gap, i, j) in pairs {
+            if best.lower.is_finite() && gap > best.lower {
+                break;
+            }
+            let (Some(pa), Some(pb)) = (&a[i], &b[j]) else { continue };
+            let (sa, sb) = (&self.sides[0][i].piece.solid, &self.sides[1][j].piece.solid);
+            let (d, lower, points) = bnb::parry_closest(&sa.shape, pa, &sb.shape, pb);
+            let lower = lower - sa.slack - sb.slack - geometry::DISTANCE_MARGIN;
+            best.lower = if lower.is_nan() { f64::NEG_INFINITY } else { best.lower.min(lower) };
+            if d < best.distance || best.distance.is_infinite() {
+                best.distance = d;
+                best.points = points;
+                best.solids = [i, j];
+            }
+        }
+        best
+    }
+
+    fn motion_bound(&self, lo: &[f64], hi: &[f64], centre: &[f64]) -> f64 {
+        // Only the feasible configurations of the box move the bodies: bound the motion over
+        // the contracted box (its centre stays the box's; the bounds measure from it).
+        let Some((lo, hi)) = self.contract(lo, hi) else { return 0.0 };
+        let (lo, hi) = (&lo[..], &hi[..]);
+        let side = |k: usize| {
+            self.side_frames(k, lo, hi, centre)
+                .into_iter()
+                .zip(&self.sides[k])
+                .map(|(frames, p)| match frames {
+                    Some(frames) => {
+                        let fb: Vec<FrameBound> = frames.into_iter().map(|(_, b)| b).collect();
+                        chain_motion_bound(&fb, p.piece.solid.bounding_radius())
+                    }
+                    None => f64::INFINITY,
+                })
+                .fold(0.0, f64::max)
+        };
+        (side(0) + side(1)) * (1.0 + geometry::placement::PAD)
+    }
+
+    fn feasible(&self, lo: &[f64], hi: &[f64]) -> Feasible {
+        let Some((lo, hi)) = self.contract(lo, hi) else { return Feasible::No };
+        let (lo, hi) = (&lo[..], &hi[..]);
+        let check =
+            |e: &Expr, run: usize, role: RoleId| truth(self.prog, e, &|v: &Var| self.var_range(run, role, v, Some((lo, hi))));
+        for (k, r) in self.runs.iter().enumerate() {
+            if self.initial {
+                // The start state: the context (over `Role` variables) with the box.
+                let ranges = |v: &Var| match v {
+                    Var::Role(role, slot) if *role == r.role => self
+                        .dims
+                        .iter()
+                        .position(|d| *d == Dim::Now(*role, *slot))
+                        .map(|i| Interval::new(lo[i], hi[i]))
+                        .or_else(|| self.shared[k].get(v).copied()),
+                    other => self.shared[k].get(other).copied(),
+                };
+                for h in &r.hyps {
+                    if truth(self.prog, h, &ranges) == Some(false) {
+                        return Feasible::No;
+                    }
+                }
+                continue;
+            }
+            let prim = self.prog.prim(r.app.prim);
+            if check(&prim.guarantee, k, r.role) == Some(false) {
+                return Feasible::No;
+            }
+            if let Some(inv) = &self.prog.kind(prim.kind).invariant {
+                if check(inv, k, r.role) == Some(false) {
+                    return Feasible::No;
+                }
+            }
+        }
+        for (role, _) in &self.carrier {
+            if let Some(inv) = &self.prog.kind_of(*role).invariant {
+                if check(inv, usize::MAX, *role) == Some(false) {
+                    return Feasible::No;
+                }
+            }
+        }
+        // "Every point satisfies them" is never claimed (the context's constraints are over
+        // ranges, not the exact set): a contact is always confirmed by a witness.
+        Feasible::Maybe
+    }
+
+    fn witness(&self, lo: &[f64], hi: &[f64], _near: &[f64]) -> Option<Vec<f64>> {
+        let (query, terms) = self.constraints(lo, hi)?;
+        let solver = crate::smt::solver_for(&query);
+        for a in query.assertions.iter().chain(query.enc.side_conditions()) {
+            solver.assert(a);
+        }
+        match solver.check() {
+            z3::SatResult::Sat => {
+                let m = solver.get_model()?;
+                if query.enc.spurious_trig(&m) {
+                    return None;
+                }
+                terms.iter().map(|t| Encoder::value_of(&m, t)).collect()
+            }
+            _ => None,
+        }
+    }
+
+    fn solid_name(&self, side: usize, solid: usize) -> String {
+        let Some(p) = self.sides.get(side).and_then(|s| s.get(solid)) else { return "?".into() };
+        let owner = match (p.role, p.obstacle) {
+            (Some(r), _) => self.prog.role_name(r).to_string(),
+            (None, Some(o)) => format!("obstacle {}", self.prog.obstacles[o].name),
+            (None, None) => "obstacle".to_string(),
+        };
+        let hull = if p.piece.solid.is_hull { " (hull)" } else { "" };
+        format!("{}'s {}{hull}", owner, p.piece.solid.name)
+    }
+}
