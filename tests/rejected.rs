@@ -1,9 +1,14 @@
-//! The rejected-variants corpus: each file under `choreographies/rejected/` breaks
-//! exactly one rule. Its first line says which, as `// expect: E0301 at 5:3`: the check
-//! must reject the file, every error must carry that code and a hint, and one of them
-//! must start at that line and column. The file name starts with the code. Every `.chor`
-//! file is one; a `.mochi` file (a library, checked on its own) is one when its first line
-//! is an `// expect:` line (the others are imported by the `.chor` files).
+//! The rejected-variants corpus: each file under `choreographies/rejected/` and
+//! `choreographies/rejected/geometry/` breaks exactly one rule. Its first line says which,
+//! as `// expect: E0301 at 5:3`: the check must reject the file, every error must carry
+//! that code and a hint, and one of them must start at that line and column. A diagnostic
+//! that points into another file (a URDF, whose errors point at its own lines) is expected
+//! as `// expect: E0501 at robots/pybullet_data/husky/husky.urdf:97:18`, the path relative
+//! to the repository root. The file name starts with the code. Every `.chor` file is one
+//! (except the few of [`PENDING`]); a `.mochi` file (a library, checked on its own) is one
+//! when its first line is an `// expect:` line (the others are imported by the `.chor`
+//! files). The fixtures the geometry files name (URDFs, meshes) are in
+//! `choreographies/rejected/geometry/fixtures/`.
 //!
 //! Every code in `diag.rs` is accounted for: produced by a file here (as its expected
 //! code), listed in [`NOT_ALONE`] with the reason it cannot be the only error of a file,
@@ -14,20 +19,40 @@ use mochi::driver::{Config, Verdict};
 use mochi::fsload::check_file;
 use mochi::source::SourceDb;
 use std::collections::BTreeSet;
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
+
+/// The folders of the corpus.
+const DIRS: &[&str] = &["choreographies/rejected", "choreographies/rejected/geometry"];
+
+/// Rejected variants whose code the geometric procedure (issue 9, in progress) will give:
+/// their first line says in prose what they expect, and they join the corpus when it is an
+/// `// expect: CODE at ...` line (the test below says when to drop an entry).
+const PENDING: &[&str] = &[
+    "choreographies/rejected/geometry/mounted-arm-orbit-too-small.chor",
+    "choreographies/rejected/geometry/sorting-panda-reaches-into-cart-path.chor",
+];
 
 fn corpus() -> Vec<PathBuf> {
-    let dir = Path::new("choreographies/rejected");
-    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
-        .expect("choreographies/rejected exists")
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.extension().is_some_and(|e| e == "chor")
-                || (p.extension().is_some_and(|e| e == "mochi")
-                    && std::fs::read(p).is_ok_and(|t| t.starts_with(b"// expect: ")))
-        })
-        .collect();
+    let mut files = Vec::new();
+    for dir in DIRS {
+        files.extend(
+            std::fs::read_dir(dir)
+                .unwrap_or_else(|e| panic!("{dir}: {e}"))
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| {
+                    p.extension().is_some_and(|e| e == "chor")
+                        || (p.extension().is_some_and(|e| e == "mochi")
+                            && std::fs::read(p).is_ok_and(|t| t.starts_with(b"// expect: ")))
+                })
+                .filter(|p| !PENDING.iter().any(|q| Path::new(q) == p.as_path())),
+        );
+    }
     files.sort();
+    // The geometry folder is read too (a walk that missed it would pass).
+    assert!(
+        files.iter().filter(|p| p.starts_with("choreographies/rejected/geometry")).count() >= 7,
+        "the URDF and mesh files (choreographies/rejected/geometry/E050*.chor) are in the corpus"
+    );
     // The library files are read too (a filter that dropped them all would pass).
     assert!(
         files.iter().filter(|p| p.extension().is_some_and(|e| e == "mochi")).count() >= 2,
@@ -36,15 +61,53 @@ fn corpus() -> Vec<PathBuf> {
     files
 }
 
-/// Parses `// expect: CODE at LINE:COL`.
-fn expectation(path: &Path) -> (Code, usize, usize) {
+/// Where an expected diagnostic starts: a file (the rejected file itself unless the
+/// expectation names another), a line and a column.
+struct Expected {
+    code: Code,
+    file: PathBuf,
+    line: usize,
+    col: usize,
+}
+
+/// Parses `// expect: CODE at LINE:COL` or `// expect: CODE at PATH:LINE:COL` (PATH
+/// relative to the repository root).
+fn expectation(path: &Path) -> Expected {
     let text = std::fs::read_to_string(path).expect("readable");
     let first = text.lines().next().unwrap_or_default();
     let rest = first.strip_prefix("// expect: ").unwrap_or_else(|| panic!("{}: no `// expect:` line", path.display()));
     let (code, pos) = rest.split_once(" at ").unwrap_or_else(|| panic!("{}: malformed expect line", path.display()));
     let code: Code = code.parse().unwrap_or_else(|_| panic!("{}: unknown code {code}", path.display()));
-    let (l, c) = pos.trim().split_once(':').expect("LINE:COL");
-    (code, l.parse().expect("line"), c.parse().expect("column"))
+    let mut parts = pos.trim().rsplitn(3, ':');
+    let (c, l, file) = (parts.next(), parts.next(), parts.next());
+    let num = |s: Option<&str>, what: &str| -> usize {
+        s.and_then(|s| s.parse().ok())
+            .unwrap_or_else(|| panic!("{}: `{pos}` is not [PATH:]LINE:COL ({what})", path.display()))
+    };
+    let file = match file {
+        None => path.to_path_buf(),
+        Some(f) => {
+            assert!(Path::new(f).is_file(), "{}: the expected file `{f}` does not exist", path.display());
+            PathBuf::from(f)
+        }
+    };
+    Expected { code, file, line: num(l, "line"), col: num(c, "column") }
+}
+
+/// `a/b/../c` as `a/c`: the loader names a URDF by the path the source wrote, joined to
+/// the source's folder, so a diagnostic's file name may hold `..`.
+fn lexical(p: &Path) -> PathBuf {
+    let mut out = PathBuf::new();
+    for c in p.components() {
+        match c {
+            Component::ParentDir if out.file_name().is_some() => {
+                out.pop();
+            }
+            Component::CurDir => {}
+            c => out.push(c),
+        }
+    }
+    out
 }
 
 #[test]
@@ -53,7 +116,7 @@ fn each_rejected_file_fails_with_exactly_its_code_at_its_position() {
     assert!(files.len() >= 25, "the corpus has {} files, at least 25 expected", files.len());
     let mut failures = Vec::new();
     for path in &files {
-        let (code, line, col) = expectation(path);
+        let Expected { code, file, line, col } = expectation(path);
         let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
         if !name.starts_with(code.as_str()) {
             failures.push(format!("{name}: file name does not start with {code}"));
@@ -83,10 +146,10 @@ fn each_rejected_file_fails_with_exactly_its_code_at_its_position() {
         }
         let at = errors.iter().any(|d| {
             let (f, l, c) = db.location(d.span);
-            l == line && c == col && Path::new(&f) == path.as_path()
+            l == line && c == col && lexical(Path::new(&f)) == lexical(&file)
         });
         if !at {
-            failures.push(format!("{name}: no {code} at {line}:{col}; got {summary:#?}"));
+            failures.push(format!("{name}: no {code} at {}:{line}:{col}; got {summary:#?}", file.display()));
         }
     }
     assert!(failures.is_empty(), "{} of {} files fail:\n{}", failures.len(), files.len(), failures.join("\n"));
@@ -113,57 +176,30 @@ const NOT_ALONE: &[(&str, &str)] = &[
          a_library_of_constants_verifies_with_a_note_and_chor_files_still_need_a_system",
     ),
     (
-        "E0501",
-        "a URDF/mesh diagnostic of checker/geometry/urdf.rs, not yet reachable from a .chor file until \
-         the lead wires robot bodies to geometry::load_robot (issue 9): then a rejected file replaces \
-         this entry. Tested in geometry::urdf::tests::each_urdf_error_points_into_the_urdf",
-    ),
-    (
-        "E0502",
-        "a URDF/mesh diagnostic of checker/geometry/urdf.rs, not yet reachable from a .chor file until \
-         the lead wires robot bodies to geometry::load_robot (issue 9): then a rejected file replaces \
-         this entry. Tested in geometry::urdf::tests::each_urdf_error_points_into_the_urdf",
-    ),
-    (
-        "E0503",
-        "a URDF/mesh diagnostic of checker/geometry/urdf.rs, not yet reachable from a .chor file until \
-         the lead wires robot bodies to geometry::load_robot (issue 9): then a rejected file replaces \
-         this entry. Tested in geometry::urdf::tests::each_urdf_error_points_into_the_urdf",
-    ),
-    (
-        "E0504",
-        "a URDF/mesh diagnostic of checker/geometry/urdf.rs, not yet reachable from a .chor file until \
-         the lead wires robot bodies to geometry::load_robot (issue 9): then a rejected file replaces \
-         this entry. Tested in geometry::urdf::tests::each_urdf_error_points_into_the_urdf",
-    ),
-    (
-        "E0505",
-        "a URDF/mesh diagnostic of checker/geometry/urdf.rs, not yet reachable from a .chor file until \
-         the lead wires robot bodies to geometry::load_robot (issue 9): then a rejected file replaces \
-         this entry. Tested in geometry::urdf::tests::each_urdf_error_points_into_the_urdf",
-    ),
-    (
-        "E0506",
-        "a URDF/mesh diagnostic of checker/geometry/urdf.rs, not yet reachable from a .chor file until \
-         the lead wires robot bodies to geometry::load_robot (issue 9): then a rejected file replaces \
-         this entry. Tested in geometry::urdf::tests::each_urdf_error_points_into_the_urdf",
-    ),
-    (
-        "E0507",
-        "a URDF/mesh diagnostic of checker/geometry/urdf.rs, not yet reachable from a .chor file until \
-         the lead wires robot bodies to geometry::load_robot (issue 9): then a rejected file replaces \
-         this entry. Tested in geometry::urdf::tests::each_urdf_error_points_into_the_urdf",
-    ),
-    (
         "U0001",
         "a note, not an error: an undecided obligation makes the verdict `unknown`, never \
          `rejected`. Tested in tests/cli.rs a_forced_timeout_gives_unknown_and_exit_3",
     ),
 ];
 
+/// Each pending file exists and still says in prose what it expects: once its first line
+/// is an `// expect: CODE at ...` line, its entry in [`PENDING`] must go.
+#[test]
+fn pending_geometry_files_are_still_pending() {
+    for p in PENDING {
+        let text = std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{p}: {e}: drop it from PENDING"));
+        let first = text.lines().next().unwrap_or_default();
+        let code = first.strip_prefix("// expect: ").and_then(|r| r.split_once(" at ")).map(|(c, _)| c.parse::<Code>());
+        assert!(
+            !matches!(code, Some(Ok(_))),
+            "{p} has an `// expect: CODE at` line now: drop it from PENDING so that the corpus checks it"
+        );
+    }
+}
+
 #[test]
 fn every_code_is_produced_by_a_rejected_example_or_explained() {
-    let covered: BTreeSet<Code> = corpus().iter().map(|p| expectation(p).0).collect();
+    let covered: BTreeSet<Code> = corpus().iter().map(|p| expectation(p).code).collect();
     let missing: Vec<&str> = Code::ALL
         .iter()
         .filter(|c| !covered.contains(c) && !c.is_reserved())
