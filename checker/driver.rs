@@ -75,6 +75,9 @@ pub enum Detail {
         cached: usize,
         /// Obligations settled without Z3 (bounds, folding).
         folded: usize,
+        /// Collision questions the geometric procedure decided (branch and bound; Z3 only
+        /// for witnesses), not counted in `queries`.
+        geometric: usize,
         failed: usize,
         undecided: usize,
         /// Obligations that held only because their context is unsatisfiable.
@@ -176,12 +179,15 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut sy
     }
     // Bodies: sizes, and geometric footprints as predicates where Z3 can decide them;
     // then every body as solids (URDFs and meshes read here) for the geometric procedure.
-    let mut diags = run.stage(|| space::prepare(&mut prog));
-    if !diags.iter().any(Diagnostic::is_error) {
-        let (world, more) = space::world::build(&prog, db, load);
-        prog.world = Some(std::sync::Arc::new(world));
-        diags.extend(more);
-    }
+    let diags = run.stage(|| {
+        let mut diags = space::prepare(&mut prog);
+        if !diags.iter().any(Diagnostic::is_error) {
+            let (world, more) = space::world::build(&prog, db, load);
+            prog.world = Some(std::sync::Arc::new(world));
+            diags.extend(more);
+        }
+        diags
+    });
     if !run.record("geometry", diags) {
         return run.finish();
     }
@@ -427,6 +433,7 @@ impl Pipeline {
                 queries: stats.queries,
                 cached: stats.cached,
                 folded: stats.folded,
+                geometric: stats.geometric,
                 failed,
                 undecided: unknown,
                 vacuous: stats.vacuous,

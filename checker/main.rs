@@ -105,6 +105,10 @@ struct CheckArgs {
     /// Write every SMT query as an SMT-LIB file into DIR
     #[arg(long, value_name = "DIR")]
     dump_smt: Option<PathBuf>,
+    /// Also list, for each pair of participants moving together (and each participant and
+    /// obstacle), the least distance between their bodies and where and when it occurs
+    #[arg(long)]
+    clearance: bool,
 }
 
 #[derive(Args)]
@@ -310,15 +314,26 @@ fn check(args: &CheckArgs, color: ColorChoice) -> Outcome {
                 continue;
             }
         };
+        let clearances = match (&report.planned, args.clearance) {
+            (Some(p), true) => mochi::smt::goals::geo::clearances(&p.program, &p.obligations, 1e-3, cfg.smt.timeout),
+            _ => Vec::new(),
+        };
         match args.format {
             Format::Text => {
                 // Diagnostics on stderr, the table and verdict on stdout (rustc's split).
                 eprint_safe(&render::diagnostics_text(&db, &report, err_color));
                 let sep = if i > 0 { "\n" } else { "" };
                 print_safe(&format!("{sep}{}", render::summary_text(&db, &name, &report, out_color, args.verbose)));
+                if args.clearance {
+                    print_safe(&render::clearance_text(&db, &clearances));
+                }
             }
             Format::Json => {
-                if !print_json(&render::report_json(&db, &name, &report), json_lines) {
+                let mut json = render::report_json(&db, &name, &report);
+                if args.clearance {
+                    json["clearance"] = render::clearance_json(&db, &clearances);
+                }
+                if !print_json(&json, json_lines) {
                     worst = worst.max(Outcome::Crashed);
                     continue;
                 }

@@ -140,13 +140,16 @@ impl std::fmt::Display for Detail {
             Detail::Errors(n) => write!(f, "{n} error(s)"),
             Detail::NotDecided(n) => write!(f, "{n} not decided (structural checks only)"),
             Detail::PastDeadline { seconds } => write!(f, "not checked: the --deadline of {seconds} s had passed"),
-            Detail::Obligations { total, queries, cached, folded, failed, undecided, vacuous } => {
+            Detail::Obligations { total, queries, cached, folded, geometric, failed, undecided, vacuous } => {
                 write!(f, "{total} obligation(s), {queries} quer{}", if queries == 1 { "y" } else { "ies" })?;
                 if cached > 0 {
                     write!(f, " ({cached} cached)")?;
                 }
                 if folded > 0 {
                     write!(f, ", {folded} without Z3")?;
+                }
+                if geometric > 0 {
+                    write!(f, ", {geometric} by the geometric procedure")?;
                 }
                 if failed > 0 {
                     write!(f, ", {failed} failed")?;
@@ -249,6 +252,63 @@ pub fn diagnostic_json(db: &SourceDb, d: &Diagnostic) -> Value {
         "labels": labels,
         "counterexample": d.counterexample.as_ref().map(|c| serde_json::to_value(c).unwrap_or(Value::Null)),
     })
+}
+
+/// `--clearance`: one line per pair, the certified least distance and where it is attained.
+pub fn clearance_text(db: &SourceDb, pairs: &[crate::smt::goals::geo::PairClearance]) -> String {
+    let mut out = String::from("clearance (least distance between bodies, m):\n");
+    if pairs.is_empty() {
+        out.push_str("  no pair of participants with bodies moves together\n");
+    }
+    let m = |v: f64| if v.is_finite() { format!("{v:.4}") } else { "?".to_string() };
+    for p in pairs {
+        let at = if contains(db, p.span) {
+            let (f, l, c) = db.location(p.span);
+            format!("{f}:{l}:{c}")
+        } else {
+            String::new()
+        };
+        let mut line = format!("  {} - {}: at least {}", p.a, p.b, m(p.lower));
+        if p.upper.is_finite() {
+            line.push_str(&format!(", {} attained", m(p.upper)));
+            if let Some(t) = p.time {
+                line.push_str(&format!(" at time {} s", m(t)));
+            }
+            if let Some([a, b]) = p.points {
+                line.push_str(&format!(
+                    " between ({}, {}, {}) and ({}, {}, {})",
+                    m(a[0]), m(a[1]), m(a[2]), m(b[0]), m(b[1]), m(b[2])
+                ));
+            }
+        }
+        if !at.is_empty() {
+            line.push_str(&format!(" (joint motion at {at})"));
+        }
+        if let Some(n) = &p.note {
+            line.push_str(&format!("; {n}"));
+        }
+        out.push_str(&line);
+        out.push('\n');
+    }
+    out
+}
+
+/// `--clearance` in `--format json`.
+pub fn clearance_json(db: &SourceDb, pairs: &[crate::smt::goals::geo::PairClearance]) -> Value {
+    let num = |v: f64| if v.is_finite() { serde_json::json!(v) } else { Value::Null };
+    Value::Array(
+        pairs
+            .iter()
+            .map(|p| {
+                let (file, line, column) = location_json(db, p.span);
+                serde_json::json!({
+                    "a": p.a, "b": p.b, "lower": num(p.lower), "upper": num(p.upper),
+                    "time": p.time, "points": p.points, "note": p.note,
+                    "file": file, "line": line, "column": column,
+                })
+            })
+            .collect(),
+    )
 }
 
 fn location_json(db: &SourceDb, span: Span) -> (Value, Value, Value) {
@@ -732,10 +792,10 @@ mod tests {
     #[test]
     fn details_read_as_the_table_shows_them() {
         let ob =
-            Detail::Obligations { total: 11, queries: 18, cached: 5, folded: 2, failed: 0, undecided: 0, vacuous: 0 };
+            Detail::Obligations { total: 11, queries: 18, cached: 5, folded: 2, geometric: 0, failed: 0, undecided: 0, vacuous: 0 };
         assert_eq!(ob.to_string(), "11 obligation(s), 18 queries (5 cached), 2 without Z3");
         let ob =
-            Detail::Obligations { total: 1, queries: 1, cached: 0, folded: 0, failed: 1, undecided: 2, vacuous: 3 };
+            Detail::Obligations { total: 1, queries: 1, cached: 0, folded: 0, geometric: 0, failed: 1, undecided: 2, vacuous: 3 };
         assert_eq!(ob.to_string(), "1 obligation(s), 1 query, 1 failed, 2 undecided, 3 held vacuously");
         assert_eq!(Detail::None.to_string(), "");
         assert_eq!(Detail::Errors(2).to_string(), "2 error(s)");

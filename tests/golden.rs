@@ -48,6 +48,11 @@ fn chor_files() -> Vec<PathBuf> {
             std::fs::read_dir(dir).expect("readable folder").map(|e| e.expect("entry").path()).collect();
         entries.sort();
         for p in entries {
+            // `choreographies/pending/`: examples the geometric procedure does not decide in
+            // reasonable time yet (issue 9's notes); each takes minutes, then says unknown.
+            if p.is_dir() && p.file_name().is_some_and(|n| n == "pending") {
+                continue;
+            }
             if p.is_dir() {
                 walk(&p, out);
             } else if p.extension().is_some_and(|e| e == "chor") {
@@ -62,7 +67,7 @@ fn chor_files() -> Vec<PathBuf> {
 
 /// A counterexample with each model value replaced by `_`: which variables it names,
 /// and whether it has a point where two footprints meet (and at how many times).
-fn without_values(cx: &Counterexample) -> String {
+fn without_values(cx: &Counterexample, note: &str) -> String {
     let mut parts = Vec::new();
     if let Some(o) = &cx.overlap {
         let at = match o.times.len() {
@@ -70,7 +75,11 @@ fn without_values(cx: &Counterexample) -> String {
             1 => "at time _ s, ".to_string(),
             n => format!("at times {} s, ", vec!["_"; n].join(" and ")),
         };
-        parts.push(format!("{at}the point (x, y, z) = (_, _, _) m is in both footprints"));
+        // What the point is (in both footprints, in a footprint and an obstacle, a point of
+        // the body outside its footprint) is the note's words after the point.
+        let what =
+            note.split_once(") m ").map_or("is in both footprints", |(_, rest)| rest.split(';').next().unwrap_or(rest));
+        parts.push(format!("{at}the point (x, y, z) = (_, _, _) m {what}"));
     }
     // The point and the time are shown above when there is an overlap.
     let hidden = |n: &str| cx.overlap.is_some() && (n.starts_with("point.") || n.starts_with("time"));
@@ -86,10 +95,9 @@ fn without_values(cx: &Counterexample) -> String {
 fn stable(d: &Diagnostic) -> Diagnostic {
     let mut d = d.clone();
     if let Some(cx) = d.counterexample.as_deref() {
-        let shown = without_values(cx);
         for note in &mut d.notes {
             if note.starts_with("counterexample: ") {
-                *note = shown.clone();
+                *note = without_values(cx, note);
             }
         }
     }
@@ -132,6 +140,10 @@ fn every_choreography_matches_its_golden_file() {
     // must see the same files.
     let mut seen = Vec::new();
     insta::glob!("../choreographies", "**/*.chor", |path| {
+        // `pending/` is skipped by the walk too (see `chor_files`).
+        if path.components().any(|c| c.as_os_str() == "pending") {
+            return;
+        }
         seen.push(path.to_path_buf());
         insta::assert_snapshot!(dump(path));
     });

@@ -24,12 +24,13 @@ use std::path::{Component, Path, PathBuf};
 /// The folders of the corpus.
 const DIRS: &[&str] = &["choreographies/rejected", "choreographies/rejected/geometry"];
 
-/// Rejected variants whose code the geometric procedure (issue 9, in progress) will give:
-/// their first line says in prose what they expect, and they join the corpus when it is an
-/// `// expect: CODE at ...` line (the test below says when to drop an entry).
+/// Rejected variants whose code the geometric procedure does not give in reasonable time
+/// yet (they live in `choreographies/pending/` with the examples they vary, which the other
+/// harnesses skip): their first line says in prose what they expect, and they join the
+/// corpus when it is an `// expect: CODE at ...` line (the test below says when).
 const PENDING: &[&str] = &[
-    "choreographies/rejected/geometry/mounted-arm-orbit-too-small.chor",
-    "choreographies/rejected/geometry/sorting-panda-reaches-into-cart-path.chor",
+    "choreographies/pending/mounted-arm-orbit-too-small.chor",
+    "choreographies/pending/sorting-panda-reaches-into-cart-path.chor",
 ];
 
 fn corpus() -> Vec<PathBuf> {

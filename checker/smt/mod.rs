@@ -523,12 +523,9 @@ impl Worker<'_> {
             stats.geometric += 1;
             return match goals::geo::decide(self.prog, ob, part, self.cfg.timeout) {
                 goals::geo::GeoAnswer::Apart => Answer::Unsat,
-                goals::geo::GeoAnswer::Contact { values, overlap } => Answer::Sat {
-                    values,
-                    overlap: Some(overlap),
-                    bound: Vec::new(),
-                    exact: Default::default(),
-                },
+                goals::geo::GeoAnswer::Contact { values, overlap } => {
+                    Answer::Sat { values, overlap: Some(overlap), bound: Vec::new(), exact: Default::default() }
+                }
                 goals::geo::GeoAnswer::Unknown(why) => Answer::Unknown(Why::Incomplete(why)),
             };
         }

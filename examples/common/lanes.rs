@@ -55,7 +55,7 @@ const arena: real = 10.0;     // carts stay within this distance of x = 0 (PGCD)
 
 robot LaneCart {
   state x: real, y: real;
-  geometry: box(2 * cart_r, 2 * cart_r, cart_h);
+  geometry: box(2 * cart_r, 2 * cart_r, cart_h) at pose(x, y, 0);
   invariant: -arena <= x <= arena && y >= 0;
 }
 

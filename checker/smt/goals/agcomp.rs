@@ -39,7 +39,10 @@ pub(super) fn plan(prog: &Program, hyps: &[Expr], parts: &[(RoleId, PrimApp)]) -
     }
     // A part with no footprint may occupy all space and meets every other footprint.
     if parts.len() > 1 {
-        if let Some(who) = parts.iter().find(|(_, app)| prog.prim(app.prim).footprint.is_none() && prog.prim(app.prim).footprint_body.is_none()) {
+        if let Some(who) = parts
+            .iter()
+            .find(|(_, app)| prog.prim(app.prim).footprint.is_none() && prog.prim(app.prim).footprint_body.is_none())
+        {
             return Plan::Fails(format!(
                 "`{}` of `{}` declares no footprint, so it may occupy all space and meets every other footprint",
                 prog.prim(who.1.prim).name,
@@ -57,7 +60,10 @@ pub(super) fn plan(prog: &Program, hyps: &[Expr], parts: &[(RoleId, PrimApp)]) -
     // Every part against every static obstacle, at every time: the obstacle is there
     // whatever the protocol does. Pairs whose boxes are apart need no query.
     if !prog.obstacles.is_empty() {
-        if let Some(who) = parts.iter().find(|(_, app)| prog.prim(app.prim).footprint.is_none() && prog.prim(app.prim).footprint_body.is_none()) {
+        if let Some(who) = parts
+            .iter()
+            .find(|(_, app)| prog.prim(app.prim).footprint.is_none() && prog.prim(app.prim).footprint_body.is_none())
+        {
             return Plan::Fails(format!(
                 "`{}` of `{}` declares no footprint, so it may occupy all space and meets every obstacle",
                 prog.prim(who.1.prim).name,

@@ -64,9 +64,7 @@ pub(crate) fn applies(prog: &Program, ob: &Obligation, part: &Part) -> bool {
     let run = |r: RoleId, app: &PrimApp| {
         let prim = prog.prim(app.prim);
         let pieces = world.prims.get(app.prim.idx()).and_then(|p| p.as_deref());
-        (prim.footprint.is_none() && pieces.is_some())
-            || pieces.is_some_and(turns)
-            || prog.role(r).mounted_on.is_some()
+        (prim.footprint.is_none() && pieces.is_some()) || pieces.is_some_and(turns) || prog.role(r).mounted_on.is_some()
     };
     match (&ob.goal, part) {
         (Goal::Compatible { parts }, Part::Disjoint(i, j)) => [i, j].iter().any(|k| run(parts[**k].0, &parts[**k].1)),
@@ -99,12 +97,12 @@ pub(crate) fn decide(prog: &Program, ob: &Obligation, part: &Part, limit: Durati
             }
             let mut runs = vec![run(&parts[*i], &ob.hyps, 0), run(&parts[*j], &ob.hyps, 0)];
             runs.extend(carrier_runs(prog, parts, &[a, b], &ob.hyps));
-            Geo::new(prog, world, ob, runs, [Who::Run(0), Who::Run(1)], false)
+            Geo::new(prog, world, ob, runs, [Who::Run(0), Who::Run(1)], Mode::Footprints)
         }
         (Goal::Compatible { parts }, Part::ClearOf { i, o }) => {
             let mut runs = vec![run(&parts[*i], &ob.hyps, 0)];
             runs.extend(carrier_runs(prog, parts, &[parts[*i].0], &ob.hyps));
-            Geo::new(prog, world, ob, runs, [Who::Run(0), Who::Obstacle(*o)], false)
+            Geo::new(prog, world, ob, runs, [Who::Run(0), Who::Obstacle(*o)], Mode::Footprints)
         }
         (Goal::Separated { sides }, Part::Apart { a, ra, b, rb }) => {
             let (x, y) = (&sides[*a].runs[*ra], &sides[*b].runs[*rb]);
@@ -112,7 +110,7 @@ pub(crate) fn decide(prog: &Program, ob: &Obligation, part: &Part, limit: Durati
                 Run { role: x.role, app: x.app.clone(), hyps: x.hyps.clone(), clock: 0 },
                 Run { role: y.role, app: y.app.clone(), hyps: y.hyps.clone(), clock: 1 },
             ];
-            Geo::new(prog, world, ob, runs, [Who::Run(0), Who::Run(1)], false)
+            Geo::new(prog, world, ob, runs, [Who::Run(0), Who::Run(1)], Mode::Footprints)
         }
         (Goal::InitiallyDisjoint { firsts }, Part::InitiallyApart { r, s }) => {
             let first = |k: usize| firsts[k].1.first().cloned();
@@ -123,7 +121,7 @@ pub(crate) fn decide(prog: &Program, ob: &Obligation, part: &Part, limit: Durati
                 Run { role: firsts[*r].0, app: ar, hyps: ob.hyps.clone(), clock: 0 },
                 Run { role: firsts[*s].0, app: as_, hyps: ob.hyps.clone(), clock: 0 },
             ];
-            Geo::new(prog, world, ob, runs, [Who::Run(0), Who::Run(1)], true)
+            Geo::new(prog, world, ob, runs, [Who::Run(0), Who::Run(1)], Mode::Initial)
         }
         _ => return GeoAnswer::Unknown("not a collision question".into()),
     };
@@ -162,6 +160,15 @@ struct Run {
     app: PrimApp,
     hyps: Vec<Expr>,
     clock: usize,
+}
+
+/// What is placed: the primitives' footprints while they run, the robots' bodies at the
+/// start ([T-SESS]), or the robots' bodies while they run (the clearance report).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Mode {
+    Footprints,
+    Initial,
+    Bodies,
 }
 
 #[derive(Clone, Copy)]
@@ -217,15 +224,16 @@ impl<'a> Geo<'a> {
         ob: &'a Obligation,
         runs: Vec<Run>,
         who: [Who; 2],
-        initial: bool,
+        mode: Mode,
     ) -> Result<Geo<'a>, String> {
+        let initial = mode == Mode::Initial;
         let mut sides: [Vec<Placed<'a>>; 2] = [Vec::new(), Vec::new()];
         for (side, w) in sides.iter_mut().zip(who) {
             match w {
                 Who::Run(k) => {
                     let r = &runs[k];
                     let kind = prog.role(r.role).kind;
-                    let pieces = if initial {
+                    let pieces = if mode != Mode::Footprints {
                         &world.kinds[kind.idx()]
                     } else {
                         match world.prims.get(r.app.prim.idx()).and_then(|p| p.as_ref()) {
@@ -242,7 +250,13 @@ impl<'a> Geo<'a> {
                         }
                     };
                     let run = (!initial).then_some(k);
-                    side.extend(pieces.iter().map(|piece| Placed { piece, role: Some(r.role), run, at: None, obstacle: None }));
+                    side.extend(pieces.iter().map(|piece| Placed {
+                        piece,
+                        role: Some(r.role),
+                        run,
+                        at: None,
+                        obstacle: None,
+                    }));
                 }
                 Who::Obstacle(o) => {
                     let obstacle = &prog.obstacles[o];
@@ -272,8 +286,7 @@ impl<'a> Geo<'a> {
             } else {
                 let prim = prog.prim(r.app.prim);
                 let lookup = |v: &Var| s.get(v).copied();
-                let ps: Vec<Option<Interval>> =
-                    r.app.args.iter().map(|a| bounds::eval(prog, a, &lookup)).collect();
+                let ps: Vec<Option<Interval>> = r.app.args.iter().map(|a| bounds::eval(prog, a, &lookup)).collect();
                 let role = r.role;
                 let lift = |v: &Var| -> Option<Interval> {
                     match v {
@@ -369,12 +382,13 @@ impl<'a> Geo<'a> {
             };
             if !iv.is_finite() || iv.lo > iv.hi {
                 let what = match d {
-                    Dim::Clock(_) => "the time of a motion whose guarantee reads `clock` and whose duration has no upper end".to_string(),
-                    Dim::Now(r, slot) => format!(
-                        "`{}.{}`, which places a body",
-                        prog.role_name(*r),
-                        prog.kind_of(*r).var(*slot).0
-                    ),
+                    Dim::Clock(_) => {
+                        "the time of a motion whose guarantee reads `clock` and whose duration has no upper end"
+                            .to_string()
+                    }
+                    Dim::Now(r, slot) => {
+                        format!("`{}.{}`, which places a body", prog.role_name(*r), prog.kind_of(*r).var(*slot).0)
+                    }
                 };
                 return Err(format!(
                     "{what} is not bounded: the geometric procedure searches a bounded box (give the kind an invariant that bounds it)"
@@ -412,7 +426,9 @@ impl<'a> Geo<'a> {
                     .world
                     .as_deref()
                     .and_then(|w| w.prims.get(r.app.prim.idx()).cloned().flatten())
-                    .is_some_and(|ps| ps.iter().any(|p| p.place.as_ref().is_some_and(|pose| pose.args.iter().any(clocky))));
+                    .is_some_and(|ps| {
+                        ps.iter().any(|p| p.place.as_ref().is_some_and(|pose| pose.args.iter().any(clocky)))
+                    });
         }
         if hi.is_finite() {
             Ok(Interval::new(0.0, hi.max(0.0)))
@@ -469,7 +485,15 @@ impl<'a> Geo<'a> {
 
     /// One pose frame `pose(...)` whose arguments read `role`'s variables (in run `run`'s
     /// frame), over the box `[lo, hi]` with centre `c`: the frame at `c` and its bound.
-    fn pose_frame(&self, role: Option<RoleId>, run: usize, pose: &Pose, lo: &[f64], hi: &[f64], c: &[f64]) -> Option<(Pose3, FrameBound)> {
+    fn pose_frame(
+        &self,
+        role: Option<RoleId>,
+        run: usize,
+        pose: &Pose,
+        lo: &[f64],
+        hi: &[f64],
+        c: &[f64],
+    ) -> Option<(Pose3, FrameBound)> {
         let mut ab = ArgBounds::fixed([0.0; 6]);
         for (k, e) in pose.args.iter().enumerate() {
             let range = |v: &Var| role.and_then(|r| self.var_range(run, r, v, Some((lo, hi))));
@@ -614,7 +638,8 @@ impl<'a> Geo<'a> {
                 GeoAnswer::Unknown(format!(
                     "the geometric search did not decide ({}; {} box(es) searched in {:.1} s, {} left, e.g. {})",
                     match why {
-                        bnb::UnknownWhy::Resolution => "boxes at the resolution limit touch or are too close to call".to_string(),
+                        bnb::UnknownWhy::Resolution =>
+                            "boxes at the resolution limit touch or are too close to call".to_string(),
                         bnb::UnknownWhy::Nodes(n) => format!("{n} boxes searched"),
                         bnb::UnknownWhy::Deadline => "time limit reached".to_string(),
                         bnb::UnknownWhy::BadBox => "the search box is malformed".to_string(),
@@ -690,7 +715,13 @@ impl<'a> Geo<'a> {
         } else {
             let mut insts = Vec::new();
             let clocks: Vec<Real> = (0..self.runs.iter().map(|r| r.clock + 1).max().unwrap_or(1))
-                .map(|k| q.enc.named_real(if self.runs.iter().any(|r| r.clock == 1) { ["time 1", "time 2"][k.min(1)] } else { "time" }))
+                .map(|k| {
+                    q.enc.named_real(if self.runs.iter().any(|r| r.clock == 1) {
+                        ["time 1", "time 2"][k.min(1)]
+                    } else {
+                        "time"
+                    })
+                })
                 .collect();
             for r in &self.runs {
                 let seeds = seeds_of(prog, &[(r.role, r.app.clone())]);
@@ -826,8 +857,9 @@ impl Scene for Geo<'_> {
     fn feasible(&self, lo: &[f64], hi: &[f64]) -> Feasible {
         let Some((lo, hi)) = self.contract(lo, hi) else { return Feasible::No };
         let (lo, hi) = (&lo[..], &hi[..]);
-        let check =
-            |e: &Expr, run: usize, role: RoleId| truth(self.prog, e, &|v: &Var| self.var_range(run, role, v, Some((lo, hi))));
+        let check = |e: &Expr, run: usize, role: RoleId| {
+            truth(self.prog, e, &|v: &Var| self.var_range(run, role, v, Some((lo, hi))))
+        };
         for (k, r) in self.runs.iter().enumerate() {
             if self.initial {
                 // The start state: the context (over `Role` variables) with the box.
@@ -897,4 +929,98 @@ impl Scene for Geo<'_> {
         let hull = if p.piece.solid.is_hull { " (hull)" } else { "" };
         format!("{}'s {}{hull}", owner, p.piece.solid.name)
     }
+}
+
+/// The least distance between two participants (or a participant and an obstacle) over
+/// the joint motions where they move together, from `--clearance`.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct PairClearance {
+    pub a: String,
+    pub b: String,
+    /// Certified: their bodies are never closer (m).
+    pub lower: f64,
+    /// Attained at `time` of the motion at `span`, with the two closest points (m).
+    pub upper: f64,
+    pub time: Option<f64>,
+    pub points: Option<[[f64; 3]; 2]>,
+    #[serde(skip)]
+    pub span: crate::source::Span,
+    /// Why the bounds stay apart, when they do (a budget, boxes at the resolution).
+    pub note: Option<String>,
+}
+
+/// For each pair of participants that move together in a joint motion with bodies (and
+/// each participant against each obstacle), the least distance between their bodies over
+/// every such motion, at every time and state the contracts allow: a certified lower
+/// bound and a configuration attaining an upper bound within `tolerance` (m).
+pub fn clearances(prog: &Program, obligations: &[Obligation], tolerance: f64, limit: Duration) -> Vec<PairClearance> {
+    let Some(world) = prog.world.as_deref() else { return Vec::new() };
+    let _consts = bounds::ConstCache::new();
+    let mut best: Vec<PairClearance> = Vec::new();
+    for ob in obligations {
+        let Goal::Compatible { parts } = &ob.goal else { continue };
+        let mut questions: Vec<(Vec<Run>, [Who; 2], String, String)> = Vec::new();
+        let has_body = |r: RoleId| !world.kinds[prog.role(r).kind.idx()].is_empty();
+        for i in 0..parts.len() {
+            let a = parts[i].0;
+            if !has_body(a) {
+                continue;
+            }
+            for j in i + 1..parts.len() {
+                let b = parts[j].0;
+                let attached =
+                    prog.carriers(a).iter().any(|m| m.carrier == b) || prog.carriers(b).iter().any(|m| m.carrier == a);
+                if !has_body(b) || attached {
+                    continue;
+                }
+                let mut runs = vec![run(&parts[i], &ob.hyps, 0), run(&parts[j], &ob.hyps, 0)];
+                runs.extend(carrier_runs(prog, parts, &[a, b], &ob.hyps));
+                questions.push((runs, [Who::Run(0), Who::Run(1)], prog.role_name(a).into(), prog.role_name(b).into()));
+            }
+            for (o, obstacle) in prog.obstacles.iter().enumerate() {
+                let mut runs = vec![run(&parts[i], &ob.hyps, 0)];
+                runs.extend(carrier_runs(prog, parts, &[a], &ob.hyps));
+                questions.push((runs, [Who::Run(0), Who::Obstacle(o)], prog.role_name(a).into(), obstacle.name.clone()));
+            }
+        }
+        for (runs, who, a, b) in questions {
+            let found = match Geo::new(prog, world, ob, runs, who, Mode::Bodies) {
+                Ok(geo) => {
+                    let n = geo.dims.len();
+                    let res: Vec<f64> = (0..n).map(|i| ((geo.root.hi[i] - geo.root.lo[i]) * 1e-4).max(1e-6)).collect();
+                    let mut opts = Options::new(res);
+                    opts.deadline = Some(Instant::now() + limit);
+                    opts.max_nodes = 400_000;
+                    let c = bnb::min_distance(&geo, &geo.root, tolerance, &opts);
+                    let time = c.at_q.as_ref().and_then(|q| geo.dims.iter().position(|d| *d == Dim::Clock(0)).map(|i| q[i]));
+                    PairClearance {
+                        a: a.clone(),
+                        b: b.clone(),
+                        lower: c.lower,
+                        upper: c.upper,
+                        time,
+                        points: c.points,
+                        span: ob.span,
+                        note: (!c.complete).then(|| "the bounds did not meet within the budget".to_string()),
+                    }
+                }
+                Err(why) => PairClearance {
+                    a: a.clone(),
+                    b: b.clone(),
+                    lower: f64::NEG_INFINITY,
+                    upper: f64::INFINITY,
+                    time: None,
+                    points: None,
+                    span: ob.span,
+                    note: Some(why),
+                },
+            };
+            match best.iter_mut().find(|p| p.a == found.a && p.b == found.b) {
+                Some(p) if found.lower < p.lower || (found.lower == p.lower && found.upper < p.upper) => *p = found,
+                Some(_) => {}
+                None => best.push(found),
+            }
+        }
+    }
+    best
 }

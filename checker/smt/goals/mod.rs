@@ -15,7 +15,7 @@ mod agcomp;
 mod boxes;
 mod candidate;
 mod frames;
-pub(crate) mod geo;
+pub mod geo;
 mod motion;
 mod query;
 mod refine;
