@@ -393,6 +393,12 @@ impl ConstCache {
     }
 }
 
+impl Default for ConstCache {
+    fn default() -> ConstCache {
+        ConstCache::new()
+    }
+}
+
 impl Drop for ConstCache {
     fn drop(&mut self) {
         CONSTS.with(|c| *c.borrow_mut() = None);

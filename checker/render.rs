@@ -277,7 +277,12 @@ pub fn clearance_text(db: &SourceDb, pairs: &[crate::smt::goals::geo::PairCleara
             if let Some([a, b]) = p.points {
                 line.push_str(&format!(
                     " between ({}, {}, {}) and ({}, {}, {})",
-                    m(a[0]), m(a[1]), m(a[2]), m(b[0]), m(b[1]), m(b[2])
+                    m(a[0]),
+                    m(a[1]),
+                    m(a[2]),
+                    m(b[0]),
+                    m(b[1]),
+                    m(b[2])
                 ));
             }
         }
@@ -791,11 +796,27 @@ mod tests {
 
     #[test]
     fn details_read_as_the_table_shows_them() {
-        let ob =
-            Detail::Obligations { total: 11, queries: 18, cached: 5, folded: 2, geometric: 0, failed: 0, undecided: 0, vacuous: 0 };
+        let ob = Detail::Obligations {
+            total: 11,
+            queries: 18,
+            cached: 5,
+            folded: 2,
+            geometric: 0,
+            failed: 0,
+            undecided: 0,
+            vacuous: 0,
+        };
         assert_eq!(ob.to_string(), "11 obligation(s), 18 queries (5 cached), 2 without Z3");
-        let ob =
-            Detail::Obligations { total: 1, queries: 1, cached: 0, folded: 0, geometric: 0, failed: 1, undecided: 2, vacuous: 3 };
+        let ob = Detail::Obligations {
+            total: 1,
+            queries: 1,
+            cached: 0,
+            folded: 0,
+            geometric: 0,
+            failed: 1,
+            undecided: 2,
+            vacuous: 3,
+        };
         assert_eq!(ob.to_string(), "1 obligation(s), 1 query, 1 failed, 2 undecided, 3 held vacuously");
         assert_eq!(Detail::None.to_string(), "");
         assert_eq!(Detail::Errors(2).to_string(), "2 error(s)");

@@ -846,3 +846,26 @@ fn projecting_a_library_says_it_is_one() {
     let e = stderr(&o);
     assert!(e.contains("is a library") && e.contains("mochi check"), "{e}");
 }
+
+// ---- clearance (issue 9) --------------------------------------------------------------
+
+/// `--clearance` lists the least distance between the cart and the bridge it passes under:
+/// the deck is 3 cm above the cart's top (bridge.chor's header), so the certified lower
+/// bound lies within the tolerance (1 mm) below 0.03 and the attained distance at 0.03.
+#[test]
+fn clearance_lists_the_least_distance_of_each_pair() {
+    let o = mochi(&["check", "--clearance", "choreographies/bridge.chor"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
+    let out = stdout(&o);
+    let line = out.lines().find(|l| l.trim_start().starts_with("Cart - Bridge: at least ")).expect(&out);
+    let num = |after: &str| -> f64 {
+        let rest = &line[line.find(after).expect(line) + after.len()..];
+        rest.split([',', ' ']).next().unwrap().parse().expect(line)
+    };
+    let (lower, upper) = (num("at least "), num(", "));
+    assert!((0.029..=0.030).contains(&lower), "{line}");
+    assert!((lower..=0.0301).contains(&upper), "{line}");
+    let j = mochi(&["check", "--clearance", "--format", "json", "choreographies/bridge.chor"]);
+    let v: serde_json::Value = serde_json::from_str(&stdout(&j)).expect("json");
+    assert_eq!(v["clearance"][0]["b"], "Bridge", "{v}");
+}
