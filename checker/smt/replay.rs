@@ -67,34 +67,13 @@ pub fn refutes(prog: &Program, ob: &Obligation, part: &Part, m: &Valuation) -> O
                 .then(|| format!("the precondition of `{}` holds under it", prim.name))
         }),
         (Goal::Compatible { parts }, Part::Disjoint(i, j)) => false_hyp(&ob.hyps).or_else(|| {
-            let point = ["point.x", "point.y", "point.z"].map(|n| m.get(n).and_then(|v| v.num().ok().cloned()));
-            let [Some(px), Some(py), Some(pz)] = point else { return None };
-            let world = [px, py, pz];
-            for k in [*i, *j] {
-                let (r, app) = parts.get(k)?;
-                let prim = prog.prim(app.prim);
-                let fp = prim.footprint.as_ref()?;
-                let local = to_local(prog, *r, &world)?;
-                let args = app.args.iter().map(|a| exact::eval(prog, a, &shared).ok()).collect::<Vec<_>>();
-                let env = frame(prog, *r, m, Some("t"), &args, Some(local));
-                if exact::holds(prog, &fp.pred, &env) == Tri::False {
-                    return Some(format!("its point is not in the footprint of `{}`", prim.name));
-                }
-            }
-            None
+            let world = model_point(m)?;
+            [*i, *j].iter().find_map(|k| outside_footprint(prog, m, parts.get(*k)?, &world))
         }),
         (Goal::Compatible { parts }, Part::ClearOf { i, o }) => false_hyp(&ob.hyps).or_else(|| {
-            let point = ["point.x", "point.y", "point.z"].map(|n| m.get(n).and_then(|v| v.num().ok().cloned()));
-            let [Some(px), Some(py), Some(pz)] = point else { return None };
-            let world = [px, py, pz];
-            let (r, app) = parts.get(*i)?;
-            let prim = prog.prim(app.prim);
-            let fp = prim.footprint.as_ref()?;
-            let local = to_local(prog, *r, &world)?;
-            let args = app.args.iter().map(|a| exact::eval(prog, a, &shared).ok()).collect::<Vec<_>>();
-            let env = frame(prog, *r, m, Some("t"), &args, Some(local));
-            if exact::holds(prog, &fp.pred, &env) == Tri::False {
-                return Some(format!("its point is not in the footprint of `{}`", prim.name));
+            let world = model_point(m)?;
+            if let Some(why) = outside_footprint(prog, m, parts.get(*i)?, &world) {
+                return Some(why);
             }
             let obstacle = prog.obstacles.get(*o)?;
             let region = crate::space::region::obstacle_region(prog, obstacle)?;
@@ -116,6 +95,31 @@ pub fn refutes(prog: &Program, ob: &Obligation, part: &Part, m: &Valuation) -> O
         (Goal::Separated { sides }, Part::InRegion { a, ra }) => false_hyp(&sides.get(*a)?.runs.get(*ra)?.hyps),
         _ => false_hyp(&ob.hyps),
     }
+}
+
+/// The world point of an overlap in the model (`point.x`, `point.y`, `point.z`).
+fn model_point(m: &Valuation) -> Option<[Num; 3]> {
+    let point = ["point.x", "point.y", "point.z"].map(|n| m.get(n).and_then(|v| v.num().ok().cloned()));
+    let [Some(px), Some(py), Some(pz)] = point else { return None };
+    Some([px, py, pz])
+}
+
+/// Why the model refutes "the world point is in the footprint of `app` run by `r` at time
+/// `t`", if it does (the footprint is false there, exactly).
+fn outside_footprint(
+    prog: &Program,
+    m: &Valuation,
+    (r, app): &(RoleId, crate::hir::PrimApp),
+    world: &[Num; 3],
+) -> Option<String> {
+    let shared = |v: &Var| shared_var(prog, v, m);
+    let prim = prog.prim(app.prim);
+    let fp = prim.footprint.as_ref()?;
+    let local = to_local(prog, *r, world)?;
+    let args = app.args.iter().map(|a| exact::eval(prog, a, &shared).ok()).collect::<Vec<_>>();
+    let env = frame(prog, *r, m, Some("t"), &args, Some(local));
+    (exact::holds(prog, &fp.pred, &env) == Tri::False)
+        .then(|| format!("its point is not in the footprint of `{}`", prim.name))
 }
 
 /// A variable of the shared vocabulary, named as the encoder names it.
