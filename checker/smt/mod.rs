@@ -454,7 +454,14 @@ impl Worker<'_> {
                         continue;
                     }
                     let which = Some(part.clone());
-                    let part = describe(self.prog, ob, part);
+                    // Say which engine found it: Z3's model, or the geometric procedure's
+                    // contact (parry, at a configuration a Z3 model of the contracts gave).
+                    let engine = if goals::geo::applies(self.prog, ob, part) {
+                        " [found by the geometric procedure: parry's contact at a state and time Z3 showed the contracts allow]"
+                    } else {
+                        ""
+                    };
+                    let part = format!("{}{engine}", describe(self.prog, ob, part));
                     return (Decision::Fails(Failure { part, which, values, overlap, bound }), stats);
                 }
                 Answer::Unknown(why) => {
