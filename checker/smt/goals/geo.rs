@@ -81,7 +81,7 @@ pub(crate) fn applies(prog: &Program, ob: &Obligation, part: &Part) -> bool {
         (Goal::InitiallyDisjoint { firsts }, Part::InitiallyApart { r, s }) => [r, s].iter().any(|k| {
             let (role, _) = &firsts[**k];
             prog.role(*role).mounted_on.is_some()
-                || world.kinds.get(prog.role(*role).kind.idx()).is_some_and(|p| World::has_solid_only(p))
+                || world.kinds.get(prog.role(*role).kind.idx()).is_some_and(|p| World::needs_solids(p))
         }),
         _ => false,
     }
@@ -95,7 +95,7 @@ pub(crate) fn decide(prog: &Program, ob: &Obligation, part: &Part, limit: Durati
             let (a, b) = (parts[*i].0, parts[*j].0);
             // A mounted robot and its carrier are attached at the mount, like two links of
             // one robot: their mutual clearance is not a question of the protocol.
-            if prog.carriers(a).iter().any(|m| m.carrier == b) || prog.carriers(b).iter().any(|m| m.carrier == a) {
+            if attached(prog, a, b) {
                 return GeoAnswer::Apart;
             }
             let mut runs = vec![run(&parts[*i], &ob.hyps, 0), run(&parts[*j], &ob.hyps, 0)];
@@ -116,6 +116,10 @@ pub(crate) fn decide(prog: &Program, ob: &Obligation, part: &Part, limit: Durati
             Geo::new(prog, world, ob, runs, [Who::Run(0), Who::Run(1)], Mode::Footprints)
         }
         (Goal::InitiallyDisjoint { firsts }, Part::InitiallyApart { r, s }) => {
+            // [T-SESS] between a mounted robot and its carrier: attached, as above.
+            if attached(prog, firsts[*r].0, firsts[*s].0) {
+                return GeoAnswer::Apart;
+            }
             let first = |k: usize| firsts[k].1.first().cloned();
             let (Some(ar), Some(as_)) = (first(*r), first(*s)) else {
                 return GeoAnswer::Unknown("a participant with no first motion".into());
@@ -133,6 +137,11 @@ pub(crate) fn decide(prog: &Program, ob: &Obligation, part: &Part, limit: Durati
         Err(why) => return GeoAnswer::Unknown(why),
     };
     geo.solve(limit)
+}
+
+/// Whether one of `a`, `b` rides (directly or through other carriers) on the other.
+fn attached(prog: &Program, a: RoleId, b: RoleId) -> bool {
+    prog.carriers(a).iter().any(|m| m.carrier == b) || prog.carriers(b).iter().any(|m| m.carrier == a)
 }
 
 /// The parts of the same joint motion that carry one of `roles`: their guarantees say
@@ -218,7 +227,13 @@ struct Geo<'a> {
     sides: [Vec<Placed<'a>>; 2],
     /// [T-SESS]: the state is the start state.
     initial: bool,
+    /// The last box contracted and its result: the search asks `feasible` and then
+    /// `motion_bound` of the same box.
+    contracted: std::cell::RefCell<Option<Contracted>>,
 }
+
+/// A box `(lo, hi)` and its contraction (`None`: empty).
+type Contracted = ((Vec<f64>, Vec<f64>), Option<(Vec<f64>, Vec<f64>)>);
 
 impl<'a> Geo<'a> {
     fn new(
@@ -318,6 +333,7 @@ impl<'a> Geo<'a> {
             carrier: HashMap::new(),
             sides,
             initial,
+            contracted: std::cell::RefCell::new(None),
         };
         geo.layout()?;
         Ok(geo)
@@ -662,6 +678,17 @@ impl<'a> Geo<'a> {
     /// the box that satisfies the constraints lies in the narrowed box. `None` when it is
     /// empty (no configuration of the box satisfies them).
     fn contract(&self, lo: &[f64], hi: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
+        if let Some(((l, h), got)) = self.contracted.borrow().as_ref() {
+            if l == lo && h == hi {
+                return got.clone();
+            }
+        }
+        let got = self.contract_uncached(lo, hi);
+        *self.contracted.borrow_mut() = Some(((lo.to_vec(), hi.to_vec()), got.clone()));
+        got
+    }
+
+    fn contract_uncached(&self, lo: &[f64], hi: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
         let (mut lo, mut hi) = (lo.to_vec(), hi.to_vec());
         if self.initial {
             return Some((lo, hi));
@@ -971,9 +998,7 @@ pub fn clearances(prog: &Program, obligations: &[Obligation], tolerance: f64, li
             }
             for j in i + 1..parts.len() {
                 let b = parts[j].0;
-                let attached =
-                    prog.carriers(a).iter().any(|m| m.carrier == b) || prog.carriers(b).iter().any(|m| m.carrier == a);
-                if !has_body(b) || attached {
+                if !has_body(b) || attached(prog, a, b) {
                     continue;
                 }
                 let mut runs = vec![run(&parts[i], &ob.hyps, 0), run(&parts[j], &ob.hyps, 0)];
@@ -1078,5 +1103,58 @@ mod tests {
         let (v, codes) = panda_and_pillar("0.2");
         assert_eq!(v, Verdict::Rejected);
         assert_eq!(codes, vec![Code::ObstacleHit]);
+    }
+}
+
+#[cfg(test)]
+mod mount_tests {
+    use crate::diag::Code;
+    use crate::driver::{Config, Verdict};
+
+    /// A sled slides from x = 0 to 1 (a 0.5 m box at `pose(x, 0, 0)`) carrying a rider, a
+    /// 0.1 m ball on its deck `mount deck: pose(x + off, 0, 0.1)`. A pillar (radius 0.1)
+    /// stands at x = 1.5. The rider reaches x = 1 + off + 0.1, the pillar's face is 1.4:
+    /// clear for off = 0.1, touching for off = 0.4. The rider's own `at:` is the identity,
+    /// so an encoding that placed it by `at:` alone (ignoring the carrier) would see it at
+    /// the origin and pass both.
+    fn ride(off: &str, footprint: &str) -> (Verdict, Vec<Code>) {
+        let src = format!(
+            "robot Sled {{ state x: real; geometry: box(0.5, 0.4, 0.1) at pose(x, 0, 0);
+               mount deck: pose(x + {off}, 0, 0.1); invariant: -5 <= x <= 5; }}
+             robot Rider {{ state s: real; geometry: sphere(0.1) at pose(0, 0, 0.1); invariant: 0 <= s <= 1; }}
+             motion Sled.slide(xf: real) {{ interruptible: false; pre: x < xf; guarantee: old(x) <= x <= xf;
+               post: x == xf; footprint: geometry; duration: [2, 2]; }}
+             motion Rider.sit {{ interruptible: true; guarantee: s == old(s); post: s == old(s);
+               {footprint}; duration: [0, inf]; }}
+             system S {{
+               participant C: Sled {{ init: x == 0; }}
+               participant R: Rider {{ init: s == 0; on: C.deck; }}
+               obstacle Pillar {{ geometry: cylinder(0.1, 2); at: pose(1.5, 0, 0); }}
+             }}
+             choreography S = dt<C: slide(1), R: sit>. end;
+             process C = dt<slide(1)>.end;
+             process R = dt<sit>.end;"
+        );
+        let mut db = crate::source::SourceDb::new();
+        let r = crate::fsload::check_source(&mut db, "mount-test.chor", &src, &Config::default());
+        (r.verdict, r.diagnostics.iter().filter(|d| d.is_error()).map(|d| d.code).collect())
+    }
+
+    #[test]
+    fn a_mounted_body_is_placed_through_its_carrier() {
+        assert_eq!(ride("0.1", "footprint: geometry"), (Verdict::Verified, vec![]));
+        assert_eq!(ride("0.4", "footprint: geometry"), (Verdict::Rejected, vec![Code::ObstacleHit]));
+    }
+
+    /// A predicate footprint of a mounted participant cannot be placed through the carrier
+    /// by the geometric procedure: never verified (it was verified when the Z3 encoding
+    /// placed the rider by its `at:` alone).
+    #[test]
+    fn a_mounted_predicate_footprint_is_never_passed() {
+        let fp = "footprint(px, py, pz): px^2 + py^2 + (pz - 0.1)^2 <= 0.01";
+        let (v, _) = ride("0.4", fp);
+        assert_ne!(v, Verdict::Verified);
+        let (v, _) = ride("0.1", fp);
+        assert_ne!(v, Verdict::Verified);
     }
 }
