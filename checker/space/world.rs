@@ -62,8 +62,9 @@ impl std::fmt::Debug for World {
 }
 
 impl World {
-    /// Whether a piece of the body is a URDF link or a mesh (no predicate exists for it).
-    pub fn has_solid_only(pieces: &[Piece]) -> bool {
+    /// Whether some piece is a URDF link or a mesh hull: no predicate exists for the body,
+    /// only solids.
+    pub fn needs_solids(pieces: &[Piece]) -> bool {
         pieces.iter().any(|p| p.link.is_some() || p.solid.is_hull)
     }
 }

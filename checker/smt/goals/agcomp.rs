@@ -39,10 +39,7 @@ pub(super) fn plan(prog: &Program, hyps: &[Expr], parts: &[(RoleId, PrimApp)]) -
     }
     // A part with no footprint may occupy all space and meets every other footprint.
     if parts.len() > 1 {
-        if let Some(who) = parts
-            .iter()
-            .find(|(_, app)| prog.prim(app.prim).footprint.is_none() && prog.prim(app.prim).footprint_body.is_none())
-        {
+        if let Some(who) = without_footprint(prog, parts) {
             return Plan::Fails(format!(
                 "`{}` of `{}` declares no footprint, so it may occupy all space and meets every other footprint",
                 prog.prim(who.1.prim).name,
@@ -60,10 +57,7 @@ pub(super) fn plan(prog: &Program, hyps: &[Expr], parts: &[(RoleId, PrimApp)]) -
     // Every part against every static obstacle, at every time: the obstacle is there
     // whatever the protocol does. Pairs whose boxes are apart need no query.
     if !prog.obstacles.is_empty() {
-        if let Some(who) = parts
-            .iter()
-            .find(|(_, app)| prog.prim(app.prim).footprint.is_none() && prog.prim(app.prim).footprint_body.is_none())
-        {
+        if let Some(who) = without_footprint(prog, parts) {
             return Plan::Fails(format!(
                 "`{}` of `{}` declares no footprint, so it may occupy all space and meets every obstacle",
                 prog.prim(who.1.prim).name,
@@ -260,6 +254,14 @@ pub(super) fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], pa
         _ => return Err(Unsupported("an [AGCOMP] obligation split into a part of another kind".into())),
     }
     Ok(())
+}
+
+/// A part whose primitive declares no footprint at all (neither a predicate nor a body):
+/// it may occupy all space.
+fn without_footprint<'p>(prog: &Program, parts: &'p [(RoleId, PrimApp)]) -> Option<&'p (RoleId, PrimApp)> {
+    parts
+        .iter()
+        .find(|(_, app)| prog.prim(app.prim).footprint.is_none() && prog.prim(app.prim).footprint_body.is_none())
 }
 
 /// A world box around a static obstacle (its region's point box: constants only), or
