@@ -28,6 +28,7 @@
 
 pub mod bounds;
 pub mod diag;
+pub mod dialect;
 pub mod driver;
 pub mod exact;
 pub mod fsload;
