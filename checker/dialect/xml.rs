@@ -110,16 +110,24 @@ struct Reader<'l> {
     entry_at: FxHashMap<String, (usize, usize, Origin)>,
 }
 
-/// One file being read: its name and document, for positions.
-struct File<'a, 'input> {
+/// One file being read: its name, text and where its lines start, for positions.
+struct File<'a> {
     name: &'a str,
-    doc: &'a roxmltree::Document<'input>,
+    text: &'a str,
+    /// The byte offset of each line's start.
+    lines: Vec<usize>,
 }
 
-impl File<'_, '_> {
+impl File<'_> {
+    /// The 1-based line and column (in characters, as roxmltree counts them) of a byte
+    /// offset: a binary search over the line starts (roxmltree's `text_pos_at` scans from
+    /// the start of the text, which made reading common.xml quadratic).
     fn origin(&self, at: usize) -> Origin {
-        let p = self.doc.text_pos_at(at);
-        Origin { file: self.name.to_string(), line: p.row, col: p.col }
+        let at = at.min(self.text.len());
+        let line = self.lines.partition_point(|&s| s <= at).max(1);
+        let start = self.lines[line - 1];
+        let col = self.text.get(start..at).map_or(0, |t| t.chars().count()) + 1;
+        Origin { file: self.name.to_string(), line: line as u32, col: col as u32 }
     }
 
     fn err<T>(&self, at: usize, message: String) -> Result<T, DialectError> {
@@ -261,13 +269,12 @@ impl Reader<'_> {
                 });
             }
         };
-        let f = File { name, doc: &doc };
+        let lines = std::iter::once(0).chain(text.match_indices('\n').map(|(i, _)| i + 1)).collect();
+        let f = File { name, text: &text, lines };
         let root = doc.root_element();
         if !root.has_tag_name("mavlink") {
-            return f.err(
-                root.range().start,
-                format!("the root element is <{}>, not <mavlink>", root.tag_name().name()),
-            );
+            return f
+                .err(root.range().start, format!("the root element is <{}>, not <mavlink>", root.tag_name().name()));
         }
         for inc in root.children().filter(|c| c.has_tag_name("include")) {
             let target = text_of(inc);
@@ -290,7 +297,7 @@ impl Reader<'_> {
         Ok(())
     }
 
-    fn enum_(&mut self, f: &File<'_, '_>, node: roxmltree::Node<'_, '_>) -> Result<(), DialectError> {
+    fn enum_(&mut self, f: &File<'_>, node: roxmltree::Node<'_, '_>) -> Result<(), DialectError> {
         let name = f.required(node, "name")?;
         let bitmask = f.flag(node, "bitmask")?;
         let at = f.origin(node.range().start);
@@ -322,10 +329,7 @@ impl Reader<'_> {
                 return f.err(
                     x.range().start,
                     if i == ei {
-                        format!(
-                            "enum entry {} is defined again with different content (first at {first})",
-                            entry.name
-                        )
+                        format!("enum entry {} is defined again with different content (first at {first})", entry.name)
                     } else {
                         format!(
                             "enum entry {} of {name} is also an entry of {} (at {first}): entry names must be \
@@ -342,7 +346,7 @@ impl Reader<'_> {
         Ok(())
     }
 
-    fn message(&mut self, f: &File<'_, '_>, node: roxmltree::Node<'_, '_>) -> Result<(), DialectError> {
+    fn message(&mut self, f: &File<'_>, node: roxmltree::Node<'_, '_>) -> Result<(), DialectError> {
         let name = f.required(node, "name")?;
         let id_text = f.required(node, "id")?;
         let id = match id_text.trim().parse::<u32>() {
@@ -411,7 +415,7 @@ impl Reader<'_> {
 }
 
 /// One `<entry>`.
-fn entry(f: &File<'_, '_>, node: roxmltree::Node<'_, '_>) -> Result<Entry, DialectError> {
+fn entry(f: &File<'_>, node: roxmltree::Node<'_, '_>) -> Result<Entry, DialectError> {
     let name = f.required(node, "name")?;
     let value = match node.attribute("value") {
         None => {
@@ -439,10 +443,7 @@ fn entry(f: &File<'_, '_>, node: roxmltree::Node<'_, '_>) -> Result<Entry, Diale
         let index = match index_text.trim().parse::<u8>() {
             Ok(i) if (1..=7).contains(&i) => i,
             _ => {
-                return f.err(
-                    f.attr_at(p, "index"),
-                    format!("{name}: param index `{index_text}` is not one of 1..=7"),
-                )
+                return f.err(f.attr_at(p, "index"), format!("{name}: param index `{index_text}` is not one of 1..=7"))
             }
         };
         if params.iter().any(|q| q.index == index) {
