@@ -14,8 +14,9 @@
 //! The API: [`builtin`] and [`builtin_names`] for the bundled dialects, [`parse`] for a
 //! definition tree given by a loader (its errors are [`DialectError`]s with a position),
 //! the lookups [`Dialect::message`], [`Dialect::message_by_id`], [`Dialect::enum_`],
-//! [`Dialect::entry`], [`Message::field`], [`Entry::param_by_name`], the wire types'
-//! ranges ([`Wire::int_range`]) and [`suggest`] for "did you mean" hints.
+//! [`Dialect::entry`], [`Message::field`], [`Entry::param_by_name`], [`command_field`] (the
+//! payload names of `COMMAND_LONG[CMD]`), the wire types' ranges ([`Wire::int_range`]) and
+//! [`suggest`] for "did you mean" hints.
 
 mod builtin;
 mod xml;
@@ -446,6 +447,62 @@ impl Dialect {
     /// the constants `has_flag` is meant for.
     pub fn is_flag(&self, entry: &str) -> bool {
         self.entry(entry).is_some_and(|(e, x)| e.bitmask && x.is_single_bit())
+    }
+}
+
+/// What a payload name of `COMMAND_LONG[CMD](...)` / `COMMAND_INT[CMD](...)` addresses: see
+/// [`command_field`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum CommandField<'a> {
+    /// A field of the message; `param` is the command's parameter it carries, if the field
+    /// is one of the message's parameter fields and the XML describes that parameter (its
+    /// label, enum, units, range, `reserved`).
+    Field { field: &'a Field, param: Option<&'a CmdParam> },
+    /// The name is both a field of the message and the label of a parameter carried by
+    /// another field (`frame` of COMMAND_INT and param2 "Frame" of MAV_CMD_DO_CHANGE_ALTITUDE;
+    /// `command` of COMMAND_LONG and param1 "command" of ardupilotmega's
+    /// MAV_CMD_NAV_SCRIPT_TIME): the writer must say `param<i>` or use another name.
+    Ambiguous { field: &'a Field, param: &'a CmdParam },
+    /// Neither a field of the message nor a parameter of the command.
+    Unknown,
+}
+
+/// The field of `message` (COMMAND_LONG, COMMAND_INT) that carries parameter `index` (1..=7)
+/// of a command: `param<i>`, and in COMMAND_INT, whose parameters 5 to 7 are the integer
+/// fields `x`, `y`, `z`, those.
+pub fn param_field(message: &Message, index: u8) -> Option<&Field> {
+    message.field(&format!("param{index}")).or_else(|| match index {
+        5..=7 => message.field(["x", "y", "z"][usize::from(index - 5)]),
+        _ => None,
+    })
+}
+
+/// Resolves `name` in the payload of `message` sent as command `command` (a `MAV_CMD`
+/// entry), as `COMMAND_LONG[MAV_CMD_DO_PARACHUTE](action {...})` reads: a field of the
+/// message by its own name (`target_system`, `param1`, `x`), or a parameter by
+/// [`Entry::param_by_name`] (its label in snake case, or `param<i>`) mapped to the field that
+/// carries it ([`param_field`]). A name that is a field and also another parameter's label is
+/// [`CommandField::Ambiguous`], never silently one of them (the two differ in type and
+/// meaning: COMMAND_INT's `frame` is a MAV_FRAME byte, DO_CHANGE_ALTITUDE's param2 a float).
+pub fn command_field<'a>(message: &'a Message, command: &'a Entry, name: &str) -> CommandField<'a> {
+    let carried = |field: &Field| (1..=7).find(|&i| param_field(message, i).is_some_and(|f| std::ptr::eq(f, field)));
+    match (message.field(name), command.param_by_name(name)) {
+        (Some(field), Some(param)) => {
+            if carried(field) == Some(param.index) {
+                CommandField::Field { field, param: Some(param) }
+            } else {
+                CommandField::Ambiguous { field, param }
+            }
+        }
+        (Some(field), None) => {
+            let param = carried(field).and_then(|i| command.params.iter().find(|p| p.index == i));
+            CommandField::Field { field, param }
+        }
+        (None, Some(param)) => match param_field(message, param.index) {
+            Some(field) => CommandField::Field { field, param: Some(param) },
+            None => CommandField::Unknown,
+        },
+        (None, None) => CommandField::Unknown,
     }
 }
 

@@ -157,6 +157,59 @@ fn command_parameters() {
     }
 }
 
+#[test]
+fn command_payload_names() {
+    let d = common();
+    let long = d.message("COMMAND_LONG").unwrap();
+    let int = d.message("COMMAND_INT").unwrap();
+    let (_, chute) = d.entry("MAV_CMD_DO_PARACHUTE").unwrap();
+    let field_param = |c: CommandField<'_>| match c {
+        CommandField::Field { field, param } => Some((field.name.clone(), param.map(|p| p.index))),
+        _ => None,
+    };
+    assert_eq!(field_param(command_field(long, chute, "action")), Some(("param1".into(), Some(1))));
+    assert_eq!(field_param(command_field(long, chute, "param1")), Some(("param1".into(), Some(1))));
+    assert_eq!(field_param(command_field(long, chute, "target_system")), Some(("target_system".into(), None)));
+    assert_eq!(field_param(command_field(int, chute, "action")), Some(("param1".into(), Some(1))));
+    assert_eq!(command_field(long, chute, "nope"), CommandField::Unknown);
+    assert_eq!(command_field(long, chute, "x"), CommandField::Unknown, "COMMAND_LONG has no x");
+    // COMMAND_INT carries params 5..7 in x, y, z: NAV_ROI's labels X, Y, Z name those fields.
+    let (_, roi) = d.entry("MAV_CMD_NAV_ROI").unwrap();
+    assert_eq!(field_param(command_field(int, roi, "x")), Some(("x".into(), Some(5))));
+    assert_eq!(field_param(command_field(int, roi, "param7")), Some(("z".into(), Some(7))));
+    assert_eq!(field_param(command_field(long, roi, "x")), Some(("param5".into(), Some(5))));
+    // DO_CHANGE_ALTITUDE's param2 is labelled Frame, and COMMAND_INT has a field frame.
+    let (_, alt) = d.entry("MAV_CMD_DO_CHANGE_ALTITUDE").unwrap();
+    assert!(matches!(command_field(int, alt, "frame"), CommandField::Ambiguous { field, param }
+        if field.name == "frame" && param.index == 2));
+    assert_eq!(field_param(command_field(long, alt, "frame")), Some(("param2".into(), Some(2))));
+    assert_eq!(field_param(command_field(int, alt, "param2")), Some(("param2".into(), Some(2))));
+    // Every clash in the bundled dialects is one of these, or the same field (x, y, z).
+    let mut clashes = Vec::new();
+    for d in [common(), apm()] {
+        for m in [d.message("COMMAND_LONG").unwrap(), d.message("COMMAND_INT").unwrap()] {
+            for x in &d.enum_("MAV_CMD").unwrap().entries {
+                for (n, _) in x.param_names() {
+                    if let CommandField::Ambiguous { .. } = command_field(m, x, &n) {
+                        clashes.push(format!("{} {} {} {n}", d.name, m.name, x.name));
+                    }
+                }
+            }
+        }
+    }
+    assert_eq!(
+        clashes,
+        [
+            "common COMMAND_INT MAV_CMD_DO_CHANGE_ALTITUDE frame",
+            "common COMMAND_INT MAV_CMD_OVERRIDE_GOTO frame",
+            "ardupilotmega COMMAND_LONG MAV_CMD_NAV_SCRIPT_TIME command",
+            "ardupilotmega COMMAND_INT MAV_CMD_DO_CHANGE_ALTITUDE frame",
+            "ardupilotmega COMMAND_INT MAV_CMD_OVERRIDE_GOTO frame",
+            "ardupilotmega COMMAND_INT MAV_CMD_NAV_SCRIPT_TIME command",
+        ]
+    );
+}
+
 /// MAVLink's CRC_EXTRA of a message: X.25 CRC over the name and the non-extension fields in
 /// wire order (sorted by element size, largest first, stably), each as `type name ` and, for
 /// arrays, the length as a byte; folded to one byte. It depends on every field's name, type,
