@@ -42,9 +42,10 @@ pub fn builtin_names() -> &'static [&'static str] {
 /// bundled file reads without error (a unit test checks each): a failure to read one would
 /// be a defect of the bundle and also gives `None`, never a panic.
 ///
-/// Cost of the first call, measured in a release build on the development machine:
-/// `common` about 5 ms, `ardupilotmega` (common and five more files) about 6 ms
-/// (`tests::builtin_parse_time_common_and_ardupilotmega_well_under_50ms` bounds it).
+/// Cost of the first call, measured in a release build on the (shared, loaded) development
+/// machine, best of 20: `common` 5.5 ms, `ardupilotmega` (common's tree and six more files)
+/// 6.7 ms; a cold first read 20-40 ms (`tests::builtin_parse_time_common_and_ardupilotmega_well_under_50ms`
+/// bounds it).
 pub fn builtin(name: &str) -> Option<&'static Dialect> {
     static CELLS: [OnceLock<Option<Dialect>>; 9] = [const { OnceLock::new() }; 9];
     let i = FILES.iter().position(|(n, _)| *n == name)?;
