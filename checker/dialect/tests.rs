@@ -809,6 +809,31 @@ fn builtin_parse_time_common_and_ardupilotmega_well_under_50ms() {
 
 // ---- no panics ----
 
+#[test]
+fn deep_nesting_does_not_overflow() {
+    let deep = |n: usize| format!("{}x{}", "<d>".repeat(n), "</d>".repeat(n));
+    let t = format!(
+        "<mavlink><enums><enum name=\"E\"><description>{}</description><entry value=\"1\" name=\"E_A\"/></enum></enums>{}</mavlink>",
+        deep(50_000),
+        deep(50_000)
+    );
+    let e = err("m.xml", &[("m.xml", &t)]);
+    assert!(e.message.contains("nest deeper than 128"), "{e}");
+    // The 129th open element: <mavlink>, <enums>, <enum>, <description> and the 125th <d>.
+    assert_eq!((e.line, e.col), (1, 45 + 3 * 124), "{e}");
+    // Close tags hidden where roxmltree does not see them do not hide the depth.
+    for hide in ["<!--</d>-->", "<![CDATA[</d>]]>", "<?pi </d>?>", "<e a=\"/>\"></e>"] {
+        let t = format!("<mavlink>{}</mavlink>", format!("<d>{hide}").repeat(50_000));
+        let e = err("m.xml", &[("m.xml", &t)]);
+        assert!(e.message.contains("nest deeper"), "{hide}: {e}");
+    }
+    // `/>` elements and attributes with `>` in them nest nothing.
+    let t = format!("<mavlink>{}</mavlink>", "<d a=\">\" b='/'/>".repeat(50_000));
+    assert!(parse_files("m.xml", &[("m.xml", &t)]).is_ok());
+    let t = format!("<mavlink>{}x{}</mavlink>", "<d>".repeat(127), "</d>".repeat(127));
+    assert!(parse_files("m.xml", &[("m.xml", &t)]).is_ok(), "128 deep with <mavlink> is allowed");
+}
+
 /// Bits of MAVLink XML a mutation splices in.
 const PIECES: &[&str] = &[
     "<",
