@@ -64,6 +64,12 @@ pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalArc>)
     for role in prog.role_ids() {
         let name = prog.role_name(role);
         let Some(def) = prog.processes.iter().find(|p| p.role == role) else {
+            // A program with a MAVLink dialect and no process at all is a protocol (issue
+            // 10): its global type and projections are checked, no process is typed (the
+            // report says so). [T-SESS] below is still asked.
+            if protocol_only(prog) {
+                continue;
+            }
             let mut d = Diagnostic::error(
                 Code::MissingProcess,
                 prog.role(role).span,
@@ -105,6 +111,13 @@ pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalArc>)
     diags.retain(|d| seen.insert((d.code, d.span, d.message.clone())));
     dedupe(&mut obligations);
     (obligations, diags)
+}
+
+/// Whether `prog` is a protocol only: it names a MAVLink dialect and has no `process`
+/// item. Then no process is typed and E0701 is not asked (with one process, every
+/// participant needs one, as without a dialect).
+pub fn protocol_only(prog: &Program) -> bool {
+    prog.dialect.is_some() && prog.processes.is_empty()
 }
 
 /// A loop checked under several contexts may meet the same goal under the same
