@@ -105,7 +105,10 @@ codes! {
     Duplicate = "E0206", "duplicate definition",
         "A name is defined twice in the same namespace: two robot kinds, two primitives of one \
          kind, two participants, two fields of one motion, two variables of one robot, or two \
-         processes for one role. Rename or delete one of them.";
+         processes for one role. In a program with a MAVLink `dialect`: a `const` named like an \
+         enum entry of the dialect (every entry is an `int` constant), or one field of a MAVLink \
+         message listed twice (a command's `action` and `param1` included). Rename or delete one \
+         of them.";
     UnboundRecursion = "E0207", "unbound recursion variable",
         "A recursion variable `t` is used outside any `mu t. ...` that binds it (Def 4.1: types \
          are closed). Bind it with `mu t.` around the recursive part.";
@@ -191,9 +194,7 @@ codes! {
     WireSort = "E0234", "a field's sort disagrees with its wire type",
         "A MAVLink field's sort comes from its wire type: `uint8_t`..`uint64_t` and \
          `int8_t`..`int64_t` are `int`, `float` and `double` are `real`, `char[N]` is `str`. A \
-         `: sort` written after the field must be that sort (it may be left out). The field \
-         `command` of a command message is fixed by its label and cannot be listed with a \
-         sort of its own either.";
+         `: sort` written after the field must be that sort (it may be left out).";
     ArrayField = "E0235", "an array field cannot be used",
         "A MAVLink field of an array type other than `char[N]` (`uint8_t[32]`, `float[4]`) has \
          no sort in mochi yet: it can neither be listed in a payload nor read by a refinement. \
@@ -226,6 +227,14 @@ codes! {
         "A payload field of a message that is not a MAVLink message must say its sort \
          (`x: real`). Only the fields of a MAVLink message (a program with a `dialect`) take \
          their sorts from the dialect, and only they may be renamed with `FIELD as NAME`.";
+    ProtocolOnly = "E0242", "a protocol only: no process typed",
+        "A note, not an error. A program with a `dialect` and no `process` item at all is a \
+         protocol (issue 10: a MAVLink sub-protocol between a ground station and a vehicle): \
+         mochi checks its global type (well-formedness, total choice, recursion parameters, \
+         every refinement and guard on its path) and projects it onto each participant, but \
+         no process is typed against its projection, so `verified` says nothing of an \
+         implementation. `mochi project FILE --role R` prints what a process of R must do. \
+         With one `process`, every participant needs one (E0701).";
     SelfMessage = "E0301", "message to oneself",
         "Def 4.1 requires `p != q` in `p -> q : l`. A participant cannot send a message to itself; \
          use a local computation in its process instead.";

@@ -13,10 +13,7 @@
 //! it is unsatisfiable like any other.
 
 use super::*;
-use crate::dialect::{CmdParam, Dialect, Entry, Message, Wire};
-#[allow(unused_imports)]
-pub(super) use shim::{suggest, DialectApi, EntryApi, MessageApi, WireApi};
-use shim as dialect;
+use crate::dialect::{self, CmdParam, Dialect, Entry, Message, Wire};
 
 /// A payload field resolved in its message: the message's field and, for a command
 /// parameter, the dialect's parameter.
@@ -234,7 +231,7 @@ impl Lowerer {
                 None => {
                     let mut names: Vec<&str> = msg.fields.iter().map(|x| x.name.as_str()).collect();
                     let labels: Vec<String> = command
-                        .map(|c| c.params.iter().filter(|p| !p.reserved).filter_map(|p| p.label.as_deref().map(snake)).collect())
+                        .map(|c| c.param_names().into_iter().filter(|(_, p)| !p.reserved).map(|(n, _)| n).collect())
                         .unwrap_or_default();
                     names.extend(labels.iter().map(String::as_str));
                     let close = dialect::suggest(name, names.iter().copied());
@@ -457,18 +454,6 @@ fn param_index(msg: &Message, field: &str) -> Option<u8> {
     }
 }
 
-/// A label in snake case, as [`Entry::param_by_name`] reads it (for suggestions).
-fn snake(label: &str) -> String {
-    let mut out = String::new();
-    for w in label.split(|c: char| !c.is_ascii_alphanumeric()).filter(|w| !w.is_empty()) {
-        if !out.is_empty() {
-            out.push('_');
-        }
-        out.push_str(&w.to_ascii_lowercase());
-    }
-    out
-}
-
 fn wire_name(w: Wire) -> &'static str {
     w.c_name()
 }
@@ -486,104 +471,3 @@ fn quoted<'a>(names: impl Iterator<Item = &'a str>) -> String {
     names.map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ")
 }
 
-/// TEMPORARY: the dialect API of s6-dialect (`checker/dialect/`), written here until that
-/// branch is merged; removed then.
-mod shim {
-    use crate::dialect::{CmdParam, Dialect, Entry, Enum, Field, Message, Wire};
-    pub trait DialectApi {
-        fn message(&self, name: &str) -> Option<&Message>;
-        fn entry(&self, name: &str) -> Option<(&Enum, &Entry)>;
-        fn enum_(&self, name: &str) -> Option<&Enum>;
-    }
-    impl DialectApi for Dialect {
-        fn message(&self, name: &str) -> Option<&Message> {
-            self.messages.iter().find(|m| m.name == name)
-        }
-        fn entry(&self, name: &str) -> Option<(&Enum, &Entry)> {
-            self.enums.iter().find_map(|e| e.entries.iter().find(|x| x.name == name).map(|x| (e, x)))
-        }
-        fn enum_(&self, name: &str) -> Option<&Enum> {
-            self.enums.iter().find(|e| e.name == name)
-        }
-    }
-    pub trait MessageApi {
-        fn field(&self, name: &str) -> Option<&Field>;
-    }
-    impl MessageApi for Message {
-        fn field(&self, name: &str) -> Option<&Field> {
-            self.fields.iter().find(|f| f.name == name)
-        }
-    }
-    pub trait EntryApi {
-        fn param_by_name(&self, name: &str) -> Option<&CmdParam>;
-    }
-    impl EntryApi for Entry {
-        fn param_by_name(&self, name: &str) -> Option<&CmdParam> {
-            self.params.iter().find(|p| {
-                format!("param{}", p.index) == name || p.label.as_deref().map(super::snake).as_deref() == Some(name)
-            })
-        }
-    }
-    pub trait WireApi {
-        fn int_range(self) -> Option<(i128, i128)>;
-        fn c_name(self) -> &'static str;
-    }
-    impl WireApi for Wire {
-        fn int_range(self) -> Option<(i128, i128)> {
-            Some(match self {
-                Wire::U8 => (0, 255),
-                Wire::U16 => (0, 65535),
-                Wire::U32 => (0, u32::MAX as i128),
-                Wire::U64 => (0, u64::MAX as i128),
-                Wire::I8 => (-128, 127),
-                Wire::I16 => (i16::MIN as i128, i16::MAX as i128),
-                Wire::I32 => (i32::MIN as i128, i32::MAX as i128),
-                Wire::I64 => (i64::MIN as i128, i64::MAX as i128),
-                _ => return None,
-            })
-        }
-        fn c_name(self) -> &'static str {
-            match self {
-                Wire::U8 => "uint8_t",
-                Wire::U16 => "uint16_t",
-                Wire::U32 => "uint32_t",
-                Wire::U64 => "uint64_t",
-                Wire::I8 => "int8_t",
-                Wire::I16 => "int16_t",
-                Wire::I32 => "int32_t",
-                Wire::I64 => "int64_t",
-                Wire::F32 => "float",
-                Wire::F64 => "double",
-                Wire::Char => "char",
-            }
-        }
-    }
-    pub static TEST: std::sync::OnceLock<&'static Dialect> = std::sync::OnceLock::new();
-    pub fn builtin(name: &str) -> Option<&'static Dialect> {
-        TEST.get().copied().filter(|d| d.name == name)
-    }
-    pub fn builtin_names() -> &'static [&'static str] {
-        &["common", "ardupilotmega", "standard", "minimal"]
-    }
-    pub fn suggest<'a>(name: &str, candidates: impl Iterator<Item = &'a str>) -> Vec<&'a str> {
-        let n = name.to_ascii_lowercase();
-        let mut v: Vec<(usize, &str)> = candidates
-            .map(|c| (lev(&n, &c.to_ascii_lowercase()), c))
-            .filter(|(d, _)| *d <= 2.max(n.len() / 3))
-            .collect();
-        v.sort();
-        v.into_iter().take(3).map(|(_, c)| c).collect()
-    }
-    fn lev(a: &str, b: &str) -> usize {
-        let b: Vec<char> = b.chars().collect();
-        let mut prev: Vec<usize> = (0..=b.len()).collect();
-        for (i, ca) in a.chars().enumerate() {
-            let mut cur = vec![i + 1];
-            for (j, cb) in b.iter().enumerate() {
-                cur.push((prev[j] + usize::from(ca != *cb)).min(prev[j + 1] + 1).min(cur[j] + 1));
-            }
-            prev = cur;
-        }
-        prev[b.len()]
-    }
-}

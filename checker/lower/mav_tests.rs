@@ -122,8 +122,9 @@ fn strings_compare_with_char_fields_and_must_fit_them() {
     assert_eq!(p.strings, vec!["MC_PITCH_P".to_string()]);
     let (_, d) = lower_mav("GCS -> UAV: PARAM_SET(param_id {param_id == \"A_NAME_OF_SEVENTEEN\"}). end");
     assert_eq!(codes(&d), ["E0236"]);
+    // Strings are compared with `==` and `!=` only.
     let (_, d) = lower_mav("GCS -> UAV: PARAM_SET(param_id {param_id < \"A\"}). end");
-    assert_eq!(codes(&d), ["E0208"]);
+    assert!(!d.is_empty() && codes(&d).iter().all(|c| *c == "E0208"), "{d:?}");
 }
 
 #[test]

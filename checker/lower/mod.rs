@@ -37,8 +37,6 @@ use crate::hir::*;
 use crate::source::Span;
 use crate::syntax::ast::{self, BinOp, UnOp};
 use crate::syntax::Parsed;
-#[allow(unused_imports)]
-use mav::{DialectApi, EntryApi, MessageApi, WireApi};
 use std::collections::HashMap;
 use std::sync::Arc;
 

@@ -92,6 +92,19 @@ pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalArc>)
         diags.extend(c.diags);
         obligations.extend(c.obligations);
     }
+    if protocol_only(prog) {
+        if let Some((sys, span)) = &prog.system {
+            diags.push(
+                Diagnostic::note_at(
+                    Code::ProtocolOnly,
+                    *span,
+                    format!("protocol only: `{sys}` names a dialect and no process, so no process was typed"),
+                )
+                .with_note("the global type and its projections are checked; `mochi project FILE --role R` prints each participant's local type")
+                .with_help("add a `process` for every participant to have implementations typed against their projections"),
+            );
+        }
+    }
     // [T-SESS]: the initial states are collision free.
     let span = prog.system.as_ref().map(|(_, s)| *s).or_else(|| prog.roles.first().map(|r| r.span));
     if let Some(span) = span {
