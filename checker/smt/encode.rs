@@ -113,6 +113,9 @@ pub struct Encoder<'p> {
     /// values of one name (shadowing) are two symbols, `v` and `v#2`, in order of first
     /// appearance (so equal queries still have equal text).
     value_names: HashMap<ValueId, String>,
+    /// The variables of sort `str` (integers in the solver), so that a counterexample
+    /// shows their values as the strings they stand for.
+    strings: std::collections::HashSet<String>,
 }
 
 impl<'p> Encoder<'p> {
@@ -126,6 +129,7 @@ impl<'p> Encoder<'p> {
             trig_by_arg: HashMap::new(),
             pi: None,
             value_names: HashMap::new(),
+            strings: std::collections::HashSet::new(),
         }
     }
 
@@ -197,6 +201,9 @@ impl<'p> Encoder<'p> {
             ]),
             other => return Err(Unsupported(format!("variables of sort `{other}`"))),
         };
+        if *sort == Sort::Str {
+            self.strings.insert(name.to_string());
+        }
         self.vars.insert(name.to_string(), t.clone());
         Ok(t)
     }
@@ -281,6 +288,15 @@ impl<'p> Encoder<'p> {
                     Term::B(b) => {
                         model.get_const_interp(b)?;
                         model.eval(b, true).map(|v| v.to_string())
+                    }
+                    Term::I(i) if self.strings.contains(name) => {
+                        // A string's code: the literal it is, or a string none writes.
+                        model.get_const_interp(i)?;
+                        let code = model.eval(i, true)?.as_i64();
+                        Some(match code.and_then(|c| self.prog.string(c)) {
+                            Some(text) => format!("\"{text}\""),
+                            None => "a string no literal of the protocol writes".to_string(),
+                        })
                     }
                     Term::I(i) => {
                         model.get_const_interp(i)?;
