@@ -928,3 +928,20 @@ fn mavlink_flags_strings_and_wire_ranges_are_decided_exactly() {
         }
     }
 }
+
+/// Processes over MAVLink messages are typed like any others: the values of a payload
+/// positionally, in the order its fields are listed. An acknowledgement the type does not
+/// allow is E0709.
+#[test]
+fn processes_of_a_mavlink_protocol_are_typed_against_their_projections() {
+    let o = mochi(&["check", "tests/data/mavlink/mission-upload-processes.chor"]);
+    let out = stdout(&o) + &stderr(&o);
+    assert!(out.contains("verdict: verified") && !out.contains("E0242"), "{out}");
+    let dir = TempDir::new("mavlink-wrong-ack");
+    let src = std::fs::read_to_string("tests/data/mavlink/mission-upload-processes.chor").expect("fixture");
+    assert!(src.contains("GCS!MISSION_ACK(MAV_MISSION_ACCEPTED)"));
+    let file = dir.write("wrong-ack.chor", &src.replace("GCS!MISSION_ACK(MAV_MISSION_ACCEPTED)", "GCS!MISSION_ACK(MAV_MISSION_ERROR)"));
+    let o = mochi(&["check", path_arg(&file)]);
+    let out = stdout(&o) + &stderr(&o);
+    assert!(out.contains("verdict: rejected") && out.contains("error[E0709]"), "{out}");
+}
