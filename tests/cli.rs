@@ -884,6 +884,12 @@ fn a_mavlink_protocol_without_processes_is_verified_and_says_no_process_was_type
     assert_eq!(diags.len(), 1, "{v}");
     assert_eq!(diags[0]["code"], "E0242");
     assert!(diags[0]["message"].as_str().unwrap_or("").contains("no process was typed"), "{v}");
+    let o = mochi(&["check", "tests/data/mavlink/mission-upload.chor"]);
+    assert!(
+        stdout(&o).contains("verdict: verified (tests/data/mavlink/mission-upload.chor) -- protocol only: no process typed"),
+        "{}",
+        stdout(&o)
+    );
     let o = mochi(&["project", "tests/data/mavlink/mission-upload.chor", "--role", "UAV"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let out = stdout(&o);
