@@ -925,6 +925,7 @@ fn mavlink_flags_strings_and_wire_ranges_are_decided_exactly() {
         ("param-id-wrong", "rejected", Some("param_id = \"MC_PITCH_P\"")),
         ("wire-limits", "verified", None),
         ("wire-limits-wrong", "rejected", Some("time_unix_usec = 18446744073709551615")),
+        ("parachute-action", "verified", None),
     ] {
         let path = format!("tests/data/mavlink/{file}.chor");
         let o = mochi(&["check", &path]);

@@ -223,3 +223,14 @@ fn mavlink_fields_are_compared_by_field_not_by_place() {
     assert!(!alpha_equal(&lp[&RoleId(1)], &lq[&RoleId(1)]));
     assert!(alpha_equal(&lp[&RoleId(1)], &lp[&RoleId(1)]));
 }
+
+/// A dialect that includes `common` has its entries and its own: ArduPilot's copter modes.
+#[test]
+fn ardupilotmega_has_commons_messages_and_its_own_entries() {
+    let src = "dialect ardupilotmega;\nsystem S { participant GCS; participant UAV; }\n\
+               choreography G = UAV -> GCS: HEARTBEAT(custom_mode {custom_mode != COPTER_MODE_ACRO}). end;";
+    let (p, d) = lower_src(src);
+    assert!(d.is_empty(), "{d:?}");
+    let c = p.consts.iter().find(|c| c.name == "COPTER_MODE_ACRO").expect("interned");
+    assert_eq!(c.value.kind, ExprKind::Int(1));
+}
