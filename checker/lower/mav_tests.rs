@@ -234,3 +234,11 @@ fn ardupilotmega_has_commons_messages_and_its_own_entries() {
     let c = p.consts.iter().find(|c| c.name == "COPTER_MODE_ACRO").expect("interned");
     assert_eq!(c.value.kind, ExprKind::Int(1));
 }
+
+/// A field is bound from its message on: reading `seq` before MISSION_REQUEST_INT is E0205
+/// (not a constant, not an entry: nothing else answers to it).
+#[test]
+fn a_field_read_before_its_message_is_unknown() {
+    let (_, d) = lower_mav("GCS -> UAV: MISSION_COUNT(count {count == seq}). UAV -> GCS: MISSION_REQUEST_INT(seq). end");
+    assert_eq!(codes(&d), ["E0205"]);
+}
