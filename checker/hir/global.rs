@@ -104,6 +104,20 @@ pub struct Msg {
     pub label_loc: Loc,
 }
 
+/// Whether two labels may be the same message on the wire, so that a receiver cannot tell
+/// them apart: equal labels, or a MAVLink command message with its command fixed
+/// (`COMMAND_LONG[MAV_CMD_X]`) and the same message without (`COMMAND_LONG`, whose
+/// `command` may be `MAV_CMD_X`). Labels of a choice (E0302) and the receptions a merge
+/// joins (E0601) must not overlap. Without a dialect no label has a `[`.
+pub fn labels_overlap(a: &str, b: &str) -> bool {
+    let split = |l: &str| match l.split_once('[') {
+        Some((m, _)) => (m.to_string(), true),
+        None => (l.to_string(), false),
+    };
+    let ((ma, ca), (mb, cb)) = (split(a), split(b));
+    a == b || (ma == mb && !(ca && cb))
+}
+
 /// A refined payload field `{v : S | P}`. Equality includes the value's id (its binding
 /// site), as [`Var::Value`](super::Var) does; `project::equal` compares up to renaming.
 #[derive(Clone, Debug)]
@@ -112,6 +126,27 @@ pub struct Field {
     pub name: String,
     pub sort: Sort,
     pub refinement: Option<Expr>,
+    /// Of a MAVLink message: which field of it this is, and what lowering added to the
+    /// refinement. `None` for a field of a label that is not a MAVLink message.
+    pub mav: Option<MavField>,
+}
+
+/// A payload field of a MAVLink message (LANGUAGE.md, MAVLink messages).
+///
+/// Lowering conjoins what the dialect says of the field (its wire range, and for a
+/// command's `command` field the fixed command) to the user's refinement, as
+/// `implicit && user`: `refinement` is `implicit` alone when `user` is false, `implicit &&
+/// written` when both are true, and the written refinement alone when `implicit` is false.
+/// The printer leaves the implicit part out, so what it prints lowers back to the same
+/// field.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct MavField {
+    /// The message's field (`param1` for a command parameter addressed by its label).
+    pub field: String,
+    /// As written: the field or the command parameter's label (`action`).
+    pub written: String,
+    pub implicit: bool,
+    pub user: bool,
 }
 
 /// `dt<(p_i : a_i)>`
@@ -150,7 +185,11 @@ pub struct RecVar {
 
 impl PartialEq for Field {
     fn eq(&self, o: &Field) -> bool {
-        self.value == o.value && self.name == o.name && self.sort == o.sort && self.refinement == o.refinement
+        self.value == o.value
+            && self.name == o.name
+            && self.sort == o.sort
+            && self.refinement == o.refinement
+            && self.mav == o.mav
     }
 }
 

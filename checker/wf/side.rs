@@ -197,16 +197,22 @@ impl Side<'_> {
             if !shape_ok {
                 continue; // labels only distinguish branches of the same shape
             }
-            if let Some((_, first)) = labels.iter().find(|(l, _)| *l == m.label) {
-                self.diags.push(
-                    Diagnostic::error(
-                        Code::DuplicateLabel,
-                        m.label_loc.0,
-                        format!("label `{}` is used by two branches", m.label),
+            if let Some((l, first)) = labels.iter().find(|(l, _)| crate::hir::labels_overlap(l, &m.label)) {
+                let message = if *l == m.label {
+                    format!("label `{}` is used by two branches", m.label)
+                } else {
+                    format!(
+                        "labels `{l}` and `{}` are one MAVLink message: the one without a fixed command may carry the other's",
+                        m.label
                     )
-                    .with_label(first.0, "first used here")
-                    .with_note("Def 4.1: labels of a choice are distinct so the receiver can tell the branches apart")
-                    .with_help("rename one of the labels"),
+                };
+                self.diags.push(
+                    Diagnostic::error(Code::DuplicateLabel, m.label_loc.0, message)
+                        .with_label(first.0, "first used here")
+                        .with_note(
+                            "Def 4.1: labels of a choice are distinct so the receiver can tell the branches apart",
+                        )
+                        .with_help("rename one of the labels"),
                 );
             } else {
                 labels.push((&m.label, m.label_loc));
@@ -225,7 +231,14 @@ impl Side<'_> {
             }
             Var::Value(id, name) => {
                 if let ValueOrigin::Message { from, to } = &prog.value(*id).origin {
-                    if viewer.is_none_or(|w| w != *from && w != *to) {
+                    // With no viewer (a recursion parameter's refinement) every participant
+                    // must know the value: so only when the sender and the receiver are all
+                    // of them (a protocol between two, as MAVLink's GCS and UAV).
+                    let known = match viewer {
+                        Some(w) => w == *from || w == *to,
+                        None => prog.role_ids().all(|r| r == *from || r == *to),
+                    };
+                    if !known {
                         bad.push((
                             name.clone(),
                             loc,
