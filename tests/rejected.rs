@@ -171,13 +171,6 @@ const NOT_ALONE: &[(&str, &str)] = &[
          (E0406) failure at time 0. Tested in smt::tests::initially_apart_holds_for_distant_bots_and_fails_for_touching_ones",
     ),
     (
-        "E0419",
-        "with processes, a send no value fits also fails the sender's [T-OUT] (E0709): typing a \
-         process against its local type implies progress. E0419 is alone in a protocol without \
-         processes (a program with a `dialect`, issue 10). Tested in tests/refined.rs \
-         (a lone message no payload fits, a choice whose only open branch has no payload)",
-    ),
-    (
         "E0420",
         "a note, not an error: a library with no robot kind and no motion primitive is verified \
          (names and sorts checked) and says so. Tested in library::tests::\
