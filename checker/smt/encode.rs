@@ -116,6 +116,9 @@ pub struct Encoder<'p> {
     /// Whether a quantifier was built ([`Encoder::quantified`]): the query then needs
     /// Z3's default solver, not the quantifier-free nlsat.
     quantified: bool,
+    /// The variables of sort `str` (integers in the solver), so that a counterexample
+    /// shows their values as the strings they stand for.
+    strings: std::collections::HashSet<String>,
 }
 
 impl<'p> Encoder<'p> {
@@ -130,6 +133,7 @@ impl<'p> Encoder<'p> {
             pi: None,
             value_names: HashMap::new(),
             quantified: false,
+            strings: std::collections::HashSet::new(),
         }
     }
 
@@ -191,7 +195,8 @@ impl<'p> Encoder<'p> {
         }
         let t = match sort {
             Sort::Bool => Term::B(Bool::new_const(name)),
-            Sort::Int => Term::I(Int::new_const(name)),
+            // A string is an integer: literals are their codes (`Program::strings`).
+            Sort::Int | Sort::Str => Term::I(Int::new_const(name)),
             Sort::Real | Sort::Any => Term::R(Real::new_const(name)),
             Sort::Point | Sort::Vector => Term::V([
                 Real::new_const(format!("{name}.x")),
@@ -200,6 +205,9 @@ impl<'p> Encoder<'p> {
             ]),
             other => return Err(Unsupported(format!("variables of sort `{other}`"))),
         };
+        if *sort == Sort::Str {
+            self.strings.insert(name.to_string());
+        }
         self.vars.insert(name.to_string(), t.clone());
         Ok(t)
     }
@@ -289,6 +297,15 @@ impl<'p> Encoder<'p> {
                     Term::B(b) => {
                         model.get_const_interp(b)?;
                         model.eval(b, true).map(|v| v.to_string())
+                    }
+                    Term::I(i) if self.strings.contains(name) => {
+                        // A string's code: the literal it is, or a string none writes.
+                        model.get_const_interp(i)?;
+                        let code = model.eval(i, true)?.as_i64();
+                        Some(match code.and_then(|c| self.prog.string(c)) {
+                            Some(text) => format!("\"{text}\""),
+                            None => "a string no literal of the protocol writes".to_string(),
+                        })
                     }
                     Term::I(i) => {
                         model.get_const_interp(i)?;
@@ -463,6 +480,23 @@ impl<'p> Encoder<'p> {
         };
         let zero = || Int::from_i64(0).to_real();
         Ok(match f {
+            Builtin::HasFlag => {
+                // Exact: bit k of x is (x div 2^k) mod 2 (Euclidean, so a negative x reads as
+                // its two's complement), for every bit k of the constant flag.
+                let flag = args
+                    .get(1)
+                    .and_then(|a| crate::hir::expr::const_int(self.prog, a))
+                    .filter(|f| *f > 0)
+                    .ok_or_else(|| Unsupported("`has_flag` with a flag that is not a positive constant".into()))?;
+                let Term::I(x) = arg(self, 0)? else {
+                    return Err(Unsupported("`has_flag` of a term that is not an integer".into()));
+                };
+                let bits: Vec<Bool> = (0..63)
+                    .filter(|k| flag >> k & 1 == 1)
+                    .map(|k| x.div(Int::from_i64(1 << k)).modulo(Int::from_i64(2)).eq(Int::from_i64(1)))
+                    .collect();
+                Term::B(Bool::and(&bits))
+            }
             Builtin::Sqrt => {
                 let a = as_real(arg(self, 0)?)?;
                 let s = Real::fresh_const("sqrt");

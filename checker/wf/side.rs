@@ -256,7 +256,14 @@ impl Side<'_> {
             }
             Var::Value(id, name) => {
                 if let ValueOrigin::Message { from, to } = &prog.value(*id).origin {
-                    if viewer.is_none_or(|w| w != *from && w != *to) {
+                    // With no viewer (a recursion parameter's refinement) every participant
+                    // must know the value: so only when the sender and the receiver are all
+                    // of them (a protocol between two, as MAVLink's GCS and UAV).
+                    let known = match viewer {
+                        Some(w) => w == *from || w == *to,
+                        None => prog.role_ids().all(|r| r == *from || r == *to),
+                    };
+                    if !known {
                         bad.push((
                             name.clone(),
                             loc,

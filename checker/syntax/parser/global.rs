@@ -127,7 +127,7 @@ impl Parser {
         } else {
             None
         };
-        let label = self.ident("a message label")?;
+        let label = self.label()?;
         let payload = if self.eat_punct("(") {
             let f = self.fields()?;
             self.expect_punct(")")?;
