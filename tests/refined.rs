@@ -98,3 +98,48 @@ fn a_message_no_payload_fits_is_stuck() {
     let dead = diagnostics(&r, "E0410");
     assert!(!dead.is_empty() && dead.iter().all(|w| w["severity"] == "warning"), "{r}");
 }
+
+/// The mission upload of mavsyntax.md as a MAVLink protocol (no processes): verified; with
+/// a counter never incremented, E0417 with the trace in MAVLink's terms; with an ACK that
+/// is never taken, stuck at i == count.
+#[test]
+fn the_mavlink_mission_upload_and_its_defects() {
+    let r = report("tests/data/refined/mission-upload.chor");
+    assert_eq!(r["verdict"], "verified", "{r}");
+    let r = report("tests/data/refined/mission-upload-counter-stuck.chor");
+    let d = diagnostics(&r, "E0417");
+    assert_eq!(d.len(), 1, "{r}");
+    let (count, i) = (value(d[0], "count").expect("count"), value(d[0], "i").expect("i"));
+    let t = trace(d[0]);
+    assert!(t[0].starts_with(&format!("GCS -> UAV: MISSION_COUNT(count = {count}")), "{t:?}");
+    assert!(t[1].starts_with(&format!("mu t: i = {i}")), "{t:?}");
+    assert!(t[2].starts_with(&format!("UAV -> GCS: [i < count] MISSION_REQUEST_INT(seq = {i})")), "{t:?}");
+    // `seq as s`: the trace names the MAVLink field, not the binder.
+    assert!(t[3].starts_with(&format!("GCS -> UAV: MISSION_ITEM_INT(seq = {i})")), "{t:?}");
+    let r = report("tests/data/refined/mission-upload-ack-never.chor");
+    let d = diagnostics(&r, "E0316");
+    assert_eq!(d.len(), 1, "{r}");
+    assert_eq!(value(d[0], "i"), value(d[0], "count"), "stuck at i == count: {}", d[0]);
+}
+
+/// DATUM's style: the branch conditions inside the payload refinements, no guards. Total
+/// choice has nothing to check; progress (E0419) finds the upload stuck at i == count
+/// when ACK's condition is `i > count`.
+#[test]
+fn datum_style_conditions_in_refinements_are_checked_by_progress() {
+    let path = "tests/data/refined/mission-upload-datum.chor";
+    assert_eq!(report(path)["verdict"], "verified");
+    let text = std::fs::read_to_string(path).expect("readable");
+    let stuck = text.replace("type == MAV_MISSION_ACCEPTED && i == count", "type == MAV_MISSION_ACCEPTED && i > count");
+    assert_ne!(stuck, text);
+    let dir = std::env::temp_dir().join(format!("mochi-refined-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let file = dir.join("datum-stuck.chor");
+    std::fs::write(&file, stuck).expect("write");
+    let r = report(file.to_str().expect("utf-8"));
+    let _ = std::fs::remove_dir_all(&dir);
+    let d = diagnostics(&r, "E0419");
+    assert_eq!(d.len(), 1, "{r}");
+    assert_eq!(value(d[0], "i"), value(d[0], "count"), "stuck at i == count: {}", d[0]);
+    assert!(trace(d[0]).iter().any(|l| l.starts_with("mu t: i = ")), "{}", d[0]);
+}
