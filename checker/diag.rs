@@ -482,6 +482,39 @@ codes! {
          known at the jump, on every path that reaches it. The counterexample is a state (with the \
          current parameters) that reaches the jump with arguments that break P. Guard the branch \
          that jumps (for example `[n > 0]` before `t(n - 1)`), or change the arguments.";
+    MeasureNegative = "E0416", "a loop's termination measure may be negative at a jump back",
+        "Termination of refined recursion (`mu t(params) decreases E. G`; DATUM seed 000 Sec 3.1's \
+         `mu T(n: Z {P}) <n = e>` with a measure): the loop claims to be left after finitely many \
+         iterations because the integer E is bounded below by 0 and drops at every jump back. \
+         So at each `t(a)`, on every path that reaches it (under what is known there: the \
+         messages' refinements, the guards on the way, the parameters' refinements), E >= 0 must \
+         hold of the current iteration. The counterexample is a state reaching the jump with a \
+         negative E. Guard the branch that jumps (for example `[i < count]`), or choose a measure \
+         that stays non-negative.";
+    MeasureNotDecreasing = "E0417", "a loop's termination measure does not decrease at a jump back",
+        "Termination of refined recursion (`mu t(params) decreases E. G`): at each jump `t(a)` the \
+         measure of the next iteration, E with the arguments for the parameters, must be smaller \
+         than E of the current one, on every path to the jump. Otherwise the loop can repeat \
+         forever (a counter never incremented: `t(i)` instead of `t(i + 1)`). The counterexample \
+         gives the parameters and payload values for which E[a/params] >= E. Pass arguments that \
+         make progress, or drop `decreases` if the loop is meant to run forever (a reactive loop: \
+         then nothing is claimed).";
+    MeasureNoExit = "E0418", "a loop with a termination measure has no way out",
+        "`mu t(params) decreases E. G` claims that the loop ends, but no path of its body reaches \
+         `end` or a jump to an enclosing loop: every path jumps back to `t` (or to a loop inside \
+         it), so the claim is false whatever E is (the measure's checks would then only say that \
+         the protocol is stuck once E runs out). Add the branch that leaves the loop (for example \
+         the acknowledgement that ends a mission upload), or drop `decreases` for a reactive loop.";
+    Stuck = "E0419", "the protocol can get stuck: no branch can be taken",
+        "Progress: in every state the protocol reaches, some way on must be open. A message \
+         `p -> q: [P] l(v: S {R})` can be sent only when its guard P holds and some value \
+         satisfies its refinement R (with the wire ranges of its fields); a choice only when one \
+         of its branches can. Total choice (E0316) asks that the guards cover every state; this \
+         check asks more: that in every state allowed there (the guards' disjunction assumed, \
+         E0316 checks it), some branch has a true guard and a payload its refinement admits. The \
+         counterexample is such a state, in the values of the messages and parameters so far, \
+         and the trace is the path that reaches it. Weaken the refinement, or add a branch for \
+         that state (for example a NACK).";
     EmptyLibrary = "E0420", "a library declares no robot kind and no motion primitive",
         "A note, not an error. `mochi check lib.mochi` checks a library on its own when the file \
          (with its imports) has no `system` and no `choreography`: its names and sorts, that each \
@@ -658,6 +691,11 @@ pub struct Overlap {
 pub struct Counterexample {
     pub values: Vec<Assignment>,
     pub overlap: Option<Overlap>,
+    /// The path through the global type to the failing point, one step a line, with the
+    /// values of this counterexample (`wf::trace`); empty (and left out of JSON) when the
+    /// point is not in the global type.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub trace: Vec<String>,
 }
 
 /// A secondary location with a short message ("the other branch is here").

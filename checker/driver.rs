@@ -331,7 +331,16 @@ impl Pipeline {
                 _ => None,
             })
             .collect();
+        // A process's send that no value fits fails [T-OUT] (E0709), with the sender's
+        // knowledge: typing implies progress, so the protocol's own progress failure
+        // (E0419) is the same defect seen from the global type, said once, at the send.
+        // Without processes (or with every send typed) E0419 stands.
+        let send_fails = obligations
+            .iter()
+            .zip(&results)
+            .any(|(ob, (d, _))| ob.rule == Rule::TOut && matches!(d, Decision::Fails(_)));
         let explained = |ob: &Obligation, f: &smt::Failure| match (&ob.goal, &f.which) {
+            (Goal::Progress { .. }, _) => send_fails,
             (Goal::Contains { prim }, _) => empty.contains(prim),
             (Goal::Compatible { parts }, Some(Part::CanEnd)) => parts.iter().any(|(_, a)| never_ends.contains(&a.prim)),
             (Goal::Refines { concrete, .. }, Some(Part::Refine(smt::goals::RefineItem::Realisable))) => {
@@ -370,12 +379,12 @@ impl Pipeline {
                     // A guard that cannot hold where it is offered: a dead branch, a
                     // warning (its checks hold vacuously and prove nothing).
                     Decision::Fails(f) if matches!(ob.goal, Goal::Reachable { dead_branch: true, .. }) => {
-                        self.diagnostics.push(dead_branch(ob, f));
+                        self.diagnostics.push(dead_branch(prog, ob, f));
                     }
                     Decision::Fails(f) => {
                         failed += 1;
                         if !explained(ob, &f) {
-                            self.diagnostics.push(failure(ob, f));
+                            self.diagnostics.push(failure(prog, ob, f));
                         }
                     }
                     Decision::Unknown { part, why } => {
@@ -551,7 +560,24 @@ fn label(db: &SourceDb, ob: &Obligation) -> String {
 
 /// The error for a failed obligation: the code of the rule and part that failed, what
 /// was required, and the counterexample in the user's terms.
-fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
+/// The path through the global type to `ob`'s point, with the counterexample's values
+/// (`wf::trace`), as lines; empty when the point is not in the global type.
+fn trace(prog: &crate::hir::Program, ob: &Obligation, f: &smt::Failure) -> Vec<String> {
+    let Some(chor) = &prog.choreography else { return Vec::new() };
+    match crate::wf::trace::path_to(&chor.body, ob.span) {
+        Some(steps) => crate::wf::trace::lines(prog, &steps, &f.values, &f.bound),
+        None => Vec::new(),
+    }
+}
+
+/// The trace as a note: "trace to this point: ..." one step a line.
+fn trace_note(lines: &[String], values: bool) -> Option<String> {
+    let how = if values { "one path; values from the counterexample" } else { "one path" };
+    (!lines.is_empty()).then(|| format!("trace to this point ({how}):\n  {}", lines.join("\n  ")))
+}
+
+fn failure(prog: &crate::hir::Program, ob: &Obligation, f: smt::Failure) -> Diagnostic {
+    let steps = trace(prog, ob, &f);
     let code = match (ob.rule, &f.which) {
         (Rule::TotalChoice, _) => Code::ChoiceNotTotal,
         (Rule::AgComp, Some(Part::Pre(_))) => Code::PreconditionAtMotion,
@@ -569,6 +595,9 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
         (Rule::Subtype, _) => Code::SubtypePredicate,
         (Rule::RecInit, _) => Code::RecInitRefinement,
         (Rule::RecJump, _) => Code::RecJumpRefinement,
+        (Rule::MeasureBound, _) => Code::MeasureNegative,
+        (Rule::MeasureDecrease, _) => Code::MeasureNotDecreasing,
+        (Rule::Progress, _) => Code::Stuck,
         (Rule::TRecInit, _) => Code::ProcessRecInit,
         (Rule::TRecJump, _) => Code::ProcessRecJump,
         (Rule::TRecArgs, _) => Code::ProcessRecArgs,
@@ -596,6 +625,9 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
         Code::InitialCollision => "move the participants apart (`at: pose(...)` or `init:`)",
         Code::RecInitRefinement | Code::ProcessRecInit => "start the parameter at a value that satisfies its refinement, or weaken the refinement",
         Code::RecJumpRefinement | Code::ProcessRecJump => "guard the branch that jumps back (e.g. `[n > 0]` before `t(n - 1)`), or pass arguments that satisfy the refinement",
+        Code::MeasureNegative => "guard the branch that jumps back so that the measure is still non-negative there (e.g. `[i < count]`), or choose another measure",
+        Code::MeasureNotDecreasing => "pass arguments that make the measure smaller (e.g. `t(i + 1)` for `decreases count - i`), or drop `decreases` if the loop may run forever",
+        Code::Stuck => "weaken the refinement or guard that no value satisfies in the counterexample's state, or add a branch for that state",
         Code::ProcessRecArgs => "pass the loop the same values as the local type's recursion (its initial values and the arguments of its jump), computed from what the process sent and received",
         Code::EmptyFootprint => "write a footprint that contains the robot at every state its guarantee allows (a footprint no point satisfies, such as `false`, hides every collision)",
         Code::VacuousContract => "fix the duration's bounds (lo <= hi, hi >= 0), or make the guarantee and the postcondition agree at the end of the motion",
@@ -611,7 +643,10 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
     for (symbol, name, span) in &f.bound {
         d = d.with_label(*span, format!("`{symbol}` in the counterexample is the `{name}` bound here"));
     }
-    let cx = Counterexample { values: f.values, overlap: f.overlap };
+    if let Some(text) = trace_note(&steps, !f.values.is_empty()) {
+        d = d.with_note(text);
+    }
+    let cx = Counterexample { values: f.values, overlap: f.overlap, trace: steps };
     if let Some(text) = counterexample_text(&cx, code) {
         d = d.with_note(text);
     }
@@ -632,14 +667,17 @@ fn dump_failed(ob: &Obligation, e: &str) -> Diagnostic {
 
 /// A branch whose guard cannot hold where the choice is made: a warning (the branch is
 /// unreachable; its obligations hold vacuously).
-fn dead_branch(ob: &Obligation, f: smt::Failure) -> Diagnostic {
-    let _ = f;
-    Diagnostic {
+fn dead_branch(prog: &crate::hir::Program, ob: &Obligation, f: smt::Failure) -> Diagnostic {
+    let steps = trace(prog, ob, &f);
+    let mut d = Diagnostic {
         severity: diag::Severity::Warning,
         ..Diagnostic::error(Code::StuckContext, ob.span, format!("dead branch: {} can never hold", ob.what))
     }
-    .with_note("the context at the choice and this branch's guard contradict each other, so no execution takes it; its checks hold vacuously")
-    .with_help("remove the branch, or fix its guard")
+    .with_note("the context at the choice contradicts this branch's guard, or leaves no value its payload's refinements admit, so no execution takes it; its checks hold vacuously");
+    if let Some(text) = trace_note(&steps, false) {
+        d = d.with_note(text);
+    }
+    d.with_help("remove the branch, or fix its guard or its payload's refinements")
 }
 
 /// One obligation per primitive the protocol runs (`used`): its contract admits a run

@@ -4,7 +4,7 @@
 //! [`Obligation::trivially_holds`] has settled the syntactically trivial ones; what it
 //! cannot decide is reported as undecided (`unknown`), never as passed.
 
-use crate::hir::{Expr, ExprKind, PrimApp, PrimId, RoleId};
+use crate::hir::{Expr, ExprKind, PrimApp, PrimId, RoleId, Sort, ValueId};
 use crate::source::Span;
 use serde::Serialize;
 
@@ -32,6 +32,14 @@ pub enum Rule {
     RecInit,
     /// ... and of the arguments of each jump back.
     RecJump,
+    /// Termination of refined recursion (`decreases E`): the measure is not negative at a
+    /// jump back.
+    MeasureBound,
+    /// ... and the next iteration's measure is smaller than this one's.
+    MeasureDecrease,
+    /// Progress: in every reachable state at a message or choice, some branch has a true
+    /// guard and a payload its refinements admit.
+    Progress,
     /// [T-REC] with parameters: a process loop's refinement holds of its initial value.
     TRecInit,
     /// [T-VAR] with parameters: ... and of the arguments of each process jump.
@@ -65,6 +73,9 @@ impl Rule {
             Rule::TSess => "[T-SESS]",
             Rule::RecInit => "recursion parameter at entry (DATUM)",
             Rule::RecJump => "recursion parameter at a jump (DATUM)",
+            Rule::MeasureBound => "termination: the measure is not negative at a jump",
+            Rule::MeasureDecrease => "termination: the measure decreases at a jump",
+            Rule::Progress => "progress: some branch can be taken",
             Rule::TRecInit => "[T-REC] with parameters",
             Rule::TRecJump => "[T-VAR] with parameters",
             Rule::TRecArgs => "[T-REC]/[T-VAR]: parameters as the type's",
@@ -83,6 +94,8 @@ impl Rule {
             Rule::AgComp => "compatibility",
             Rule::FullSeparation => "separation",
             Rule::RecInit | Rule::RecJump => "recursion-parameters",
+            Rule::MeasureBound | Rule::MeasureDecrease => "termination",
+            Rule::Progress => "progress",
             Rule::Refinement
             | Rule::TMotion
             | Rule::TOut
@@ -110,6 +123,9 @@ impl Rule {
             Rule::TSess => "tsess",
             Rule::RecInit => "recinit",
             Rule::RecJump => "recjump",
+            Rule::MeasureBound => "measurebound",
+            Rule::MeasureDecrease => "measuredecrease",
+            Rule::Progress => "progress",
             Rule::TRecInit => "trecinit",
             Rule::TRecJump => "trecjump",
             Rule::TRecArgs => "trecargs",
@@ -148,10 +164,26 @@ pub enum Goal {
     /// `dead_branch`, the step is the guard of one branch among several: an unsatisfiable
     /// context there is a dead branch (a warning), not a stuck protocol.
     Reachable { before: Vec<Vec<Expr>>, dead_branch: bool },
+    /// Progress at a message or a choice: `hyps ⇒ ∨_b (guard_b ∧ ∃ fields_b. refinement_b)`,
+    /// some branch's guard holds and some payload satisfies its refinements.
+    Progress { branches: Vec<Enabled> },
     /// The footprint of `prim` (a predicate) contains its kind's body, at every time and
     /// state its guarantee and the invariant allow from every start its precondition
     /// allows, for every argument (the obligation's `hyps` are empty).
     Contains { prim: PrimId },
+}
+
+/// When one branch of a choice (or a lone message) can be taken: its guard holds and
+/// some values of `fields` satisfy `refinement` (the conjunction of its payload's
+/// refinements, fields defined by an equality already replaced by their definition).
+#[derive(Clone, Debug)]
+pub struct Enabled {
+    /// The message as the user wrote it, for the report (`p -> q: l`).
+    pub what: String,
+    pub guard: Option<Expr>,
+    /// The payload values still to be chosen (existentially quantified).
+    pub fields: Vec<(ValueId, String, Sort)>,
+    pub refinement: Expr,
 }
 
 /// One side of a `*`: its participants and the primitives they may run on it.
@@ -259,6 +291,9 @@ mod tests {
             Rule::TSess,
             Rule::RecInit,
             Rule::RecJump,
+            Rule::MeasureBound,
+            Rule::MeasureDecrease,
+            Rule::Progress,
             Rule::TRecInit,
             Rule::TRecJump,
             Rule::TRecArgs,

@@ -16,6 +16,10 @@ pub enum Global {
     Rec {
         var: String,
         params: Vec<RecParam>,
+        /// The termination measure of `mu t(...) decreases E. G` (an `int` over the
+        /// parameters, values bound before the loop and constants): at every jump `t(a)`,
+        /// `E >= 0` and `E[a/params] < E` (E0416, E0417).
+        decreases: Option<Expr>,
         body: Box<Global>,
         loc: Loc,
     },

@@ -346,10 +346,15 @@ impl Printer<'_> {
                 self.newline();
                 self.out.push(')');
             }
-            Global::Rec { var, params, body, .. } => {
+            Global::Rec { var, params, decreases, body, .. } => {
                 let _ = write!(self.out, "mu {var}");
                 let outer = self.scope.len();
                 self.rec_params(params);
+                if let Some(m) = decreases {
+                    self.out.push_str(" decreases (");
+                    self.expr(m, 0);
+                    self.out.push(')');
+                }
                 self.scope.truncate(outer);
                 self.out.push_str(". ");
                 self.global(body);

@@ -85,14 +85,23 @@ impl Lowerer {
                     Global::Par(lowered, Loc(*span))
                 }
             }
-            ast::Global::Rec { var, params, body, span } => {
+            ast::Global::Rec { var, params, decreases, body, span } => {
                 let mark = cx.values.len();
                 let params = self.rec_params(params, ValueOrigin::RecParam, Who::Nobody, &mut cx.values);
+                // The measure reads the parameters, the values bound before the loop and
+                // constants, none of which changes within an iteration (no participant's
+                // state: a motion would change it between the head and the jump).
+                let decreases = decreases.as_ref().map(|e| {
+                    let env = Env { values: &cx.values.clone(), ..Env::consts_only() };
+                    let m = self.expr(e, &env);
+                    self.expect_sort(&m, &Sort::Int, &format!("the measure of `{}`", var.name));
+                    m
+                });
                 cx.recs.push((var.name.clone(), params.len()));
                 let body = self.global(body, cx);
                 cx.recs.pop();
                 cx.values.truncate(mark);
-                Global::Rec { var: var.name.clone(), params, body: Box::new(body), loc: Loc(*span) }
+                Global::Rec { var: var.name.clone(), params, decreases, body: Box::new(body), loc: Loc(*span) }
             }
             ast::Global::Var { var, args, span } => {
                 let args =

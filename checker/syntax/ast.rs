@@ -303,10 +303,12 @@ pub enum Global {
     Choice(Vec<Global>, Span),
     /// `g1 * g2 * ...`
     Par(Vec<Global>, Span),
-    /// `mu t. G` or `mu t(params). G`
+    /// `mu t. G` or `mu t(params). G`, optionally `mu t(params) decreases E. G`
     Rec {
         var: Ident,
         params: Vec<RecParam>,
+        /// The termination measure `decreases E` (refined sessions, issue 10).
+        decreases: Option<Expr>,
         body: Box<Global>,
         span: Span,
     },
