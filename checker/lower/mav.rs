@@ -216,6 +216,23 @@ impl Lowerer {
         f: &ast::Field,
     ) -> Option<Resolved<'static>> {
         let name = f.name.name.as_str();
+        // A name that is a field of the message and the label of a parameter carried by
+        // another field (COMMAND_INT's `frame`, MAV_CMD_DO_CHANGE_ALTITUDE's param2 "Frame")
+        // is neither: the two differ in type and meaning, so the writer must say which.
+        if let Some(c) = command {
+            if let dialect::CommandField::Ambiguous { field, param } = dialect::command_field(msg, c, name) {
+                self.err(
+                    Code::UnknownField,
+                    f.name.span,
+                    format!(
+                        "`{name}` names both the field `{}` of `{}` and parameter {} of `{}` (carried in `param{}`)",
+                        field.name, msg.name, param.index, c.name, param.index
+                    ),
+                    format!("write `param{}` for the command's parameter; the message's own `{}` cannot be refined in a `{}[...]` payload that names it so", param.index, field.name, msg.name),
+                );
+                return None;
+            }
+        }
         // A command parameter by its label or `param<i>`: the message's field for index i.
         let by_param = command.and_then(|c| c.param_by_name(name)).map(|p| (param_field(msg, p.index), p));
         let res = match by_param {
