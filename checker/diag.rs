@@ -105,7 +105,10 @@ codes! {
     Duplicate = "E0206", "duplicate definition",
         "A name is defined twice in the same namespace: two robot kinds, two primitives of one \
          kind, two participants, two fields of one motion, two variables of one robot, or two \
-         processes for one role. Rename or delete one of them.";
+         processes for one role. In a program with a MAVLink `dialect`: a `const` named like an \
+         enum entry of the dialect (every entry is an `int` constant), or one field of a MAVLink \
+         message listed twice (a command's `action` and `param1` included). Rename or delete one \
+         of them.";
     UnboundRecursion = "E0207", "unbound recursion variable",
         "A recursion variable `t` is used outside any `mu t. ...` that binds it (Def 4.1: types \
          are closed). Bind it with `mu t.` around the recursive part.";
@@ -167,6 +170,71 @@ codes! {
         "`on: Carrier.mount` names a mount point that the carrier's robot kind does not declare. \
          A robot offers mounts with `mount name: pose(...);` in its `robot` block; the message \
          lists the ones it has.";
+    UnknownDialect = "E0230", "unknown MAVLink dialect",
+        "`dialect NAME;` names the MAVLink dialect whose messages a protocol exchanges. mochi \
+         bundles the dialects of the MAVLink XML definitions (`common`, `ardupilotmega`, \
+         `standard`, `minimal` and the others shipped under `checker/dialect/definitions/`); the \
+         message lists them and the closest names. Dialects are read at build time: a user XML \
+         file cannot be named yet.";
+    DialectConflict = "E0231", "two different dialects",
+        "A program (the `.chor` file and every file it imports) speaks one MAVLink dialect: \
+         each message label, field and enum entry is resolved in it. Two `dialect` items naming \
+         different dialects are an error (the same name twice is harmless). A dialect such as \
+         `ardupilotmega` includes `common`: name the larger one.";
+    UnknownMessage = "E0232", "unknown MAVLink message",
+        "In a program with a `dialect`, every message label is a MAVLink message of that \
+         dialect, by its XML name (`MISSION_COUNT`, `COMMAND_LONG[MAV_CMD_X]`). The label \
+         names none; the help lists the closest names (by edit distance). Without a `dialect`, \
+         labels are free.";
+    UnknownField = "E0233", "unknown field of a MAVLink message",
+        "A payload field of a MAVLink message must be one of the message's fields (`count` of \
+         `MISSION_COUNT`), or for `COMMAND_LONG[MAV_CMD_X]` and `COMMAND_INT[MAV_CMD_X]` one of \
+         its parameters, by `param1`..`param7` or by the parameter's XML label in snake case \
+         (`action` for MAV_CMD_DO_PARACHUTE's \"Action\"). The help lists the closest names.";
+    WireSort = "E0234", "a field's sort disagrees with its wire type",
+        "A MAVLink field's sort comes from its wire type: `uint8_t`..`uint64_t` and \
+         `int8_t`..`int64_t` are `int`, `float` and `double` are `real`, `char[N]` is `str`. A \
+         `: sort` written after the field must be that sort (it may be left out).";
+    ArrayField = "E0235", "an array field cannot be used",
+        "A MAVLink field of an array type other than `char[N]` (`uint8_t[32]`, `float[4]`) has \
+         no sort in mochi yet: it can neither be listed in a payload nor read by a refinement. \
+         Leave it out of the message's payload: a field not listed may have any value of its \
+         wire type.";
+    StringTooLong = "E0236", "a string literal longer than its field",
+        "A `char[N]` field holds at most N characters; a string literal compared with it is \
+         longer, so the comparison could never be true (or `!=` never false). Use the name as the \
+         autopilot spells it (parameter ids are at most 16 characters).";
+    BadCommand = "E0237", "a command label that names no command",
+        "`COMMAND_LONG[MAV_CMD_X]` and `COMMAND_INT[MAV_CMD_X]` are the command messages with \
+         their `command` field fixed to the entry `MAV_CMD_X` of the enum `MAV_CMD`. The command \
+         must be such an entry, the message one with a `command` field of enum `MAV_CMD`, and \
+         the program must name a `dialect`.";
+    ReservedParam = "E0238", "a reserved command parameter is named",
+        "A `MAV_CMD` parameter the dialect marks `reserved=\"true\"` must not be used (it is sent \
+         as 0 or NaN and means nothing). Remove it from the payload.";
+    BadFlag = "E0239", "`has_flag` needs an integer and a constant flag",
+        "`has_flag(x, F)` is true iff every bit set in F is set in the integer x (MAVLink bitmask \
+         enums such as MAV_MODE_FLAG). F must be a constant positive integer: an entry of a \
+         bitmask enum, an integer literal or a constant with such a value; x must be of sort \
+         `int`.";
+    ShadowsEntry = "E0240", "a name hides an enum entry of the dialect",
+        "In a program with a `dialect`, every enum entry (`MAV_MISSION_ACCEPTED`, \
+         `MAV_CMD_DO_PARACHUTE`) is an `int` constant. A payload binder, recursion parameter, \
+         received value, motion parameter or robot variable of the same name would hide it \
+         from every expression after it, silently changing what the name means. Choose another \
+         name. (A `const` of an entry's name is E0206.)";
+    MissingSort = "E0241", "a payload field without a sort",
+        "A payload field of a message that is not a MAVLink message must say its sort \
+         (`x: real`). Only the fields of a MAVLink message (a program with a `dialect`) take \
+         their sorts from the dialect, and only they may be renamed with `FIELD as NAME`.";
+    ProtocolOnly = "E0242", "a protocol only: no process typed",
+        "A note, not an error. A program with a `dialect` and no `process` item at all is a \
+         protocol (issue 10: a MAVLink sub-protocol between a ground station and a vehicle): \
+         mochi checks its global type (well-formedness, total choice, recursion parameters, \
+         every refinement and guard on its path) and projects it onto each participant, but \
+         no process is typed against its projection, so `verified` says nothing of an \
+         implementation. `mochi project FILE --role R` prints what a process of R must do. \
+         With one `process`, every participant needs one (E0701).";
     SelfMessage = "E0301", "message to oneself",
         "Def 4.1 requires `p != q` in `p -> q : l`. A participant cannot send a message to itself; \
          use a local computation in its process instead.";
@@ -414,6 +482,39 @@ codes! {
          known at the jump, on every path that reaches it. The counterexample is a state (with the \
          current parameters) that reaches the jump with arguments that break P. Guard the branch \
          that jumps (for example `[n > 0]` before `t(n - 1)`), or change the arguments.";
+    MeasureNegative = "E0416", "a loop's termination measure may be negative at a jump back",
+        "Termination of refined recursion (`mu t(params) decreases E. G`; DATUM seed 000 Sec 3.1's \
+         `mu T(n: Z {P}) <n = e>` with a measure): the loop claims to be left after finitely many \
+         iterations because the integer E is bounded below by 0 and drops at every jump back. \
+         So at each `t(a)`, on every path that reaches it (under what is known there: the \
+         messages' refinements, the guards on the way, the parameters' refinements), E >= 0 must \
+         hold of the current iteration. The counterexample is a state reaching the jump with a \
+         negative E. Guard the branch that jumps (for example `[i < count]`), or choose a measure \
+         that stays non-negative.";
+    MeasureNotDecreasing = "E0417", "a loop's termination measure does not decrease at a jump back",
+        "Termination of refined recursion (`mu t(params) decreases E. G`): at each jump `t(a)` the \
+         measure of the next iteration, E with the arguments for the parameters, must be smaller \
+         than E of the current one, on every path to the jump. Otherwise the loop can repeat \
+         forever (a counter never incremented: `t(i)` instead of `t(i + 1)`). The counterexample \
+         gives the parameters and payload values for which E[a/params] >= E. Pass arguments that \
+         make progress, or drop `decreases` if the loop is meant to run forever (a reactive loop: \
+         then nothing is claimed).";
+    MeasureNoExit = "E0418", "a loop with a termination measure has no way out",
+        "`mu t(params) decreases E. G` claims that the loop ends, but no path of its body reaches \
+         `end` or a jump to an enclosing loop: every path jumps back to `t` (or to a loop inside \
+         it), so the claim is false whatever E is (the measure's checks would then only say that \
+         the protocol is stuck once E runs out). Add the branch that leaves the loop (for example \
+         the acknowledgement that ends a mission upload), or drop `decreases` for a reactive loop.";
+    Stuck = "E0419", "the protocol can get stuck: no branch can be taken",
+        "Progress: in every state the protocol reaches, some way on must be open. A message \
+         `p -> q: [P] l(v: S {R})` can be sent only when its guard P holds and some value \
+         satisfies its refinement R (with the wire ranges of its fields); a choice only when one \
+         of its branches can. Total choice (E0316) asks that the guards cover every state; this \
+         check asks more: that in every state allowed there (the guards' disjunction assumed, \
+         E0316 checks it), some branch has a true guard and a payload its refinement admits. The \
+         counterexample is such a state, in the values of the messages and parameters so far, \
+         and the trace is the path that reaches it. Weaken the refinement, or add a branch for \
+         that state (for example a NACK).";
     EmptyLibrary = "E0420", "a library declares no robot kind and no motion primitive",
         "A note, not an error. `mochi check lib.mochi` checks a library on its own when the file \
          (with its imports) has no `system` and no `choreography`: its names and sorts, that each \

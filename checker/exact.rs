@@ -334,6 +334,14 @@ fn eval_inner(prog: &Program, e: &Expr, env: &dyn Env, depth: usize) -> Result<V
                     })
                 }
                 Builtin::Point | Builtin::Vector => Value::Vec3([num(arg(0)?)?, num(arg(1)?)?, num(arg(2)?)?]),
+                Builtin::HasFlag => {
+                    let flag = crate::hir::expr::const_int(prog, arg(1)?).ok_or("a flag that is not a constant")?;
+                    let x = num(arg(0)?)?;
+                    if x.lo != x.hi || !x.lo.is_integer() {
+                        return Ok(Value::Bool(Tri::Unknown));
+                    }
+                    Value::Bool(Tri::of(has_flag(&x.lo, flag)))
+                }
                 Builtin::Dot | Builtin::Norm2 => {
                     let u = vec3(ev(arg(0)?)?)?;
                     let v = if *f == Builtin::Dot { vec3(ev(arg(1)?)?)? } else { u.clone() };
@@ -347,6 +355,18 @@ fn eval_inner(prog: &Program, e: &Expr, env: &dyn Env, depth: usize) -> Result<V
         }
         ExprKind::Tuple(_) => return Err("tuples".into()),
     })
+}
+
+/// `has_flag(x, flag)` on exact integers: every bit `k` of `flag` (a positive constant)
+/// has `floor(x / 2^k) mod 2 == 1`, as the SMT encoding says it (two's complement for a
+/// negative `x`).
+pub fn has_flag(x: &Rat, flag: i64) -> bool {
+    let two = Rat::from_integer(BigInt::from(2));
+    flag > 0
+        && (0..63).filter(|k| flag >> k & 1 == 1).all(|k| {
+            let q = (x / Rat::from_integer(BigInt::one() << k)).floor();
+            (&q - &two * (&q / &two).floor()).is_one()
+        })
 }
 
 fn vec3(v: Value) -> Result<[Num; 3], String> {

@@ -32,6 +32,14 @@ pub enum Rule {
     RecInit,
     /// ... and of the arguments of each jump back.
     RecJump,
+    /// Termination of refined recursion (`decreases E`): the measure is not negative at a
+    /// jump back.
+    MeasureBound,
+    /// ... and the next iteration's measure is smaller than this one's.
+    MeasureDecrease,
+    /// Progress: in every reachable state at a message or choice, some branch has a true
+    /// guard and a payload its refinements admit.
+    Progress,
     /// [T-REC] with parameters: a process loop's refinement holds of its initial value.
     TRecInit,
     /// [T-VAR] with parameters: ... and of the arguments of each process jump.
@@ -65,6 +73,9 @@ impl Rule {
             Rule::TSess => "[T-SESS]",
             Rule::RecInit => "recursion parameter at entry (DATUM)",
             Rule::RecJump => "recursion parameter at a jump (DATUM)",
+            Rule::MeasureBound => "termination: the measure is not negative at a jump",
+            Rule::MeasureDecrease => "termination: the measure decreases at a jump",
+            Rule::Progress => "progress: some branch can be taken",
             Rule::TRecInit => "[T-REC] with parameters",
             Rule::TRecJump => "[T-VAR] with parameters",
             Rule::TRecArgs => "[T-REC]/[T-VAR]: parameters as the type's",
@@ -83,6 +94,8 @@ impl Rule {
             Rule::AgComp => "compatibility",
             Rule::FullSeparation => "separation",
             Rule::RecInit | Rule::RecJump => "recursion-parameters",
+            Rule::MeasureBound | Rule::MeasureDecrease => "termination",
+            Rule::Progress => "progress",
             Rule::Refinement
             | Rule::TMotion
             | Rule::TOut
@@ -110,6 +123,9 @@ impl Rule {
             Rule::TSess => "tsess",
             Rule::RecInit => "recinit",
             Rule::RecJump => "recjump",
+            Rule::MeasureBound => "measurebound",
+            Rule::MeasureDecrease => "measuredecrease",
+            Rule::Progress => "progress",
             Rule::TRecInit => "trecinit",
             Rule::TRecJump => "trecjump",
             Rule::TRecArgs => "trecargs",
@@ -259,6 +275,9 @@ mod tests {
             Rule::TSess,
             Rule::RecInit,
             Rule::RecJump,
+            Rule::MeasureBound,
+            Rule::MeasureDecrease,
+            Rule::Progress,
             Rule::TRecInit,
             Rule::TRecJump,
             Rule::TRecArgs,

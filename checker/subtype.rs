@@ -384,6 +384,17 @@ impl Sub<'_> {
             .with_help("carry one value per field of the super type's message"));
         }
         for (x, y) in sub.iter().zip(sup) {
+            let field = |f: &Field| f.mav.as_ref().map(|m| m.field.clone());
+            if field(x) != field(y) {
+                let name = |f: &Field| field(f).unwrap_or_else(|| f.name.clone());
+                return Err(Diagnostic::error(
+                    Code::SortMismatch,
+                    sloc.0,
+                    format!("this value is the field `{}`, the super type's at its place is `{}`", name(x), name(y)),
+                )
+                .with_label(tloc.0, "the super type's message")
+                .with_help("list the MAVLink message's fields in the super type's order"));
+            }
             if !x.sort.fits(&y.sort) && !y.sort.fits(&x.sort) {
                 return Err(Diagnostic::error(
                     Code::SortMismatch,

@@ -171,6 +171,12 @@ const NOT_ALONE: &[(&str, &str)] = &[
          (E0406) failure at time 0. Tested in smt::tests::initially_apart_holds_for_distant_bots_and_fails_for_touching_ones",
     ),
     (
+        "E0242",
+        "a note, not an error: a program with a dialect and no process is a protocol, verified \
+         without typing processes, and says so. Tested in tests/cli.rs::\
+         a_mavlink_protocol_without_processes_is_verified_and_says_no_process_was_typed",
+    ),
+    (
         "E0420",
         "a note, not an error: a library with no robot kind and no motion primitive is verified \
          (names and sorts checked) and says so. Tested in library::tests::\

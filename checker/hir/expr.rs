@@ -21,6 +21,12 @@ pub enum Sort {
     Point,
     Vector,
     Product(Vec<Sort>),
+    /// A string: a MAVLink `char[N]` field or a string literal (issue 10). The only
+    /// operations are `==` and `!=`. Encoded as an integer: each distinct literal of the
+    /// program is one code ([`Program::strings`](super::Program)), so two literals are equal
+    /// iff they are the same text, and a variable is any integer (a code of a literal, or
+    /// a string no literal writes). Sound and complete for `==`/`!=` (LANGUAGE.md).
+    Str,
     /// The sort of a process binder before typing gives it the payload's: open, not
     /// wrong. An operation on it checks what it can and leaves the result open where
     /// it depends on it.
@@ -58,6 +64,7 @@ impl std::fmt::Display for Sort {
             Sort::Real => f.write_str("real"),
             Sort::Point => f.write_str("point"),
             Sort::Vector => f.write_str("vector"),
+            Sort::Str => f.write_str("str"),
             Sort::Any => f.write_str("_"),
             // Never in a message: every check accepts it.
             Sort::Error => f.write_str("{error}"),
@@ -126,6 +133,12 @@ pub enum Builtin {
     /// no arguments). Being irrational, it is never a rational value anywhere: bounds
     /// enclose it, the solver sees a fresh real inside a rational enclosure.
     Pi,
+    /// `has_flag(x, F)` (issue 10, MAVLink bitmasks): every bit set in the constant
+    /// positive integer `F` is set in the integer `x`. Lowering checks that `F` is one
+    /// ([`const_int`]); the SMT stage encodes each bit `k` exactly as
+    /// `(x div 2^k) mod 2 == 1` (Euclidean division, so a negative `x` reads as its
+    /// two's complement with infinitely many leading ones).
+    HasFlag,
 }
 
 impl Builtin {
@@ -142,6 +155,7 @@ impl Builtin {
             "dot" => Builtin::Dot,
             "norm2" => Builtin::Norm2,
             "pi" => Builtin::Pi,
+            "has_flag" => Builtin::HasFlag,
             _ => return None,
         })
     }
@@ -158,12 +172,13 @@ impl Builtin {
             Builtin::Dot => "dot",
             Builtin::Norm2 => "norm2",
             Builtin::Pi => "pi",
+            Builtin::HasFlag => "has_flag",
         }
     }
     pub fn arity(self) -> usize {
         match self {
             Builtin::Sqrt | Builtin::Abs | Builtin::Sin | Builtin::Cos | Builtin::Norm2 => 1,
-            Builtin::Min | Builtin::Max | Builtin::Dot => 2,
+            Builtin::Min | Builtin::Max | Builtin::Dot | Builtin::HasFlag => 2,
             Builtin::Point | Builtin::Vector => 3,
             Builtin::Pi => 0,
         }
@@ -316,6 +331,39 @@ impl Expr {
 // ---- predicate helpers (on top of the traversals; used by subtyping, Σ and typing) ----
 
 /// A value variable as an expression.
+/// The value of a closed integer term: an integer literal, a constant whose value is one,
+/// and `-`, `+`, `-`, `*` of those (checked: `None` on overflow or anything else). Used
+/// for `has_flag`'s flag (lowering checks it, the SMT stage and the exact evaluator read
+/// it back); constants are acyclic once lowered, and the depth is bounded by `fuel`.
+pub fn const_int(prog: &super::Program, e: &Expr) -> Option<i64> {
+    fn go(prog: &super::Program, e: &Expr, fuel: u32) -> Option<i64> {
+        let fuel = fuel.checked_sub(1)?;
+        match &e.kind {
+            ExprKind::Int(i) if e.sort == Sort::Int => Some(*i),
+            ExprKind::Var(Var::Const(c)) => {
+                let c = prog.consts.get(c.idx())?;
+                if c.sort != Sort::Int {
+                    return None;
+                }
+                go(prog, &c.value, fuel)
+            }
+            ExprKind::Unary(UnOp::Neg, a) => go(prog, a, fuel)?.checked_neg(),
+            ExprKind::Binary(op, a, b) => {
+                let (a, b) = (go(prog, a, fuel)?, go(prog, b, fuel)?);
+                match op {
+                    BinOp::Add => a.checked_add(b),
+                    BinOp::Sub => a.checked_sub(b),
+                    BinOp::Mul => a.checked_mul(b),
+                    BinOp::Pow => a.checked_pow(u32::try_from(b).ok()?),
+                    _ => None,
+                }
+            }
+            _ => None,
+        }
+    }
+    go(prog, e, 64)
+}
+
 pub fn value_expr(id: ValueId, name: &str, sort: &Sort) -> Expr {
     Expr { kind: ExprKind::Var(Var::Value(id, name.to_string())), sort: sort.clone(), loc: Loc::default() }
 }

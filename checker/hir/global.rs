@@ -16,6 +16,10 @@ pub enum Global {
     Rec {
         var: String,
         params: Vec<RecParam>,
+        /// The termination measure of `mu t(...) decreases E. G` (an `int` over the
+        /// parameters, values bound before the loop and constants): at every jump `t(a)`,
+        /// `E >= 0` and `E[a/params] < E` (E0416, E0417).
+        decreases: Option<Expr>,
         body: Box<Global>,
         loc: Loc,
     },
@@ -112,6 +116,27 @@ pub struct Field {
     pub name: String,
     pub sort: Sort,
     pub refinement: Option<Expr>,
+    /// Of a MAVLink message: which field of it this is, and what lowering added to the
+    /// refinement. `None` for a field of a label that is not a MAVLink message.
+    pub mav: Option<MavField>,
+}
+
+/// A payload field of a MAVLink message (LANGUAGE.md, MAVLink messages).
+///
+/// Lowering conjoins what the dialect says of the field (its wire range, and for a
+/// command's `command` field the fixed command) to the user's refinement, as
+/// `implicit && user`: `refinement` is `implicit` alone when `user` is false, `implicit &&
+/// written` when both are true, and the written refinement alone when `implicit` is false.
+/// The printer leaves the implicit part out, so what it prints lowers back to the same
+/// field.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct MavField {
+    /// The message's field (`param1` for a command parameter addressed by its label).
+    pub field: String,
+    /// As written: the field or the command parameter's label (`action`).
+    pub written: String,
+    pub implicit: bool,
+    pub user: bool,
 }
 
 /// `dt<(p_i : a_i)>`
@@ -150,7 +175,11 @@ pub struct RecVar {
 
 impl PartialEq for Field {
     fn eq(&self, o: &Field) -> bool {
-        self.value == o.value && self.name == o.name && self.sort == o.sort && self.refinement == o.refinement
+        self.value == o.value
+            && self.name == o.name
+            && self.sort == o.sort
+            && self.refinement == o.refinement
+            && self.mav == o.mav
     }
 }
 

@@ -15,7 +15,7 @@ pub mod print;
 pub mod process;
 
 pub use expr::{Builtin, Expr, ExprKind, Slot, Sort, Var};
-pub use global::{Field, Global, Motion, Msg, PrimApp, RecParam, RecVar};
+pub use global::{Field, Global, MavField, Motion, Msg, PrimApp, RecParam, RecVar};
 pub use local::{Local, LocalArc, RecvBranch, SendBranch};
 pub use process::{Process, RecvArm};
 
@@ -72,6 +72,11 @@ pub struct Const {
     pub value: Expr,
     pub span: Span,
 }
+
+/// The name of the kind of plain participants (`participant GCS;`): no state, no inputs,
+/// no body, no primitives. It cannot be written (it is not an identifier), so no `robot`
+/// item and no `participant P: Kind` can name it.
+pub const PLAIN_KIND: &str = "<plain>";
 
 /// A robot kind: state variables X, input variables W (Sec 3.1), geometry, invariant.
 #[derive(Clone, Debug)]
@@ -229,6 +234,12 @@ pub struct Program {
     pub obstacles: Vec<body::Obstacle>,
     /// Every body as solids (set by the geometry stage, `space::world`).
     pub world: Option<std::sync::Arc<crate::space::world::World>>,
+    /// The MAVLink dialect named by `dialect NAME;` (issue 10): message labels are its
+    /// messages, its enum entries are `int` constants.
+    pub dialect: Option<&'static crate::dialect::Dialect>,
+    /// The string literals of the program, each once: a literal of sort `str` is
+    /// `ExprKind::Int(code)` with `code` its index here ([`Sort::Str`]).
+    pub strings: Vec<String>,
 }
 
 impl Program {
@@ -252,6 +263,15 @@ impl Program {
     }
     pub fn kind_of(&self, r: RoleId) -> &RobotKind {
         self.kind(self.role(r).kind)
+    }
+    /// Whether `r` is a plain participant (`participant GCS;`): its kind is the synthetic
+    /// empty one lowering gives every plain participant, [`PLAIN_KIND`].
+    pub fn is_plain(&self, r: RoleId) -> bool {
+        self.kind_of(r).name == PLAIN_KIND
+    }
+    /// The text of a string literal's code ([`Sort::Str`]).
+    pub fn string(&self, code: i64) -> Option<&str> {
+        usize::try_from(code).ok().and_then(|i| self.strings.get(i)).map(String::as_str)
     }
     /// For [T-SESS]: each participant's possible first primitives, in role order.
     /// Participants that never move are left out (they have no footprint to place).

@@ -247,8 +247,21 @@ impl Printer<'_> {
                 self.out.push_str(", ");
             }
             let name = self.bind(f.value, &f.name);
-            let _ = write!(self.out, "{}: {}", name, f.sort);
-            if let Some(r) = &f.refinement {
+            // A MAVLink field: `FIELD` or `FIELD as NAME`, and only the user's part of the
+            // refinement (lowering adds the wire range again; `MavField`).
+            let written = match &f.mav {
+                Some(m) if m.written != name => format!("{} as {name}", m.written),
+                _ => name,
+            };
+            let _ = write!(self.out, "{}: {}", written, f.sort);
+            let user = match (&f.mav, &f.refinement) {
+                (Some(m), Some(r)) if m.implicit => match &r.kind {
+                    ExprKind::Binary(BinOp::And, _, u) if m.user => Some(&**u),
+                    _ => None,
+                },
+                (_, r) => r.as_ref(),
+            };
+            if let Some(r) = user {
                 self.out.push_str(" { ");
                 self.expr(r, 0);
                 self.out.push_str(" }");
@@ -333,10 +346,15 @@ impl Printer<'_> {
                 self.newline();
                 self.out.push(')');
             }
-            Global::Rec { var, params, body, .. } => {
+            Global::Rec { var, params, decreases, body, .. } => {
                 let _ = write!(self.out, "mu {var}");
                 let outer = self.scope.len();
                 self.rec_params(params);
+                if let Some(m) = decreases {
+                    self.out.push_str(" decreases (");
+                    self.expr(m, 0);
+                    self.out.push(')');
+                }
                 self.scope.truncate(outer);
                 self.out.push_str(". ");
                 self.global(body);
@@ -416,6 +434,15 @@ impl Printer<'_> {
             return;
         }
         match &e.kind {
+            // A string literal is its code (`Program::strings`).
+            ExprKind::Int(i) if e.sort == Sort::Str => match self.prog.string(*i) {
+                Some(text) => {
+                    let _ = write!(self.out, "\"{text}\"");
+                }
+                None => {
+                    let _ = write!(self.out, "{{string {i}}}");
+                }
+            },
             ExprKind::Int(i) => {
                 if *i < 0 && ctx > 0 {
                     let _ = write!(self.out, "({i})");

@@ -124,6 +124,16 @@ impl Lowerer {
         let kind = self.prog.role(role).kind;
         let args: Vec<Expr> = call.args.iter().map(|a| self.expr(a, &Env::role(role, values))).collect();
         let Some(&prim) = self.prims.get(&(kind, call.name.name.clone())) else {
+            if self.prog.is_plain(role) {
+                let who = self.prog.role_name(role).to_string();
+                self.err(
+                    Code::UnknownPrimitive,
+                    call.name.span,
+                    format!("`{who}` is a plain participant: it has no motion primitive `{}`", call.name.name),
+                    format!("a participant declared `participant {who};` only sends and receives messages; give it a robot kind (`participant {who}: Kind`) to move"),
+                );
+                return None;
+            }
             let kname = self.prog.kind(kind).name.clone();
             let avail: Vec<_> =
                 self.prog.prims.iter().filter(|p| p.kind == kind).map(|p| format!("`{}`", p.name)).collect();

@@ -67,6 +67,21 @@ impl Lowerer {
             self.diags.push(d);
             return;
         }
+        if let Some((e, entry)) = self.prog.dialect.and_then(|d| d.entry(&c.name.name)) {
+            let dialect = self.dialect_decl.as_ref().map(|(n, s)| (n.clone(), *s));
+            let mut d = Diagnostic::error(
+                Code::Duplicate,
+                c.name.span,
+                format!("constant `{}` is defined twice: it is an entry of the enum `{}`", c.name.name, e.name),
+            )
+            .with_note(format!("`{}` is {} in the dialect", c.name.name, entry.value))
+            .with_help("rename the constant: in a program with a `dialect` every enum entry is an `int` constant");
+            if let Some((name, span)) = dialect {
+                d = d.with_label(span, format!("the dialect `{name}` defines it"));
+            }
+            self.diags.push(d);
+            return;
+        }
         let id = ConstId(self.prog.consts.len() as u32);
         self.consts.insert(c.name.name.clone(), id);
         self.const_spans.push(c.name.span);
@@ -81,6 +96,7 @@ impl Lowerer {
             ast::SortKind::Real => Sort::Real,
             ast::SortKind::Point => Sort::Point,
             ast::SortKind::Vector => Sort::Vector,
+            ast::SortKind::Str => Sort::Str,
             ast::SortKind::Product(parts) => {
                 let parts: Vec<Sort> = parts.iter().map(|p| self.sort(p)).collect();
                 if parts.contains(&Sort::Error) {
@@ -94,7 +110,7 @@ impl Lowerer {
                     Code::SortMismatch,
                     s.span,
                     format!("unknown sort `{n}`"),
-                    "sorts are `unit`, `bool`, `int`, `real`, `point`, `vector` and products `(S, S)`",
+                    "sorts are `unit`, `bool`, `int`, `real`, `point`, `vector`, `str` and products `(S, S)`",
                 );
                 Sort::Error
             }
@@ -115,6 +131,7 @@ impl Lowerer {
                 continue;
             }
             seen.insert(d.name.name.clone(), d.name.span);
+            self.hides_entry(&d.name);
             let sort = self.sort(&d.sort);
             out.push((d.name.name.clone(), sort));
         }
@@ -155,6 +172,28 @@ impl Lowerer {
         self.prog.kinds[kind.idx()].invariant = Some(e);
     }
 
+    /// The kind of plain participants (`participant GCS;`): no state, inputs, body, mounts,
+    /// invariant or primitives. One for all of them, made on first use; its name
+    /// ([`PLAIN_KIND`]) is not an identifier, so nothing written can name it.
+    pub(super) fn plain_kind(&mut self) -> KindId {
+        if let Some(k) = self.plain_kind {
+            return k;
+        }
+        let id = KindId(self.prog.kinds.len() as u32);
+        self.kind_spans.push(Span::default());
+        self.prog.kinds.push(RobotKind {
+            name: PLAIN_KIND.to_string(),
+            state: Vec::new(),
+            inputs: Vec::new(),
+            body: None,
+            mounts: Vec::new(),
+            invariant: None,
+            span: Span::default(),
+        });
+        self.plain_kind = Some(id);
+        id
+    }
+
     pub(super) fn kind_of_name(&mut self, name: &ast::Ident) -> Option<KindId> {
         match self.kinds.get(&name.name) {
             Some(&k) => Some(k),
@@ -185,7 +224,11 @@ impl Lowerer {
                 self.diags.push(d);
                 continue;
             }
-            let Some(kind) = self.kind_of_name(&p.kind) else {
+            let kind = match &p.kind {
+                Some(k) => self.kind_of_name(k),
+                None => Some(self.plain_kind()),
+            };
+            let Some(kind) = kind else {
                 self.poisoned.insert(p.name.name.clone());
                 continue;
             };
@@ -289,7 +332,11 @@ pub(super) fn const_refs(e: &ast::Expr) -> Vec<(&str, Span)> {
             ast::ExprKind::Binary(_, a, b) => stack.extend([&**a, &**b]),
             ast::ExprKind::If(a, b, c) => stack.extend([&**a, &**b, &**c]),
             ast::ExprKind::Call(_, args) | ast::ExprKind::Tuple(args) => stack.extend(args.iter()),
-            ast::ExprKind::Int(_) | ast::ExprKind::Real(_) | ast::ExprKind::Bool(_) | ast::ExprKind::Error => {}
+            ast::ExprKind::Int(_)
+            | ast::ExprKind::Real(_)
+            | ast::ExprKind::Bool(_)
+            | ast::ExprKind::Str(_)
+            | ast::ExprKind::Error => {}
         }
     }
     out

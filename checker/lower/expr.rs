@@ -39,6 +39,7 @@ impl Lowerer {
             ast::ExprKind::Int(i) => mk(ExprKind::Int(*i), Sort::Int),
             ast::ExprKind::Real(r) => mk(ExprKind::Real(r.clone()), Sort::Real),
             ast::ExprKind::Bool(b) => mk(ExprKind::Bool(*b), Sort::Bool),
+            ast::ExprKind::Str(s) => self.string(s, loc),
             // The parser reported it.
             ast::ExprKind::Error => Expr::error(loc),
             ast::ExprKind::Var(name) => self.var(name, e.span, env),
@@ -138,7 +139,7 @@ impl Lowerer {
                 Code::UnknownVariable,
                 f.span,
                 format!("unknown function `{}`", f.name),
-                "functions are sqrt, min, max, abs, sin, cos, old, point, vector, dot, norm2",
+                "functions are sqrt, min, max, abs, sin, cos, old, point, vector, dot, norm2, has_flag",
             );
             return Expr::error(loc);
         };
@@ -187,6 +188,12 @@ impl Lowerer {
             }
             // Only the parser makes this call (`pi` is reserved, `pi()` does not parse).
             Builtin::Pi => Sort::Real,
+            Builtin::HasFlag => {
+                if !self.has_flag(&args, span) {
+                    return Expr::error(loc);
+                }
+                Sort::Bool
+            }
         };
         mk(ExprKind::Call(b, args), sort)
     }
@@ -261,6 +268,8 @@ impl Lowerer {
                         format!("cannot compare `{}` with `{}`", a.sort, b.sort),
                         "both sides of `==` must have the same sort",
                     );
+                } else {
+                    self.string_fits(a, b);
                 }
                 Sort::Bool
             }

@@ -23,6 +23,9 @@ mod body;
 mod contract;
 mod decl;
 mod expr;
+mod mav;
+#[cfg(test)]
+mod mav_tests;
 mod names;
 mod process;
 #[cfg(test)]
@@ -42,6 +45,7 @@ pub fn lower(parsed: &Parsed) -> (Program, Vec<Diagnostic>) {
     let mut l = Lowerer::default();
     let items: Vec<&ast::Item> = parsed.files.iter().flat_map(|(_, f)| f.items.iter()).collect();
     let root_span = parsed.files.last().map(|(id, _)| Span::new(*id, 0, 0)).unwrap_or_default();
+    l.dialects(&items);
     let consts: Vec<&ast::ConstDecl> =
         items.iter().filter_map(|it| if let ast::Item::Const(c) = it { Some(c) } else { None }).collect();
     l.constants(&consts);
@@ -95,6 +99,11 @@ pub fn lower_local(prog: &Program, role: RoleId, t: &ast::Local) -> (LocalArc, V
     let mut l = Lowerer { prog: prog.clone(), ..Lowerer::default() };
     l.consts = prog.consts.iter().enumerate().map(|(i, c)| (c.name.clone(), ConstId(i as u32))).collect();
     l.kinds = prog.kinds.iter().enumerate().map(|(i, k)| (k.name.clone(), KindId(i as u32))).collect();
+    // Enum entries the program interned already keep their constants (and ids).
+    if let Some(d) = prog.dialect {
+        l.entry_consts = l.consts.iter().filter(|(n, _)| d.entry(n).is_some()).map(|(n, c)| (n.clone(), *c)).collect();
+        l.dialect_decl = Some((d.name.clone(), Span::default()));
+    }
     l.prims = prog.prims.iter().enumerate().map(|(i, p)| ((p.kind, p.name.clone()), PrimId(i as u32))).collect();
     let body = l.local(t, role, &mut Scopes::default());
     (body, l.diags)
@@ -118,6 +127,16 @@ struct Lowerer {
     /// Process and local type declarations seen per role.
     process_roles: HashMap<RoleId, Span>,
     local_roles: HashMap<RoleId, Span>,
+    /// The first `dialect` item: its name and span.
+    dialect_decl: Option<(String, Span)>,
+    /// The dialect named could not be found (E0230): messages are not checked.
+    dialect_failed: bool,
+    /// Enum entries of the dialect interned as constants so far ([`Lowerer::entry_const`]).
+    entry_consts: HashMap<String, ConstId>,
+    /// The length N of each `char[N]` payload value, for E0236.
+    str_len: HashMap<ValueId, u32>,
+    /// The kind of plain participants ([`PLAIN_KIND`]), made on first use.
+    plain_kind: Option<KindId>,
 }
 
 /// Whose variables an unqualified name may denote.

@@ -20,6 +20,9 @@ impl Lowerer {
         if self.is_local_name(name, env) || self.consts.contains_key(name) || (name == "clock" && env.part.is_some()) {
             return true;
         }
+        if self.prog.dialect.is_some_and(|d| d.entry(name).is_some()) {
+            return true;
+        }
         self.own_kind(env).is_some_and(|k| self.prog.kind(k).slot(name).is_some())
     }
 
@@ -73,7 +76,19 @@ impl Lowerer {
         if let Some(&c) = self.consts.get(name) {
             return mk(Var::Const(c), self.prog.consts[c.idx()].sort.clone());
         }
+        // An enum entry of the dialect: an `int` constant (after the user's, which cannot
+        // share its name: E0206).
+        if let Some(c) = self.entry_const(name) {
+            return mk(Var::Const(c), Sort::Int);
+        }
         let mut help = "declare it as a `const`, a parameter, a robot variable, or bind it in a message".to_string();
+        if let Some(d) = self.prog.dialect {
+            let close = crate::dialect::suggest(name, d.enums.iter().flat_map(|e| e.entries.iter().map(|x| x.name.as_str())));
+            if !close.is_empty() {
+                let names: Vec<String> = close.iter().map(|n| format!("`{n}`")).collect();
+                help = format!("did you mean the enum entry {}?", names.join(" or "));
+            }
+        }
         if self.prog.role_by_name(name).is_some() {
             help = format!("`{name}` is a participant; write `{name}.var` for one of its variables");
         } else if let Who::Role(r) = env.who {
@@ -160,6 +175,16 @@ impl Lowerer {
             None => {
                 let vars: Vec<_> = k.state.iter().chain(&k.inputs).map(|(n, _)| format!("`{n}`")).collect();
                 let kname = k.name.clone();
+                if self.prog.is_plain(r) {
+                    let who = self.prog.role_name(r).to_string();
+                    self.err(
+                        Code::UnknownVariable,
+                        field.span,
+                        format!("`{who}` is a plain participant: it has no variable `{}`", field.name),
+                        "a plain participant's state is what it sends and receives: read the payload's value, or keep it in a recursion parameter",
+                    );
+                    return Expr::error(loc);
+                }
                 self.err(
                     Code::UnknownVariable,
                     field.span,

@@ -44,7 +44,8 @@ impl Lowerer {
                     let env = Env::role(from, &cx.values);
                     self.pred(gd, &env, "a guard")
                 });
-                let payload = self.fields(&m.payload, from, ValueOrigin::Message { from, to }, &mut cx.values);
+                let payload =
+                    self.message(&m.label, &m.payload, from, ValueOrigin::Message { from, to }, &mut cx.values);
                 Global::Msg(Msg {
                     from,
                     to,
@@ -84,14 +85,23 @@ impl Lowerer {
                     Global::Par(lowered, Loc(*span))
                 }
             }
-            ast::Global::Rec { var, params, body, span } => {
+            ast::Global::Rec { var, params, decreases, body, span } => {
                 let mark = cx.values.len();
                 let params = self.rec_params(params, ValueOrigin::RecParam, Who::Nobody, &mut cx.values);
+                // The measure reads the parameters, the values bound before the loop and
+                // constants, none of which changes within an iteration (no participant's
+                // state: a motion would change it between the head and the jump).
+                let decreases = decreases.as_ref().map(|e| {
+                    let env = Env { values: &cx.values.clone(), ..Env::consts_only() };
+                    let m = self.expr(e, &env);
+                    self.expect_sort(&m, &Sort::Int, &format!("the measure of `{}`", var.name));
+                    m
+                });
                 cx.recs.push((var.name.clone(), params.len()));
                 let body = self.global(body, cx);
                 cx.recs.pop();
                 cx.values.truncate(mark);
-                Global::Rec { var: var.name.clone(), params, body: Box::new(body), loc: Loc(*span) }
+                Global::Rec { var: var.name.clone(), params, decreases, body: Box::new(body), loc: Loc(*span) }
             }
             ast::Global::Var { var, args, span } => {
                 let args =
@@ -111,22 +121,24 @@ impl Lowerer {
         origin: ValueOrigin,
         values: &mut Vec<ValueId>,
     ) -> Vec<Field> {
-        super::distinct("payload field", fields.iter().map(|f| &f.name), &mut self.diags);
+        super::distinct("payload field", fields.iter().map(|f| f.bound()), &mut self.diags);
         let mut out = Vec::new();
         for f in fields {
-            let sort = self.sort(&f.sort);
-            let v = self.new_value(&f.name, sort.clone(), origin.clone());
+            // A missing sort is reported by `message` (E0241).
+            let sort = f.sort.as_ref().map(|s| self.sort(s)).unwrap_or(Sort::Error);
+            let v = self.new_value(f.bound(), sort.clone(), origin.clone());
             values.push(v);
             let refinement = f.refinement.as_ref().map(|r| {
                 let env = Env::role(viewer, values);
                 self.pred(r, &env, "a refinement")
             });
-            out.push(Field { value: v, name: f.name.name.clone(), sort, refinement });
+            out.push(Field { value: v, name: f.bound().name.clone(), sort, refinement, mav: None });
         }
         out
     }
 
     pub(super) fn new_value(&mut self, name: &ast::Ident, sort: Sort, origin: ValueOrigin) -> ValueId {
+        self.hides_entry(name);
         let id = ValueId(self.prog.values.len() as u32);
         self.prog.values.push(ValueVar { name: name.name.clone(), sort, origin, span: name.span });
         id
@@ -221,7 +233,8 @@ impl Lowerer {
                         self.pred(g, &env, "a guard")
                     });
                     let Some(to) = self.role(&b.to) else { continue };
-                    let payload = self.fields(&b.payload, me, ValueOrigin::Message { from: me, to }, &mut cx.values);
+                    let origin = ValueOrigin::Message { from: me, to };
+                    let payload = self.message(&b.label, &b.payload, me, origin, &mut cx.values);
                     let cont = self.local(&b.cont, me, cx);
                     out.push(SendBranch { guard, to, label: b.label.name.clone(), payload, cont, loc: Loc(b.span) });
                 }
@@ -232,7 +245,8 @@ impl Lowerer {
                 for b in branches {
                     cx.values.truncate(mark);
                     let Some(from) = self.role(&b.from) else { continue };
-                    let payload = self.fields(&b.payload, me, ValueOrigin::Message { from, to: me }, &mut cx.values);
+                    let origin = ValueOrigin::Message { from, to: me };
+                    let payload = self.message(&b.label, &b.payload, me, origin, &mut cx.values);
                     let cont = self.local(&b.cont, me, cx);
                     out.push(RecvBranch { from, label: b.label.name.clone(), payload, cont, loc: Loc(b.span) });
                 }

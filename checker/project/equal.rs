@@ -141,7 +141,10 @@ impl<'t> Differ<'t> {
         }
         self.ren.extend(a.iter().zip(b).map(|(x, y)| (x.value, y.value)));
         a.iter().zip(b).all(|(x, y)| {
-            (x.name == y.name || !self.names) && x.sort == y.sort && self.opt_expr(&x.refinement, &y.refinement)
+            (x.name == y.name || !self.names)
+                && x.sort == y.sort
+                && same_mav_field(x, y)
+                && self.opt_expr(&x.refinement, &y.refinement)
         })
     }
 
@@ -249,4 +252,10 @@ impl<'t> Differ<'t> {
             _ => here,
         }
     }
+}
+
+/// Two payload fields at one position are the same field of the MAVLink message (or both
+/// are fields of a free label): binders are renamed, but `seq` is not `mission_type`.
+pub(crate) fn same_mav_field(x: &Field, y: &Field) -> bool {
+    x.mav.as_ref().map(|m| (&m.field, m.implicit, m.user)) == y.mav.as_ref().map(|m| (&m.field, m.implicit, m.user))
 }

@@ -46,7 +46,7 @@ impl Projector<'_> {
                     .with_help("move the participant's actions out of all sides but one")),
                 }
             }
-            Global::Rec { var, params, body, loc } => {
+            Global::Rec { var, params, body, loc, .. } => {
                 if !self.occurs_in(body) {
                     // Def 4.8 (4) is undefined here; the role has left the protocol.
                     return Ok(Arc::new(Local::End(*loc)));

@@ -187,7 +187,8 @@ impl<'p> Encoder<'p> {
         }
         let t = match sort {
             Sort::Bool => Term::B(Bool::new_const(name)),
-            Sort::Int => Term::I(Int::new_const(name)),
+            // A string is an integer: literals are their codes (`Program::strings`).
+            Sort::Int | Sort::Str => Term::I(Int::new_const(name)),
             Sort::Real | Sort::Any => Term::R(Real::new_const(name)),
             Sort::Point | Sort::Vector => Term::V([
                 Real::new_const(format!("{name}.x")),
@@ -454,6 +455,23 @@ impl<'p> Encoder<'p> {
         };
         let zero = || Int::from_i64(0).to_real();
         Ok(match f {
+            Builtin::HasFlag => {
+                // Exact: bit k of x is (x div 2^k) mod 2 (Euclidean, so a negative x reads as
+                // its two's complement), for every bit k of the constant flag.
+                let flag = args
+                    .get(1)
+                    .and_then(|a| crate::hir::expr::const_int(self.prog, a))
+                    .filter(|f| *f > 0)
+                    .ok_or_else(|| Unsupported("`has_flag` with a flag that is not a positive constant".into()))?;
+                let Term::I(x) = arg(self, 0)? else {
+                    return Err(Unsupported("`has_flag` of a term that is not an integer".into()));
+                };
+                let bits: Vec<Bool> = (0..63)
+                    .filter(|k| flag >> k & 1 == 1)
+                    .map(|k| x.div(&Int::from_i64(1 << k)).modulo(&Int::from_i64(2)).eq(Int::from_i64(1)))
+                    .collect();
+                Term::B(Bool::and(&bits))
+            }
             Builtin::Sqrt => {
                 let a = as_real(arg(self, 0)?)?;
                 let s = Real::fresh_const("sqrt");

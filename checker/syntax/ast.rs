@@ -22,6 +22,8 @@ pub struct File {
 #[derive(Clone, Debug)]
 pub enum Item {
     Import(Import),
+    /// `dialect NAME;` (issue 10): the MAVLink dialect whose messages are the labels.
+    Dialect(DialectDecl),
     Const(ConstDecl),
     Robot(RobotDecl),
     Motion(MotionDecl),
@@ -34,6 +36,13 @@ pub enum Item {
 #[derive(Clone, Debug)]
 pub struct Import {
     pub path: String,
+    pub span: Span,
+}
+
+/// `dialect common;`: names a bundled MAVLink dialect (LANGUAGE.md, MAVLink messages).
+#[derive(Clone, Debug)]
+pub struct DialectDecl {
+    pub name: Ident,
     pub span: Span,
 }
 
@@ -67,6 +76,8 @@ pub enum SortKind {
     Real,
     Point,
     Vector,
+    /// `str`: a MAVLink `char[N]` field's sort (issue 10).
+    Str,
     Product(Vec<SortAst>),
     /// A name the parser does not know (reported by lowering).
     Named(String),
@@ -168,7 +179,9 @@ pub struct SystemDecl {
 #[derive(Clone, Debug)]
 pub struct ParticipantDecl {
     pub name: Ident,
-    pub kind: Ident,
+    /// `None` for a plain participant (`participant GCS;`): no state, no geometry, no
+    /// motion primitives (issue 10: a ground station, an autopilot).
+    pub kind: Option<Ident>,
     pub init: Option<Expr>,
     pub at: Option<Pose>,
     /// Every `on: Carrier.mount` written (more than one is E0206, reported by lowering).
@@ -238,12 +251,23 @@ pub struct LocalDecl {
     pub span: Span,
 }
 
-/// A message payload field `x: sort { refinement }`.
+/// A message payload field `x: sort { refinement }`. Of a MAVLink message (a program
+/// with a `dialect`), `FIELD`, `FIELD as BINDER`, each with an optional `: sort` and
+/// `{refinement}`: `name` is then the message's field (or a `MAV_CMD` parameter's label)
+/// and `binder` the value's name when it differs.
 #[derive(Clone, Debug)]
 pub struct Field {
     pub name: Ident,
-    pub sort: SortAst,
+    pub binder: Option<Ident>,
+    pub sort: Option<SortAst>,
     pub refinement: Option<Expr>,
+}
+
+impl Field {
+    /// The name the field's value is bound to: the binder after `as`, else the field's.
+    pub fn bound(&self) -> &Ident {
+        self.binder.as_ref().unwrap_or(&self.name)
+    }
 }
 
 /// A primitive applied to arguments: `m_move(x_G)`, or `work` with no arguments.
@@ -279,10 +303,12 @@ pub enum Global {
     Choice(Vec<Global>, Span),
     /// `g1 * g2 * ...`
     Par(Vec<Global>, Span),
-    /// `mu t. G` or `mu t(params). G`
+    /// `mu t. G` or `mu t(params). G`, optionally `mu t(params) decreases E. G`
     Rec {
         var: Ident,
         params: Vec<RecParam>,
+        /// The termination measure `decreases E` (refined sessions, issue 10).
+        decreases: Option<Expr>,
         body: Box<Global>,
         span: Span,
     },
@@ -300,6 +326,8 @@ pub struct Msg {
     pub from: Ident,
     pub to: Ident,
     pub guard: Option<Expr>,
+    /// The label; a MAVLink command is one label `COMMAND_LONG[MAV_CMD_X]` (written with
+    /// any spacing, stored without), its span from the message name to the `]`.
     pub label: Ident,
     pub payload: Vec<Field>,
     pub span: Span,
@@ -451,6 +479,8 @@ pub enum ExprKind {
     /// A real literal kept as written, so no precision is lost before the solver.
     Real(String),
     Bool(bool),
+    /// A string literal `"MC_PITCH_P"` (compared with `char[N]` MAVLink fields).
+    Str(String),
     Var(String),
     /// `e.name`: a participant's variable (`Cart.x`) or a component (`p.x`).
     Dot(Box<Expr>, Ident),

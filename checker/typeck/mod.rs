@@ -64,6 +64,12 @@ pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalArc>)
     for role in prog.role_ids() {
         let name = prog.role_name(role);
         let Some(def) = prog.processes.iter().find(|p| p.role == role) else {
+            // A program with a MAVLink dialect and no process at all is a protocol (issue
+            // 10): its global type and projections are checked, no process is typed (the
+            // report says so). [T-SESS] below is still asked.
+            if protocol_only(prog) {
+                continue;
+            }
             let mut d = Diagnostic::error(
                 Code::MissingProcess,
                 prog.role(role).span,
@@ -86,6 +92,19 @@ pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalArc>)
         diags.extend(c.diags);
         obligations.extend(c.obligations);
     }
+    if protocol_only(prog) {
+        if let Some((sys, span)) = &prog.system {
+            diags.push(
+                Diagnostic::note_at(
+                    Code::ProtocolOnly,
+                    *span,
+                    format!("protocol only: `{sys}` names a dialect and no process, so no process was typed"),
+                )
+                .with_note("the global type and its projections are checked; `mochi project FILE --role R` prints each participant's local type")
+                .with_help("add a `process` for every participant to have implementations typed against their projections"),
+            );
+        }
+    }
     // [T-SESS]: the initial states are collision free.
     let span = prog.system.as_ref().map(|(_, s)| *s).or_else(|| prog.roles.first().map(|r| r.span));
     if let Some(span) = span {
@@ -105,6 +124,13 @@ pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalArc>)
     diags.retain(|d| seen.insert((d.code, d.span, d.message.clone())));
     dedupe(&mut obligations);
     (obligations, diags)
+}
+
+/// Whether `prog` is a protocol only: it names a MAVLink dialect and has no `process`
+/// item. Then no process is typed and E0701 is not asked (with one process, every
+/// participant needs one, as without a dialect).
+pub fn protocol_only(prog: &Program) -> bool {
+    prog.dialect.is_some() && prog.processes.is_empty()
 }
 
 /// A loop checked under several contexts may meet the same goal under the same

@@ -345,8 +345,9 @@ const STEP_BUDGET: usize = 1 << 20;
 struct Contexts<'a> {
     prog: &'a Program,
     obligations: Vec<Obligation>,
-    /// Enclosing recursions, innermost last: the variable and its parameters.
-    loops: Vec<(&'a str, &'a [RecParam])>,
+    /// Enclosing recursions, innermost last: the variable, its parameters and its
+    /// termination measure.
+    loops: Vec<(&'a str, &'a [RecParam], Option<&'a Expr>)>,
     /// The contexts reached at recursion variables: (index into `loops`, Σ there).
     jumps: Vec<(usize, Sigma)>,
     /// The primitives run inside some `*`, in walk order, with the context each starts
@@ -414,10 +415,13 @@ impl<'a> Contexts<'a> {
                 out
             }
             Global::Par(sides, loc) => self.par(sides, *loc, sigma),
-            Global::Rec { var, params, body, .. } => self.rec(var, params, body, sigma),
+            Global::Rec { var, params, decreases, body, .. } => self.rec(var, params, decreases.as_ref(), body, sigma),
             Global::Var(v) => {
-                if let Some(i) = self.loops.iter().rposition(|(n, _)| *n == v.var) {
-                    let params = self.loops[i].1;
+                if let Some(i) = self.loops.iter().rposition(|(n, _, _)| *n == v.var) {
+                    let (_, params, measure) = self.loops[i];
+                    if let (Some(e), true) = (measure, params.len() == v.args.len()) {
+                        self.measure(&v.var, e, params, v, &sigma);
+                    }
                     // The next iteration assumes the refinements of the arguments.
                     if params.len() == v.args.len() {
                         for p in params {
@@ -446,6 +450,40 @@ impl<'a> Contexts<'a> {
             }
             Global::End(_) => None,
         }
+    }
+
+    /// Termination (`mu t(params) decreases E`): at the jump `t(a)` (`v`), under Σ there
+    /// (the path's messages and guards, the parameters' refinements, the loop invariant),
+    /// `E >= 0` (E0416) and `E[a/params] < E` (E0417). E reads only the parameters, values
+    /// bound before the loop and constants (lowering), none of which changes between the
+    /// loop head and a jump back to it: E here is E of the iteration that jumps.
+    fn measure(&mut self, var: &str, e: &Expr, params: &[RecParam], v: &RecVar, sigma: &Sigma) {
+        let text = print::expr(self.prog, None, e);
+        let zero = Expr { kind: ExprKind::Int(0), sort: Sort::Int, loc: e.loc };
+        let cmp = |op, a: Expr, b: Expr| Expr {
+            kind: ExprKind::Binary(op, Box::new(a), Box::new(b)),
+            sort: Sort::Bool,
+            loc: e.loc,
+        };
+        self.obligations.push(Obligation {
+            rule: Rule::MeasureBound,
+            span: v.loc.0,
+            what: format!("the measure `{text}` of `{var}` at the jump `{}`", jump_text(self.prog, v)),
+            hyps: sigma.facts().to_vec(),
+            goal: Goal::Valid(cmp(BinOp::Le, zero, e.clone())),
+        });
+        let next = crate::sigma::subst_params(e, params, &v.args);
+        self.obligations.push(Obligation {
+            rule: Rule::MeasureDecrease,
+            span: v.loc.0,
+            what: format!(
+                "the measure `{text}` of `{var}` at the jump `{}` (next: `{}`)",
+                jump_text(self.prog, v),
+                print::expr(self.prog, None, &next)
+            ),
+            hyps: sigma.facts().to_vec(),
+            goal: Goal::Valid(cmp(BinOp::Lt, next, e.clone())),
+        });
     }
 
     /// [T-SESS]'s assumption, checked: each participant's `init` is satisfiable and
@@ -617,7 +655,14 @@ impl<'a> Contexts<'a> {
     /// `mu t(n: S {R} = e). G`: the refinement `R` must hold of `e` at entry (and of
     /// the arguments at each jump, see `walk`), so the body assumes it; the rest of the
     /// loop invariant is the fixpoint of the module documentation.
-    fn rec(&mut self, var: &'a str, params: &'a [RecParam], body: &'a Global, sigma: Sigma) -> Option<Sigma> {
+    fn rec(
+        &mut self,
+        var: &'a str,
+        params: &'a [RecParam],
+        measure: Option<&'a Expr>,
+        body: &'a Global,
+        sigma: Sigma,
+    ) -> Option<Sigma> {
         let inits = crate::sigma::initial_values(params);
         for p in params {
             let Some(r) = &p.refinement else { continue };
@@ -646,7 +691,7 @@ impl<'a> Contexts<'a> {
             for r in params.iter().filter_map(|p| p.refinement.as_ref()) {
                 start.assume(r);
             }
-            self.loops.push((var, params));
+            self.loops.push((var, params, measure));
             let out = self.walk(body, start);
             self.loops.pop();
             let reached: Vec<&Sigma> =
@@ -676,6 +721,15 @@ impl<'a> Contexts<'a> {
             self.jumps.truncate(marks.2);
         }
     }
+}
+
+/// `t(a, b)`: a jump as written.
+fn jump_text(prog: &Program, v: &RecVar) -> String {
+    if v.args.is_empty() {
+        return v.var.clone();
+    }
+    let a: Vec<String> = v.args.iter().map(|a| print::expr(prog, None, a)).collect();
+    format!("{}({})", v.var, a.join(", "))
 }
 
 /// "s `a, b`": the arguments of a jump as written, for messages.

@@ -55,12 +55,28 @@ impl Side<'_> {
                     self.walk(s, false, true);
                 }
             }
-            Global::Rec { var, body, loc, params } => {
+            Global::Rec { var, body, loc, params, decreases } => {
                 self.closes(tail, *loc, &format!("`mu {var}`"));
+                // Every participant of the loop reads its parameters' refinements (each
+                // tests them in its guards): a value is known when each of them sent or
+                // received it.
+                let pt = body.participant_list();
                 for p in params {
                     if let Some(r) = &p.refinement {
-                        self.knows(r, None, "the refinement of a recursion parameter");
+                        self.knows_all(r, &pt, "the refinement of a recursion parameter");
                     }
+                }
+                if let (Some(m), false) = (decreases, has_exit(body, var)) {
+                    self.diags.push(
+                        Diagnostic::error(
+                            Code::MeasureNoExit,
+                            m.loc.0,
+                            format!("`mu {var}` claims to terminate, but no path of its body leaves the loop"),
+                        )
+                        .with_label(loc.0, "every path of this loop jumps back to it")
+                        .with_note("a loop with `decreases` must have a path to `end` or to an enclosing loop")
+                        .with_help("add the branch that leaves the loop (for example an acknowledgement followed by `end`), or drop `decreases` for a loop meant to run forever"),
+                    );
                 }
                 if unguarded(body).contains(var.as_str()) {
                     self.diags.push(
@@ -215,6 +231,21 @@ impl Side<'_> {
     }
 
     /// E0305: `e` may read only what `viewer` knows.
+    /// [`Self::knows`] for each of `viewers` (no participant: what every participant
+    /// knows, constants and parameters).
+    fn knows_all(&mut self, e: &Expr, viewers: &[RoleId], what: &str) {
+        if viewers.is_empty() {
+            return self.knows(e, None, what);
+        }
+        let before = self.diags.len();
+        for w in viewers {
+            self.knows(e, Some(*w), what);
+            if self.diags.len() > before {
+                return; // one report: the first participant that does not know
+            }
+        }
+    }
+
     fn knows(&mut self, e: &Expr, viewer: Option<RoleId>, what: &str) {
         let prog = self.prog;
         let mut bad: Vec<(String, Loc, String)> = Vec::new();
@@ -225,7 +256,14 @@ impl Side<'_> {
             }
             Var::Value(id, name) => {
                 if let ValueOrigin::Message { from, to } = &prog.value(*id).origin {
-                    if viewer.is_none_or(|w| w != *from && w != *to) {
+                    // With no viewer (a recursion parameter's refinement) every participant
+                    // must know the value: so only when the sender and the receiver are all
+                    // of them (a protocol between two, as MAVLink's GCS and UAV).
+                    let known = match viewer {
+                        Some(w) => w == *from || w == *to,
+                        None => prog.role_ids().all(|r| r == *from || r == *to),
+                    };
+                    if !known {
                         bad.push((
                             name.clone(),
                             loc,
@@ -249,6 +287,29 @@ impl Side<'_> {
             );
         }
     }
+}
+
+/// Whether some path of `g`, the body of `mu var`, leaves the loop: reaches `end` or a jump
+/// to an enclosing loop (a variable not bound inside `g`, other than `var`). Syntactic:
+/// each node of a global type is on some path (E0314 rejects what follows a jump).
+fn has_exit(g: &Global, var: &str) -> bool {
+    fn go<'g>(g: &'g Global, var: &str, inner: &mut Vec<&'g str>) -> bool {
+        match g {
+            Global::End(_) => true,
+            Global::Var(v) => v.var != var && !inner.contains(&v.var.as_str()),
+            Global::Msg(_) | Global::Motion(_) => false,
+            Global::Seq(gs, _) | Global::Choice(gs, _) | Global::Par(gs, _) => {
+                gs.iter().any(|g| crate::stack::deep(|| go(g, var, inner)))
+            }
+            Global::Rec { var: v, body, .. } => {
+                inner.push(v);
+                let out = crate::stack::deep(|| go(body, var, inner));
+                inner.pop();
+                out
+            }
+        }
+    }
+    go(g, var, &mut Vec::new())
 }
 
 /// Recursion variables reachable from the start of `g` without a message or motion.

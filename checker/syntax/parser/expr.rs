@@ -141,6 +141,10 @@ impl Parser {
                 self.bump();
                 Ok(Expr { kind: ExprKind::Real(r), span: start })
             }
+            Tok::Str(s) => {
+                self.bump();
+                Ok(Expr { kind: ExprKind::Str(s), span: start })
+            }
             Tok::Punct("(") => {
                 self.bump();
                 let mut items = vec![self.expr()?];

@@ -105,9 +105,10 @@ impl Parser {
         if self.eat_kw("mu") {
             let var = self.ident("a recursion variable")?;
             let params = self.rec_params()?;
+            let decreases = if self.eat_kw("decreases") { Some(self.measure()?) } else { None };
             self.expect_punct(".")?;
             let body = self.global()?;
-            return Ok(Global::Rec { var, params, body: Box::new(body), span: start.to(self.prev_span()) });
+            return Ok(Global::Rec { var, params, decreases, body: Box::new(body), span: start.to(self.prev_span()) });
         }
         if self.eat_kw("end") {
             return Ok(Global::End(start));
@@ -126,7 +127,7 @@ impl Parser {
         } else {
             None
         };
-        let label = self.ident("a message label")?;
+        let label = self.label()?;
         let payload = if self.eat_punct("(") {
             let f = self.fields()?;
             self.expect_punct(")")?;
@@ -135,5 +136,75 @@ impl Parser {
             Vec::new()
         };
         Ok(Global::Msg(Msg { from, to, guard, label, payload, span: start.to(self.prev_span()) }))
+    }
+
+    /// The measure of `mu t(...) decreases E. G`. It ends at the first `.` outside
+    /// brackets: a measure is an integer, which has no components, so `decreases n. p -> q`
+    /// is the measure `n` and the body `p -> q`, not the component `n.p` (the expression
+    /// grammar would read `.` followed by a name as a component).
+    fn measure(&mut self) -> PResult<Expr> {
+        let mut depth = 0i32;
+        let mut end = None;
+        for k in self.pos..self.toks.len() {
+            match &self.toks[k].tok {
+                Tok::Punct("(" | "[" | "{") => depth += 1,
+                Tok::Punct(")" | "]" | "}") => {
+                    depth -= 1;
+                    if depth < 0 {
+                        break;
+                    }
+                }
+                Tok::Punct(".") if depth == 0 => {
+                    end = Some(k);
+                    break;
+                }
+                Tok::Punct(";") | Tok::Eof => break,
+                _ => {}
+            }
+        }
+        let Some(end) = end else { return self.expr() };
+        // The `.` is hidden while the measure is read, so that it cannot continue it.
+        let dot = std::mem::replace(&mut self.toks[end].tok, Tok::Punct(";"));
+        let e = self.expr();
+        self.toks[end].tok = dot;
+        let e = e?;
+        if self.pos != end {
+            return self.error_expected("`.` after the measure of `decreases`");
+        }
+        Ok(e)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{parse_global, FileId};
+    use crate::syntax::ast::{ExprKind, Global};
+
+    fn rec(src: &str) -> (Option<crate::syntax::ast::Expr>, Global) {
+        let (g, d) = parse_global(FileId(0), src);
+        assert!(d.is_empty(), "{d:?}");
+        let Some(Global::Rec { decreases, body, .. }) = g else { panic!("expected mu") };
+        (decreases, *body)
+    }
+
+    /// `decreases n. p -> q` is the measure `n` and a body starting with `p -> q`, not the
+    /// component `n.p` of the expression grammar.
+    #[test]
+    fn the_measure_ends_at_the_first_dot() {
+        let (m, body) = rec("mu t(n: int = 3) decreases n. p -> q: a. t(n - 1)");
+        assert!(matches!(m.map(|m| m.kind), Some(ExprKind::Var(..))), "the measure is `n`");
+        assert!(matches!(body, Global::Seq(ref v, _) if v.len() == 2));
+        let (m, _) = rec("mu t(i: int = 0) decreases (c - i) * 2. (p -> q: a. t(i + 1) + p -> q: b. end)");
+        assert!(matches!(m.map(|m| m.kind), Some(ExprKind::Binary(..))));
+        let (m, _) = rec("mu t. p -> q: a. t");
+        assert!(m.is_none());
+    }
+
+    #[test]
+    fn a_measure_not_followed_by_a_dot_is_an_error() {
+        let (_, d) = parse_global(FileId(0), "mu t(n: int = 3) decreases n");
+        assert!(!d.is_empty());
+        let (_, d) = parse_global(FileId(0), "mu t(n: int = 3) decreases. p -> q: a. t(n)");
+        assert!(!d.is_empty());
     }
 }

@@ -30,7 +30,7 @@ impl Parser {
             match self.peek() {
                 Tok::Ident(k) if ITEM_KEYWORDS.contains(&k.as_str()) => k.clone(),
                 _ => return self.error_expected(
-                    "an item (`import`, `const`, `robot`, `motion`, `system`, `choreography`, `process` or `local`)",
+                    "an item (`import`, `dialect`, `const`, `robot`, `motion`, `system`, `choreography`, `process` or `local`)",
                 ),
             };
         self.bump();
@@ -45,6 +45,11 @@ impl Parser {
                 };
                 self.expect_punct(";")?;
                 Item::Import(Import { path, span: start.to(self.prev_span()) })
+            }
+            "dialect" => {
+                let name = self.ident("a MAVLink dialect name (`common`, `ardupilotmega`, ...)")?;
+                self.expect_punct(";")?;
+                Item::Dialect(DialectDecl { name, span: start.to(self.prev_span()) })
             }
             "const" => {
                 let name = self.ident("a constant name")?;
@@ -297,8 +302,17 @@ impl Parser {
             }
             let pstart = p.bump().span;
             let name = p.ident("a participant name")?;
-            p.expect_punct(":")?;
-            let kind = p.ident("a robot kind")?;
+            // `participant GCS;` is a plain participant: no kind, nothing else to say.
+            if p.eat_punct(";") {
+                let span = pstart.to(p.prev_span());
+                participants.push(ParticipantDecl { name, kind: None, init: None, at: None, on: Vec::new(), span });
+                return Ok(());
+            }
+            if !p.is_punct(":") {
+                return p.error_expected("`:` and a robot kind, or `;` for a plain participant");
+            }
+            p.bump();
+            let kind = Some(p.ident("a robot kind")?);
             let mut part = ParticipantDecl { name, kind, init: None, at: None, on: Vec::new(), span: pstart };
             if !p.eat_punct(";") {
                 p.block(|p| {
@@ -388,12 +402,15 @@ impl Parser {
             "real" => SortKind::Real,
             "point" => SortKind::Point,
             "vector" => SortKind::Vector,
+            "str" => SortKind::Str,
             other => SortKind::Named(other.to_string()),
         };
         Ok(SortAst { kind, span: id.span })
     }
 
-    /// `(f: S {P}, g: S)` payload fields; the opening `(` is already consumed.
+    /// `(f: S {P}, g: S)` payload fields; the opening `(` is already consumed. The sort
+    /// is optional and `f as b` renames the value: both are for MAVLink messages, whose
+    /// fields have their sorts from the dialect (lowering reports a missing sort elsewhere).
     pub(super) fn fields(&mut self) -> PResult<Vec<Field>> {
         let mut out = Vec::new();
         if self.is_punct(")") {
@@ -401,8 +418,8 @@ impl Parser {
         }
         loop {
             let name = self.ident("a field name")?;
-            self.expect_punct(":")?;
-            let sort = self.sort()?;
+            let binder = if self.eat_kw("as") { Some(self.ident("a name for the field's value")?) } else { None };
+            let sort = if self.eat_punct(":") { Some(self.sort()?) } else { None };
             let refinement = if self.eat_punct("{") {
                 let e = self.expr()?;
                 self.expect_punct("}")?;
@@ -410,7 +427,7 @@ impl Parser {
             } else {
                 None
             };
-            out.push(Field { name, sort, refinement });
+            out.push(Field { name, binder, sort, refinement });
             if !self.eat_punct(",") {
                 return Ok(out);
             }

@@ -142,7 +142,7 @@ impl Parser {
         };
         let to = self.ident("a receiving participant")?;
         self.expect_punct("!")?;
-        let label = self.ident("a message label")?;
+        let label = self.label()?;
         let payload = if self.eat_punct("(") {
             let f = self.fields()?;
             self.expect_punct(")")?;
@@ -166,7 +166,7 @@ impl Parser {
         let start = self.span();
         let from = self.ident("a sending participant")?;
         self.expect_punct("?")?;
-        let label = self.ident("a message label")?;
+        let label = self.label()?;
         let payload = if self.eat_punct("(") {
             let f = self.fields()?;
             self.expect_punct(")")?;

@@ -26,7 +26,8 @@ use crate::source::{FileId, Span};
 /// The deepest nesting of parentheses, prefixes and operators accepted.
 pub const MAX_DEPTH: usize = 1000;
 
-const ITEM_KEYWORDS: &[&str] = &["import", "const", "robot", "motion", "system", "choreography", "process", "local"];
+const ITEM_KEYWORDS: &[&str] =
+    &["import", "dialect", "const", "robot", "motion", "system", "choreography", "process", "local"];
 const RESERVED: &[&str] = &[
     "import",
     "const",
@@ -180,6 +181,19 @@ impl Parser {
             }
             _ => self.error_expected(what),
         }
+    }
+
+    /// A message label: a name, or a MAVLink command `COMMAND_LONG[MAV_CMD_X]`, returned as
+    /// one [`Ident`] named `COMMAND_LONG[MAV_CMD_X]` whose span runs to the `]`. In a
+    /// global type the guard's `[` comes before the label, so a `[` after it is the command.
+    fn label(&mut self) -> PResult<Ident> {
+        let mut label = self.ident("a message label")?;
+        if self.eat_punct("[") {
+            let cmd = self.ident("a command (`COMMAND_LONG[MAV_CMD_NAME]`)")?;
+            self.expect_punct("]")?;
+            label = Ident { name: format!("{}[{}]", label.name, cmd.name), span: label.span.to(self.prev_span()) };
+        }
+        Ok(label)
     }
 
     fn describe(tok: &Tok) -> String {

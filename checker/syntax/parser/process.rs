@@ -46,14 +46,14 @@ impl Parser {
             }
             let who = self.ident("a participant")?;
             if self.eat_punct("!") {
-                let label = self.ident("a message label")?;
+                let label = self.label()?;
                 let args = self.opt_args()?;
                 let span = start.to(self.prev_span());
                 self.expect_punct(".")?;
                 heads.push(Process::Send { to: who, label, args, cont: placeholder(), span });
             } else {
                 self.expect_punct("?")?;
-                let label = self.ident("a message label")?;
+                let label = self.label()?;
                 let mut binders = Vec::new();
                 if self.eat_punct("(") {
                     if !self.is_punct(")") {
