@@ -691,6 +691,11 @@ pub struct Overlap {
 pub struct Counterexample {
     pub values: Vec<Assignment>,
     pub overlap: Option<Overlap>,
+    /// The path through the global type to the failing point, one step a line, with the
+    /// values of this counterexample (`wf::trace`); empty (and left out of JSON) when the
+    /// point is not in the global type.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub trace: Vec<String>,
 }
 
 /// A secondary location with a short message ("the other branch is here").

@@ -370,12 +370,12 @@ impl Pipeline {
                     // A guard that cannot hold where it is offered: a dead branch, a
                     // warning (its checks hold vacuously and prove nothing).
                     Decision::Fails(f) if matches!(ob.goal, Goal::Reachable { dead_branch: true, .. }) => {
-                        self.diagnostics.push(dead_branch(ob, f));
+                        self.diagnostics.push(dead_branch(prog, ob, f));
                     }
                     Decision::Fails(f) => {
                         failed += 1;
                         if !explained(ob, &f) {
-                            self.diagnostics.push(failure(ob, f));
+                            self.diagnostics.push(failure(prog, ob, f));
                         }
                     }
                     Decision::Unknown { part, why } => {
@@ -551,7 +551,24 @@ fn label(db: &SourceDb, ob: &Obligation) -> String {
 
 /// The error for a failed obligation: the code of the rule and part that failed, what
 /// was required, and the counterexample in the user's terms.
-fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
+/// The path through the global type to `ob`'s point, with the counterexample's values
+/// (`wf::trace`), as lines; empty when the point is not in the global type.
+fn trace(prog: &crate::hir::Program, ob: &Obligation, f: &smt::Failure) -> Vec<String> {
+    let Some(chor) = &prog.choreography else { return Vec::new() };
+    match crate::wf::trace::path_to(&chor.body, ob.span) {
+        Some(steps) => crate::wf::trace::lines(prog, &steps, &f.values, &f.bound),
+        None => Vec::new(),
+    }
+}
+
+/// The trace as a note: "trace to this point: ..." one step a line.
+fn trace_note(lines: &[String]) -> Option<String> {
+    (!lines.is_empty())
+        .then(|| format!("trace to this point (one path; values from the counterexample):\n  {}", lines.join("\n  ")))
+}
+
+fn failure(prog: &crate::hir::Program, ob: &Obligation, f: smt::Failure) -> Diagnostic {
+    let steps = trace(prog, ob, &f);
     let code = match (ob.rule, &f.which) {
         (Rule::TotalChoice, _) => Code::ChoiceNotTotal,
         (Rule::AgComp, Some(Part::Pre(_))) => Code::PreconditionAtMotion,
@@ -617,7 +634,10 @@ fn failure(ob: &Obligation, f: smt::Failure) -> Diagnostic {
     for (symbol, name, span) in &f.bound {
         d = d.with_label(*span, format!("`{symbol}` in the counterexample is the `{name}` bound here"));
     }
-    let cx = Counterexample { values: f.values, overlap: f.overlap };
+    if let Some(text) = trace_note(&steps) {
+        d = d.with_note(text);
+    }
+    let cx = Counterexample { values: f.values, overlap: f.overlap, trace: steps };
     if let Some(text) = counterexample_text(&cx, code) {
         d = d.with_note(text);
     }
@@ -638,14 +658,17 @@ fn dump_failed(ob: &Obligation, e: &str) -> Diagnostic {
 
 /// A branch whose guard cannot hold where the choice is made: a warning (the branch is
 /// unreachable; its obligations hold vacuously).
-fn dead_branch(ob: &Obligation, f: smt::Failure) -> Diagnostic {
-    let _ = f;
-    Diagnostic {
+fn dead_branch(prog: &crate::hir::Program, ob: &Obligation, f: smt::Failure) -> Diagnostic {
+    let steps = trace(prog, ob, &f);
+    let mut d = Diagnostic {
         severity: diag::Severity::Warning,
         ..Diagnostic::error(Code::StuckContext, ob.span, format!("dead branch: {} can never hold", ob.what))
     }
-    .with_note("the context at the choice and this branch's guard contradict each other, so no execution takes it; its checks hold vacuously")
-    .with_help("remove the branch, or fix its guard")
+    .with_note("the context at the choice contradicts this branch's guard, or leaves no value its payload's refinements admit, so no execution takes it; its checks hold vacuously");
+    if let Some(text) = trace_note(&steps) {
+        d = d.with_note(text);
+    }
+    d.with_help("remove the branch, or fix its guard or its payload's refinements")
 }
 
 /// One obligation per primitive the protocol runs (`used`): its contract admits a run

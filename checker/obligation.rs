@@ -4,7 +4,7 @@
 //! [`Obligation::trivially_holds`] has settled the syntactically trivial ones; what it
 //! cannot decide is reported as undecided (`unknown`), never as passed.
 
-use crate::hir::{Expr, ExprKind, PrimApp, PrimId, RoleId};
+use crate::hir::{Expr, ExprKind, PrimApp, PrimId, RoleId, Sort, ValueId};
 use crate::source::Span;
 use serde::Serialize;
 
@@ -164,10 +164,26 @@ pub enum Goal {
     /// `dead_branch`, the step is the guard of one branch among several: an unsatisfiable
     /// context there is a dead branch (a warning), not a stuck protocol.
     Reachable { before: Vec<Vec<Expr>>, dead_branch: bool },
+    /// Progress at a message or a choice: `hyps ⇒ ∨_b (guard_b ∧ ∃ fields_b. refinement_b)`,
+    /// some branch's guard holds and some payload satisfies its refinements.
+    Progress { branches: Vec<Enabled> },
     /// The footprint of `prim` (a predicate) contains its kind's body, at every time and
     /// state its guarantee and the invariant allow from every start its precondition
     /// allows, for every argument (the obligation's `hyps` are empty).
     Contains { prim: PrimId },
+}
+
+/// When one branch of a choice (or a lone message) can be taken: its guard holds and
+/// some values of `fields` satisfy `refinement` (the conjunction of its payload's
+/// refinements, fields defined by an equality already replaced by their definition).
+#[derive(Clone, Debug)]
+pub struct Enabled {
+    /// The message as the user wrote it, for the report (`p -> q: l`).
+    pub what: String,
+    pub guard: Option<Expr>,
+    /// The payload values still to be chosen (existentially quantified).
+    pub fields: Vec<(ValueId, String, Sort)>,
+    pub refinement: Expr,
 }
 
 /// One side of a `*`: its participants and the primitives they may run on it.

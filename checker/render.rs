@@ -183,7 +183,8 @@ impl std::fmt::Display for Detail {
 ///   "diagnostics": [{ "code", "severity", "message", "file", "line", "column",
 ///                     "help", "notes", "labels": [{ "message", "file", "line", "column" }],
 ///                     "counterexample": null | { "values": [{ "name", "value" }],
-///                                                "overlap": null | { "point": [x, y, z], "times": [t] } } }],
+///                                                "overlap": null | { "point": [x, y, z], "times": [t] },
+///                                                "trace"?: [step] } }],   (a global type's path to the point)
 ///   "checks": [{ "name", "status": "pass" | "fail" | "unknown", "millis", "queries" }],
 ///   "partitions": [{ "file", "line", "column", "how": "written" | "inferred" | "queries",
 ///                    "point": null | [x, y, z],
@@ -956,6 +957,7 @@ mod tests {
         let cx = Counterexample {
             values: vec![Assignment { name: "Cart.x".into(), value: "0.5".into() }],
             overlap: Some(Overlap { point: [1.0, 0.25, 0.0], times: vec![2.5] }),
+            trace: Vec::new(),
         };
         let d = Diagnostic::error(Code::FootprintsOverlap, Span::new(f, 0, 6), "overlap").with_counterexample(cx);
         let v = diagnostic_json(&db, &d);
@@ -963,6 +965,23 @@ mod tests {
             v["counterexample"],
             json!({ "values": [{ "name": "Cart.x", "value": "0.5" }], "overlap": { "point": [1.0, 0.25, 0.0], "times": [2.5] } })
         );
+    }
+
+    /// A counterexample's trace (the path through the global type) is in the JSON as a
+    /// list of lines, after the values.
+    #[test]
+    fn a_counterexample_trace_is_in_the_json() {
+        use crate::diag::{Assignment, Counterexample};
+        let (db, f) = db_with("system {}\n");
+        let cx = Counterexample {
+            values: vec![Assignment { name: "i".into(), value: "0".into() }],
+            overlap: None,
+            trace: vec!["GCS -> UAV: count(c = 1)".into(), "mu t: i = 0".into()],
+        };
+        let d =
+            Diagnostic::error(Code::MeasureNotDecreasing, Span::new(f, 0, 6), "no progress").with_counterexample(cx);
+        let v = diagnostic_json(&db, &d);
+        assert_eq!(v["counterexample"]["trace"], json!(["GCS -> UAV: count(c = 1)", "mu t: i = 0"]));
     }
 
     #[test]

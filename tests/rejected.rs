@@ -177,6 +177,13 @@ const NOT_ALONE: &[(&str, &str)] = &[
          a_mavlink_protocol_without_processes_is_verified_and_says_no_process_was_typed",
     ),
     (
+        "E0419",
+        "with processes, a send no value fits also fails the sender's [T-OUT] (E0709): typing a \
+         process against its local type implies progress. E0419 is alone in a protocol without \
+         processes (a program with a `dialect`, issue 10). Tested in tests/refined.rs \
+         (a lone message no payload fits, a choice whose only open branch has no payload)",
+    ),
+    (
         "E0420",
         "a note, not an error: a library with no robot kind and no motion primitive is verified \
          (names and sorts checked) and says so. Tested in library::tests::\

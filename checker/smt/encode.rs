@@ -113,6 +113,9 @@ pub struct Encoder<'p> {
     /// values of one name (shadowing) are two symbols, `v` and `v#2`, in order of first
     /// appearance (so equal queries still have equal text).
     value_names: HashMap<ValueId, String>,
+    /// Whether a quantifier was built ([`Encoder::quantified`]): the query then needs
+    /// Z3's default solver, not the quantifier-free nlsat.
+    quantified: bool,
 }
 
 impl<'p> Encoder<'p> {
@@ -126,6 +129,7 @@ impl<'p> Encoder<'p> {
             trig_by_arg: HashMap::new(),
             pi: None,
             value_names: HashMap::new(),
+            quantified: false,
         }
     }
 
@@ -203,8 +207,13 @@ impl<'p> Encoder<'p> {
 
     /// The logic of the query: whether it declared an integer variable (those are
     /// declared only by [`Encoder::named`]).
+    /// Marks the query as quantified (progress: some payload exists, `goals::progress`).
+    pub fn quantified(&mut self) {
+        self.quantified = true;
+    }
+
     pub fn logic(&self) -> Logic {
-        if self.vars.values().any(|t| matches!(t, Term::I(_))) {
+        if self.quantified || self.vars.values().any(|t| matches!(t, Term::I(_))) {
             Logic::WithIntegers
         } else {
             Logic::Nra

@@ -166,6 +166,8 @@ enum GoalKey<'o> {
     CanEnd(PrimId),
     Contains(PrimId),
     Reachable(&'o [Vec<Expr>], bool),
+    /// Each branch's guard, fields (by binding site and sort) and refinement.
+    Progress(Vec<(Option<&'o Expr>, Vec<(ValueId, &'o Sort)>, &'o Expr)>),
 }
 
 /// A primitive application without its location.
@@ -195,6 +197,12 @@ impl<'o> GoalKey<'o> {
             Goal::CanEnd { prim } => GoalKey::CanEnd(*prim),
             Goal::Contains { prim } => GoalKey::Contains(*prim),
             Goal::Reachable { before, dead_branch } => GoalKey::Reachable(before, *dead_branch),
+            Goal::Progress { branches } => GoalKey::Progress(
+                branches
+                    .iter()
+                    .map(|b| (b.guard.as_ref(), b.fields.iter().map(|(v, _, s)| (*v, s)).collect(), &b.refinement))
+                    .collect(),
+            ),
         }
     }
 }

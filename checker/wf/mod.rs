@@ -10,3 +10,4 @@
 pub mod scope;
 pub mod side;
 pub mod sync;
+pub mod trace;

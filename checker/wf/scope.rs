@@ -40,7 +40,7 @@
 use crate::diag::{Code, Diagnostic};
 use crate::hir::expr::BinOp;
 use crate::hir::*;
-use crate::obligation::{Goal, Obligation, RoleMotion, Rule, Side};
+use crate::obligation::{Enabled, Goal, Obligation, RoleMotion, Rule, Side};
 use crate::sigma::Sigma;
 use std::collections::HashMap;
 
@@ -70,6 +70,7 @@ pub fn check(prog: &Program, g: &Global) -> (Vec<Obligation>, Vec<Diagnostic>) {
         runs: Vec::new(),
         in_par: 0,
         steps: 0,
+        choice_firsts: Default::default(),
     };
     let start = c.initial();
     c.walk(g, start);
@@ -356,6 +357,8 @@ struct Contexts<'a> {
     /// How many `*` enclose the current point.
     in_par: usize,
     steps: usize,
+    /// The first messages of the choices met: their progress is the choice's.
+    choice_firsts: std::collections::HashSet<crate::source::Span>,
 }
 
 impl<'a> Contexts<'a> {
@@ -369,9 +372,23 @@ impl<'a> Contexts<'a> {
         self.steps += 1;
         match g {
             Global::Msg(m) => {
-                // No vacuity check here: [T-OUT] makes the sender establish the guard and
-                // the refinements, so a context they make unsatisfiable is one no
-                // execution reaches (or [T-OUT] fails, E0709).
+                // Progress (E0419): in every state of Σ, the guard holds and some payload
+                // satisfies the refinements (the first message of a choice: the
+                // choice's). A message no value fits is stuck, not unreachable: nothing
+                // but the protocol itself is there to establish it (a program may have no
+                // processes at all).
+                if !self.choice_firsts.contains(&m.loc.0) {
+                    let e = enabled(self.prog, m);
+                    if e.guard.is_some() || !e.refinement.is_true() {
+                        self.obligations.push(Obligation {
+                            rule: Rule::Progress,
+                            span: m.loc.0,
+                            what: format!("the message {}: some payload satisfies its refinements", e.what),
+                            hyps: sigma.facts().to_vec(),
+                            goal: Goal::Progress { branches: vec![e] },
+                        });
+                    }
+                }
                 sigma.assume_message(m);
                 Some(sigma)
             }
@@ -389,20 +406,27 @@ impl<'a> Contexts<'a> {
             }
             Global::Choice(branches, _) => {
                 self.total_choice(branches, &sigma);
+                self.progress(branches, &sigma);
                 let mut out: Option<Sigma> = None;
                 for b in branches {
                     let mut s = sigma.clone();
                     let first = super::side::first_message(b);
-                    if let (Some(m), Some(guard)) = (first, first.and_then(|m| m.guard.as_ref())) {
+                    if let Some(guard) = first.and_then(|m| m.guard.as_ref()) {
                         s.assume(guard);
-                        if branches.len() > 1 && s.facts() != sigma.facts() {
+                    }
+                    if let (Some(m), true) = (first, branches.len() > 1) {
+                        // A dead branch: its guard, or its guard and its payload's
+                        // refinements together (no value fits), contradict Σ.
+                        let mut taken = sigma.clone();
+                        taken.assume_message(m);
+                        if taken.facts() != sigma.facts() {
                             let what = format!(
-                                "the guard of branch `{}` ({} -> {})",
+                                "the guard and payload of branch `{}` ({} -> {})",
                                 m.label,
                                 self.prog.role_name(m.from),
                                 self.prog.role_name(m.to)
                             );
-                            self.reachable(m.loc.0, what, &s, vec![sigma.facts().to_vec()], true);
+                            self.reachable(m.loc.0, what, &taken, vec![sigma.facts().to_vec()], true);
                         }
                     }
                     if let Some(end) = self.walk(b, s) {
@@ -477,9 +501,9 @@ impl<'a> Contexts<'a> {
             rule: Rule::MeasureDecrease,
             span: v.loc.0,
             what: format!(
-                "the measure `{text}` of `{var}` at the jump `{}` (next: `{}`)",
-                jump_text(self.prog, v),
-                print::expr(self.prog, None, &next)
+                "the measure `{text}` of `{var}` is `{}` after the jump `{}`",
+                print::expr(self.prog, None, &next),
+                jump_text(self.prog, v)
             ),
             hyps: sigma.facts().to_vec(),
             goal: Goal::Valid(cmp(BinOp::Lt, next, e.clone())),
@@ -606,6 +630,39 @@ impl<'a> Contexts<'a> {
         }
     }
 
+    /// Progress at a choice (E0419): under Σ and the guards' disjunction (whose validity
+    /// is total choice's, E0316), some branch has a true guard and a payload its
+    /// refinements admit. Asked only when some first message has a refinement: without
+    /// one this is total choice itself.
+    fn progress(&mut self, branches: &[Global], sigma: &Sigma) {
+        let firsts: Vec<&Msg> = branches.iter().filter_map(super::side::first_message).collect();
+        if firsts.len() != branches.len() {
+            return; // a branch without a first message: E0303, reported by `side`
+        }
+        self.choice_firsts.extend(firsts.iter().map(|m| m.loc.0));
+        let each: Vec<Enabled> = firsts.iter().map(|m| enabled(self.prog, m)).collect();
+        if each.iter().all(|e| e.fields.is_empty() && e.refinement.is_true()) {
+            return;
+        }
+        let mut hyps = sigma.clone();
+        if let Some(any) = firsts
+            .iter()
+            .map(|m| m.guard.clone())
+            .collect::<Option<Vec<Expr>>>()
+            .and_then(|gs| gs.into_iter().reduce(|a, b| or(a, b)))
+        {
+            hyps.assume(&any);
+        }
+        let m = firsts[0];
+        self.obligations.push(Obligation {
+            rule: Rule::Progress,
+            span: m.loc.0,
+            what: format!("the choice by `{}`: some branch can be taken", self.prog.role_name(m.from)),
+            hyps: hyps.facts().to_vec(),
+            goal: Goal::Progress { branches: each },
+        });
+    }
+
     /// `g1 * ... * gn`: each side from the facts over its own participants; one
     /// separation obligation listing what each side may run.
     fn par(&mut self, sides: &'a [Global], loc: Loc, sigma: Sigma) -> Option<Sigma> {
@@ -720,6 +777,57 @@ impl<'a> Contexts<'a> {
             self.runs.truncate(marks.1);
             self.jumps.truncate(marks.2);
         }
+    }
+}
+
+fn or(a: Expr, b: Expr) -> Expr {
+    let loc = a.loc;
+    Expr { kind: ExprKind::Binary(BinOp::Or, Box::new(a), Box::new(b)), sort: Sort::Bool, loc }
+}
+
+/// When `m` can be sent: its guard, and some payload satisfying the conjunction of its
+/// fields' refinements. A field defined by an equality `f == e` (e of f's sort, reading no
+/// field of `m`) is replaced by `e` in the other conjuncts (∃f. f == e ∧ P(f) is P(e)), so
+/// that `seq == i` needs no quantifier; the fields still read are left to an existential.
+fn enabled(prog: &Program, m: &Msg) -> Enabled {
+    let mut conj: Vec<Expr> = Vec::new();
+    for f in &m.payload {
+        if let Some(r) = &f.refinement {
+            crate::hir::expr::conjuncts(r, &mut conj);
+        }
+    }
+    let ids: Vec<ValueId> = m.payload.iter().map(|f| f.value).collect();
+    let field = |e: &Expr| match &e.kind {
+        ExprKind::Var(Var::Value(id, _)) if ids.contains(id) => Some(*id),
+        _ => None,
+    };
+    let reads_field = |e: &Expr| crate::hir::expr::mentions(e, &|v| matches!(v, Var::Value(id, _) if ids.contains(id)));
+    loop {
+        let def = conj.iter().enumerate().find_map(|(k, c)| {
+            let ExprKind::Binary(BinOp::Eq, a, b) = &c.kind else { return None };
+            [(a, b), (b, a)].into_iter().find_map(|(x, e)| {
+                let id = field(x)?;
+                (!reads_field(e) && (x.sort == e.sort || x.sort == Sort::Real && e.sort == Sort::Int))
+                    .then(|| (k, id, (**e).clone()))
+            })
+        });
+        let Some((k, id, e)) = def else { break };
+        conj.remove(k);
+        let map = HashMap::from([(id, e)]);
+        conj = conj.iter().map(|c| crate::hir::expr::subst_values(c, &map)).collect();
+    }
+    let rest = crate::hir::expr::and_all(conj, m.loc);
+    let fields = m
+        .payload
+        .iter()
+        .filter(|f| crate::hir::expr::mentions(&rest, &|v| matches!(v, Var::Value(id, _) if *id == f.value)))
+        .map(|f| (f.value, f.name.clone(), f.sort.clone()))
+        .collect();
+    Enabled {
+        what: format!("{} -> {}: {}", prog.role_name(m.from), prog.role_name(m.to), m.label),
+        guard: m.guard.clone(),
+        fields,
+        refinement: rest,
     }
 }
 
@@ -1089,5 +1197,178 @@ mod context_tests {
         // The body assumes the refinement: total choice and the jump see `0 <= n`.
         assert!(hyps(&p, &o, Rule::TotalChoice)[0].contains(&"0 <= n".to_string()));
         assert_eq!(hyps(&p, &o, Rule::RecJump), vec![sorted(["0 <= P.x", "Q.x == 0", "0 <= n", "0 < n"])]);
+    }
+}
+
+/// Refined sessions (issue 10): termination, progress and recursion parameters, decided
+/// end to end (the global walk's obligations through the SMT stage), on global types with
+/// no processes. The nested-loop cases are those nuscr got wrong (nuscr/nuscr#155: a
+/// recursion variable missing from the progress check's environment; #158: several
+/// variables under one label): shadowed parameter names, a jump to an outer loop from an
+/// inner one, parameters read after an inner loop.
+#[cfg(test)]
+mod refined_tests {
+    use crate::lower::tests::lower_src;
+    use crate::obligation::Rule;
+    use crate::smt::{discharge, Decision, SmtConfig};
+
+    const SYS: &str = "robot R { state x: real; } system S { participant P: R; participant Q: R; }";
+
+    /// The rules whose obligations fail, in order, and the first failure's counterexample
+    /// as `name = value` pairs. Panics on an undecided obligation: each case is decidable.
+    fn failing(chor: &str) -> (Vec<Rule>, Vec<String>) {
+        let (p, d) = lower_src(&format!("{SYS} choreography G = {chor};"));
+        assert!(d.is_empty(), "{d:?}");
+        let body = &p.choreography.as_ref().expect("choreography").body;
+        let side = super::super::side::check(&p, body);
+        assert!(side.is_empty(), "{side:?}");
+        let (obs, d) = super::check(&p, body);
+        assert!(d.is_empty(), "{d:?}");
+        let labels: Vec<String> = obs.iter().map(|o| o.rule.slug().to_string()).collect();
+        let results = discharge(&p, &obs, &labels, &SmtConfig::default());
+        let mut rules = Vec::new();
+        let mut values = Vec::new();
+        for (ob, (dec, _)) in obs.iter().zip(results) {
+            match dec {
+                Decision::Holds(_) => {}
+                Decision::Fails(f) => {
+                    // A dead branch is a warning, not a failure of the protocol.
+                    if matches!(ob.goal, crate::obligation::Goal::Reachable { dead_branch: true, .. }) {
+                        continue;
+                    }
+                    if rules.is_empty() {
+                        values = f.values.iter().map(|a| format!("{} = {}", a.name, a.value)).collect();
+                    }
+                    rules.push(ob.rule);
+                }
+                Decision::Unknown { why, .. } => panic!("undecided: {} ({why})", ob.what),
+            }
+        }
+        (rules, values)
+    }
+
+    const UPLOAD: &str = "P -> Q: count(c: int {1 <= c && c <= 5}).
+        mu t(i: int {0 <= i && i <= c} = 0) decreases c - i.
+          ( Q -> P: [i < c] req(seq: int {seq == i}). P -> Q: item(s: int {s == i}). JUMP
+          + Q -> P: [ACK] ack. end )";
+
+    fn upload(jump: &str, ack: &str) -> String {
+        UPLOAD.replace("JUMP", jump).replace("ACK", ack)
+    }
+
+    #[test]
+    fn the_upload_terminates_and_a_counter_never_incremented_does_not() {
+        assert_eq!(failing(&upload("t(i + 1)", "i == c")).0, vec![]);
+        let (rules, values) = failing(&upload("t(i)", "i == c"));
+        assert_eq!(rules, vec![Rule::MeasureDecrease]);
+        assert!(values.iter().any(|v| v.starts_with("i = ")), "{values:?}");
+        // A measure that may go negative: no refinement bounds i by c.
+        let unbounded = "P -> Q: count(c: int {1 <= c && c <= 5}).
+            mu t(i: int = 0) decreases c - i.
+              ( Q -> P: req. t(i + 1) + Q -> P: ack. end )";
+        assert_eq!(failing(unbounded).0, vec![Rule::MeasureBound]);
+    }
+
+    /// The acknowledgement's guard `i > c` is never true where the loop must end (i == c):
+    /// the choice is not total there (stuck), with i == c in the counterexample.
+    #[test]
+    fn an_acknowledgement_that_is_never_taken_leaves_the_upload_stuck() {
+        let (rules, values) = failing(&upload("t(i + 1)", "i > c"));
+        assert_eq!(rules, vec![Rule::TotalChoice]);
+        let get = |n: &str| values.iter().find_map(|v| v.strip_prefix(&format!("{n} = ")).map(str::to_string));
+        assert_eq!(get("i"), get("c"), "stuck at i == c: {values:?}");
+    }
+
+    /// Progress with payloads: a refinement no value satisfies is stuck (a lone message),
+    /// or leaves a choice with no branch to take once the guards alone are total.
+    #[test]
+    fn a_payload_no_value_satisfies_is_stuck() {
+        assert_eq!(failing("P -> Q: m(x: int {x > 0 && x < 0}). end").0, vec![Rule::Progress]);
+        // Against an earlier received value: for c == 2 no r has c < r < 3.
+        let (rules, values) =
+            failing("P -> Q: cnt(c: int {1 <= c && c <= 5}). Q -> P: ack(r: int {r > c && r < 3}). end");
+        assert_eq!(rules, vec![Rule::Progress]);
+        assert!(values.iter().any(|v| v.starts_with("c = ") && v != "c = 1"), "{values:?}");
+        // Satisfiable for every c: no failure (and no quantifier: r == c + 1 defines r).
+        assert_eq!(failing("P -> Q: cnt(c: int {1 <= c && c <= 5}). Q -> P: ack(r: int {r == c + 1}). end").0, vec![]);
+        assert_eq!(failing("P -> Q: cnt(c: int {1 <= c && c <= 5}). Q -> P: ack(r: int {r > c}). end").0, vec![]);
+        // Guards total, but the branch for c >= 3 admits no payload.
+        let choice = "P -> Q: cnt(c: int {1 <= c && c <= 5}).
+            ( Q -> P: [c < 3] ok(r: int {r == c}). end + Q -> P: [c >= 3] big(r: int {r > c && r < 3}). end )";
+        assert_eq!(failing(choice).0, vec![Rule::Progress]);
+        let fine = choice.replace("r > c && r < 3", "r > c && r < 9");
+        assert_eq!(failing(&fine).0, vec![]);
+    }
+
+    /// nuscr#155's protocol: the parameter `n` must be in the progress check's
+    /// environment. At n == 0 no v has v == n && v > 0: stuck.
+    #[test]
+    fn nuscr_155_the_recursion_parameter_is_in_the_progress_check() {
+        let g = "P -> Q: init(x: int {x >= 0}).
+            mu t(n: int {n >= 0 && n <= x} = 0).
+              ( Q -> P: [n < x] step(v: int {v == n && v > 0}). t(n + 1)
+              + Q -> P: [n == x] stop. end )";
+        let (rules, values) = failing(g);
+        assert_eq!(rules, vec![Rule::Progress]);
+        assert!(values.contains(&"n = 0".to_string()), "{values:?}");
+        assert_eq!(failing(&g.replace("v > 0", "v >= 0")).0, vec![]);
+    }
+
+    /// nuscr#158: several parameters under one label, substituted simultaneously.
+    #[test]
+    fn several_parameters_are_substituted_together() {
+        let g = "mu t(a: int {a >= 0} = 0, b: int {b >= a} = 0) decreases 10 - b.
+              ( P -> Q: [b < 10] more. t(ARGS) + P -> Q: [b >= 10] stop. end )";
+        assert_eq!(failing(&g.replace("ARGS", "a + 1, b + 1")).0, vec![]);
+        assert_eq!(failing(&g.replace("ARGS", "a + 1, b")).0, vec![Rule::MeasureDecrease, Rule::RecJump]);
+        // b's refinement reads the new a (a + 1 <= b + 1), not the old one.
+        assert_eq!(failing(&g.replace("ARGS", "b + 1, b + 1")).0, vec![]);
+    }
+
+    const NESTED: &str = "P -> Q: cnt(c: int {2 <= c && c <= 4}).
+        mu t(n: int {0 <= n && n <= c} = 0) decreases c - n.
+          ( P -> Q: [n < c] outer.
+            (mu s(INNER: int {0 <= INNER && INNER <= 3} = 0) decreases 3 - INNER.
+              ( P -> Q: [INNER < 3] inner. s(INNER + 1)
+              + P -> Q: [INNER == 3] done(v: int {READ}). t(OUTER) ))
+          + P -> Q: [n == c] stop. end )";
+
+    fn nested(inner: &str, read: &str, outer: &str) -> String {
+        NESTED.replace("INNER", inner).replace("READ", read).replace("OUTER", outer)
+    }
+
+    /// A jump from the inner loop to the outer one with the outer's parameter: `n < c` of
+    /// the outer iteration still holds inside the inner loop, so `t(n + 1)` keeps
+    /// `n <= c` and the outer measure drops; `t(n)` does not make progress.
+    #[test]
+    fn a_jump_to_the_outer_loop_from_the_inner_one_uses_the_outer_parameters() {
+        assert_eq!(failing(&nested("m", "v == n", "n + 1")).0, vec![]);
+        assert_eq!(failing(&nested("m", "v == n", "n")).0, vec![Rule::MeasureDecrease]);
+        // `n + 2` may pass c (n == c - 1): the outer refinement fails at the inner jump.
+        assert_eq!(failing(&nested("m", "v == n", "n + 2")).0, vec![Rule::RecJump]);
+    }
+
+    /// The inner loop's parameter shadows the outer's name: inside it, `n` is the inner
+    /// one (3 at `done`). `t(n - 3)` is then `t(0)`, which keeps `0 <= n <= c`; read as
+    /// the outer `n` (names confused) it would be negative and break it. (The outer loop's
+    /// `decreases c - n` is dropped here: restarting at 0 does not terminate.)
+    #[test]
+    fn a_shadowed_parameter_name_means_the_inner_parameter() {
+        let g = nested("n", "v == n && v == 3", "n - 3").replace(" decreases c - n", "");
+        assert_eq!(failing(&g).0, vec![]);
+        // `t(n + 1)` with the inner n == 3 gives the outer 4 > c for c < 4.
+        let g = nested("n", "v == n", "n + 1").replace(" decreases c - n", "");
+        let (rules, values) = failing(&g);
+        assert_eq!(rules, vec![Rule::RecJump]);
+        assert!(values.iter().any(|v| v.starts_with("c = ") && v != "c = 4"), "{values:?}");
+    }
+
+    /// A parameter of the outer loop read after the inner loop's iterations (in its exit
+    /// message): what held of it before the inner loop still holds.
+    #[test]
+    fn an_outer_parameter_read_after_the_inner_loop_keeps_its_facts() {
+        assert_eq!(failing(&nested("m", "v == n && v < c", "n + 1")).0, vec![]);
+        let (rules, _) = failing(&nested("m", "v == n && v >= c", "n + 1"));
+        assert_eq!(rules, vec![Rule::Progress]);
     }
 }

@@ -17,6 +17,7 @@ mod candidate;
 mod frames;
 pub mod geo;
 mod motion;
+mod progress;
 mod query;
 mod refine;
 pub mod witness;
@@ -157,6 +158,7 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
         Goal::CanEnd { .. } if ob.rule == crate::obligation::Rule::Occupies => Plan::Parts(vec![Part::Occupies]),
         Goal::CanEnd { .. } => Plan::Parts(vec![Part::Realisable]),
         Goal::Reachable { .. } => Plan::Parts(vec![Part::Context]),
+        Goal::Progress { .. } => Plan::Parts(vec![Part::Valid]),
         Goal::Contains { prim } => {
             let n = prog.kind(prog.prim(*prim).kind).body.as_ref().map_or(0, |b| b.parts.len());
             Plan::Parts((0..n).map(Part::Contains).collect())

@@ -32,6 +32,16 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
             let g = q.enc.boolean(c)?;
             q.assertions.push(g.not());
         }
+        (Goal::Progress { branches }, Part::Valid) => {
+            let seeds =
+                vars_of(prog, branches.iter().flat_map(|b| b.guard.iter().chain(std::iter::once(&b.refinement))));
+            hyps(&mut q, &slice(prog, &ob.hyps, seeds))?;
+            let mut some = Vec::new();
+            for b in branches {
+                some.push(super::progress::enabled(&mut q.enc, b)?);
+            }
+            q.assertions.push(Bool::or(&some).not());
+        }
         // Σ alone, whatever the goal (the vacuity guard; a stuck motion).
         (_, Part::Context) => hyps(&mut q, &context_of(prog, ob))?,
         (Goal::Compatible { parts }, _) => compat(&mut q, &ob.hyps, parts, part)?,
@@ -185,6 +195,11 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
 pub fn context_of(prog: &Program, ob: &Obligation) -> Vec<Expr> {
     match &ob.goal {
         Goal::Valid(goal) => slice(prog, &ob.hyps, vars_of(prog, [goal])),
+        Goal::Progress { branches } => slice(
+            prog,
+            &ob.hyps,
+            vars_of(prog, branches.iter().flat_map(|b| b.guard.iter().chain(std::iter::once(&b.refinement)))),
+        ),
         _ => ob.hyps.clone(),
     }
 }
