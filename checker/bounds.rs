@@ -152,7 +152,7 @@ impl Interval {
         // rounded quotient, exact iff the remainder `n - v d` is 0.
         const EXACT: i64 = 1 << 53;
         if let (Some(n), Some(d)) = (q.numer().to_i64(), q.denom().to_i64()) {
-            if n.abs() <= EXACT && (1..=EXACT).contains(&d) {
+            if n.unsigned_abs() <= EXACT as u64 && (1..=EXACT).contains(&d) {
                 let (n, d) = (n as f64, d as f64);
                 let (lo, hi) = div_out(n, d);
                 return Interval { lo, hi };

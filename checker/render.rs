@@ -127,7 +127,12 @@ fn write_summary(
     };
     write!(out, "verdict: ")?;
     paint(out, colour, word)?;
-    writeln!(out, " ({file_name})")?;
+    write!(out, " ({file_name})")?;
+    // A MAVLink protocol with no process (E0242): the verdict is the global type's only.
+    if report.diagnostics.iter().any(|d| d.code == crate::diag::Code::ProtocolOnly) {
+        write!(out, " -- protocol only: no process typed")?;
+    }
+    writeln!(out)?;
     Ok(())
 }
 

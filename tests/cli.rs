@@ -869,3 +869,85 @@ fn clearance_lists_the_least_distance_of_each_pair() {
     let v: serde_json::Value = serde_json::from_str(&stdout(&j)).expect("json");
     assert_eq!(v["clearance"][0]["b"], "Bridge", "{v}");
 }
+
+// ---- MAVLink protocols (issue 10): the front end end to end ---------------------------
+
+/// A protocol with a dialect and no process is checked without typing processes, says so
+/// (the note E0242), and is verified; its projection prints MAVLink labels and fields.
+#[test]
+fn a_mavlink_protocol_without_processes_is_verified_and_says_no_process_was_typed() {
+    let o = mochi(&["check", "tests/data/mavlink/mission-upload.chor", "--format", "json"]);
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
+    assert_eq!(v["verdict"], "verified", "{v}");
+    assert_eq!(o.status.code(), Some(0));
+    let diags = v["diagnostics"].as_array().expect("diagnostics");
+    assert_eq!(diags.len(), 1, "{v}");
+    assert_eq!(diags[0]["code"], "E0242");
+    assert!(diags[0]["message"].as_str().unwrap_or("").contains("no process was typed"), "{v}");
+    let o = mochi(&["check", "tests/data/mavlink/mission-upload.chor"]);
+    assert!(
+        stdout(&o).contains("verdict: verified (tests/data/mavlink/mission-upload.chor) -- protocol only: no process typed"),
+        "{}",
+        stdout(&o)
+    );
+    let o = mochi(&["project", "tests/data/mavlink/mission-upload.chor", "--role", "UAV"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(out.starts_with("GCS?MISSION_COUNT(count: int { 1 <= count && count <= MISSION_ITEM_LIMIT }"), "{out}");
+    assert!(out.contains("GCS!MISSION_REQUEST_INT(seq: int { seq == i })"), "{out}");
+    assert!(out.contains("GCS?MISSION_ITEM_INT(seq as s: int { s == i })"), "{out}");
+    assert!(out.contains("[i == count] GCS!MISSION_ACK(type: int { type == MAV_MISSION_ACCEPTED }).end"), "{out}");
+    // With one process, every participant needs one (E0701), as without a dialect.
+    let dir = TempDir::new("mavlink-one-process");
+    let src = std::fs::read_to_string("tests/data/mavlink/mission-upload.chor").expect("fixture")
+        + "\nprocess GCS = UAV!MISSION_COUNT(1, 0).end;\n";
+    let file = dir.write("one-process.chor", &src);
+    let o = mochi(&["check", path_arg(&file), "--format", "json"]);
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
+    assert_eq!(v["verdict"], "rejected", "{v}");
+    let codes: Vec<&str> =
+        v["diagnostics"].as_array().expect("diagnostics").iter().filter_map(|d| d["code"].as_str()).collect();
+    assert!(codes.contains(&"E0701") && !codes.contains(&"E0242"), "{codes:?}");
+}
+
+/// The encodings of `has_flag`, strings and the widest wire ranges, end to end: each
+/// verified fixture holds only because the encoding is exact (the armed bit implies
+/// `base_mode >= 128` only with `base_mode <= 255`; two literals differ; 2^64 - 1 is the
+/// largest uint64_t), and each wrong variant is rejected with a counterexample in the
+/// user's terms.
+#[test]
+fn mavlink_flags_strings_and_wire_ranges_are_decided_exactly() {
+    for (file, want, cx) in [
+        ("armed-flag", "verified", None),
+        ("armed-flag-wrong", "rejected", Some("base_mode = ")),
+        ("param-id", "verified", None),
+        ("param-id-wrong", "rejected", Some("param_id = \"MC_PITCH_P\"")),
+        ("wire-limits", "verified", None),
+        ("wire-limits-wrong", "rejected", Some("time_unix_usec = 18446744073709551615")),
+    ] {
+        let path = format!("tests/data/mavlink/{file}.chor");
+        let o = mochi(&["check", &path]);
+        let out = stdout(&o) + &stderr(&o);
+        assert!(out.contains(&format!("verdict: {want}")), "{path}:\n{out}");
+        if let Some(cx) = cx {
+            assert!(out.contains("error[E0414]") && out.contains(cx), "{path}:\n{out}");
+        }
+    }
+}
+
+/// Processes over MAVLink messages are typed like any others: the values of a payload
+/// positionally, in the order its fields are listed. An acknowledgement the type does not
+/// allow is E0709.
+#[test]
+fn processes_of_a_mavlink_protocol_are_typed_against_their_projections() {
+    let o = mochi(&["check", "tests/data/mavlink/mission-upload-processes.chor"]);
+    let out = stdout(&o) + &stderr(&o);
+    assert!(out.contains("verdict: verified") && !out.contains("E0242"), "{out}");
+    let dir = TempDir::new("mavlink-wrong-ack");
+    let src = std::fs::read_to_string("tests/data/mavlink/mission-upload-processes.chor").expect("fixture");
+    assert!(src.contains("GCS!MISSION_ACK(MAV_MISSION_ACCEPTED)"));
+    let file = dir.write("wrong-ack.chor", &src.replace("GCS!MISSION_ACK(MAV_MISSION_ACCEPTED)", "GCS!MISSION_ACK(MAV_MISSION_ERROR)"));
+    let o = mochi(&["check", path_arg(&file)]);
+    let out = stdout(&o) + &stderr(&o);
+    assert!(out.contains("verdict: rejected") && out.contains("error[E0709]"), "{out}");
+}

@@ -171,3 +171,51 @@ fn plain_participants_have_no_variables_and_no_motions() {
     assert_eq!(codes(&d), ["E0203"]);
     assert!(d[0].message.contains("plain participant"), "{d:?}");
 }
+
+/// What `mochi project` prints of a MAVLink protocol parses and lowers back to the same
+/// local type (the golden test does this for `choreographies/`): `FIELD as NAME`, the
+/// wire range left out and added back, a command label, a string.
+#[test]
+fn printed_mavlink_projections_lower_back_to_the_same_type() {
+    let (p, d) = lower_mav(
+        "GCS -> UAV: MISSION_COUNT(count {1 <= count}, mission_type as mt {mt == MAV_MISSION_TYPE_MISSION}).
+         GCS -> UAV: COMMAND_LONG[MAV_CMD_DO_PARACHUTE](action {action == PARACHUTE_RELEASE}, command, param2 as p2).
+         GCS -> UAV: PARAM_SET(param_id {param_id == \"MC_PITCH_P\"}, param_value).
+         UAV -> GCS: HEARTBEAT(base_mode as b {has_flag(b, MAV_MODE_FLAG_SAFETY_ARMED)}, custom_mode: int).
+         end",
+    );
+    assert!(d.is_empty(), "{d:?}");
+    let (locals, d) = crate::project::project_all(&p);
+    assert!(d.is_empty(), "{d:?}");
+    assert_eq!(locals.len(), 2);
+    for (role, t) in &locals {
+        let text = crate::hir::print::local(&p, t);
+        let mut db = crate::source::SourceDb::new();
+        let file = db.add("printed", text.clone());
+        let (ast, d) = crate::syntax::parser::parse_local(file, &text);
+        assert!(d.is_empty(), "{text}: {d:?}");
+        let (back, d) = lower_local(&p, *role, &ast.expect("parsed"));
+        assert!(d.is_empty(), "{text}: {d:?}");
+        assert!(crate::project::alpha_equal(&back, t), "{text}");
+        assert_eq!(crate::hir::print::local(&p, &back), text);
+    }
+    let uav = crate::hir::print::local(&p, &locals[&RoleId(1)]);
+    assert!(uav.contains("GCS?COMMAND_LONG[MAV_CMD_DO_PARACHUTE](action: real { action == PARACHUTE_RELEASE }, command: int, param2 as p2: real)"), "{uav}");
+    assert!(uav.contains("param_id: str { param_id == \"MC_PITCH_P\" }"), "{uav}");
+    assert!(uav.contains("base_mode as b: int { has_flag(b, MAV_MODE_FLAG_SAFETY_ARMED) }"), "{uav}");
+}
+
+/// A field listed in a different place is another field: two projections that list
+/// `target_system` and `target_component` (both `uint8_t`) in swapped places do not merge as equal.
+#[test]
+fn mavlink_fields_are_compared_by_field_not_by_place() {
+    use crate::project::alpha_equal;
+    let (p, d) = lower_mav("GCS -> UAV: MISSION_REQUEST_INT(target_system as a, target_component as b). end");
+    assert!(d.is_empty(), "{d:?}");
+    let (q, d) = lower_mav("GCS -> UAV: MISSION_REQUEST_INT(target_component as a, target_system as b). end");
+    assert!(d.is_empty(), "{d:?}");
+    let (lp, _) = crate::project::project_all(&p);
+    let (lq, _) = crate::project::project_all(&q);
+    assert!(!alpha_equal(&lp[&RoleId(1)], &lq[&RoleId(1)]));
+    assert!(alpha_equal(&lp[&RoleId(1)], &lp[&RoleId(1)]));
+}

@@ -116,6 +116,9 @@ pub struct Encoder<'p> {
     /// Whether a quantifier was built ([`Encoder::quantified`]): the query then needs
     /// Z3's default solver, not the quantifier-free nlsat.
     quantified: bool,
+    /// The variables of sort `str` (integers in the solver), so that a counterexample
+    /// shows their values as the strings they stand for.
+    strings: std::collections::HashSet<String>,
 }
 
 impl<'p> Encoder<'p> {
@@ -130,6 +133,7 @@ impl<'p> Encoder<'p> {
             pi: None,
             value_names: HashMap::new(),
             quantified: false,
+            strings: std::collections::HashSet::new(),
         }
     }
 
@@ -201,6 +205,9 @@ impl<'p> Encoder<'p> {
             ]),
             other => return Err(Unsupported(format!("variables of sort `{other}`"))),
         };
+        if *sort == Sort::Str {
+            self.strings.insert(name.to_string());
+        }
         self.vars.insert(name.to_string(), t.clone());
         Ok(t)
     }
@@ -290,6 +297,15 @@ impl<'p> Encoder<'p> {
                     Term::B(b) => {
                         model.get_const_interp(b)?;
                         model.eval(b, true).map(|v| v.to_string())
+                    }
+                    Term::I(i) if self.strings.contains(name) => {
+                        // A string's code: the literal it is, or a string none writes.
+                        model.get_const_interp(i)?;
+                        let code = model.eval(i, true)?.as_i64();
+                        Some(match code.and_then(|c| self.prog.string(c)) {
+                            Some(text) => format!("\"{text}\""),
+                            None => "a string no literal of the protocol writes".to_string(),
+                        })
                     }
                     Term::I(i) => {
                         model.get_const_interp(i)?;
