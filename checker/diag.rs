@@ -170,7 +170,7 @@ codes! {
         "`on: Carrier.mount` names a mount point that the carrier's robot kind does not declare. \
          A robot offers mounts with `mount name: pose(...);` in its `robot` block; the message \
          lists the ones it has.";
-    UnknownDialect = "E0230", "unknown MAVLink dialect",
+    UnknownDialect = "E0230", "unknown mavlink dialect",
         "`dialect NAME;` names the MAVLink dialect whose messages a protocol exchanges. mochi \
          bundles the dialects of the MAVLink XML definitions (`common`, `ardupilotmega`, \
          `standard`, `minimal` and the others shipped under `checker/dialect/definitions/`); the \
@@ -181,12 +181,12 @@ codes! {
          each message label, field and enum entry is resolved in it. Two `dialect` items naming \
          different dialects are an error (the same name twice is harmless). A dialect such as \
          `ardupilotmega` includes `common`: name the larger one.";
-    UnknownMessage = "E0232", "unknown MAVLink message",
+    UnknownMessage = "E0232", "unknown mavlink message",
         "In a program with a `dialect`, every message label is a MAVLink message of that \
          dialect, by its XML name (`MISSION_COUNT`, `COMMAND_LONG[MAV_CMD_X]`). The label \
          names none; the help lists the closest names (by edit distance). Without a `dialect`, \
          labels are free.";
-    UnknownField = "E0233", "unknown field of a MAVLink message",
+    UnknownField = "E0233", "unknown field of a mavlink message",
         "A payload field of a MAVLink message must be one of the message's fields (`count` of \
          `MISSION_COUNT`), or for `COMMAND_LONG[MAV_CMD_X]` and `COMMAND_INT[MAV_CMD_X]` one of \
          its parameters, by `param1`..`param7` or by the parameter's XML label in snake case \

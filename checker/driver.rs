@@ -331,7 +331,16 @@ impl Pipeline {
                 _ => None,
             })
             .collect();
+        // A process's send that no value fits fails [T-OUT] (E0709), with the sender's
+        // knowledge: typing implies progress, so the protocol's own progress failure
+        // (E0419) is the same defect seen from the global type, said once, at the send.
+        // Without processes (or with every send typed) E0419 stands.
+        let send_fails = obligations
+            .iter()
+            .zip(&results)
+            .any(|(ob, (d, _))| ob.rule == Rule::TOut && matches!(d, Decision::Fails(_)));
         let explained = |ob: &Obligation, f: &smt::Failure| match (&ob.goal, &f.which) {
+            (Goal::Progress { .. }, _) => send_fails,
             (Goal::Contains { prim }, _) => empty.contains(prim),
             (Goal::Compatible { parts }, Some(Part::CanEnd)) => parts.iter().any(|(_, a)| never_ends.contains(&a.prim)),
             (Goal::Refines { concrete, .. }, Some(Part::Refine(smt::goals::RefineItem::Realisable))) => {
@@ -562,9 +571,9 @@ fn trace(prog: &crate::hir::Program, ob: &Obligation, f: &smt::Failure) -> Vec<S
 }
 
 /// The trace as a note: "trace to this point: ..." one step a line.
-fn trace_note(lines: &[String]) -> Option<String> {
-    (!lines.is_empty())
-        .then(|| format!("trace to this point (one path; values from the counterexample):\n  {}", lines.join("\n  ")))
+fn trace_note(lines: &[String], values: bool) -> Option<String> {
+    let how = if values { "one path; values from the counterexample" } else { "one path" };
+    (!lines.is_empty()).then(|| format!("trace to this point ({how}):\n  {}", lines.join("\n  ")))
 }
 
 fn failure(prog: &crate::hir::Program, ob: &Obligation, f: smt::Failure) -> Diagnostic {
@@ -634,7 +643,7 @@ fn failure(prog: &crate::hir::Program, ob: &Obligation, f: smt::Failure) -> Diag
     for (symbol, name, span) in &f.bound {
         d = d.with_label(*span, format!("`{symbol}` in the counterexample is the `{name}` bound here"));
     }
-    if let Some(text) = trace_note(&steps) {
+    if let Some(text) = trace_note(&steps, !f.values.is_empty()) {
         d = d.with_note(text);
     }
     let cx = Counterexample { values: f.values, overlap: f.overlap, trace: steps };
@@ -665,7 +674,7 @@ fn dead_branch(prog: &crate::hir::Program, ob: &Obligation, f: smt::Failure) -> 
         ..Diagnostic::error(Code::StuckContext, ob.span, format!("dead branch: {} can never hold", ob.what))
     }
     .with_note("the context at the choice contradicts this branch's guard, or leaves no value its payload's refinements admit, so no execution takes it; its checks hold vacuously");
-    if let Some(text) = trace_note(&steps) {
+    if let Some(text) = trace_note(&steps, false) {
         d = d.with_note(text);
     }
     d.with_help("remove the branch, or fix its guard or its payload's refinements")

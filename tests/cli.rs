@@ -886,7 +886,8 @@ fn a_mavlink_protocol_without_processes_is_verified_and_says_no_process_was_type
     assert!(diags[0]["message"].as_str().unwrap_or("").contains("no process was typed"), "{v}");
     let o = mochi(&["check", "tests/data/mavlink/mission-upload.chor"]);
     assert!(
-        stdout(&o).contains("verdict: verified (tests/data/mavlink/mission-upload.chor) -- protocol only: no process typed"),
+        stdout(&o)
+            .contains("verdict: verified (tests/data/mavlink/mission-upload.chor) -- protocol only: no process typed"),
         "{}",
         stdout(&o)
     );
@@ -924,6 +925,7 @@ fn mavlink_flags_strings_and_wire_ranges_are_decided_exactly() {
         ("param-id-wrong", "rejected", Some("param_id = \"MC_PITCH_P\"")),
         ("wire-limits", "verified", None),
         ("wire-limits-wrong", "rejected", Some("time_unix_usec = 18446744073709551615")),
+        ("parachute-action", "verified", None),
     ] {
         let path = format!("tests/data/mavlink/{file}.chor");
         let o = mochi(&["check", &path]);
@@ -946,7 +948,10 @@ fn processes_of_a_mavlink_protocol_are_typed_against_their_projections() {
     let dir = TempDir::new("mavlink-wrong-ack");
     let src = std::fs::read_to_string("tests/data/mavlink/mission-upload-processes.chor").expect("fixture");
     assert!(src.contains("GCS!MISSION_ACK(MAV_MISSION_ACCEPTED)"));
-    let file = dir.write("wrong-ack.chor", &src.replace("GCS!MISSION_ACK(MAV_MISSION_ACCEPTED)", "GCS!MISSION_ACK(MAV_MISSION_ERROR)"));
+    let file = dir.write(
+        "wrong-ack.chor",
+        &src.replace("GCS!MISSION_ACK(MAV_MISSION_ACCEPTED)", "GCS!MISSION_ACK(MAV_MISSION_ERROR)"),
+    );
     let o = mochi(&["check", path_arg(&file)]);
     let out = stdout(&o) + &stderr(&o);
     assert!(out.contains("verdict: rejected") && out.contains("error[E0709]"), "{out}");

@@ -126,8 +126,19 @@ pub struct Dialect {
 
 impl Wire {
     /// Every wire type, in the order of the MAVLink specification.
-    pub const ALL: [Wire; 11] =
-        [Wire::U8, Wire::U16, Wire::U32, Wire::U64, Wire::I8, Wire::I16, Wire::I32, Wire::I64, Wire::F32, Wire::F64, Wire::Char];
+    pub const ALL: [Wire; 11] = [
+        Wire::U8,
+        Wire::U16,
+        Wire::U32,
+        Wire::U64,
+        Wire::I8,
+        Wire::I16,
+        Wire::I32,
+        Wire::I64,
+        Wire::F32,
+        Wire::F64,
+        Wire::Char,
+    ];
 
     /// The wire type of a C type name of the XML (`"uint16_t"`, `"float"`, `"char"`), without
     /// an array suffix. `uint8_t_mavlink_version` (HEARTBEAT's version byte, filled in by the

@@ -264,10 +264,8 @@ impl Reader<'_> {
         let f = File { name, doc: &doc };
         let root = doc.root_element();
         if !root.has_tag_name("mavlink") {
-            return f.err(
-                root.range().start,
-                format!("the root element is <{}>, not <mavlink>", root.tag_name().name()),
-            );
+            return f
+                .err(root.range().start, format!("the root element is <{}>, not <mavlink>", root.tag_name().name()));
         }
         for inc in root.children().filter(|c| c.has_tag_name("include")) {
             let target = text_of(inc);
@@ -322,10 +320,7 @@ impl Reader<'_> {
                 return f.err(
                     x.range().start,
                     if i == ei {
-                        format!(
-                            "enum entry {} is defined again with different content (first at {first})",
-                            entry.name
-                        )
+                        format!("enum entry {} is defined again with different content (first at {first})", entry.name)
                     } else {
                         format!(
                             "enum entry {} of {name} is also an entry of {} (at {first}): entry names must be \
@@ -439,10 +434,7 @@ fn entry(f: &File<'_, '_>, node: roxmltree::Node<'_, '_>) -> Result<Entry, Diale
         let index = match index_text.trim().parse::<u8>() {
             Ok(i) if (1..=7).contains(&i) => i,
             _ => {
-                return f.err(
-                    f.attr_at(p, "index"),
-                    format!("{name}: param index `{index_text}` is not one of 1..=7"),
-                )
+                return f.err(f.attr_at(p, "index"), format!("{name}: param index `{index_text}` is not one of 1..=7"))
             }
         };
         if params.iter().any(|q| q.index == index) {

@@ -320,13 +320,21 @@ impl Lowerer {
         let var = || Expr { kind: ExprKind::Var(Var::Value(v, binder.name.clone())), sort: sort.clone(), loc };
         let mut implicit = Vec::new();
         if let Some((lo, hi)) = wire.int_range() {
-            let cmp = |op, a: Expr, b: Expr| Expr { kind: ExprKind::Binary(op, Box::new(a), Box::new(b)), sort: Sort::Bool, loc };
+            let cmp = |op, a: Expr, b: Expr| Expr {
+                kind: ExprKind::Binary(op, Box::new(a), Box::new(b)),
+                sort: Sort::Bool,
+                loc,
+            };
             implicit.push(cmp(BinOp::Le, int_literal(lo, loc), var()));
             implicit.push(cmp(BinOp::Le, var(), int_literal(hi, loc)));
         }
         if let (Some(c), "command") = (command, res.field.name.as_str()) {
             let value = Expr { kind: ExprKind::Int(c.value), sort: Sort::Int, loc };
-            implicit.push(Expr { kind: ExprKind::Binary(BinOp::Eq, Box::new(var()), Box::new(value)), sort: Sort::Bool, loc });
+            implicit.push(Expr {
+                kind: ExprKind::Binary(BinOp::Eq, Box::new(var()), Box::new(value)),
+                sort: Sort::Bool,
+                loc,
+            });
         }
         let user = f.refinement.as_ref().map(|r| {
             let env = Env::role(viewer, values);
@@ -415,7 +423,7 @@ impl Lowerer {
                 "pass an `int` field such as HEARTBEAT's `base_mode`",
             );
         }
-        if !flag.is_some_and(|f| f > 0) {
+        if flag.is_none_or(|f| f <= 0) {
             self.err(
                 Code::BadFlag,
                 args[1].loc.0,
@@ -470,4 +478,3 @@ fn int_literal(n: i128, loc: Loc) -> Expr {
 fn quoted<'a>(names: impl Iterator<Item = &'a str>) -> String {
     names.map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ")
 }
-

@@ -68,7 +68,9 @@ fn enum_entries_are_int_constants_that_nothing_may_hide() {
     let c = p.consts.iter().find(|c| c.name == "MAV_MISSION_ACCEPTED").expect("interned");
     assert_eq!((c.sort.clone(), c.value.kind.clone()), (Sort::Int, ExprKind::Int(0)));
     // A constant of an entry's name is E0206; a binder of one is E0240.
-    let (_, d) = lower_src(&format!("{SYS}const MAV_MISSION_ACCEPTED: int = 3;\nchoreography G = UAV -> GCS: MISSION_ACK. end;"));
+    let (_, d) = lower_src(&format!(
+        "{SYS}const MAV_MISSION_ACCEPTED: int = 3;\nchoreography G = UAV -> GCS: MISSION_ACK. end;"
+    ));
     assert_eq!(codes(&d), ["E0206"]);
     let (_, d) = lower_mav("UAV -> GCS: MISSION_ACK(type as MAV_MISSION_ACCEPTED). end");
     assert_eq!(codes(&d), ["E0240"]);
@@ -139,7 +141,9 @@ fn has_flag_needs_an_int_and_a_positive_constant() {
 
 #[test]
 fn dialects_are_named_once() {
-    let (_, d) = lower_src("dialect comon;\nsystem S { participant GCS; participant UAV; }\nchoreography G = GCS -> UAV: ping. end;");
+    let (_, d) = lower_src(
+        "dialect comon;\nsystem S { participant GCS; participant UAV; }\nchoreography G = GCS -> UAV: ping. end;",
+    );
     assert_eq!(codes(&d), ["E0230"]);
     assert!(d[0].help.as_deref().unwrap_or("").contains("`common`"), "{d:?}");
     let (_, d) = lower_src(&format!("{SYS}dialect common;\nchoreography G = GCS -> UAV: HEARTBEAT. end;"));
@@ -218,4 +222,15 @@ fn mavlink_fields_are_compared_by_field_not_by_place() {
     let (lq, _) = crate::project::project_all(&q);
     assert!(!alpha_equal(&lp[&RoleId(1)], &lq[&RoleId(1)]));
     assert!(alpha_equal(&lp[&RoleId(1)], &lp[&RoleId(1)]));
+}
+
+/// A dialect that includes `common` has its entries and its own: ArduPilot's copter modes.
+#[test]
+fn ardupilotmega_has_commons_messages_and_its_own_entries() {
+    let src = "dialect ardupilotmega;\nsystem S { participant GCS; participant UAV; }\n\
+               choreography G = UAV -> GCS: HEARTBEAT(custom_mode {custom_mode != COPTER_MODE_ACRO}). end;";
+    let (p, d) = lower_src(src);
+    assert!(d.is_empty(), "{d:?}");
+    let c = p.consts.iter().find(|c| c.name == "COPTER_MODE_ACRO").expect("interned");
+    assert_eq!(c.value.kind, ExprKind::Int(1));
 }

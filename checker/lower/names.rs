@@ -83,7 +83,8 @@ impl Lowerer {
         }
         let mut help = "declare it as a `const`, a parameter, a robot variable, or bind it in a message".to_string();
         if let Some(d) = self.prog.dialect {
-            let close = crate::dialect::suggest(name, d.enums.iter().flat_map(|e| e.entries.iter().map(|x| x.name.as_str())));
+            let close =
+                crate::dialect::suggest(name, d.enums.iter().flat_map(|e| e.entries.iter().map(|x| x.name.as_str())));
             if !close.is_empty() {
                 let names: Vec<String> = close.iter().map(|n| format!("`{n}`")).collect();
                 help = format!("did you mean the enum entry {}?", names.join(" or "));

@@ -493,7 +493,7 @@ impl<'p> Encoder<'p> {
                 };
                 let bits: Vec<Bool> = (0..63)
                     .filter(|k| flag >> k & 1 == 1)
-                    .map(|k| x.div(&Int::from_i64(1 << k)).modulo(&Int::from_i64(2)).eq(Int::from_i64(1)))
+                    .map(|k| x.div(Int::from_i64(1 << k)).modulo(Int::from_i64(2)).eq(Int::from_i64(1)))
                     .collect();
                 Term::B(Bool::and(&bits))
             }

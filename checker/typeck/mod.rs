@@ -167,8 +167,11 @@ enum GoalKey<'o> {
     Contains(PrimId),
     Reachable(&'o [Vec<Expr>], bool),
     /// Each branch's guard, fields (by binding site and sort) and refinement.
-    Progress(Vec<(Option<&'o Expr>, Vec<(ValueId, &'o Sort)>, &'o Expr)>),
+    Progress(Vec<BranchKey<'o>>),
 }
+
+/// A progress branch: its guard, its fields (by binding site and sort), its refinement.
+type BranchKey<'o> = (Option<&'o Expr>, Vec<(ValueId, &'o Sort)>, &'o Expr);
 
 /// A primitive application without its location.
 type AppKey<'o> = (PrimId, &'o [Expr]);

@@ -649,7 +649,7 @@ impl<'a> Contexts<'a> {
             .iter()
             .map(|m| m.guard.clone())
             .collect::<Option<Vec<Expr>>>()
-            .and_then(|gs| gs.into_iter().reduce(|a, b| or(a, b)))
+            .and_then(|gs| gs.into_iter().reduce(or))
         {
             hyps.assume(&any);
         }

@@ -93,7 +93,9 @@ fn find<'g>(g: &'g Global, span: Span, branch: Option<(usize, usize)>, out: &mut
 /// are the counterexample's; `bound` says which symbol each of two same-named values has
 /// (`smt::Failure::bound`).
 pub fn lines(prog: &Program, steps: &[Step], values: &[Assignment], bound: &[(String, String, Span)]) -> Vec<String> {
-    let value = |id: ValueId, name: &str| -> String {
+    // `shown` is the name the user reads (a MAVLink field as written, `seq` of
+    // `seq as s`); `name` the value's own, by which the model knows it.
+    let value = |id: ValueId, name: &str, shown: &str| -> String {
         let shared: Vec<&(String, String, Span)> = bound.iter().filter(|(_, n, _)| n == name).collect();
         let symbol = if shared.is_empty() {
             Some(name.to_string())
@@ -101,8 +103,8 @@ pub fn lines(prog: &Program, steps: &[Step], values: &[Assignment], bound: &[(St
             shared.iter().find(|(_, _, s)| *s == prog.value(id).span).map(|(sym, _, _)| sym.clone())
         };
         match symbol.and_then(|sym| values.iter().find(|a| a.name == sym)) {
-            Some(a) => format!("{name} = {}", a.value),
-            None => name.to_string(),
+            Some(a) => format!("{shown} = {}", a.value),
+            None => shown.to_string(),
         }
     };
     let mut out = Vec::new();
@@ -110,7 +112,11 @@ pub fn lines(prog: &Program, steps: &[Step], values: &[Assignment], bound: &[(St
         match step {
             Step::Msg { m, branch } => {
                 let guard = m.guard.as_ref().map(|g| format!("[{}] ", print::expr(prog, None, g))).unwrap_or_default();
-                let fields: Vec<String> = m.payload.iter().map(|f| value(f.value, &f.name)).collect();
+                let fields: Vec<String> = m
+                    .payload
+                    .iter()
+                    .map(|f| value(f.value, &f.name, f.mav.as_ref().map_or(&f.name, |m| &m.written)))
+                    .collect();
                 let payload = if fields.is_empty() { String::new() } else { format!("({})", fields.join(", ")) };
                 let which = branch.map(|(k, n)| format!("   (branch {k} of {n})")).unwrap_or_default();
                 out.push(format!(
@@ -121,7 +127,7 @@ pub fn lines(prog: &Program, steps: &[Step], values: &[Assignment], bound: &[(St
                 ));
             }
             Step::Loop { var, params } => {
-                let ps: Vec<String> = params.iter().map(|p| value(p.value, &p.name)).collect();
+                let ps: Vec<String> = params.iter().map(|p| value(p.value, &p.name, &p.name)).collect();
                 if ps.is_empty() {
                     out.push(format!("mu {var}   (loop head)"));
                 } else {
