@@ -108,6 +108,20 @@ pub struct Msg {
     pub label_loc: Loc,
 }
 
+/// Whether two labels may be the same message on the wire, so that a receiver cannot tell
+/// them apart: equal labels, or a MAVLink command message with its command fixed
+/// (`COMMAND_LONG[MAV_CMD_X]`) and the same message without (`COMMAND_LONG`, whose
+/// `command` may be `MAV_CMD_X`). Labels of a choice (E0302) and the receptions a merge
+/// joins (E0601) must not overlap. Without a dialect no label has a `[`.
+pub fn labels_overlap(a: &str, b: &str) -> bool {
+    let split = |l: &str| match l.split_once('[') {
+        Some((m, _)) => (m.to_string(), true),
+        None => (l.to_string(), false),
+    };
+    let ((ma, ca), (mb, cb)) = (split(a), split(b));
+    a == b || (ma == mb && !(ca && cb))
+}
+
 /// A refined payload field `{v : S | P}`. Equality includes the value's id (its binding
 /// site), as [`Var::Value`](super::Var) does; `project::equal` compares up to renaming.
 #[derive(Clone, Debug)]

@@ -117,6 +117,9 @@ impl Lowerer {
     /// `partition(py, py, pz)` would read both `py`s as the first coordinate (x).
     pub(super) fn distinct_coordinates(&mut self, point: &[ast::Ident]) {
         super::distinct("coordinate", point, &mut self.diags);
+        for c in point {
+            self.hides_entry(c);
+        }
     }
 
     /// Resolves `p: a(args)` (or a process's `a(args)`) for the kind of `role`.

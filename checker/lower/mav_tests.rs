@@ -234,3 +234,23 @@ fn ardupilotmega_has_commons_messages_and_its_own_entries() {
     let c = p.consts.iter().find(|c| c.name == "COPTER_MODE_ACRO").expect("interned");
     assert_eq!(c.value.kind, ExprKind::Int(1));
 }
+
+/// A field is bound from its message on: reading `seq` before MISSION_REQUEST_INT is E0205
+/// (not a constant, not an entry: nothing else answers to it).
+#[test]
+fn a_field_read_before_its_message_is_unknown() {
+    let (_, d) =
+        lower_mav("GCS -> UAV: MISSION_COUNT(count {count == seq}). UAV -> GCS: MISSION_REQUEST_INT(seq). end");
+    assert_eq!(codes(&d), ["E0205"]);
+}
+
+/// Robot variables, primitive parameters and footprint coordinates are binders too.
+#[test]
+fn robot_names_may_not_hide_entries_either() {
+    let (_, d) = lower_src(
+        "dialect common;\nrobot R { state MAV_MISSION_ACCEPTED: real; }\n\
+         motion R.m(MAV_CMD_DO_PARACHUTE: real) { interruptible: true; footprint(PARACHUTE_RELEASE, y, z): true; }\n\
+         system S { participant A: R; participant GCS; }\nchoreography G = GCS -> A: HEARTBEAT. end;",
+    );
+    assert_eq!(codes(&d), ["E0240", "E0240", "E0240"]);
+}

@@ -170,6 +170,20 @@ impl Projector<'_> {
                     why: Some("Def 4.7 merges receptions only from the same sender".to_string()),
                 });
             }
+            // A MAVLink command with its command fixed and the same message without: one
+            // message on the wire, so the receiver could not tell which branch follows.
+            if let Some(x) = out.iter().find(|x| x.label != b.label && labels_overlap(&x.label, &b.label)) {
+                return Err(Clash {
+                    left: x.loc,
+                    left_text: recv_text(self.prog, x),
+                    right: b.loc,
+                    right_text: recv_text(self.prog, b),
+                    why: Some(format!(
+                        "`{}` and `{}` are one MAVLink message: the one without a fixed command may carry the other's",
+                        x.label, b.label
+                    )),
+                });
+            }
             match out.iter_mut().find(|x| x.label == b.label) {
                 None => out.push(b.clone()),
                 Some(x) => {

@@ -213,16 +213,22 @@ impl Side<'_> {
             if !shape_ok {
                 continue; // labels only distinguish branches of the same shape
             }
-            if let Some((_, first)) = labels.iter().find(|(l, _)| *l == m.label) {
-                self.diags.push(
-                    Diagnostic::error(
-                        Code::DuplicateLabel,
-                        m.label_loc.0,
-                        format!("label `{}` is used by two branches", m.label),
+            if let Some((l, first)) = labels.iter().find(|(l, _)| crate::hir::labels_overlap(l, &m.label)) {
+                let message = if *l == m.label {
+                    format!("label `{}` is used by two branches", m.label)
+                } else {
+                    format!(
+                        "labels `{l}` and `{}` are one MAVLink message: the one without a fixed command may carry the other's",
+                        m.label
                     )
-                    .with_label(first.0, "first used here")
-                    .with_note("Def 4.1: labels of a choice are distinct so the receiver can tell the branches apart")
-                    .with_help("rename one of the labels"),
+                };
+                self.diags.push(
+                    Diagnostic::error(Code::DuplicateLabel, m.label_loc.0, message)
+                        .with_label(first.0, "first used here")
+                        .with_note(
+                            "Def 4.1: labels of a choice are distinct so the receiver can tell the branches apart",
+                        )
+                        .with_help("rename one of the labels"),
                 );
             } else {
                 labels.push((&m.label, m.label_loc));
