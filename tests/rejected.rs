@@ -1,5 +1,6 @@
-//! The rejected-variants corpus: each file under `choreographies/rejected/` and
-//! `choreographies/rejected/geometry/` breaks exactly one rule. Its first line says which,
+//! The rejected-variants corpus: each file under `choreographies/rejected/`,
+//! `choreographies/rejected/geometry/` and `choreographies/mavlink/rejected/` (the MAVLink
+//! case studies' defective variants, issue 10) breaks exactly one rule. Its first line says which,
 //! as `// expect: E0301 at 5:3`: the check must reject the file, every error must carry
 //! that code and a hint, and one of them must start at that line and column. A diagnostic
 //! that points into another file (a URDF, whose errors point at its own lines) is expected
@@ -22,7 +23,8 @@ use std::collections::BTreeSet;
 use std::path::{Component, Path, PathBuf};
 
 /// The folders of the corpus.
-const DIRS: &[&str] = &["choreographies/rejected", "choreographies/rejected/geometry"];
+const DIRS: &[&str] =
+    &["choreographies/rejected", "choreographies/rejected/geometry", "choreographies/mavlink/rejected"];
 
 /// Rejected variants whose code the geometric procedure does not give in reasonable time
 /// yet (they live in `choreographies/pending/` with the examples they vary, which the other
@@ -53,6 +55,11 @@ fn corpus() -> Vec<PathBuf> {
     assert!(
         files.iter().filter(|p| p.starts_with("choreographies/rejected/geometry")).count() >= 7,
         "the URDF and mesh files (choreographies/rejected/geometry/E050*.chor) are in the corpus"
+    );
+    // The MAVLink variants are read too (issue 10: each case study's defective variants).
+    assert!(
+        files.iter().filter(|p| p.starts_with("choreographies/mavlink/rejected")).count() >= 8,
+        "the MAVLink variants (choreographies/mavlink/rejected/E*.chor) are in the corpus"
     );
     // The library files are read too (a filter that dropped them all would pass).
     assert!(
