@@ -21,6 +21,9 @@ impl Lowerer {
                 format!("{what} must be of sort `{want}`, this is `{}`", e.sort),
                 match want {
                     Sort::Bool => "write a comparison or a boolean combination".to_string(),
+                    Sort::Int if e.sort == Sort::Real => {
+                        "write an integer term: a literal with a decimal point, a division or a `real` variable is a real, and an `int` is never rounded to one".to_string()
+                    }
                     Sort::Real | Sort::Int => "write a numeric term".to_string(),
                     _ => format!("write a term of sort `{want}`"),
                 },

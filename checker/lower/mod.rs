@@ -219,5 +219,6 @@ impl Lowerer {
 #[derive(Default)]
 struct Scopes {
     values: Vec<ValueId>,
-    recs: Vec<(String, usize)>,
+    /// The recursion variables in scope, innermost last, with their parameters' sorts.
+    recs: Vec<(String, Vec<Sort>)>,
 }

@@ -56,7 +56,7 @@ impl Lowerer {
             }
             ast::Process::Rec { var, params, body, span } => {
                 let params = self.rec_params(params, ValueOrigin::Bound { role: me }, Who::Role(me), &mut cx.values);
-                cx.recs.push((var.name.clone(), params.len()));
+                cx.recs.push((var.name.clone(), params.iter().map(|p| p.sort.clone()).collect()));
                 let body = self.process(body, me, cx);
                 cx.recs.pop();
                 Some(Process::Rec { var: var.name.clone(), params, body: Box::new(body?), loc: Loc(*span) })

@@ -97,7 +97,7 @@ impl Lowerer {
                     self.expect_sort(&m, &Sort::Int, &format!("the measure of `{}`", var.name));
                     m
                 });
-                cx.recs.push((var.name.clone(), params.len()));
+                cx.recs.push((var.name.clone(), params.iter().map(|p| p.sort.clone()).collect()));
                 let body = self.global(body, cx);
                 cx.recs.pop();
                 cx.values.truncate(mark);
@@ -176,24 +176,30 @@ impl Lowerer {
         var: &ast::Ident,
         args: &[ast::Expr],
         span: Span,
-        recs: &[(String, usize)],
+        recs: &[(String, Vec<Sort>)],
         env: Env,
     ) -> Vec<Expr> {
         let args: Vec<Expr> = args.iter().map(|a| self.expr(a, &env)).collect();
-        match recs.iter().rev().find(|(n, _)| *n == var.name) {
+        match recs.iter().rev().find(|(n, _)| *n == var.name).map(|(n, sorts)| (n, sorts.len(), sorts)) {
             None => self.err(
                 Code::UnboundRecursion,
                 var.span,
                 format!("recursion variable `{}` is not bound here", var.name),
                 format!("bind it with `mu {}. ...` around this occurrence", var.name),
             ),
-            Some((_, n)) if *n != args.len() => self.err(
+            Some((_, n, _)) if n != args.len() => self.err(
                 Code::ArityMismatch,
                 span,
                 format!("`{}` takes {n} argument(s), found {}", var.name, args.len()),
                 "pass one argument per recursion parameter",
             ),
-            _ => {}
+            // Each argument has its parameter's sort (an `int` parameter given `i + 0.5`
+            // would be a real the next iteration's refinements and guards read as an int).
+            Some((_, _, sorts)) => {
+                for (i, (a, s)) in args.iter().zip(sorts).enumerate() {
+                    self.expect_sort(a, s, &format!("argument {} of `{}`", i + 1, var.name));
+                }
+            }
         }
         args
     }
@@ -260,7 +266,7 @@ impl Lowerer {
             }
             ast::Local::Rec { var, params, body, span } => {
                 let params = self.rec_params(params, ValueOrigin::RecParam, Who::Role(me), &mut cx.values);
-                cx.recs.push((var.name.clone(), params.len()));
+                cx.recs.push((var.name.clone(), params.iter().map(|p| p.sort.clone()).collect()));
                 let body = self.local(body, me, cx);
                 cx.recs.pop();
                 Local::Rec { var: var.name.clone(), params, body, loc: Loc(*span) }
