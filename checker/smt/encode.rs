@@ -309,7 +309,7 @@ impl<'p> Encoder<'p> {
                     }
                     Term::I(i) => {
                         model.get_const_interp(i)?;
-                        model.eval(i, true).map(|v| v.to_string())
+                        model.eval(i, true).map(|v| int_text(&v.to_string()))
                     }
                     Term::R(r) => {
                         model.get_const_interp(r)?;
@@ -804,12 +804,29 @@ fn decimal(r: &Real) -> String {
     }
 }
 
+/// An integer of a Z3 model as the user writes it: Z3 prints a negative one as `(- 1)`.
+fn int_text(z3: &str) -> String {
+    match z3.strip_prefix("(- ").and_then(|r| r.strip_suffix(')')) {
+        Some(n) if n.bytes().all(|b| b.is_ascii_digit()) => format!("-{n}"),
+        _ => z3.to_string(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn q(n: i64, d: i64) -> BigRational {
         BigRational::new(n.into(), d.into())
+    }
+
+    #[test]
+    fn negative_integers_of_a_model_read_as_written() {
+        assert_eq!(int_text("(- 1)"), "-1");
+        assert_eq!(int_text("(- 9223372036854775809)"), "-9223372036854775809");
+        assert_eq!(int_text("42"), "42");
+        // Anything else is shown as Z3 printed it, not guessed at.
+        assert_eq!(int_text("(- x)"), "(- x)");
     }
 
     #[test]
