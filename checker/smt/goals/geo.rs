@@ -24,7 +24,7 @@ use super::Part;
 use super::Query;
 use crate::bounds::{self, Interval};
 use crate::diag::{Assignment, Overlap};
-use crate::geometry::bnb::{self, Closest, Feasible, Options, QBox, Scene};
+use crate::geometry::bnb::{self, Bound, Closest, Feasible, Options, QBox, Scene};
 use crate::geometry::placement::{chain_motion_bound, ArgBounds, FrameBound};
 use crate::geometry::{self, Pose3};
 use crate::hir::body::Pose;
@@ -600,6 +600,25 @@ impl<'a> Geo<'a> {
         out
     }
 
+    /// Each solid of side `side` placed at `c` (world pose) with the bound on how far its
+    /// points move over `[lo, hi]`; `None` if some solid cannot be placed (no bound).
+    fn placed(&self, side: usize, lo: &[f64], hi: &[f64], c: &[f64]) -> Option<Vec<(Pose3, f64)>> {
+        self.side_frames(side, lo, hi, c)
+            .into_iter()
+            .zip(&self.sides[side])
+            .map(|(frames, p)| {
+                let frames = frames?;
+                let mut pose = geometry::identity();
+                let mut fb = Vec::with_capacity(frames.len());
+                for (f, b) in frames {
+                    pose *= f;
+                    fb.push(b);
+                }
+                Some((pose * p.piece.solid.pose, chain_motion_bound(&fb, p.piece.solid.bounding_radius())))
+            })
+            .collect()
+    }
+
     fn at_pose(&self, role: RoleId) -> Option<(Pose3, FrameBound)> {
         let pose = &self.prog.role(role).pose;
         let mut a = [0.0; 6];
@@ -625,6 +644,38 @@ impl<'a> Geo<'a> {
         opts.max_nodes = 400_000;
         opts.time_dim = self.dims.iter().position(|d| *d == Dim::Clock(0));
         let d = bnb::decide(self, &self.root, &opts);
+        if std::env::var_os("MOCHI_GEO_STATS").is_some() {
+            // Profiling aid (not a user interface): boxes and splits per dimension.
+            let splits: Vec<String> = self
+                .dims
+                .iter()
+                .enumerate()
+                .filter_map(|(i, dim)| {
+                    let n = d.stats.splits.get(i).copied().unwrap_or(0);
+                    (n > 0).then(|| format!("{}:{n}", self.dim_name(*dim)))
+                })
+                .collect();
+            let (a, b) = (self.solid_name(0, 0), self.solid_name(1, 0));
+            eprintln!(
+                "geo {a} / {b}: {} dims, {} boxes, {} distance, {} witness, {:.3} s, {}; splits {}",
+                self.dims.len(),
+                d.stats.nodes,
+                d.stats.distance_calls,
+                d.stats.witness_calls,
+                d.stats.elapsed.as_secs_f64(),
+                match &d.outcome {
+                    bnb::Outcome::Apart { .. } => "apart",
+                    bnb::Outcome::Contact(_) => "contact",
+                    bnb::Outcome::Unknown { .. } => "unknown",
+                },
+                splits.join(" ")
+            );
+            if std::env::var_os("MOCHI_GEO_STATS").is_some_and(|v| v == "2") {
+                for (i, dim) in self.dims.iter().enumerate() {
+                    eprintln!("    {} in [{}, {}]", self.dim_name(*dim), self.root.lo[i], self.root.hi[i]);
+                }
+            }
+        }
         match d.outcome {
             bnb::Outcome::Apart { .. } => GeoAnswer::Apart,
             bnb::Outcome::Contact(c) => {
@@ -677,7 +728,7 @@ impl<'a> Geo<'a> {
     /// rounded) with the box's ranges for everything else. Sound: every configuration of
     /// the box that satisfies the constraints lies in the narrowed box. `None` when it is
     /// empty (no configuration of the box satisfies them).
-    fn contract(&self, lo: &[f64], hi: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
+    fn narrow(&self, lo: &[f64], hi: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
         if let Some(((l, h), got)) = self.contracted.borrow().as_ref() {
             if l == lo && h == hi {
                 return got.clone();
@@ -809,6 +860,10 @@ impl Scene for Geo<'_> {
         self.dims.len()
     }
 
+    fn contract(&self, b: &QBox) -> Option<QBox> {
+        self.narrow(&b.lo, &b.hi).map(|(lo, hi)| QBox::new(lo, hi))
+    }
+
     fn distance(&self, q: &[f64]) -> Closest {
         let place = |side: usize| -> Vec<Option<Pose3>> {
             self.side_frames(side, q, q, q)
@@ -863,10 +918,88 @@ impl Scene for Geo<'_> {
         best
     }
 
+    /// Pair by pair: the two sides' solids placed at the centre, each with the bound on
+    /// how far its points move over the (contracted) box; the box's bound is the least over
+    /// pairs `(i, j)` of `lower_ij(c) − m_i − m_j` (each pair's distance at any `q` is at
+    /// least that: the module argument, per pair), which is at least the default
+    /// `min_ij lower_ij(c) − max_i m_i − max_j m_j`. A pair whose bounding spheres' gap
+    /// minus its motion already exceeds the least bound so far asks parry nothing: its
+    /// true distance is at least that gap (spheres contain the solids).
+    fn bound(&self, lo: &[f64], hi: &[f64], centre: &[f64]) -> Bound {
+        let none = || Bound {
+            lower: f64::NEG_INFINITY,
+            at_c: Closest { distance: f64::NAN, lower: f64::NEG_INFINITY, points: [[0.0; 3]; 2], solids: [0, 0] },
+            mb: f64::INFINITY,
+            focus: None,
+        };
+        let Some((lo, hi)) = self.narrow(lo, hi) else {
+            // No feasible configuration: nothing to bound (the search prunes it first).
+            return Bound { lower: f64::INFINITY, mb: 0.0, ..none() };
+        };
+        let (Some(a), Some(b)) = (self.placed(0, &lo, &hi, centre), self.placed(1, &lo, &hi, centre)) else {
+            return none();
+        };
+        let origin = |p: &Pose3, s: &geometry::Solid| geometry::apply(&(*p * s.pose.inverse()), [0.0; 3]);
+        let mut pairs = Vec::with_capacity(a.len() * b.len());
+        for (i, (pa, ma)) in a.iter().enumerate() {
+            for (j, (pb, mb)) in b.iter().enumerate() {
+                let (sa, sb) = (&self.sides[0][i].piece.solid, &self.sides[1][j].piece.solid);
+                let (ca, cb) = (origin(pa, sa), origin(pb, sb));
+                let d2: f64 = ca.iter().zip(cb).map(|(x, y)| (x - y) * (x - y)).sum();
+                let gap = d2.sqrt() - sa.bounding_radius() - sb.bounding_radius() - geometry::DISTANCE_MARGIN;
+                let m = (ma + mb) * (1.0 + geometry::placement::PAD);
+                pairs.push((gap - m, gap, m, i, j));
+            }
+        }
+        pairs.sort_by(|x, y| x.0.total_cmp(&y.0));
+        let mut out = Bound {
+            lower: f64::INFINITY,
+            at_c: Closest { distance: f64::INFINITY, lower: f64::INFINITY, points: [[0.0; 3]; 2], solids: [0, 0] },
+            mb: 0.0,
+            focus: None,
+        };
+        for (key, gap, m, i, j) in pairs {
+            // This pair's bound is at least its key: it cannot lower the minimum. (Pairs whose
+            // spheres overlap at the centre are still asked, so that a contact at the centre
+            // is seen.)
+            if key >= out.lower && gap > 0.0 {
+                continue;
+            }
+            let (pa, pb) = (&a[i].0, &b[j].0);
+            let (sa, sb) = (&self.sides[0][i].piece.solid, &self.sides[1][j].piece.solid);
+            let (d, lower, points) = bnb::parry_closest(&sa.shape, pa, &sb.shape, pb);
+            let lower = lower - sa.slack - sb.slack - geometry::DISTANCE_MARGIN;
+            let lower = if lower.is_nan() { f64::NEG_INFINITY } else { lower };
+            let pair = lower.max(gap) - m;
+            let pair = if pair.is_nan() { f64::NEG_INFINITY } else { pair };
+            if pair < out.lower || out.focus.is_none() {
+                out.lower = out.lower.min(pair);
+                out.mb = m;
+                out.focus = Some([i, j]);
+            }
+            out.at_c.lower = out.at_c.lower.min(lower);
+            if d < out.at_c.distance || out.at_c.distance.is_infinite() || d.is_nan() {
+                out.at_c.distance = d;
+                out.at_c.points = points;
+                out.at_c.solids = [i, j];
+            }
+        }
+        out
+    }
+
+    fn focus_motion_bound(&self, lo: &[f64], hi: &[f64], centre: &[f64], focus: Option<[usize; 2]>) -> f64 {
+        let Some([i, j]) = focus else { return self.motion_bound(lo, hi, centre) };
+        let Some((lo, hi)) = self.narrow(lo, hi) else { return 0.0 };
+        let m = |side: usize, k: usize| {
+            self.placed(side, &lo, &hi, centre).and_then(|v| v.get(k).map(|x| x.1)).unwrap_or(f64::INFINITY)
+        };
+        (m(0, i) + m(1, j)) * (1.0 + geometry::placement::PAD)
+    }
+
     fn motion_bound(&self, lo: &[f64], hi: &[f64], centre: &[f64]) -> f64 {
         // Only the feasible configurations of the box move the bodies: bound the motion over
         // the contracted box (its centre stays the box's; the bounds measure from it).
-        let Some((lo, hi)) = self.contract(lo, hi) else { return 0.0 };
+        let Some((lo, hi)) = self.narrow(lo, hi) else { return 0.0 };
         let (lo, hi) = (&lo[..], &hi[..]);
         let side = |k: usize| {
             self.side_frames(k, lo, hi, centre)
@@ -885,7 +1018,7 @@ impl Scene for Geo<'_> {
     }
 
     fn feasible(&self, lo: &[f64], hi: &[f64]) -> Feasible {
-        let Some((lo, hi)) = self.contract(lo, hi) else { return Feasible::No };
+        let Some((lo, hi)) = self.narrow(lo, hi) else { return Feasible::No };
         let (lo, hi) = (&lo[..], &hi[..]);
         let check = |e: &Expr, run: usize, role: RoleId| {
             truth(self.prog, e, &|v: &Var| self.var_range(run, role, v, Some((lo, hi))))
