@@ -18,6 +18,8 @@
 //! constraint exactly and parry confirms the contact there; anything else is unknown,
 //! never apart. ARCHITECTURE.md ("Geometric decision procedure") has the argument.
 
+mod affine;
+
 use super::motion::Inst;
 use super::query::{hyps, seeds_of, slice};
 use super::Part;
@@ -545,10 +547,27 @@ impl<'a> Geo<'a> {
     /// pose in its owner frame is not included), over the box `[lo, hi]` with centre `c`.
     /// Chains of participants and forward kinematics are computed once per call.
     fn side_frames(&self, side: usize, lo: &[f64], hi: &[f64], c: &[f64]) -> Vec<Option<Vec<(Pose3, FrameBound)>>> {
+        self.frames_of(side, None, lo, hi, c)
+    }
+
+    /// [`Geo::side_frames`], computed only for solid `only` when given (the others are
+    /// `None`).
+    fn frames_of(
+        &self,
+        side: usize,
+        only: Option<usize>,
+        lo: &[f64],
+        hi: &[f64],
+        c: &[f64],
+    ) -> Vec<Option<Vec<(Pose3, FrameBound)>>> {
         let mut chains: HashMap<Option<RoleId>, Option<Vec<(Pose3, FrameBound)>>> = HashMap::new();
         let mut fk: HashMap<(RoleId, usize), Option<Kinematics>> = HashMap::new();
         let mut out = Vec::new();
-        for p in &self.sides[side] {
+        for (idx, p) in self.sides[side].iter().enumerate() {
+            if only.is_some_and(|k| k != idx) {
+                out.push(None);
+                continue;
+            }
             let chain = chains
                 .entry(p.role)
                 .or_insert_with(|| match p.role {
@@ -606,17 +625,24 @@ impl<'a> Geo<'a> {
         self.side_frames(side, lo, hi, c)
             .into_iter()
             .zip(&self.sides[side])
-            .map(|(frames, p)| {
-                let frames = frames?;
-                let mut pose = geometry::identity();
-                let mut fb = Vec::with_capacity(frames.len());
-                for (f, b) in frames {
-                    pose *= f;
-                    fb.push(b);
-                }
-                Some((pose * p.piece.solid.pose, chain_motion_bound(&fb, p.piece.solid.bounding_radius())))
-            })
+            .map(|(frames, p)| Self::place_one(frames?, p))
             .collect()
+    }
+
+    /// Solid `k` of side `side` alone, as [`Geo::placed`] places it.
+    fn placed_one(&self, side: usize, k: usize, lo: &[f64], hi: &[f64], c: &[f64]) -> Option<(Pose3, f64)> {
+        let frames = self.frames_of(side, Some(k), lo, hi, c).into_iter().nth(k)??;
+        Self::place_one(frames, self.sides[side].get(k)?)
+    }
+
+    fn place_one(frames: Vec<(Pose3, FrameBound)>, p: &Placed) -> Option<(Pose3, f64)> {
+        let mut pose = geometry::identity();
+        let mut fb = Vec::with_capacity(frames.len());
+        for (f, b) in frames {
+            pose *= f;
+            fb.push(b);
+        }
+        Some((pose * p.piece.solid.pose, chain_motion_bound(&fb, p.piece.solid.bounding_radius())))
     }
 
     fn at_pose(&self, role: RoleId) -> Option<(Pose3, FrameBound)> {
@@ -750,7 +776,29 @@ impl<'a> Geo<'a> {
             facts.extend(self.prog.kind(prim.kind).invariant.as_ref());
             let (l0, h0) = (lo.clone(), hi.clone());
             let start = |v: &Var| self.var_range(k, r.role, v, Some((&l0, &h0)));
-            let got = bounds::ranges_from(self.prog, &facts, &start);
+            let mut got = bounds::ranges_from(self.prog, &facts, &start);
+            // Bounds affine in one start value, evaluated at its two ends (affine.rs).
+            for ab in affine::affine_bounds(&facts) {
+                let Some(Interval { lo: l, hi: h }) = start(&ab.old) else { continue };
+                if !(l.is_finite() && h.is_finite()) {
+                    continue;
+                }
+                let at = |x: f64| {
+                    let pin = |v: &Var| if *v == ab.old { Some(Interval::point(x)) } else { start(v) };
+                    bounds::eval(self.prog, ab.e, &pin)
+                };
+                let (Some(a), Some(b)) = (at(l), at(h)) else { continue };
+                let hull = Interval { lo: a.lo.min(b.lo), hi: a.hi.max(b.hi) };
+                if hull.lo.is_nan() || hull.hi.is_nan() {
+                    continue;
+                }
+                let iv = match ab.side {
+                    affine::Side::Upper => Interval { lo: f64::NEG_INFINITY, hi: hull.hi },
+                    affine::Side::Lower => Interval { lo: hull.lo, hi: f64::INFINITY },
+                    affine::Side::Both => hull,
+                };
+                got.entry(ab.own.clone()).and_modify(|o| *o = o.meet(iv)).or_insert(iv);
+            }
             for (i, d) in self.dims.iter().enumerate() {
                 let Dim::Now(role, slot) = d else { continue };
                 if *role != r.role {
@@ -990,9 +1038,7 @@ impl Scene for Geo<'_> {
     fn focus_motion_bound(&self, lo: &[f64], hi: &[f64], centre: &[f64], focus: Option<[usize; 2]>) -> f64 {
         let Some([i, j]) = focus else { return self.motion_bound(lo, hi, centre) };
         let Some((lo, hi)) = self.narrow(lo, hi) else { return 0.0 };
-        let m = |side: usize, k: usize| {
-            self.placed(side, &lo, &hi, centre).and_then(|v| v.get(k).map(|x| x.1)).unwrap_or(f64::INFINITY)
-        };
+        let m = |side: usize, k: usize| self.placed_one(side, k, &lo, &hi, centre).map_or(f64::INFINITY, |x| x.1);
         (m(0, i) + m(1, j)) * (1.0 + geometry::placement::PAD)
     }
 
