@@ -30,7 +30,6 @@ const DIRS: &[&str] = &["choreographies/rejected", "choreographies/rejected/geom
 /// corpus when it is an `// expect: CODE at ...` line (the test below says when).
 const PENDING: &[&str] = &[
     "choreographies/pending/mounted-arm-orbit-too-small.chor",
-    "choreographies/pending/sorting-panda-reaches-into-cart-path.chor",
 ];
 
 fn corpus() -> Vec<PathBuf> {
