@@ -1,7 +1,8 @@
 //! End-to-end benchmark on the bundled examples: the paper's cart and arms (Fig 2),
 //! the sorting case (Sec 4.5), PGCD's Fetch and Handover (Sec 5 (2), Table 2), and the
-//! geometry examples of issue 9 (a bridge, a mounted arm, turning and diagonal carts, and
-//! the sorting case study of Sec 5 (3) with the robots' URDFs).
+//! geometry examples of issue 9 (a bridge, turning and diagonal carts, and the sorting case
+//! study of Sec 5 (3) with the robots' URDFs). The mounted arm
+//! (`choreographies/pending/mounted-arm.chor`) is not run: it is still unknown after 30 s.
 //!
 //! ```text
 //! cargo bench --bench examples                 # 10 runs per example
@@ -36,7 +37,6 @@ const EXAMPLES: &[(&str, &str)] = &[
     ("choreographies/pgcd/fetch.chor", "PGCD: 5.0 s, 387 queries (Table 2: 7 s on 6 cores)"),
     ("choreographies/pgcd/handover.chor", "PGCD: 218 s (Table 2: 70 s on 6 cores)"),
     ("choreographies/bridge.chor", "-"),
-    ("choreographies/mounted-arm.chor", "-"),
     ("choreographies/turn-together.chor", "-"),
     ("choreographies/diagonal.chor", "-"),
     (CASE_STUDY, "PGCD: did not finish in 900 s here (paper: 2410 s of compatibility checks, dReal, 6 cores)"),

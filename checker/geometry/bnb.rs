@@ -344,7 +344,7 @@ fn choose_split(
 /// shrink a box); `None` when no `q` of `b` satisfies the constraints. A malformed answer
 /// (NaN, wrong length) keeps `b`: never lose a configuration.
 fn narrowed(scene: &dyn Scene, b: QBox) -> Option<QBox> {
-    let Some(n) = scene.contract(&b) else { return None };
+    let n = scene.contract(&b)?;
     if n.lo.len() != b.lo.len() || n.hi.len() != b.hi.len() {
         return Some(b);
     }
@@ -950,6 +950,60 @@ mod tests {
             "{name}: {} nodes, {} distance calls, {} witness calls, {:?}",
             d.stats.nodes, d.stats.distance_calls, d.stats.witness_calls, d.stats.elapsed
         );
+    }
+
+    /// The passing balls with the constraint `t >= 6` (after the balls have passed), told to
+    /// the search only through `contract` (`feasible` says Maybe everywhere), possibly
+    /// answering with a box larger than asked (`widen`: a contraction may only shrink).
+    struct AfterSix {
+        inner: ParryScene,
+        widen: bool,
+    }
+    impl Scene for AfterSix {
+        fn dims(&self) -> usize {
+            1
+        }
+        fn distance(&self, q: &[f64]) -> Closest {
+            self.inner.distance(q)
+        }
+        fn motion_bound(&self, lo: &[f64], hi: &[f64], c: &[f64]) -> f64 {
+            self.inner.motion_bound(lo, hi, c)
+        }
+        fn feasible(&self, _: &[f64], _: &[f64]) -> Feasible {
+            Feasible::Maybe
+        }
+        fn contract(&self, b: &QBox) -> Option<QBox> {
+            if self.widen {
+                return Some(QBox::new(vec![b.lo[0] - 100.0], vec![b.hi[0] + 100.0]));
+            }
+            let lo = b.lo[0].max(6.0);
+            (lo <= b.hi[0]).then(|| QBox::new(vec![lo], b.hi.clone()))
+        }
+        fn witness(&self, lo: &[f64], hi: &[f64], near: &[f64]) -> Option<Vec<f64>> {
+            let lo = [lo[0].max(6.0)];
+            (lo[0] <= hi[0]).then(|| Unconstrained.witness(&lo, hi, near)).flatten()
+        }
+        fn solid_name(&self, side: usize, solid: usize) -> String {
+            self.inner.solid_name(side, solid)
+        }
+    }
+
+    /// A box is evaluated after contraction: its centre and motion bound are the narrowed
+    /// box's. Balls touching at t = 5 (y = 0.9) are apart for t >= 6, which the search proves
+    /// in a few boxes only through the contraction; a contraction answering a larger box is
+    /// intersected with the box, so the touching balls are still found (never lost).
+    #[test]
+    fn a_contracted_box_is_evaluated_and_a_contraction_only_shrinks() {
+        let s = AfterSix { inner: passing_balls(0.9), widen: false };
+        let d = decide(&s, &root1(), &opts(&[1e-4]));
+        report("after six", &d);
+        assert!(matches!(d.outcome, Outcome::Apart { .. }), "{:?}", d.outcome);
+        assert!(d.stats.nodes <= 3, "{:?}", d.stats);
+        let w = AfterSix { inner: passing_balls(0.9), widen: true };
+        let d = decide(&w, &root1(), &opts(&[1e-4]));
+        // The widened answer is cut back to the box; the witness still only looks at t >= 6,
+        // so no contact is confirmed there, but nothing is proved apart either.
+        assert!(!matches!(d.outcome, Outcome::Apart { .. }), "{:?}", d.outcome);
     }
 
     #[test]

@@ -94,8 +94,8 @@ pub(super) fn affine_in(e: &Expr, v: &Var) -> Option<bool> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::hir::Slot;
     use crate::hir::Loc;
+    use crate::hir::Slot;
 
     fn var(v: Var) -> Expr {
         Expr { kind: ExprKind::Var(v), sort: crate::hir::Sort::Real, loc: Loc::default() }

@@ -19,6 +19,7 @@
 //! never apart. ARCHITECTURE.md ("Geometric decision procedure") has the argument.
 
 mod affine;
+mod squares;
 
 use super::motion::Inst;
 use super::query::{hyps, seeds_of, slice};
@@ -670,38 +671,6 @@ impl<'a> Geo<'a> {
         opts.max_nodes = 400_000;
         opts.time_dim = self.dims.iter().position(|d| *d == Dim::Clock(0));
         let d = bnb::decide(self, &self.root, &opts);
-        if std::env::var_os("MOCHI_GEO_STATS").is_some() {
-            // Profiling aid (not a user interface): boxes and splits per dimension.
-            let splits: Vec<String> = self
-                .dims
-                .iter()
-                .enumerate()
-                .filter_map(|(i, dim)| {
-                    let n = d.stats.splits.get(i).copied().unwrap_or(0);
-                    (n > 0).then(|| format!("{}:{n}", self.dim_name(*dim)))
-                })
-                .collect();
-            let (a, b) = (self.solid_name(0, 0), self.solid_name(1, 0));
-            eprintln!(
-                "geo {a} / {b}: {} dims, {} boxes, {} distance, {} witness, {:.3} s, {}; splits {}",
-                self.dims.len(),
-                d.stats.nodes,
-                d.stats.distance_calls,
-                d.stats.witness_calls,
-                d.stats.elapsed.as_secs_f64(),
-                match &d.outcome {
-                    bnb::Outcome::Apart { .. } => "apart",
-                    bnb::Outcome::Contact(_) => "contact",
-                    bnb::Outcome::Unknown { .. } => "unknown",
-                },
-                splits.join(" ")
-            );
-            if std::env::var_os("MOCHI_GEO_STATS").is_some_and(|v| v == "2") {
-                for (i, dim) in self.dims.iter().enumerate() {
-                    eprintln!("    {} in [{}, {}]", self.dim_name(*dim), self.root.lo[i], self.root.hi[i]);
-                }
-            }
-        }
         match d.outcome {
             bnb::Outcome::Apart { .. } => GeoAnswer::Apart,
             bnb::Outcome::Contact(c) => {
@@ -731,8 +700,17 @@ impl<'a> Geo<'a> {
                     .enumerate()
                     .map(|(i, d)| format!("{} in [{:.4}, {:.4}]", self.dim_name(*d), qbox.lo[i], qbox.hi[i]))
                     .collect();
+                let splits: Vec<String> = self
+                    .dims
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(i, dim)| {
+                        let n = d.stats.splits.get(i).copied().unwrap_or(0);
+                        (n > 0).then(|| format!("{} {n}", self.dim_name(*dim)))
+                    })
+                    .collect();
                 GeoAnswer::Unknown(format!(
-                    "the geometric search did not decide ({}; {} box(es) searched in {:.1} s, {} left, e.g. {})",
+                    "the geometric search did not decide ({}; {} box(es) searched in {:.1} s, {} left, split along {}; e.g. {})",
                     match why {
                         bnb::UnknownWhy::Resolution =>
                             "boxes at the resolution limit touch or are too close to call".to_string(),
@@ -743,6 +721,7 @@ impl<'a> Geo<'a> {
                     d.stats.nodes,
                     d.stats.elapsed.as_secs_f64(),
                     unresolved,
+                    if splits.is_empty() { "nothing".to_string() } else { splits.join(", ") },
                     at.join(", ")
                 ))
             }
@@ -798,6 +777,38 @@ impl<'a> Geo<'a> {
                     affine::Side::Both => hull,
                 };
                 got.entry(ab.own.clone()).and_modify(|o| *o = o.meet(iv)).or_insert(iv);
+            }
+            // Sums of squares (the rover's annulus), over the box narrowed so far (squares.rs).
+            for sb in squares::squares_bounds(&facts) {
+                let idx: Option<Vec<usize>> = sb
+                    .vars
+                    .iter()
+                    .map(|v| match v {
+                        Var::Own(slot) => self.dims.iter().position(|d| *d == Dim::Now(r.role, *slot)),
+                        _ => None,
+                    })
+                    .collect();
+                let Some(idx) = idx else { continue };
+                let Some(e) = bounds::eval(self.prog, sb.e, &start) else { continue };
+                let bound = if sb.upper { e.hi } else { e.lo };
+                let mut ranges: Vec<(f64, f64)> = idx
+                    .iter()
+                    .zip(&sb.vars)
+                    .map(|(&i, v)| match got.get(v) {
+                        Some(iv) => (lo[i].max(iv.lo), hi[i].min(iv.hi)),
+                        None => (lo[i], hi[i]),
+                    })
+                    .collect();
+                if ranges.iter().any(|(l, h)| l.is_nan() || h.is_nan()) {
+                    continue;
+                }
+                if !squares::narrow(&mut ranges, bound, sb.upper) {
+                    return None;
+                }
+                for (v, (l, h)) in sb.vars.iter().zip(ranges) {
+                    let iv = Interval { lo: l, hi: h };
+                    got.entry(v.clone()).and_modify(|o| *o = o.meet(iv)).or_insert(iv);
+                }
             }
             for (i, d) in self.dims.iter().enumerate() {
                 let Dim::Now(role, slot) = d else { continue };
