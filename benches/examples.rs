@@ -1,7 +1,8 @@
 //! End-to-end benchmark on the bundled examples: the paper's cart and arms (Fig 2),
 //! the sorting case (Sec 4.5), PGCD's Fetch and Handover (Sec 5 (2), Table 2), and the
-//! geometry examples of issue 9 (a bridge, a mounted arm, turning and diagonal carts, and
-//! the sorting case study of Sec 5 (3) with the robots' URDFs).
+//! geometry examples of issue 9 (a bridge, turning and diagonal carts, and the sorting case
+//! study of Sec 5 (3) with the robots' URDFs). The mounted arm
+//! (`choreographies/pending/mounted-arm.chor`) is not run: it is still unknown after 30 s.
 //!
 //! ```text
 //! cargo bench --bench examples                 # 10 runs per example
@@ -23,6 +24,14 @@
 //! reports 2410 s of compatibility checks with dReal on 6 cores, and PGCD's artifact on
 //! this machine did not finish in 900 s. The benchmark measures and prints; it asserts no
 //! time (the verdict it prints says whether the times are those of a proof).
+//!
+//! Measured (`--quick`, 2 cores shared with other jobs, session 6): the case study verified
+//! in 405 ms wall (min 393 ms; compatibility 350 ms of worker time, separation 119 ms,
+//! typing obligations 153 ms, geometry stage 58 ms), against PGCD's 2410 s (paper) and more
+//! than 900 s here. Before session 6 it was unknown after 31 s (over 200 s with the default
+//! limits before the arms' loop invariant was fixed). The other examples are unchanged within
+//! noise: cart-and-arms 124 ms, sorting 141, fetch 102, handover 210, bridge 9,
+//! turn-together 17, diagonal 86.
 
 use mochi::driver::{Config, Report};
 use mochi::fsload::check_file;
@@ -36,7 +45,6 @@ const EXAMPLES: &[(&str, &str)] = &[
     ("choreographies/pgcd/fetch.chor", "PGCD: 5.0 s, 387 queries (Table 2: 7 s on 6 cores)"),
     ("choreographies/pgcd/handover.chor", "PGCD: 218 s (Table 2: 70 s on 6 cores)"),
     ("choreographies/bridge.chor", "-"),
-    ("choreographies/mounted-arm.chor", "-"),
     ("choreographies/turn-together.chor", "-"),
     ("choreographies/diagonal.chor", "-"),
     (CASE_STUDY, "PGCD: did not finish in 900 s here (paper: 2410 s of compatibility checks, dReal, 6 cores)"),

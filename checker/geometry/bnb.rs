@@ -40,6 +40,20 @@ pub struct Closest {
     pub solids: [usize; 2],
 }
 
+/// A box's certified lower bound ([`Scene::bound`]).
+#[derive(Clone, Debug)]
+pub struct Bound {
+    /// No `q` of the box puts the sides closer than this.
+    pub lower: f64,
+    /// The sides at the box's centre.
+    pub at_c: Closest,
+    /// The motion bound the splitting rule compares against ([`Scene::focus_motion_bound`]
+    /// with `focus`).
+    pub mb: f64,
+    /// The pair of solids whose bound is `lower` (`None`: every solid).
+    pub focus: Option<[usize; 2]>,
+}
+
 /// Can the constraints hold in a box?
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Feasible {
@@ -62,8 +76,30 @@ pub trait Scene {
     /// Upper bound on how far any point of either side can move, relative to its place
     /// at `centre`, for `q` anywhere in `[lo, hi]` (the sum of both sides' bounds).
     fn motion_bound(&self, lo: &[f64], hi: &[f64], centre: &[f64]) -> f64;
+    /// A certified lower bound on the distance of the two sides over every `q` of the
+    /// box `[lo, hi]` (centre `centre`), with the sides' distance at the centre. The
+    /// default is `distance(centre).lower − motion_bound(..)`; a scene may bound pair by
+    /// pair instead (`min` over pairs of solids of `lower_ij(c) − m_i − m_j`, which is at
+    /// least the default), and name the pair that attains it (its `focus`).
+    fn bound(&self, lo: &[f64], hi: &[f64], centre: &[f64]) -> Bound {
+        let at_c = self.distance(centre);
+        let mb = self.motion_bound(lo, hi, centre);
+        Bound { lower: at_c.lower - mb, at_c, mb, focus: None }
+    }
+    /// [`Scene::motion_bound`] restricted to the solids of `focus` (one of each side), an
+    /// upper bound on how far their points move; default: every solid.
+    fn focus_motion_bound(&self, lo: &[f64], hi: &[f64], centre: &[f64], focus: Option<[usize; 2]>) -> f64 {
+        let _ = focus;
+        self.motion_bound(lo, hi, centre)
+    }
     /// Can some `q` in the box satisfy the constraints?
     fn feasible(&self, lo: &[f64], hi: &[f64]) -> Feasible;
+    /// A sub-box of `b` that holds every `q` of `b` satisfying the constraints (`None`:
+    /// none does). Must be sound in that sense; the search then evaluates the narrowed box
+    /// (its centre, its motion bound) instead of `b`. Default: `b` itself.
+    fn contract(&self, b: &QBox) -> Option<QBox> {
+        Some(b.clone())
+    }
     /// A `q` in the box that satisfies the constraints exactly, if one can be found (an
     /// SMT solver may be asked), preferably near `near`. Used only to confirm a contact
     /// and to attain a clearance's upper bound.
@@ -215,6 +251,8 @@ impl Outcome {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Stats {
     pub nodes: usize,
+    /// Per dimension: how many boxes were split along it.
+    pub splits: Vec<usize>,
     pub distance_calls: usize,
     pub witness_calls: usize,
     pub elapsed: Duration,
@@ -265,7 +303,14 @@ fn at_resolution(b: &QBox, res: &[f64]) -> bool {
 }
 
 /// The dimension to split (one that is above its resolution; `None` if none is).
-fn choose_split(scene: &dyn Scene, b: &QBox, c: &[f64], mb: f64, opts: &Options) -> Option<usize> {
+fn choose_split(
+    scene: &dyn Scene,
+    b: &QBox,
+    c: &[f64],
+    mb: f64,
+    focus: Option<[usize; 2]>,
+    opts: &Options,
+) -> Option<usize> {
     let res = &opts.resolution;
     let open: Vec<usize> = (0..b.lo.len()).filter(|&k| !widths_ok(b, res, k)).collect();
     if open.is_empty() {
@@ -285,7 +330,7 @@ fn choose_split(scene: &dyn Scene, b: &QBox, c: &[f64], mb: f64, opts: &Options)
     for &k in &open {
         lo[k] = c[k];
         hi[k] = c[k];
-        let gain = mb - scene.motion_bound(&lo, &hi, c);
+        let gain = mb - scene.focus_motion_bound(&lo, &hi, c, focus);
         lo[k] = b.lo[k];
         hi[k] = b.hi[k];
         if gain > 1e-12 * mb && best.is_none_or(|(_, g)| gain > g) {
@@ -293,6 +338,36 @@ fn choose_split(scene: &dyn Scene, b: &QBox, c: &[f64], mb: f64, opts: &Options)
         }
     }
     best.map(|(k, _)| k).or_else(widest)
+}
+
+/// `b` narrowed by the scene's contraction, intersected with `b` (a contraction may only
+/// shrink a box); `None` when no `q` of `b` satisfies the constraints. A malformed answer
+/// (NaN, wrong length) keeps `b`: never lose a configuration.
+fn narrowed(scene: &dyn Scene, b: QBox) -> Option<QBox> {
+    let n = scene.contract(&b)?;
+    if n.lo.len() != b.lo.len() || n.hi.len() != b.hi.len() {
+        return Some(b);
+    }
+    let mut out = b.clone();
+    for k in 0..b.lo.len() {
+        let (l, h) = (n.lo[k], n.hi[k]);
+        if l.is_nan() || h.is_nan() {
+            continue;
+        }
+        out.lo[k] = out.lo[k].max(l);
+        out.hi[k] = out.hi[k].min(h);
+        if out.lo[k] > out.hi[k] {
+            return None;
+        }
+    }
+    Some(out)
+}
+
+fn count_split(stats: &mut Stats, k: usize) {
+    if stats.splits.len() <= k {
+        stats.splits.resize(k + 1, 0);
+    }
+    stats.splits[k] += 1;
 }
 
 fn midpoint(p: &[[f64; 3]; 2]) -> [f64; 3] {
@@ -329,6 +404,7 @@ struct Node {
     c: Vec<f64>,
     at_c: Closest,
     mb: f64,
+    focus: Option<[usize; 2]>,
     feas: Feasible,
 }
 
@@ -398,6 +474,10 @@ fn pass(scene: &dyn Scene, root: &QBox, opts: &Options, earliest: bool, max_node
                 return out;
             }
             stats.nodes += 1;
+            let Some(b) = narrowed(scene, b) else {
+                out.infeasible += 1;
+                continue;
+            };
             let feas = scene.feasible(&b.lo, &b.hi);
             if feas == Feasible::No {
                 out.infeasible += 1;
@@ -405,9 +485,7 @@ fn pass(scene: &dyn Scene, root: &QBox, opts: &Options, earliest: bool, max_node
             }
             let c = b.centre();
             stats.distance_calls += 1;
-            let at_c = scene.distance(&c);
-            let mb = scene.motion_bound(&b.lo, &b.hi, &c);
-            let lb = at_c.lower - mb;
+            let Bound { lower: lb, at_c, mb, focus } = scene.bound(&b.lo, &b.hi, &c);
             if lb > margin {
                 out.proved += 1;
                 out.min_lb = out.min_lb.min(lb);
@@ -418,7 +496,7 @@ fn pass(scene: &dyn Scene, root: &QBox, opts: &Options, earliest: bool, max_node
             heap.push(Queued {
                 key: (order_time.map_or(0.0, |t| b.lo[t]), lb),
                 seq,
-                item: Node { qbox: b, c, at_c, mb, feas },
+                item: Node { qbox: b, c, at_c, mb, focus, feas },
             });
         }
         let Some(Queued { item: n, .. }) = heap.pop() else {
@@ -436,8 +514,9 @@ fn pass(scene: &dyn Scene, root: &QBox, opts: &Options, earliest: bool, max_node
                 return out;
             }
         }
-        match choose_split(scene, b, &n.c, n.mb, opts) {
+        match choose_split(scene, b, &n.c, n.mb, n.focus, opts) {
             Some(k) => {
+                count_split(stats, k);
                 let (x, y) = b.split(k);
                 pending.push(x);
                 pending.push(y);
@@ -569,22 +648,22 @@ pub fn min_distance(scene: &dyn Scene, root: &QBox, tolerance: f64, opts: &Optio
     let mut seq = 0u64;
     let mut frozen = f64::INFINITY;
     // Evaluates a box: None when infeasible, else its lower bound (and offers its centre).
-    let eval = |b: &QBox, stats: &mut Stats, best: &mut Option<(Vec<f64>, Closest)>| {
+    let eval = |b: QBox, stats: &mut Stats, best: &mut Option<(Vec<f64>, Closest)>| {
+        let b = narrowed(scene, b)?;
         let feas = scene.feasible(&b.lo, &b.hi);
         if feas == Feasible::No {
             return None;
         }
         let c = b.centre();
         stats.distance_calls += 1;
-        let d = scene.distance(&c);
-        let lb = d.lower - scene.motion_bound(&b.lo, &b.hi, &c);
+        let Bound { lower: lb, at_c: d, .. } = scene.bound(&b.lo, &b.hi, &c);
         if feas == Feasible::All || scene.feasible(&c, &c) == Feasible::All {
             offer(c, d, best);
         }
-        Some(if lb.is_nan() { f64::NEG_INFINITY } else { lb })
+        Some((if lb.is_nan() { f64::NEG_INFINITY } else { lb }, b))
     };
-    if let Some(lb) = eval(root, &mut stats, &mut best) {
-        heap.push(Queued { key: (lb, 0.0), seq, item: root.clone() });
+    if let Some((lb, b)) = eval(root.clone(), &mut stats, &mut best) {
+        heap.push(Queued { key: (lb, 0.0), seq, item: b });
     }
     let upper_of = |best: &Option<(Vec<f64>, Closest)>| best.as_ref().map_or(f64::INFINITY, |(_, d)| d.distance);
     loop {
@@ -606,11 +685,12 @@ pub fn min_distance(scene: &dyn Scene, root: &QBox, tolerance: f64, opts: &Optio
         };
         let c = b.centre();
         let mb = scene.motion_bound(&b.lo, &b.hi, &c);
-        match choose_split(scene, &b, &c, mb, opts) {
+        match choose_split(scene, &b, &c, mb, None, opts) {
             Some(k) => {
                 let (x, y) = b.split(k);
+                count_split(&mut stats, k);
                 for child in [x, y] {
-                    if let Some(lb) = eval(&child, &mut stats, &mut best) {
+                    if let Some((lb, child)) = eval(child, &mut stats, &mut best) {
                         seq += 1;
                         heap.push(Queued { key: (lb, 0.0), seq, item: child });
                     }
@@ -870,6 +950,60 @@ mod tests {
             "{name}: {} nodes, {} distance calls, {} witness calls, {:?}",
             d.stats.nodes, d.stats.distance_calls, d.stats.witness_calls, d.stats.elapsed
         );
+    }
+
+    /// The passing balls with the constraint `t >= 6` (after the balls have passed), told to
+    /// the search only through `contract` (`feasible` says Maybe everywhere), possibly
+    /// answering with a box larger than asked (`widen`: a contraction may only shrink).
+    struct AfterSix {
+        inner: ParryScene,
+        widen: bool,
+    }
+    impl Scene for AfterSix {
+        fn dims(&self) -> usize {
+            1
+        }
+        fn distance(&self, q: &[f64]) -> Closest {
+            self.inner.distance(q)
+        }
+        fn motion_bound(&self, lo: &[f64], hi: &[f64], c: &[f64]) -> f64 {
+            self.inner.motion_bound(lo, hi, c)
+        }
+        fn feasible(&self, _: &[f64], _: &[f64]) -> Feasible {
+            Feasible::Maybe
+        }
+        fn contract(&self, b: &QBox) -> Option<QBox> {
+            if self.widen {
+                return Some(QBox::new(vec![b.lo[0] - 100.0], vec![b.hi[0] + 100.0]));
+            }
+            let lo = b.lo[0].max(6.0);
+            (lo <= b.hi[0]).then(|| QBox::new(vec![lo], b.hi.clone()))
+        }
+        fn witness(&self, lo: &[f64], hi: &[f64], near: &[f64]) -> Option<Vec<f64>> {
+            let lo = [lo[0].max(6.0)];
+            (lo[0] <= hi[0]).then(|| Unconstrained.witness(&lo, hi, near)).flatten()
+        }
+        fn solid_name(&self, side: usize, solid: usize) -> String {
+            self.inner.solid_name(side, solid)
+        }
+    }
+
+    /// A box is evaluated after contraction: its centre and motion bound are the narrowed
+    /// box's. Balls touching at t = 5 (y = 0.9) are apart for t >= 6, which the search proves
+    /// in a few boxes only through the contraction; a contraction answering a larger box is
+    /// intersected with the box, so the touching balls are still found (never lost).
+    #[test]
+    fn a_contracted_box_is_evaluated_and_a_contraction_only_shrinks() {
+        let s = AfterSix { inner: passing_balls(0.9), widen: false };
+        let d = decide(&s, &root1(), &opts(&[1e-4]));
+        report("after six", &d);
+        assert!(matches!(d.outcome, Outcome::Apart { .. }), "{:?}", d.outcome);
+        assert!(d.stats.nodes <= 3, "{:?}", d.stats);
+        let w = AfterSix { inner: passing_balls(0.9), widen: true };
+        let d = decide(&w, &root1(), &opts(&[1e-4]));
+        // The widened answer is cut back to the box; the witness still only looks at t >= 6,
+        // so no contact is confirmed there, but nothing is proved apart either.
+        assert!(!matches!(d.outcome, Outcome::Apart { .. }), "{:?}", d.outcome);
     }
 
     #[test]

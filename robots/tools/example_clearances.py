@@ -66,15 +66,15 @@ def sorting():
     green = ([-0.185, -0.49, 0], [-0.015, -0.31, 0.16])
     lane_y = ([-0.185, -0.49, 0], [-0.015, 0.09, 0.16])
     sensor = ([0.10, -0.10, 0], [0.20, 0.0, 0.20])
-    m0, mp = mq(0, 0, 0, 0, 0), mq(0, -1.2, 0.9, 0, 0.6)
+    m0, mp = mq(0, 0, 0, 0, 0), mq(0, -1.1, 0.9, 0, 0.6)
     sh = MOVEO.shapes(m0, mw)
     print("Moveo plate / carrier at the red stop %.4f" % shapes_box_distance([s for s in sh if s[0] == "base_link"], *red)[0])
     arm = lambda q: [s for s in MOVEO.shapes(q, mw) if s[0] != "base_link"]  # noqa: E731
     d = min(shapes_box_distance(arm(lerp(m0, mp, k / 10)), *red)[0] for k in range(11))
     print("Moveo M0 -> MP / carrier: %.4f (nominal)" % d)
-    worst = min(shapes_box_distance(arm(mq(*[v + s * 0.0315 for v, s in zip((0, -1.2, 0.9, 0, 0.6), sg)])), *red)[0]
+    worst = min(shapes_box_distance(arm(mq(*[v + s * 0.063 for v, s in zip((0, -1.1, 0.9, 0, 0.6), sg)])), *red)[0]
                 for sg in itertools.product((-1, 1), repeat=5))
-    print("Moveo MP with +-1.8 degrees: worst %.4f" % worst)
+    print("Moveo MP with +-3.6 degrees (2 x moveo_err at the start of the move back up): worst %.4f" % worst)
     H = (0, -0.785398, 0, -2.356195, 0, 1.570796, 0.785398, 0.04)
     PG = (-0.1419, 0.5143, 0, -1.3372, 0, 1.8516, 0.785398, 0.04)
     G = (-0.1419, 0.7121, 0, -1.5403, 0, 2.2525, 0.785398, 0.04)

@@ -18,13 +18,16 @@
 //! constraint exactly and parry confirms the contact there; anything else is unknown,
 //! never apart. ARCHITECTURE.md ("Geometric decision procedure") has the argument.
 
+mod affine;
+mod squares;
+
 use super::motion::Inst;
 use super::query::{hyps, seeds_of, slice};
 use super::Part;
 use super::Query;
 use crate::bounds::{self, Interval};
 use crate::diag::{Assignment, Overlap};
-use crate::geometry::bnb::{self, Closest, Feasible, Options, QBox, Scene};
+use crate::geometry::bnb::{self, Bound, Closest, Feasible, Options, QBox, Scene};
 use crate::geometry::placement::{chain_motion_bound, ArgBounds, FrameBound};
 use crate::geometry::{self, Pose3};
 use crate::hir::body::Pose;
@@ -545,10 +548,27 @@ impl<'a> Geo<'a> {
     /// pose in its owner frame is not included), over the box `[lo, hi]` with centre `c`.
     /// Chains of participants and forward kinematics are computed once per call.
     fn side_frames(&self, side: usize, lo: &[f64], hi: &[f64], c: &[f64]) -> Vec<Option<Vec<(Pose3, FrameBound)>>> {
+        self.frames_of(side, None, lo, hi, c)
+    }
+
+    /// [`Geo::side_frames`], computed only for solid `only` when given (the others are
+    /// `None`).
+    fn frames_of(
+        &self,
+        side: usize,
+        only: Option<usize>,
+        lo: &[f64],
+        hi: &[f64],
+        c: &[f64],
+    ) -> Vec<Option<Vec<(Pose3, FrameBound)>>> {
         let mut chains: HashMap<Option<RoleId>, Option<Vec<(Pose3, FrameBound)>>> = HashMap::new();
         let mut fk: HashMap<(RoleId, usize), Option<Kinematics>> = HashMap::new();
         let mut out = Vec::new();
-        for p in &self.sides[side] {
+        for (idx, p) in self.sides[side].iter().enumerate() {
+            if only.is_some_and(|k| k != idx) {
+                out.push(None);
+                continue;
+            }
             let chain = chains
                 .entry(p.role)
                 .or_insert_with(|| match p.role {
@@ -598,6 +618,32 @@ impl<'a> Geo<'a> {
             out.push(Some(frames));
         }
         out
+    }
+
+    /// Each solid of side `side` placed at `c` (world pose) with the bound on how far its
+    /// points move over `[lo, hi]`; `None` if some solid cannot be placed (no bound).
+    fn placed(&self, side: usize, lo: &[f64], hi: &[f64], c: &[f64]) -> Option<Vec<(Pose3, f64)>> {
+        self.side_frames(side, lo, hi, c)
+            .into_iter()
+            .zip(&self.sides[side])
+            .map(|(frames, p)| Self::place_one(frames?, p))
+            .collect()
+    }
+
+    /// Solid `k` of side `side` alone, as [`Geo::placed`] places it.
+    fn placed_one(&self, side: usize, k: usize, lo: &[f64], hi: &[f64], c: &[f64]) -> Option<(Pose3, f64)> {
+        let frames = self.frames_of(side, Some(k), lo, hi, c).into_iter().nth(k)??;
+        Self::place_one(frames, self.sides[side].get(k)?)
+    }
+
+    fn place_one(frames: Vec<(Pose3, FrameBound)>, p: &Placed) -> Option<(Pose3, f64)> {
+        let mut pose = geometry::identity();
+        let mut fb = Vec::with_capacity(frames.len());
+        for (f, b) in frames {
+            pose *= f;
+            fb.push(b);
+        }
+        Some((pose * p.piece.solid.pose, chain_motion_bound(&fb, p.piece.solid.bounding_radius())))
     }
 
     fn at_pose(&self, role: RoleId) -> Option<(Pose3, FrameBound)> {
@@ -654,8 +700,17 @@ impl<'a> Geo<'a> {
                     .enumerate()
                     .map(|(i, d)| format!("{} in [{:.4}, {:.4}]", self.dim_name(*d), qbox.lo[i], qbox.hi[i]))
                     .collect();
+                let splits: Vec<String> = self
+                    .dims
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(i, dim)| {
+                        let n = d.stats.splits.get(i).copied().unwrap_or(0);
+                        (n > 0).then(|| format!("{} {n}", self.dim_name(*dim)))
+                    })
+                    .collect();
                 GeoAnswer::Unknown(format!(
-                    "the geometric search did not decide ({}; {} box(es) searched in {:.1} s, {} left, e.g. {})",
+                    "the geometric search did not decide ({}; {} box(es) searched in {:.1} s, {} left, split along {}; e.g. {})",
                     match why {
                         bnb::UnknownWhy::Resolution =>
                             "boxes at the resolution limit touch or are too close to call".to_string(),
@@ -666,6 +721,7 @@ impl<'a> Geo<'a> {
                     d.stats.nodes,
                     d.stats.elapsed.as_secs_f64(),
                     unresolved,
+                    if splits.is_empty() { "nothing".to_string() } else { splits.join(", ") },
                     at.join(", ")
                 ))
             }
@@ -677,7 +733,7 @@ impl<'a> Geo<'a> {
     /// rounded) with the box's ranges for everything else. Sound: every configuration of
     /// the box that satisfies the constraints lies in the narrowed box. `None` when it is
     /// empty (no configuration of the box satisfies them).
-    fn contract(&self, lo: &[f64], hi: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
+    fn narrow(&self, lo: &[f64], hi: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
         if let Some(((l, h), got)) = self.contracted.borrow().as_ref() {
             if l == lo && h == hi {
                 return got.clone();
@@ -699,7 +755,61 @@ impl<'a> Geo<'a> {
             facts.extend(self.prog.kind(prim.kind).invariant.as_ref());
             let (l0, h0) = (lo.clone(), hi.clone());
             let start = |v: &Var| self.var_range(k, r.role, v, Some((&l0, &h0)));
-            let got = bounds::ranges_from(self.prog, &facts, &start);
+            let mut got = bounds::ranges_from(self.prog, &facts, &start);
+            // Bounds affine in one start value, evaluated at its two ends (affine.rs).
+            for ab in affine::affine_bounds(&facts) {
+                let Some(Interval { lo: l, hi: h }) = start(&ab.old) else { continue };
+                if !(l.is_finite() && h.is_finite()) {
+                    continue;
+                }
+                let at = |x: f64| {
+                    let pin = |v: &Var| if *v == ab.old { Some(Interval::point(x)) } else { start(v) };
+                    bounds::eval(self.prog, ab.e, &pin)
+                };
+                let (Some(a), Some(b)) = (at(l), at(h)) else { continue };
+                let hull = Interval { lo: a.lo.min(b.lo), hi: a.hi.max(b.hi) };
+                if hull.lo.is_nan() || hull.hi.is_nan() {
+                    continue;
+                }
+                let iv = match ab.side {
+                    affine::Side::Upper => Interval { lo: f64::NEG_INFINITY, hi: hull.hi },
+                    affine::Side::Lower => Interval { lo: hull.lo, hi: f64::INFINITY },
+                    affine::Side::Both => hull,
+                };
+                got.entry(ab.own.clone()).and_modify(|o| *o = o.meet(iv)).or_insert(iv);
+            }
+            // Sums of squares (the rover's annulus), over the box narrowed so far (squares.rs).
+            for sb in squares::squares_bounds(&facts) {
+                let idx: Option<Vec<usize>> = sb
+                    .vars
+                    .iter()
+                    .map(|v| match v {
+                        Var::Own(slot) => self.dims.iter().position(|d| *d == Dim::Now(r.role, *slot)),
+                        _ => None,
+                    })
+                    .collect();
+                let Some(idx) = idx else { continue };
+                let Some(e) = bounds::eval(self.prog, sb.e, &start) else { continue };
+                let bound = if sb.upper { e.hi } else { e.lo };
+                let mut ranges: Vec<(f64, f64)> = idx
+                    .iter()
+                    .zip(&sb.vars)
+                    .map(|(&i, v)| match got.get(v) {
+                        Some(iv) => (lo[i].max(iv.lo), hi[i].min(iv.hi)),
+                        None => (lo[i], hi[i]),
+                    })
+                    .collect();
+                if ranges.iter().any(|(l, h)| l.is_nan() || h.is_nan()) {
+                    continue;
+                }
+                if !squares::narrow(&mut ranges, bound, sb.upper) {
+                    return None;
+                }
+                for (v, (l, h)) in sb.vars.iter().zip(ranges) {
+                    let iv = Interval { lo: l, hi: h };
+                    got.entry(v.clone()).and_modify(|o| *o = o.meet(iv)).or_insert(iv);
+                }
+            }
             for (i, d) in self.dims.iter().enumerate() {
                 let Dim::Now(role, slot) = d else { continue };
                 if *role != r.role {
@@ -809,6 +919,10 @@ impl Scene for Geo<'_> {
         self.dims.len()
     }
 
+    fn contract(&self, b: &QBox) -> Option<QBox> {
+        self.narrow(&b.lo, &b.hi).map(|(lo, hi)| QBox::new(lo, hi))
+    }
+
     fn distance(&self, q: &[f64]) -> Closest {
         let place = |side: usize| -> Vec<Option<Pose3>> {
             self.side_frames(side, q, q, q)
@@ -863,10 +977,86 @@ impl Scene for Geo<'_> {
         best
     }
 
+    /// Pair by pair: the two sides' solids placed at the centre, each with the bound on
+    /// how far its points move over the (contracted) box; the box's bound is the least over
+    /// pairs `(i, j)` of `lower_ij(c) − m_i − m_j` (each pair's distance at any `q` is at
+    /// least that: the module argument, per pair), which is at least the default
+    /// `min_ij lower_ij(c) − max_i m_i − max_j m_j`. A pair whose bounding spheres' gap
+    /// minus its motion already exceeds the least bound so far asks parry nothing: its
+    /// true distance is at least that gap (spheres contain the solids).
+    fn bound(&self, lo: &[f64], hi: &[f64], centre: &[f64]) -> Bound {
+        let none = || Bound {
+            lower: f64::NEG_INFINITY,
+            at_c: Closest { distance: f64::NAN, lower: f64::NEG_INFINITY, points: [[0.0; 3]; 2], solids: [0, 0] },
+            mb: f64::INFINITY,
+            focus: None,
+        };
+        let Some((lo, hi)) = self.narrow(lo, hi) else {
+            // No feasible configuration: nothing to bound (the search prunes it first).
+            return Bound { lower: f64::INFINITY, mb: 0.0, ..none() };
+        };
+        let (Some(a), Some(b)) = (self.placed(0, &lo, &hi, centre), self.placed(1, &lo, &hi, centre)) else {
+            return none();
+        };
+        let origin = |p: &Pose3, s: &geometry::Solid| geometry::apply(&(*p * s.pose.inverse()), [0.0; 3]);
+        let mut pairs = Vec::with_capacity(a.len() * b.len());
+        for (i, (pa, ma)) in a.iter().enumerate() {
+            for (j, (pb, mb)) in b.iter().enumerate() {
+                let (sa, sb) = (&self.sides[0][i].piece.solid, &self.sides[1][j].piece.solid);
+                let (ca, cb) = (origin(pa, sa), origin(pb, sb));
+                let d2: f64 = ca.iter().zip(cb).map(|(x, y)| (x - y) * (x - y)).sum();
+                let gap = d2.sqrt() - sa.bounding_radius() - sb.bounding_radius() - geometry::DISTANCE_MARGIN;
+                let m = (ma + mb) * (1.0 + geometry::placement::PAD);
+                pairs.push((gap - m, gap, m, i, j));
+            }
+        }
+        pairs.sort_by(|x, y| x.0.total_cmp(&y.0));
+        let mut out = Bound {
+            lower: f64::INFINITY,
+            at_c: Closest { distance: f64::INFINITY, lower: f64::INFINITY, points: [[0.0; 3]; 2], solids: [0, 0] },
+            mb: 0.0,
+            focus: None,
+        };
+        for (key, gap, m, i, j) in pairs {
+            // This pair's bound is at least its key: it cannot lower the minimum. (Pairs whose
+            // spheres overlap at the centre are still asked, so that a contact at the centre
+            // is seen.)
+            if key >= out.lower && gap > 0.0 {
+                continue;
+            }
+            let (pa, pb) = (&a[i].0, &b[j].0);
+            let (sa, sb) = (&self.sides[0][i].piece.solid, &self.sides[1][j].piece.solid);
+            let (d, lower, points) = bnb::parry_closest(&sa.shape, pa, &sb.shape, pb);
+            let lower = lower - sa.slack - sb.slack - geometry::DISTANCE_MARGIN;
+            let lower = if lower.is_nan() { f64::NEG_INFINITY } else { lower };
+            let pair = lower.max(gap) - m;
+            let pair = if pair.is_nan() { f64::NEG_INFINITY } else { pair };
+            if pair < out.lower || out.focus.is_none() {
+                out.lower = out.lower.min(pair);
+                out.mb = m;
+                out.focus = Some([i, j]);
+            }
+            out.at_c.lower = out.at_c.lower.min(lower);
+            if d < out.at_c.distance || out.at_c.distance.is_infinite() || d.is_nan() {
+                out.at_c.distance = d;
+                out.at_c.points = points;
+                out.at_c.solids = [i, j];
+            }
+        }
+        out
+    }
+
+    fn focus_motion_bound(&self, lo: &[f64], hi: &[f64], centre: &[f64], focus: Option<[usize; 2]>) -> f64 {
+        let Some([i, j]) = focus else { return self.motion_bound(lo, hi, centre) };
+        let Some((lo, hi)) = self.narrow(lo, hi) else { return 0.0 };
+        let m = |side: usize, k: usize| self.placed_one(side, k, &lo, &hi, centre).map_or(f64::INFINITY, |x| x.1);
+        (m(0, i) + m(1, j)) * (1.0 + geometry::placement::PAD)
+    }
+
     fn motion_bound(&self, lo: &[f64], hi: &[f64], centre: &[f64]) -> f64 {
         // Only the feasible configurations of the box move the bodies: bound the motion over
         // the contracted box (its centre stays the box's; the bounds measure from it).
-        let Some((lo, hi)) = self.contract(lo, hi) else { return 0.0 };
+        let Some((lo, hi)) = self.narrow(lo, hi) else { return 0.0 };
         let (lo, hi) = (&lo[..], &hi[..]);
         let side = |k: usize| {
             self.side_frames(k, lo, hi, centre)
@@ -885,7 +1075,7 @@ impl Scene for Geo<'_> {
     }
 
     fn feasible(&self, lo: &[f64], hi: &[f64]) -> Feasible {
-        let Some((lo, hi)) = self.contract(lo, hi) else { return Feasible::No };
+        let Some((lo, hi)) = self.narrow(lo, hi) else { return Feasible::No };
         let (lo, hi) = (&lo[..], &hi[..]);
         let check = |e: &Expr, run: usize, role: RoleId| {
             truth(self.prog, e, &|v: &Var| self.var_range(run, role, v, Some((lo, hi))))

@@ -1,0 +1,174 @@
+//! Contraction by a sum of squares: a guarantee conjunct `x^2 + y^2 (+ z^2) <= e` or
+//! `e <= x^2 + y^2 (+ ...)` over state variables (the rover's annulus
+//! `(r - err)^2 <= x^2 + y^2 <= (r + err)^2`), with `e` free of state variables. Interval
+//! bounds read off `v <= e` conjuncts never narrow `x` from such a conjunct.
+//!
+//! Sound (every `v` of the box satisfying the conjunct stays in the narrowed range):
+//! - `Σ w^2 <= U` gives `v^2 <= U - Σ_{w ≠ v} min w^2`, so `|v| <= sqrt(that)` (none if it is
+//!   negative);
+//! - `Σ w^2 >= L` gives `v^2 >= L - Σ_{w ≠ v} max w^2 = s^2`, so `v` lies outside `(-s, s)`:
+//!   a range with `lo > -s` keeps only `[s, hi]`, one with `hi < s` only `[lo, -s]`.
+//!
+//! `U` is the enclosure's upper end and `L` its lower end; every derived bound is rounded
+//! outward by a relative 1e-12 plus 1e-12 (far above the few f64 roundings involved).
+
+use crate::hir::expr::{mentions, ExprKind};
+use crate::hir::{Expr, Var};
+use crate::syntax::ast::BinOp;
+
+/// `Σ v^2 <= e` (`upper`) or `e <= Σ v^2`.
+#[derive(Clone, Debug)]
+pub(super) struct SquaresBound<'a> {
+    pub vars: Vec<Var>,
+    pub e: &'a Expr,
+    pub upper: bool,
+}
+
+/// The squared variables of a sum `v^2 + w^2 + ...` of at least two distinct `Own` variables.
+fn squares(e: &Expr, out: &mut Vec<Var>) -> bool {
+    match &e.kind {
+        ExprKind::Binary(BinOp::Add, a, b) => squares(a, out) && squares(b, out),
+        ExprKind::Binary(BinOp::Pow, a, b) => match (&a.kind, &b.kind) {
+            (ExprKind::Var(v @ Var::Own(_)), ExprKind::Int(2)) if !out.contains(v) => {
+                out.push(v.clone());
+                true
+            }
+            _ => false,
+        },
+        _ => false,
+    }
+}
+
+pub(super) fn squares_bounds<'a>(facts: &[&'a Expr]) -> Vec<SquaresBound<'a>> {
+    let mut out = Vec::new();
+    for c in facts.iter().flat_map(|f| f.conjuncts()) {
+        let ExprKind::Binary(op, a, b) = &c.kind else { continue };
+        let (sum, e, upper) = match op {
+            BinOp::Le | BinOp::Lt => {
+                if is_sum(a) {
+                    (&**a, &**b, true)
+                } else {
+                    (&**b, &**a, false)
+                }
+            }
+            BinOp::Ge | BinOp::Gt => {
+                if is_sum(a) {
+                    (&**a, &**b, false)
+                } else {
+                    (&**b, &**a, true)
+                }
+            }
+            _ => continue,
+        };
+        let mut vars = Vec::new();
+        if !squares(sum, &mut vars) || vars.len() < 2 || mentions(e, &|v| matches!(v, Var::Own(_))) {
+            continue;
+        }
+        out.push(SquaresBound { vars, e, upper });
+    }
+    out
+}
+
+fn is_sum(e: &Expr) -> bool {
+    let mut v = Vec::new();
+    squares(e, &mut v) && v.len() >= 2
+}
+
+fn down(x: f64) -> f64 {
+    x - x.abs() * 1e-12 - 1e-12
+}
+fn up(x: f64) -> f64 {
+    x + x.abs() * 1e-12 + 1e-12
+}
+
+/// `min v^2` and `max v^2` over `[lo, hi]`.
+fn sq_range(lo: f64, hi: f64) -> (f64, f64) {
+    let min = if lo <= 0.0 && hi >= 0.0 { 0.0 } else { lo.abs().min(hi.abs()).powi(2) };
+    (min, lo.abs().max(hi.abs()).powi(2))
+}
+
+/// Narrows `ranges` (one `[lo, hi]` per variable of the sum, in order) by `Σ v^2 <= bound`
+/// (`upper`) or `Σ v^2 >= bound`. `false`: no point of the box satisfies it.
+pub(super) fn narrow(ranges: &mut [(f64, f64)], bound: f64, upper: bool) -> bool {
+    if !bound.is_finite() {
+        return true;
+    }
+    for _ in 0..2 {
+        for k in 0..ranges.len() {
+            let others = |pick: fn((f64, f64)) -> f64| -> f64 {
+                ranges.iter().enumerate().filter(|(j, _)| *j != k).map(|(_, r)| pick(sq_range(r.0, r.1))).sum()
+            };
+            let (lo, hi) = ranges[k];
+            if upper {
+                let room = bound - others(|r| r.0);
+                if up(room) < 0.0 {
+                    return false;
+                }
+                let m = up(room.max(0.0).sqrt());
+                ranges[k] = (lo.max(-m), hi.min(m));
+            } else {
+                let need = bound - others(|r| r.1);
+                if need <= 0.0 {
+                    continue;
+                }
+                let s = down(need.sqrt()).max(0.0);
+                let (mut l, mut h) = (lo, hi);
+                if l > -s {
+                    l = l.max(s);
+                }
+                if h < s {
+                    h = h.min(-s);
+                }
+                ranges[k] = (l, h);
+            }
+            let (l, h) = ranges[k];
+            if l.is_nan() || h.is_nan() || l > h {
+                return false;
+            }
+        }
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::narrow;
+
+    /// The rover's annulus 0.68 <= r <= 0.72: a box in the first quadrant straddling the ring
+    /// is cut to the ring's extent, one inside the inner disc or outside the outer one is
+    /// empty, and random points of the ring in a box stay in its narrowing.
+    #[test]
+    fn the_annulus_narrows_a_box_to_the_ring_and_keeps_every_point_of_it() {
+        let (r1, r2) = (0.68f64 * 0.68, 0.72f64 * 0.72);
+        let mut b = [(0.0, 1.0), (0.5, 0.6)];
+        assert!(narrow(&mut b, r2, true) && narrow(&mut b, r1, false));
+        // x^2 <= 0.72^2 - 0.25, x^2 >= 0.68^2 - 0.36
+        assert!((b[0].1 - (r2 - 0.25f64).sqrt()).abs() < 1e-9, "{b:?}");
+        assert!((b[0].0 - (r1 - 0.36f64).sqrt()).abs() < 1e-9, "{b:?}");
+        let mut inner = [(-0.3, 0.3), (-0.3, 0.3)];
+        assert!(!narrow(&mut inner, r1, false));
+        let mut outer = [(0.6, 0.7), (0.6, 0.7)];
+        assert!(!narrow(&mut outer, r2, true));
+        let mut seed = 12345u64;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..2000 {
+            let (ax, bx) = (rnd() * 1.6 - 0.8, rnd() * 1.6 - 0.8);
+            let (ay, by) = (rnd() * 1.6 - 0.8, rnd() * 1.6 - 0.8);
+            let bx0 = (ax.min(bx), ax.max(bx));
+            let by0 = (ay.min(by), ay.max(by));
+            let mut nb = [bx0, by0];
+            let ok = narrow(&mut nb, r2, true) && narrow(&mut nb, r1, false);
+            for _ in 0..20 {
+                let (x, y) = (bx0.0 + rnd() * (bx0.1 - bx0.0), by0.0 + rnd() * (by0.1 - by0.0));
+                let s = x * x + y * y;
+                if (r1..=r2).contains(&s) {
+                    assert!(ok, "a ring point ({x}, {y}) in a box called empty: {bx0:?} {by0:?}");
+                    assert!(nb[0].0 <= x && x <= nb[0].1 && nb[1].0 <= y && y <= nb[1].1, "({x}, {y}) lost: {nb:?}");
+                }
+            }
+        }
+    }
+}
