@@ -12,7 +12,8 @@
 //! verdicts) and [`exact`] evaluates expressions in exact arithmetic for it and for the
 //! replay of counterexamples. Also: [`source`] (files and spans) and [`diag`] (codes
 //! and diagnostics), used by every stage; [`sigma`] (the logical context Σ that scoping
-//! and typing thread); [`subtype`] (subtyping of local types, Fig 5, and [T-SUB] for
+//! and typing thread); [`dialect`] (the MAVLink schema that lowering checks messages against,
+//! read from the bundled XML definitions); [`subtype`] (subtyping of local types, Fig 5, and [T-SUB] for
 //! written `local` items); [`library`] (`mochi check lib.mochi`); [`fsload`] (the IO
 //! edge: source files from disk) and [`stack`] (stack growth for recursive passes).
 //!
