@@ -382,18 +382,7 @@ impl Lowerer {
         origin: ValueOrigin,
         values: &mut Vec<ValueId>,
     ) -> Vec<Field> {
-        let mut out = Vec::new();
-        for f in fields {
-            let sort = f.sort.as_ref().map(|s| self.sort(s)).unwrap_or(Sort::Error);
-            let v = self.new_value(f.bound(), sort.clone(), origin.clone());
-            values.push(v);
-            let refinement = f.refinement.as_ref().map(|r| {
-                let env = Env::role(viewer, values);
-                self.pred(r, &env, "a refinement")
-            });
-            out.push(Field { value: v, name: f.bound().name.clone(), sort, refinement, mav: None });
-        }
-        out
+        self.plain_fields(fields, viewer, origin, values)
     }
 
     /// E0236: a string literal compared with a `char[N]` field is longer than N.

@@ -122,6 +122,19 @@ impl Lowerer {
         values: &mut Vec<ValueId>,
     ) -> Vec<Field> {
         super::distinct("payload field", fields.iter().map(|f| f.bound()), &mut self.diags);
+        self.plain_fields(fields, viewer, origin, values)
+    }
+
+    /// [`Self::fields`] without the check that the names are distinct: each field bound
+    /// with its written sort (`Sort::Error` when none is written) and refinement. Also the
+    /// fields of a MAVLink message that could not be resolved (`lower::mav`).
+    pub(super) fn plain_fields(
+        &mut self,
+        fields: &[ast::Field],
+        viewer: RoleId,
+        origin: ValueOrigin,
+        values: &mut Vec<ValueId>,
+    ) -> Vec<Field> {
         let mut out = Vec::new();
         for f in fields {
             // A missing sort is reported by `message` (E0241).
