@@ -42,6 +42,8 @@ use num_rational::BigRational;
 use num_traits::{One, Signed, ToPrimitive, Zero};
 use std::collections::HashMap;
 
+pub mod compiled;
+
 /// A closed interval `[lo, hi]`, possibly with infinite ends.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Interval {
