@@ -51,7 +51,15 @@ pub struct Bound {
     /// with `focus`).
     pub mb: f64,
     /// The pair of solids whose bound is `lower` (`None`: every solid).
-    pub focus: Option<[usize; 2]>,
+    pub focus: Option<Focus>,
+}
+
+/// The pair of solids a box's bound comes from (one of each side), and for each whether
+/// it was bounded by a stand-in the scene places instead (see the scene's `bound`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Focus {
+    pub solids: [usize; 2],
+    pub proxy: [bool; 2],
 }
 
 /// Can the constraints hold in a box?
@@ -88,7 +96,7 @@ pub trait Scene {
     }
     /// [`Scene::motion_bound`] restricted to the solids of `focus` (one of each side), an
     /// upper bound on how far their points move; default: every solid.
-    fn focus_motion_bound(&self, lo: &[f64], hi: &[f64], centre: &[f64], focus: Option<[usize; 2]>) -> f64 {
+    fn focus_motion_bound(&self, lo: &[f64], hi: &[f64], centre: &[f64], focus: Option<Focus>) -> f64 {
         let _ = focus;
         self.motion_bound(lo, hi, centre)
     }
@@ -255,6 +263,8 @@ pub struct Stats {
     pub splits: Vec<usize>,
     pub distance_calls: usize,
     pub witness_calls: usize,
+    /// Configurations sampled in boxes to look for a contact ([`probe`]).
+    pub probes: usize,
     pub elapsed: Duration,
 }
 
@@ -308,7 +318,7 @@ fn choose_split(
     b: &QBox,
     c: &[f64],
     mb: f64,
-    focus: Option<[usize; 2]>,
+    focus: Option<Focus>,
     opts: &Options,
 ) -> Option<usize> {
     let res = &opts.resolution;
@@ -398,13 +408,103 @@ fn confirm(
     (d.distance <= 0.0).then_some((q, d))
 }
 
+/// How many configurations [`probe`] samples per box, and how many candidate contacts
+/// per search it may ask the scene to confirm (each a solver call).
+const PROBES_PER_BOX: usize = 1;
+const PROBE_WITNESSES: usize = 64;
+/// Probing starts once a search has evaluated this many boxes: most proofs end sooner
+/// and pay nothing for it.
+const PROBE_AFTER: usize = 3_000;
+
+/// Looks for a contact inside `b` away from its centre: a few configurations drawn from
+/// the box (a fixed pseudo-random sequence, so runs repeat), each evaluated where the
+/// constraints may hold; one whose solids touch is confirmed like any contact, by the
+/// scene's witness in a box around it (half a resolution wide in every dimension) whose
+/// distance, evaluated again, is ≤ 0. The centre alone misses contacts that need several
+/// coordinates at once (a heading and a position), which splitting by the motion bound
+/// does not steer towards. Only ever finds contacts: it proves nothing apart, and a
+/// probe that is not confirmed changes nothing.
+fn probe(scene: &dyn Scene, b: &QBox, opts: &Options, stats: &mut Stats) -> Option<(Vec<f64>, Closest)> {
+    if stats.witness_calls >= PROBE_WITNESSES || stats.nodes < PROBE_AFTER {
+        return None;
+    }
+    let n = b.lo.len();
+    for _ in 0..PROBES_PER_BOX {
+        stats.probes += 1;
+        let q = draw(b, stats.probes);
+        if scene.feasible(&q, &q) == Feasible::No {
+            continue;
+        }
+        stats.distance_calls += 1;
+        if scene.distance(&q).distance > 0.0 {
+            continue;
+        }
+        let half: Vec<f64> = opts.resolution.iter().map(|r| r * 0.5).collect();
+        let lo: Vec<f64> = (0..n).map(|k| (q[k] - half[k]).max(b.lo[k])).collect();
+        let hi: Vec<f64> = (0..n).map(|k| (q[k] + half[k]).min(b.hi[k])).collect();
+        stats.witness_calls += 1;
+        let Some(w) = scene.witness(&lo, &hi, &q) else { continue };
+        if !b.contains(&w) {
+            continue;
+        }
+        stats.distance_calls += 1;
+        let d = scene.distance(&w);
+        if d.distance <= 0.0 {
+            return Some((w, d));
+        }
+        if stats.witness_calls >= PROBE_WITNESSES {
+            return None;
+        }
+    }
+    None
+}
+
+/// A configuration of `b` that satisfies the constraints (the scene's witness, asked near a
+/// probe drawn from the box), with the distance there: an attained upper bound for
+/// [`min_distance`]. At most `PROBE_WITNESSES` witnesses per search.
+fn probe_min(scene: &dyn Scene, b: &QBox, opts: &Options, stats: &mut Stats) -> Option<(Vec<f64>, Closest)> {
+    if stats.witness_calls >= PROBE_WITNESSES {
+        return None;
+    }
+    stats.probes += 1;
+    let q = draw(b, stats.probes);
+    if scene.feasible(&q, &q) == Feasible::No {
+        return None;
+    }
+    let n = q.len();
+    let lo: Vec<f64> = (0..n).map(|k| (q[k] - 0.5 * opts.resolution[k]).max(b.lo[k])).collect();
+    let hi: Vec<f64> = (0..n).map(|k| (q[k] + 0.5 * opts.resolution[k]).min(b.hi[k])).collect();
+    stats.witness_calls += 1;
+    let w = scene.witness(&lo, &hi, &q).filter(|w| b.contains(w))?;
+    stats.distance_calls += 1;
+    let d = scene.distance(&w);
+    (!d.distance.is_nan()).then_some((w, d))
+}
+
+/// The `seed`-th configuration of a fixed pseudo-random sequence (xorshift64*) in `b`.
+fn draw(b: &QBox, seed: usize) -> Vec<f64> {
+    let mut s = (seed as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+    (0..b.lo.len())
+        .map(|k| {
+            s ^= s >> 12;
+            s ^= s << 25;
+            s ^= s >> 27;
+            let u = (s.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64;
+            (b.lo[k] + u * (b.hi[k] - b.lo[k])).clamp(b.lo[k], b.hi[k])
+        })
+        .collect()
+}
+
+/// How long the search for the earliest contact may take once a contact is found.
+const REFINE: Duration = Duration::from_secs(2);
+
 /// A box evaluated at its centre.
 struct Node {
     qbox: QBox,
     c: Vec<f64>,
     at_c: Closest,
     mb: f64,
-    focus: Option<[usize; 2]>,
+    focus: Option<Focus>,
     feas: Feasible,
 }
 
@@ -514,6 +614,12 @@ fn pass(scene: &dyn Scene, root: &QBox, opts: &Options, earliest: bool, max_node
                 return out;
             }
         }
+        if time_ok {
+            if let Some((q, at)) = probe(scene, b, opts, stats) {
+                out.end = Some(PassEnd::Contact { q, at, box_time: time.map_or(f64::NEG_INFINITY, |t| b.lo[t]) });
+                return out;
+            }
+        }
         match choose_split(scene, b, &n.c, n.mb, n.focus, opts) {
             Some(k) => {
                 count_split(stats, k);
@@ -572,7 +678,15 @@ pub fn decide(scene: &dyn Scene, root: &QBox, opts: &Options) -> Decision {
             // Refine: the earliest contact with time ≤ q[t], with the nodes left.
             let mut early = root.clone();
             early.hi[t] = q[t].max(early.lo[t]);
-            let second = pass(scene, &early, opts, true, opts.max_nodes, &mut stats);
+            // At most REFINE of the time left: the contact stands whatever the refinement
+            // finds, which only moves it earlier and says how far before it all is clear.
+            let mut o2 = opts.clone();
+            let now = Instant::now();
+            o2.deadline = Some(match opts.deadline {
+                Some(d) => d.min(now + REFINE.min(d.saturating_duration_since(now))),
+                None => now + REFINE,
+            });
+            let second = pass(scene, &early, &o2, true, opts.max_nodes, &mut stats);
             let (q, at, clear) = match second.end {
                 Some(PassEnd::Contact { q: q2, at: at2, box_time }) => (q2, at2, box_time.min(second.unknown_time)),
                 Some(PassEnd::Budget { frontier, .. }) => (q, at, frontier.min(second.unknown_time)),
@@ -656,11 +770,11 @@ pub fn min_distance(scene: &dyn Scene, root: &QBox, tolerance: f64, opts: &Optio
         }
         let c = b.centre();
         stats.distance_calls += 1;
-        let Bound { lower: lb, at_c: d, .. } = scene.bound(&b.lo, &b.hi, &c);
+        let Bound { lower: lb, at_c: d, mb, focus } = scene.bound(&b.lo, &b.hi, &c);
         if feas == Feasible::All || scene.feasible(&c, &c) == Feasible::All {
             offer(c, d, best);
         }
-        Some((if lb.is_nan() { f64::NEG_INFINITY } else { lb }, b))
+        Some((if lb.is_nan() { f64::NEG_INFINITY } else { lb }, (b, mb, focus)))
     };
     if let Some((lb, b)) = eval(root.clone(), &mut stats, &mut best) {
         heap.push(Queued { key: (lb, 0.0), seq, item: b });
@@ -680,12 +794,18 @@ pub fn min_distance(scene: &dyn Scene, root: &QBox, tolerance: f64, opts: &Optio
             break;
         }
         stats.nodes += 1;
-        let Some(Queued { item: b, key: (lb, _), .. }) = heap.pop() else {
+        let Some(Queued { item: (b, mb, focus), key: (lb, _), .. }) = heap.pop() else {
             break;
         };
         let c = b.centre();
-        let mb = scene.motion_bound(&b.lo, &b.hi, &c);
-        match choose_split(scene, &b, &c, mb, None, opts) {
+        // The split that lowers the motion charged to the pair the bound came from (as in
+        // `pass`); the upper bound is sought by probes too (`probe`).
+        if let Some((q, d)) = probe_min(scene, &b, opts, &mut stats) {
+            if best.as_ref().is_none_or(|(_, x)| d.distance < x.distance) {
+                best = Some((q, d));
+            }
+        }
+        match choose_split(scene, &b, &c, mb, focus, opts) {
             Some(k) => {
                 let (x, y) = b.split(k);
                 count_split(&mut stats, k);
@@ -788,6 +908,29 @@ pub struct ParryScene {
 /// parry is its f64 build (`parry3d-f64`, Cargo.toml): its isometries are ours. The f32
 /// padding below ([`F32_REL`]) is kept although the arithmetic is now f64: it is a
 /// conservative margin, far above f64 rounding.
+/// The distance of two solids placed at `p1`, `p2` when a side is a convex hull standing
+/// for a mesh, measured on the mesh's triangles (not its hull) against the other solid
+/// (its triangles too if it is a hull), with the closest points; `None` when parry cannot
+/// tell (an unsupported pair).
+///
+/// What it may be used for: a value `<= 0` is a contact (a mesh's surface that meets the
+/// other solid is a point of both solids); a positive value is an upper bound on the
+/// solids' distance (the surfaces' closest points are points of the solids; the solids
+/// may be closer only if one lies inside a closed mesh, and then their distance is 0).
+/// It is never a lower bound: proofs use the hulls.
+pub fn mesh_distance(
+    s1: &super::Solid,
+    p1: &Isometry3<f64>,
+    s2: &super::Solid,
+    p2: &Isometry3<f64>,
+) -> Option<(f64, [[f64; 3]; 2])> {
+    let g1: &dyn parry3d::shape::Shape = if s1.is_hull { s1.mesh()? } else { s1.shape.as_ref() };
+    let g2: &dyn parry3d::shape::Shape = if s2.is_hull { s2.mesh()? } else { s2.shape.as_ref() };
+    let c = parry3d::query::contact(&to_parry(p1), g1, &to_parry(p2), g2, f64::MAX).ok()??;
+    let pt = |p: PPoint<f64>| [p.x, p.y, p.z];
+    (!c.dist.is_nan()).then(|| (c.dist, [pt(c.point1), pt(c.point2)]))
+}
+
 fn to_parry(iso: &Isometry3<f64>) -> PIso<f64> {
     *iso
 }

@@ -68,6 +68,9 @@ pub struct Solid {
     pub is_hull: bool,
     radius: f64,
     aabb: Aabb,
+    /// [`Solid::trimesh`], built on first use by [`Solid::mesh`] (a BVH build per call
+    /// would dominate a search that confirms contacts of hulls).
+    mesh: Arc<std::sync::OnceLock<Option<parry3d::shape::TriMesh>>>,
 }
 
 impl std::fmt::Debug for Solid {
@@ -102,7 +105,7 @@ impl Solid {
         let aabb = shape.compute_aabb(&pose).loosened(slack);
         let radius = far_radius(&shape, &pose) + slack;
         let is_hull = triangles.is_some();
-        Solid { shape, pose, name, slack, triangles, is_hull, radius, aabb }
+        Solid { shape, pose, name, slack, triangles, is_hull, radius, aabb, mesh: Arc::default() }
     }
 
     /// The same solid placed by `place ∘ pose` in a new owner frame (`place` maps the old
@@ -172,9 +175,43 @@ impl Solid {
         self.radius
     }
 
+    /// A solid that holds this one turned by any angle about the owner frame's z axis:
+    /// the cylinder about that axis through the corners of [`Solid::local_aabb`] (slack
+    /// included). The geometric search places it instead of the solid when only that
+    /// turn varies (a mobile base's heading), so the heading needs no splitting.
+    ///
+    /// Sound: a point `p` of the solid lies in its box, so its distance from the z axis is
+    /// at most the largest corner's (a convex function of `p` is largest at a vertex) and
+    /// its height is in the box's z range; a turn about z keeps both. The radius and the
+    /// half height are padded by 1e-9 m (and a relative 1e-12) against the rounding of the
+    /// square root and of the cylinder's quarter turn (parry's cylinders stand on y).
+    pub fn z_cylinder(&self) -> Solid {
+        let (lo, hi) = (self.aabb.mins, self.aabb.maxs);
+        let pad = |x: f64| x * (1.0 + 1e-12) + 1e-9;
+        let mut r2: f64 = 0.0;
+        for x in [lo.x, hi.x] {
+            for y in [lo.y, hi.y] {
+                r2 = r2.max(x * x + y * y);
+            }
+        }
+        let radius = pad(r2.sqrt());
+        let half = pad((hi.z - lo.z) / 2.0);
+        let zc = lo.z / 2.0 + hi.z / 2.0;
+        let pose = Isometry3::from_parts(
+            Translation3::new(0.0, 0.0, zc),
+            UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::FRAC_PI_2),
+        );
+        Solid::new(SharedShape::cylinder(half, radius), pose, format!("{} (turned about z)", self.name))
+    }
+
     /// The axis-aligned box, in the owner's frame, of the solid (slack included).
     pub fn local_aabb(&self) -> Aabb {
         self.aabb
+    }
+
+    /// [`Solid::trimesh`], built once per solid.
+    pub fn mesh(&self) -> Option<&parry3d::shape::TriMesh> {
+        self.mesh.get_or_init(|| self.trimesh()).as_ref()
     }
 
     /// The triangle mesh of a mesh solid, in the solid's own frame (place it by
@@ -272,6 +309,33 @@ mod tests {
         assert!(Solid::mochi_capsule(0.3, 0.5, id(), "c").is_err());
         let e = Solid::mochi_box(1.0, -2.0, 1.0, id(), "b").unwrap_err();
         assert!(e.message.contains("y length") && e.message.contains("-2"), "{e}");
+    }
+
+    /// The z cylinder holds the solid at every turn about z: sampled surface points of a
+    /// box off the axis, turned by many angles, are inside it (parry's point test).
+    #[test]
+    fn z_cylinder_holds_every_turn() {
+        let place = Isometry3::new(Vector3::new(0.3, -0.2, 0.1), Vector3::new(0.0, 0.0, 0.4));
+        let s = Solid::mochi_box(0.14, 0.18, 0.2, place, "rover").unwrap();
+        let c = s.z_cylinder();
+        for k in 0..64 {
+            let turn = Isometry3::rotation(Vector3::new(0.0, 0.0, k as f64 * 0.1));
+            for x in [-0.07, 0.07] {
+                for y in [-0.09, 0.09] {
+                    for z in [0.0, 0.2] {
+                        // The box's corner in its own frame, placed and turned.
+                        let p = turn * s.pose * Point3::new(x, y, z - 0.1);
+                        let inside = c.shape.contains_point(&c.pose, &p);
+                        assert!(inside, "corner {p:?} at turn {k} outside the cylinder");
+                    }
+                }
+            }
+        }
+        // Not absurdly large: by the triangle inequality every corner of the turned box's
+        // axis-aligned box is within |(0.3, -0.2)| + 0.149 = 0.51 of the axis, so a point
+        // 0.52 from it (at mid height) is outside.
+        let out = Point3::new(0.52, 0.0, 0.2);
+        assert!(!c.shape.contains_point(&c.pose, &out), "the cylinder is too wide");
     }
 
     /// The bounding radius bounds every point: checked on sampled surface points of each

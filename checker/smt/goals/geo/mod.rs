@@ -19,6 +19,8 @@
 //! never apart. ARCHITECTURE.md ("Geometric decision procedure") has the argument.
 
 mod affine;
+mod contract;
+mod pose;
 mod squares;
 
 use super::motion::Inst;
@@ -27,7 +29,7 @@ use super::Part;
 use super::Query;
 use crate::bounds::{self, Interval};
 use crate::diag::{Assignment, Overlap};
-use crate::geometry::bnb::{self, Bound, Closest, Feasible, Options, QBox, Scene};
+use crate::geometry::bnb::{self, Bound, Closest, Feasible, Focus, Options, QBox, Scene};
 use crate::geometry::placement::{chain_motion_bound, ArgBounds, FrameBound};
 use crate::geometry::{self, Pose3};
 use crate::hir::body::Pose;
@@ -211,6 +213,31 @@ struct Placed<'a> {
     at: Option<&'a Pose>,
     /// The obstacle, by index.
     obstacle: Option<usize>,
+    /// The solid's stand-in when its own frame only turns about z (`pose(x, y, z, 0, 0,
+    /// yaw)` with no link after it): [`geometry::Solid::z_cylinder`], which every heading
+    /// leaves in place ([`Geo::bound`]).
+    turned: Option<geometry::Solid>,
+}
+
+/// Whether a piece's own frame turns about z only: its pose's roll and pitch are exactly 0
+/// (constants) and no URDF link comes after it.
+fn turns_about_z(prog: &Program, piece: &Piece) -> bool {
+    let Some(pose) = &piece.place else { return false };
+    piece.link.is_none()
+        && pose.args[3..5].iter().all(|e| {
+            !crate::hir::expr::mentions(e, &|v| !matches!(v, Var::Const(_)))
+                && bounds::eval(prog, e, &bounds::closed).is_some_and(|iv| iv.is_exactly(0.0))
+        })
+}
+
+/// A solid placed at a box's centre: its world pose, its owner frame's, and how far its
+/// points move over the box; for a solid with a stand-in, how far the stand-in's points
+/// move (its frame's turn about z left out: the stand-in does not change under it).
+struct At {
+    pose: Pose3,
+    owner: Pose3,
+    motion: f64,
+    turned_motion: Option<f64>,
 }
 
 struct Geo<'a> {
@@ -233,7 +260,17 @@ struct Geo<'a> {
     /// The last box contracted and its result: the search asks `feasible` and then
     /// `motion_bound` of the same box.
     contracted: std::cell::RefCell<Option<Contracted>>,
+    /// Per run, its contraction compiled (empty at the start state, [T-SESS]).
+    contractions: Vec<contract::RunContraction>,
+    scratch: std::cell::RefCell<bounds::compiled::Scratch>,
+    /// Pose frames compiled on first use, by (the pose, whose frame, which run).
+    poses: std::cell::RefCell<PoseCache>,
+    /// Each participant's `at:` frame (constant), on first use.
+    at_poses: std::cell::RefCell<rustc_hash::FxHashMap<RoleId, Option<(Pose3, FrameBound)>>>,
+    pose_stack: std::cell::RefCell<Vec<Option<Interval>>>,
 }
+
+type PoseCache = rustc_hash::FxHashMap<(*const Pose, Option<RoleId>, usize), pose::CompiledPose>;
 
 /// A box `(lo, hi)` and its contraction (`None`: empty).
 type Contracted = ((Vec<f64>, Vec<f64>), Option<(Vec<f64>, Vec<f64>)>);
@@ -277,6 +314,7 @@ impl<'a> Geo<'a> {
                         run,
                         at: None,
                         obstacle: None,
+                        turned: turns_about_z(prog, piece).then(|| piece.solid.z_cylinder()),
                     }));
                 }
                 Who::Obstacle(o) => {
@@ -287,6 +325,7 @@ impl<'a> Geo<'a> {
                         run: None,
                         at: obstacle.pose.as_ref(),
                         obstacle: Some(o),
+                        turned: None,
                     }));
                 }
             }
@@ -337,8 +376,16 @@ impl<'a> Geo<'a> {
             sides,
             initial,
             contracted: std::cell::RefCell::new(None),
+            contractions: Vec::new(),
+            scratch: Default::default(),
+            poses: Default::default(),
+            at_poses: Default::default(),
+            pose_stack: Default::default(),
         };
         geo.layout()?;
+        if !initial {
+            geo.contractions = (0..geo.runs.len()).map(|k| geo.compile_contraction(k)).collect();
+        }
         Ok(geo)
     }
 
@@ -516,17 +563,13 @@ impl<'a> Geo<'a> {
         hi: &[f64],
         c: &[f64],
     ) -> Option<(Pose3, FrameBound)> {
-        let mut ab = ArgBounds::fixed([0.0; 6]);
-        for (k, e) in pose.args.iter().enumerate() {
-            let range = |v: &Var| role.and_then(|r| self.var_range(run, r, v, Some((lo, hi))));
-            let at = |v: &Var| role.and_then(|r| self.var_range(run, r, v, Some((c, c))));
-            let box_iv = bounds::eval(self.prog, e, &range)?;
-            let mid = bounds::eval(self.prog, e, &at)?;
-            ab.lo[k] = box_iv.lo;
-            ab.hi[k] = box_iv.hi;
-            ab.centre[k] = mid.lo / 2.0 + mid.hi / 2.0;
+        let key = (pose as *const Pose, role, run);
+        if !self.poses.borrow().contains_key(&key) {
+            let compiled = pose::CompiledPose::new(self.prog, pose, &|v: &Var| self.leaf(run, role, v));
+            self.poses.borrow_mut().insert(key, compiled);
         }
-        Some((geometry::pose6(ab.centre), FrameBound::pose(&ab)))
+        let poses = self.poses.borrow();
+        poses.get(&key)?.frame(lo, hi, c, &mut self.pose_stack.borrow_mut())
     }
 
     /// The frames placing `role`'s own frame in the world (outermost first): each
@@ -620,9 +663,9 @@ impl<'a> Geo<'a> {
         out
     }
 
-    /// Each solid of side `side` placed at `c` (world pose) with the bound on how far its
-    /// points move over `[lo, hi]`; `None` if some solid cannot be placed (no bound).
-    fn placed(&self, side: usize, lo: &[f64], hi: &[f64], c: &[f64]) -> Option<Vec<(Pose3, f64)>> {
+    /// Each solid of side `side` placed at `c` with the bounds on how far its points move
+    /// over `[lo, hi]`; `None` if some solid cannot be placed (no bound).
+    fn placed(&self, side: usize, lo: &[f64], hi: &[f64], c: &[f64]) -> Option<Vec<At>> {
         self.side_frames(side, lo, hi, c)
             .into_iter()
             .zip(&self.sides[side])
@@ -631,22 +674,41 @@ impl<'a> Geo<'a> {
     }
 
     /// Solid `k` of side `side` alone, as [`Geo::placed`] places it.
-    fn placed_one(&self, side: usize, k: usize, lo: &[f64], hi: &[f64], c: &[f64]) -> Option<(Pose3, f64)> {
+    fn placed_one(&self, side: usize, k: usize, lo: &[f64], hi: &[f64], c: &[f64]) -> Option<At> {
         let frames = self.frames_of(side, Some(k), lo, hi, c).into_iter().nth(k)??;
         Self::place_one(frames, self.sides[side].get(k)?)
     }
 
-    fn place_one(frames: Vec<(Pose3, FrameBound)>, p: &Placed) -> Option<(Pose3, f64)> {
+    fn place_one(frames: Vec<(Pose3, FrameBound)>, p: &Placed) -> Option<At> {
         let mut pose = geometry::identity();
         let mut fb = Vec::with_capacity(frames.len());
         for (f, b) in frames {
             pose *= f;
             fb.push(b);
         }
-        Some((pose * p.piece.solid.pose, chain_motion_bound(&fb, p.piece.solid.bounding_radius())))
+        let motion = chain_motion_bound(&fb, p.piece.solid.bounding_radius());
+        // The stand-in's frame is the solid's own (`turns_about_z`: the last frame, with
+        // roll and pitch fixed at 0), whose turn about z leaves it in place: only the other
+        // frames' motion and that frame's translation move it.
+        let turned_motion = p.turned.as_ref().map(|s| {
+            if let Some(last) = fb.last_mut() {
+                last.drot = 0.0;
+            }
+            chain_motion_bound(&fb, s.bounding_radius())
+        });
+        Some(At { pose: pose * p.piece.solid.pose, owner: pose, motion, turned_motion })
     }
 
     fn at_pose(&self, role: RoleId) -> Option<(Pose3, FrameBound)> {
+        if let Some(got) = self.at_poses.borrow().get(&role) {
+            return *got;
+        }
+        let got = self.at_pose_uncached(role);
+        self.at_poses.borrow_mut().insert(role, got);
+        got
+    }
+
+    fn at_pose_uncached(&self, role: RoleId) -> Option<(Pose3, FrameBound)> {
         let pose = &self.prog.role(role).pose;
         let mut a = [0.0; 6];
         let mut ab = ArgBounds::fixed([0.0; 6]);
@@ -674,13 +736,8 @@ impl<'a> Geo<'a> {
         match d.outcome {
             bnb::Outcome::Apart { .. } => GeoAnswer::Apart,
             bnb::Outcome::Contact(c) => {
-                let hull = c.names.iter().any(|n| n.contains("(hull)"));
-                if hull {
-                    return GeoAnswer::Unknown(format!(
-                        "the convex hulls of `{}` and `{}` touch at ({:.4}, {:.4}, {:.4}); the meshes themselves may not",
-                        c.names[0], c.names[1], c.point[0], c.point[1], c.point[2]
-                    ));
-                }
+                // A contact is confirmed on the meshes themselves (`Geo::distance`), never on
+                // convex hulls alone.
                 let times: Vec<f64> = self
                     .dims
                     .iter()
@@ -746,88 +803,46 @@ impl<'a> Geo<'a> {
 
     fn contract_uncached(&self, lo: &[f64], hi: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
         let (mut lo, mut hi) = (lo.to_vec(), hi.to_vec());
-        if self.initial {
-            return Some((lo, hi));
-        }
-        for (k, r) in self.runs.iter().enumerate() {
-            let prim = self.prog.prim(r.app.prim);
-            let mut facts: Vec<&Expr> = vec![&prim.guarantee];
-            facts.extend(self.prog.kind(prim.kind).invariant.as_ref());
-            let (l0, h0) = (lo.clone(), hi.clone());
-            let start = |v: &Var| self.var_range(k, r.role, v, Some((&l0, &h0)));
-            let mut got = bounds::ranges_from(self.prog, &facts, &start);
-            // Bounds affine in one start value, evaluated at its two ends (affine.rs).
-            for ab in affine::affine_bounds(&facts) {
-                let Some(Interval { lo: l, hi: h }) = start(&ab.old) else { continue };
-                if !(l.is_finite() && h.is_finite()) {
-                    continue;
-                }
-                let at = |x: f64| {
-                    let pin = |v: &Var| if *v == ab.old { Some(Interval::point(x)) } else { start(v) };
-                    bounds::eval(self.prog, ab.e, &pin)
-                };
-                let (Some(a), Some(b)) = (at(l), at(h)) else { continue };
-                let hull = Interval { lo: a.lo.min(b.lo), hi: a.hi.max(b.hi) };
-                if hull.lo.is_nan() || hull.hi.is_nan() {
-                    continue;
-                }
-                let iv = match ab.side {
-                    affine::Side::Upper => Interval { lo: f64::NEG_INFINITY, hi: hull.hi },
-                    affine::Side::Lower => Interval { lo: hull.lo, hi: f64::INFINITY },
-                    affine::Side::Both => hull,
-                };
-                got.entry(ab.own.clone()).and_modify(|o| *o = o.meet(iv)).or_insert(iv);
-            }
-            // Sums of squares (the rover's annulus), over the box narrowed so far (squares.rs).
-            for sb in squares::squares_bounds(&facts) {
-                let idx: Option<Vec<usize>> = sb
-                    .vars
-                    .iter()
-                    .map(|v| match v {
-                        Var::Own(slot) => self.dims.iter().position(|d| *d == Dim::Now(r.role, *slot)),
-                        _ => None,
-                    })
-                    .collect();
-                let Some(idx) = idx else { continue };
-                let Some(e) = bounds::eval(self.prog, sb.e, &start) else { continue };
-                let bound = if sb.upper { e.hi } else { e.lo };
-                let mut ranges: Vec<(f64, f64)> = idx
-                    .iter()
-                    .zip(&sb.vars)
-                    .map(|(&i, v)| match got.get(v) {
-                        Some(iv) => (lo[i].max(iv.lo), hi[i].min(iv.hi)),
-                        None => (lo[i], hi[i]),
-                    })
-                    .collect();
-                if ranges.iter().any(|(l, h)| l.is_nan() || h.is_nan()) {
-                    continue;
-                }
-                if !squares::narrow(&mut ranges, bound, sb.upper) {
-                    return None;
-                }
-                for (v, (l, h)) in sb.vars.iter().zip(ranges) {
-                    let iv = Interval { lo: l, hi: h };
-                    got.entry(v.clone()).and_modify(|o| *o = o.meet(iv)).or_insert(iv);
-                }
-            }
-            for (i, d) in self.dims.iter().enumerate() {
-                let Dim::Now(role, slot) = d else { continue };
-                if *role != r.role {
-                    continue;
-                }
-                if let Some(iv) = got.get(&Var::Own(*slot)) {
-                    if iv.lo.is_nan() || iv.hi.is_nan() {
-                        continue;
-                    }
-                    lo[i] = lo[i].max(iv.lo);
-                    hi[i] = hi[i].min(iv.hi);
-                    if lo[i] > hi[i] {
-                        return None;
-                    }
-                }
+        let mut work = self.scratch.borrow_mut();
+        // Each run over the box as the runs before it left it.
+        for c in &self.contractions {
+            if !c.narrow(&mut lo, &mut hi, &mut work) {
+                return None;
             }
         }
         Some((lo, hi))
+    }
+
+    /// Run `k`'s contraction, compiled: its guarantee and invariant, with the ranges of
+    /// everything that is not a dimension fixed for the question ([`Geo::var_range`]).
+    fn compile_contraction(&self, k: usize) -> contract::RunContraction {
+        let r = &self.runs[k];
+        let prim = self.prog.prim(r.app.prim);
+        let mut facts: Vec<&Expr> = vec![&prim.guarantee];
+        facts.extend(self.prog.kind(prim.kind).invariant.as_ref());
+        let dim = |d: Dim| self.dims.iter().position(|x| *x == d);
+        let dim_of = |v: &Var| match v {
+            Var::Own(slot) => dim(Dim::Now(r.role, *slot)),
+            _ => None,
+        };
+        contract::RunContraction::new(self.prog, &facts, &dim_of, &|v: &Var| self.leaf(k, Some(r.role), v))
+    }
+
+    /// Where the range of variable `v` of participant `role`, read in run `run`'s frame,
+    /// comes from in a box: [`Geo::var_range`] with the dimensions left to the box.
+    /// `role` `None`: an obstacle's pose, which reads no variable.
+    fn leaf(&self, run: usize, role: Option<RoleId>, v: &Var) -> contract::Leaf {
+        let Some(role) = role else { return contract::Leaf::Fixed(None) };
+        let dim = |d: Dim| self.dims.iter().position(|x| *x == d);
+        let i = match v {
+            Var::Own(slot) => dim(Dim::Now(role, *slot)),
+            Var::Clock => self.runs.get(run).and_then(|r| dim(Dim::Clock(r.clock))),
+            _ => None,
+        };
+        match i {
+            Some(i) => contract::Leaf::Dim(i),
+            None => contract::Leaf::Fixed(self.var_range(run, role, v, None)),
+        }
     }
 
     fn dim_name(&self, d: Dim) -> String {
@@ -965,7 +980,13 @@ impl Scene for Geo<'_> {
             }
             let (Some(pa), Some(pb)) = (&a[i], &b[j]) else { continue };
             let (sa, sb) = (&self.sides[0][i].piece.solid, &self.sides[1][j].piece.solid);
-            let (d, lower, points) = bnb::parry_closest(&sa.shape, pa, &sb.shape, pb);
+            let (mut d, lower, mut points) = bnb::parry_closest(&sa.shape, pa, &sb.shape, pb);
+            if sa.is_hull || sb.is_hull {
+                // The estimate (a contact when <= 0) is the meshes' own, not their hulls':
+                // hulls that touch are not a contact (`bnb::mesh_distance`). The certified
+                // lower bound stays the hulls'.
+                (d, points) = bnb::mesh_distance(sa, pa, sb, pb).unwrap_or((f64::INFINITY, points));
+            }
             let lower = lower - sa.slack - sb.slack - geometry::DISTANCE_MARGIN;
             best.lower = if lower.is_nan() { f64::NEG_INFINITY } else { best.lower.min(lower) };
             if d < best.distance || best.distance.is_infinite() {
@@ -998,15 +1019,15 @@ impl Scene for Geo<'_> {
         let (Some(a), Some(b)) = (self.placed(0, &lo, &hi, centre), self.placed(1, &lo, &hi, centre)) else {
             return none();
         };
-        let origin = |p: &Pose3, s: &geometry::Solid| geometry::apply(&(*p * s.pose.inverse()), [0.0; 3]);
+        let pad = 1.0 + geometry::placement::PAD;
         let mut pairs = Vec::with_capacity(a.len() * b.len());
-        for (i, (pa, ma)) in a.iter().enumerate() {
-            for (j, (pb, mb)) in b.iter().enumerate() {
+        for (i, x) in a.iter().enumerate() {
+            for (j, y) in b.iter().enumerate() {
                 let (sa, sb) = (&self.sides[0][i].piece.solid, &self.sides[1][j].piece.solid);
-                let (ca, cb) = (origin(pa, sa), origin(pb, sb));
+                let (ca, cb) = (geometry::apply(&x.owner, [0.0; 3]), geometry::apply(&y.owner, [0.0; 3]));
                 let d2: f64 = ca.iter().zip(cb).map(|(x, y)| (x - y) * (x - y)).sum();
                 let gap = d2.sqrt() - sa.bounding_radius() - sb.bounding_radius() - geometry::DISTANCE_MARGIN;
-                let m = (ma + mb) * (1.0 + geometry::placement::PAD);
+                let m = (x.motion + y.motion) * pad;
                 pairs.push((gap - m, gap, m, i, j));
             }
         }
@@ -1024,17 +1045,45 @@ impl Scene for Geo<'_> {
             if key >= out.lower && gap > 0.0 {
                 continue;
             }
-            let (pa, pb) = (&a[i].0, &b[j].0);
+            let (x, y) = (&a[i], &b[j]);
             let (sa, sb) = (&self.sides[0][i].piece.solid, &self.sides[1][j].piece.solid);
-            let (d, lower, points) = bnb::parry_closest(&sa.shape, pa, &sb.shape, pb);
+            let (d, lower, points) = bnb::parry_closest(&sa.shape, &x.pose, &sb.shape, &y.pose);
             let lower = lower - sa.slack - sb.slack - geometry::DISTANCE_MARGIN;
             let lower = if lower.is_nan() { f64::NEG_INFINITY } else { lower };
-            let pair = lower.max(gap) - m;
-            let pair = if pair.is_nan() { f64::NEG_INFINITY } else { pair };
+            let mut best = (lower.max(gap) - m, m, [false, false]);
+            if best.0.is_nan() {
+                best.0 = f64::NEG_INFINITY;
+            }
+            if best.0 <= 0.0 {
+                // Not proved apart directly: try the stand-ins of solids whose frame turns
+                // about z (a mobile base's heading). Each is a sound bound of its own: the
+                // stand-in holds the solid at every heading, and moves by at most its motion
+                // bound over the box; the pair's bound is the best of them.
+                let sides = [(&self.sides[0][i], x), (&self.sides[1][j], y)];
+                for proxy in [[false, true], [true, false], [true, true]] {
+                    let mut parts = Vec::with_capacity(2);
+                    for (s, (placed, at)) in sides.iter().enumerate() {
+                        if proxy[s] {
+                            let (Some(stand), Some(mv)) = (&placed.turned, at.turned_motion) else { break };
+                            parts.push((stand, at.owner * stand.pose, mv));
+                        } else {
+                            parts.push((&placed.piece.solid, at.pose, at.motion));
+                        }
+                    }
+                    let [(s0, p0, m0), (s1, p1, m1)] = parts[..] else { continue };
+                    let (_, low, _) = bnb::parry_closest(&s0.shape, &p0, &s1.shape, &p1);
+                    let mv = (m0 + m1) * pad;
+                    let bound = low - s0.slack - s1.slack - geometry::DISTANCE_MARGIN - mv;
+                    if bound > best.0 {
+                        best = (bound, mv, proxy);
+                    }
+                }
+            }
+            let (pair, mv, proxy) = best;
             if pair < out.lower || out.focus.is_none() {
                 out.lower = out.lower.min(pair);
-                out.mb = m;
-                out.focus = Some([i, j]);
+                out.mb = mv;
+                out.focus = Some(Focus { solids: [i, j], proxy });
             }
             out.at_c.lower = out.at_c.lower.min(lower);
             if d < out.at_c.distance || out.at_c.distance.is_infinite() || d.is_nan() {
@@ -1046,10 +1095,13 @@ impl Scene for Geo<'_> {
         out
     }
 
-    fn focus_motion_bound(&self, lo: &[f64], hi: &[f64], centre: &[f64], focus: Option<[usize; 2]>) -> f64 {
-        let Some([i, j]) = focus else { return self.motion_bound(lo, hi, centre) };
+    fn focus_motion_bound(&self, lo: &[f64], hi: &[f64], centre: &[f64], focus: Option<Focus>) -> f64 {
+        let Some(Focus { solids: [i, j], proxy }) = focus else { return self.motion_bound(lo, hi, centre) };
         let Some((lo, hi)) = self.narrow(lo, hi) else { return 0.0 };
-        let m = |side: usize, k: usize| self.placed_one(side, k, &lo, &hi, centre).map_or(f64::INFINITY, |x| x.1);
+        let m = |side: usize, k: usize| {
+            let at = self.placed_one(side, k, &lo, &hi, centre);
+            at.and_then(|at| if proxy[side] { at.turned_motion } else { Some(at.motion) }).unwrap_or(f64::INFINITY)
+        };
         (m(0, i) + m(1, j)) * (1.0 + geometry::placement::PAD)
     }
 
