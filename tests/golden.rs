@@ -91,17 +91,75 @@ fn without_values(cx: &Counterexample, note: &str) -> String {
     format!("counterexample: {}", parts.join("; "))
 }
 
-/// `d` as it is stored: its counterexample note without the model's values.
+/// A trace note with each value (`name = value` in a message's payload or a loop head's
+/// parameters) replaced by `_`: the values are a Z3 model's, and another model (another
+/// Z3 build, another order of queries) is as good a counterexample. Guards (`==`, `!=`,
+/// `<=`, `>=`) are the program's text and stay.
+fn trace_without_values(note: &str) -> String {
+    let b = note.as_bytes();
+    let mut out = String::with_capacity(note.len());
+    let mut i = 0;
+    while i < b.len() {
+        let assign = b[i] == b'='
+            && i >= 1
+            && b[i - 1] == b' '
+            && i >= 2
+            && !matches!(b[i - 2], b'=' | b'!' | b'<' | b'>')
+            && b.get(i + 1) == Some(&b' ')
+            && b.get(i + 2) != Some(&b'=');
+        if !assign {
+            let ch = note[i..].chars().next().expect("a char");
+            out.push(ch);
+            i += ch.len_utf8();
+            continue;
+        }
+        out.push_str("= _");
+        i += 2;
+        // The value: a quoted string, or everything up to `,`, `)` or white space.
+        if b.get(i) == Some(&b'"') {
+            i += 1;
+            while i < b.len() && b[i] != b'"' {
+                i += if b[i] == b'\\' { 2 } else { 1 };
+            }
+            i = (i + 1).min(b.len());
+        } else {
+            while i < b.len() && !matches!(b[i], b',' | b')' | b' ' | b'\n') {
+                i += 1;
+            }
+        }
+    }
+    out
+}
+
+/// `d` as it is stored: its counterexample and trace notes without the model's values.
 fn stable(d: &Diagnostic) -> Diagnostic {
     let mut d = d.clone();
     if let Some(cx) = d.counterexample.as_deref() {
         for note in &mut d.notes {
             if note.starts_with("counterexample: ") {
                 *note = without_values(cx, note);
+            } else if note.starts_with("trace to this point") {
+                *note = trace_without_values(note);
             }
         }
     }
     d
+}
+
+#[test]
+fn trace_values_are_hidden_and_guards_kept() {
+    let note = "trace to this point (one path; values from the counterexample):\n    \
+                GCS -> UAV: MISSION_COUNT(count = 3, mission_type = 0)\n    \
+                mu t: i = 2, r = 1, dup = true   (loop head: this iteration's parameters)\n    \
+                UAV -> GCS: [res == MAV_X && k != 2 && a <= 1] ACK(s = \"a, b\", t = -1.5e-3)";
+    let got = trace_without_values(note);
+    assert_eq!(
+        got,
+        "trace to this point (one path; values from the counterexample):\n    \
+         GCS -> UAV: MISSION_COUNT(count = _, mission_type = _)\n    \
+         mu t: i = _, r = _, dup = _   (loop head: this iteration's parameters)\n    \
+         UAV -> GCS: [res == MAV_X && k != 2 && a <= 1] ACK(s = _, t = _)"
+    );
 }
 
 /// The stable part of a report: no timings, no query counts, no model values, paths
@@ -110,7 +168,7 @@ fn dump(path: &Path) -> String {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let rel = path.strip_prefix(root).unwrap_or(path);
     let mut db = SourceDb::new();
-    let report = match check_file(&mut db, rel, &Config::default()) {
+    let report = match check_file(&mut db, rel, &Config::patient()) {
         Ok(r) => r,
         Err(e) => return format!("cannot read {}: {e}", rel.display()),
     };
@@ -235,6 +293,12 @@ fn parse_value(text: &str) -> Option<Value> {
         let c: Vec<exact::Num> =
             inner.split(',').map(|c| exact::parse_decimal(c.trim()).map(exact::Num::exact)).collect::<Option<_>>()?;
         return <[exact::Num; 3]>::try_from(c).ok().map(Value::Vec3);
+    }
+    // A fraction `n/d` is shown where the value is no short decimal; `≈` marks a value that
+    // is only approximate (then it is not read: nothing can be checked of it).
+    if let Some((n, d)) = text.split_once('/') {
+        let (n, d) = (exact::parse_decimal(n)?, exact::parse_decimal(d)?);
+        return (!num_traits::Zero::is_zero(&d)).then(|| Value::rat(n / d));
     }
     exact::parse_decimal(text).map(Value::rat)
 }
@@ -455,7 +519,7 @@ fn frame<'a>(
 /// Every counterexample a report shows, with the obligation and part it refutes.
 fn shown_counterexamples(path: &Path) -> Vec<(Program, Obligation, Part, Diagnostic)> {
     let mut db = SourceDb::new();
-    let report = check_file(&mut db, path, &Config::default()).expect("readable");
+    let report = check_file(&mut db, path, &Config::patient()).expect("readable");
     let planned = report.planned;
     let shown: Vec<Diagnostic> = report
         .diagnostics
@@ -470,7 +534,7 @@ fn shown_counterexamples(path: &Path) -> Vec<(Program, Obligation, Part, Diagnos
     let mochi::driver::Planned { program: prog, obligations } =
         planned.unwrap_or_else(|| panic!("{}: a counterexample, but no obligations", path.display()));
     let labels = vec![String::new(); obligations.len()];
-    let results = mochi::smt::discharge(&prog, &obligations, &labels, &Default::default());
+    let results = mochi::smt::discharge(&prog, &obligations, &labels, &Config::patient().smt);
     let mut out = Vec::new();
     for d in shown {
         // The obligation at the diagnostic's span whose failed part the diagnostic names.

@@ -788,20 +788,68 @@ pub fn rational_value(r: &Real) -> Option<BigRational> {
 /// Z3 prints rationals as `(/ 13.0 20.0)`; users read `0.65` (rounded to 1e-6 m or s,
 /// far below any tolerance of the robots modelled).
 fn decimal(r: &Real) -> String {
-    let v = match r.as_rational() {
-        Some((n, 1)) => return n.to_string(),
-        Some((n, d)) if d != 0 => n as f64 / d as f64,
-        _ => match r.approx(17).parse::<f64>() {
-            Ok(v) => v,
-            Err(_) => return r.to_string(),
-        },
-    };
-    let rounded = (v * 1e6).round() / 1e6;
-    if rounded == 0.0 && v != 0.0 {
-        format!("{v:e}")
-    } else {
-        format!("{rounded}")
+    // The exact value: a decimal of at most 30 places (Z3's models are mostly short
+    // rationals), else a fraction. Never a value rounded to a few places that reads as exact:
+    // `th == pi / 2` holds of a model's value in π's enclosure, halved, as far as exact
+    // arithmetic can tell, and not of 1.570796.
+    if let Some(q) = rational_value(r) {
+        if let Some(text) = exact_decimal(&q, 30) {
+            return text;
+        }
+        // A fraction that is no short decimal (a dyadic one from Z3's arithmetic, n / 2^68):
+        // exactly, while it stays readable.
+        let (n, d) = (q.numer().to_string(), q.denom().to_string());
+        if n.len() <= 30 && d.len() <= 30 {
+            return format!("{n}/{d}");
+        }
     }
+    // Otherwise (an algebraic number, a huge fraction) the nearest double, marked as such.
+    let v = match r.approx(17).parse::<f64>() {
+        Ok(v) => v,
+        Err(_) => return r.to_string(),
+    };
+    if v != 0.0 && v.abs() < 1e-4 {
+        format!("≈{v:e}")
+    } else {
+        format!("≈{v}")
+    }
+}
+
+/// `q` written exactly in decimal, if it has at most `places` decimal places: `0.65`,
+/// `-7`, `1e-9` (scientific below 1e-4, as Rust prints small doubles).
+fn exact_decimal(q: &BigRational, places: u32) -> Option<String> {
+    let ten = num_bigint::BigInt::from(10u8);
+    let mut scaled = q.clone();
+    let mut k = 0u32;
+    while !scaled.is_integer() {
+        if k == places {
+            return None;
+        }
+        scaled *= BigRational::from_integer(ten.clone());
+        k += 1;
+    }
+    let n = scaled.to_integer();
+    let (neg, digits) = (n.sign() == num_bigint::Sign::Minus, n.magnitude().to_string());
+    let sign = if neg { "-" } else { "" };
+    if k == 0 {
+        return Some(format!("{sign}{digits}"));
+    }
+    let small = !n.is_zero() && (digits.len() as i64 - k as i64) < -3;
+    let text = if small {
+        // d.ddd e-x: the exponent of the leading digit.
+        let exp = digits.len() as i64 - 1 - k as i64;
+        let mant = digits.trim_end_matches('0');
+        match mant.len() {
+            1 => format!("{mant}e{exp}"),
+            _ => format!("{}.{}e{exp}", &mant[..1], &mant[1..]),
+        }
+    } else if digits.len() as u32 > k {
+        let (int, frac) = digits.split_at(digits.len() - k as usize);
+        format!("{int}.{}", frac.trim_end_matches('0'))
+    } else {
+        format!("0.{}{}", "0".repeat((k as usize) - digits.len()), digits.trim_end_matches('0'))
+    };
+    Some(format!("{sign}{}", text.trim_end_matches('.')))
 }
 
 /// An integer of a Z3 model as the user writes it: Z3 prints a negative one as `(- 1)`.
@@ -852,7 +900,21 @@ mod tests {
         assert_eq!(decimal(&rational("0.65").expect("a literal")), "0.65");
         assert_eq!(decimal(&rational("-7").expect("a literal")), "-7");
         assert_eq!(decimal(&rational("1e-9").expect("a literal")), "1e-9");
-        assert_eq!(decimal(&real_of_rational(&q(1, 3)).expect("a rational")), "0.333333");
+        // Not a decimal: the fraction, never a rounding that reads as exact.
+        assert_eq!(decimal(&real_of_rational(&q(1, 3)).expect("a rational")), "1/3");
+        // A dyadic fraction of 40 places (Z3's arithmetic makes them): the fraction.
+        assert_eq!(decimal(&real_of_rational(&q(7, 1 << 40)).expect("a rational")), "7/1099511627776");
+        assert_eq!(decimal(&real_of_rational(&q(1, 1024)).expect("a rational")), "0.0009765625");
+        assert_eq!(decimal(&real_of_rational(&q(-3, 8)).expect("a rational")), "-0.375");
+        assert_eq!(decimal(&real_of_rational(&q(-123, 100_000_000)).expect("a rational")), "-1.23e-6");
+        // π's enclosure halved: 21 places, exact.
+        let half_pi = BigRational::new(
+            num_bigint::BigInt::parse_bytes(b"314159265358979323846", 10).expect("digits"),
+            num_bigint::BigInt::from(2u8) * num_bigint::BigInt::from(10u8).pow(20),
+        );
+        assert_eq!(decimal(&real_of_rational(&half_pi).expect("a rational")), "1.57079632679489661923");
+        assert_eq!(exact_decimal(&q(1, 3), 30), None);
+        assert_eq!(exact_decimal(&q(1200, 1), 30).as_deref(), Some("1200"));
     }
 
     #[test]
