@@ -604,6 +604,16 @@ codes! {
         "`<mimic joint=\"J\" multiplier=\"m\" offset=\"o\"/>` makes a joint's value `m * J + o`; \
          mochi supports it (the joint then has no state variable of its own). `J` must be another \
          movable joint of the same URDF, and mimics must not follow each other in a cycle.";
+    UrdfTooLarge = "E0530", "a urdf robot reaches farther than mochi's bound",
+        "mochi computes a URDF robot's poses and distances in 64-bit floating point, and bounds \
+         the robot's size so that these never overflow (an overflowing pose is NaN, which no \
+         geometric check may use): every point of every link's collision geometry must be within \
+         1000 km (1e6 m) of the root link's origin in every configuration within the joint \
+         limits. The reach is measured along each link's chain: the lengths of the joint origins' \
+         `xyz`, each prismatic joint's largest travel, and the size of the link's collision \
+         solids. The diagnostic points at the joint origin (or link) where the reach first \
+         exceeds the bound. A URDF in millimetres without a mesh `scale` is 1000 times too \
+         large, but still within the bound; a reach beyond it is a broken file.";
     MotionPrecondition = "E0708", "a motion's precondition may not hold in the process",
         "[T-MOTION] (Table 1): when a process starts a motion, what it knows (Σ: its initial state, \
          the postconditions of its earlier motions, the refinements of values it received, the \
