@@ -1,5 +1,10 @@
 //! URDF files to kinematic trees ([`super::Robot`]), with diagnostics that point into the
-//! URDF file (E0501-E0507).
+//! URDF file (E0501-E0507, E0530).
+//!
+//! URDFs are downloaded, so the text is bounded first (`prescan`: nesting, attributes per
+//! element, namespace declarations), before any parser that is not linear in those sees it,
+//! and a robot must stay within `MAX_REACH` (1e6 m) of its root (E0530) so that no pose or
+//! distance overflows.
 //!
 //! urdf-rs parses the robot; it gives no positions, so the text is also read with
 //! roxmltree, which knows the byte range of every element and attribute: a malformed
