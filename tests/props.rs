@@ -307,3 +307,163 @@ fn the_bundled_examples_are_found() {
         assert!(ex.iter().any(|(p, _)| p.starts_with(sub)), "nothing read from {sub}");
     }
 }
+
+// The URDF reader on hostile input (issue: URDF files and meshes are downloaded): arbitrary
+// bytes, and the Moveo arm's URDF (robots/moveo_urdf) mutated by deletions, duplications
+// and insertions of XML fragments, go to `geometry::load_robot`. It must return, without a
+// panic, either a robot whose link poses are finite (at zero and at random joint values)
+// or diagnostics, each with a help and a span inside the URDF's text.
+
+const MOVEO: &str = "robots/moveo_urdf/urdf/moveo_urdf.urdf";
+
+/// Fragments that make XML and URDFs go wrong: markup, nesting, references, numbers that
+/// are not finite or not numbers, names that collide.
+const XML_BITS: &[&str] = &[
+    "<",
+    ">",
+    "/>",
+    "</link>",
+    "</joint>",
+    "\"",
+    "'",
+    "=",
+    "&amp;",
+    "&#0;",
+    "&bogus;",
+    "<!--",
+    "-->",
+    "<![CDATA[",
+    "]]>",
+    "<?xml version=\"1.0\"?>",
+    "<!DOCTYPE r [<!ENTITY e \"x\">]>",
+    "<a><a><a><a><a><a><a><a>",
+    "<link name=\"base_link\"/>",
+    "<joint name=\"j\" type=\"fixed\"><parent link=\"base_link\"/><child link=\"base_link\"/></joint>",
+    "<mimic joint=\"Joint_1\"/>",
+    "1e400",
+    "nan",
+    "-inf",
+    "1e308",
+    "-",
+    "0",
+    " ",
+    "\u{feff}",
+    "\0",
+    "\u{2192}",
+    "type=\"floating\"",
+    "xyz=\"0 0 0 0\"",
+    "scale=\"1e300 1 1\"",
+    "filename=\"../../x.stl\"",
+    "package://",
+];
+
+#[derive(Clone, Debug)]
+enum XmlMutation {
+    Delete(usize, usize),
+    Duplicate(usize, usize),
+    Insert(usize, usize),
+}
+
+fn xml_mutation() -> impl Strategy<Value = XmlMutation> {
+    prop_oneof![
+        (any::<usize>(), 1usize..60).prop_map(|(a, n)| XmlMutation::Delete(a, n)),
+        (any::<usize>(), 1usize..400).prop_map(|(a, n)| XmlMutation::Duplicate(a, n)),
+        (any::<usize>(), 0..XML_BITS.len()).prop_map(|(a, t)| XmlMutation::Insert(a, t)),
+    ]
+}
+
+fn apply_xml(text: &str, m: &XmlMutation) -> String {
+    match *m {
+        XmlMutation::Delete(a, n) => apply(text, &Mutation::Delete(a, n)),
+        XmlMutation::Duplicate(a, n) => apply(text, &Mutation::Duplicate(a, n)),
+        XmlMutation::Insert(a, t) => {
+            let a = boundary(text, a);
+            format!("{}{}{}", &text[..a], XML_BITS[t], &text[a..])
+        }
+    }
+}
+
+/// Loads `urdf` as if it were the Moveo's URDF file (its meshes are read from disk, once)
+/// and checks the property.
+fn urdf_loads_or_points_into_the_file(urdf: &[u8], meshes: &mut std::collections::HashMap<PathBuf, Vec<u8>>) {
+    use mochi::geometry::load_robot;
+    use mochi::source::Span;
+    let mut db = SourceDb::new();
+    let at = Span::new(db.add("test.chor", "robot"), 0, 5);
+    let urdf_path = Path::new(env!("CARGO_MANIFEST_DIR")).join(MOVEO);
+    let mut read = |p: &Path| -> std::io::Result<Vec<u8>> {
+        if p == urdf_path {
+            return Ok(urdf.to_vec());
+        }
+        if let Some(b) = meshes.get(p) {
+            return Ok(b.clone());
+        }
+        let b = mochi::fsload::read_bytes(p)?;
+        meshes.insert(p.to_path_buf(), b.clone());
+        Ok(b)
+    };
+    match load_robot(&mut db, &urdf_path, at, &mut read) {
+        Ok(robot) => {
+            let n = robot.joint_names().len();
+            for q in [vec![0.0; n], (0..n).map(|i| (i as f64 * 0.7).sin()).collect()] {
+                for (l, p) in robot.link_poses(&q).iter().enumerate() {
+                    let ok = p.translation.vector.iter().chain(p.rotation.coords.iter()).all(|c| c.is_finite());
+                    assert!(ok, "link {} has the pose {p:?} at {q:?}", robot.links[l].name);
+                }
+            }
+        }
+        Err(ds) => {
+            assert!(!ds.is_empty(), "rejected without a diagnostic");
+            for d in &ds {
+                let file = db.file(d.span.file);
+                assert!(file.name.ends_with("moveo_urdf.urdf"), "{d:?} points into {}", file.name);
+                assert!(
+                    d.span.start <= d.span.end && d.span.end as usize <= file.text.len(),
+                    "span out of range: {d:?}"
+                );
+                assert!(d.help.is_some(), "no help: {d:?}");
+                assert!(d.message.len() < 2000, "a message of {} bytes", d.message.len());
+            }
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+
+    #[test]
+    fn arbitrary_bytes_as_a_urdf_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..600)) {
+        urdf_loads_or_points_into_the_file(&bytes, &mut Default::default());
+        // The same bytes inside a robot element: the parsers see well-formed prefixes.
+        let mut wrapped = b"<robot name=\"r\"><link name=\"a\">".to_vec();
+        wrapped.extend(&bytes);
+        wrapped.extend(b"</link></robot>");
+        urdf_loads_or_points_into_the_file(&wrapped, &mut Default::default());
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 150, ..ProptestConfig::default() })]
+
+    #[test]
+    fn mutated_urdfs_load_or_point_into_the_file(muts in prop::collection::vec(xml_mutation(), 1..5)) {
+        let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(MOVEO)).expect("the Moveo URDF");
+        let t = muts.iter().fold(text, |t, m| apply_xml(&t, m));
+        thread_local!(static MESHES: std::cell::RefCell<std::collections::HashMap<PathBuf, Vec<u8>>> = Default::default());
+        MESHES.with(|m| urdf_loads_or_points_into_the_file(t.as_bytes(), &mut m.borrow_mut()));
+    }
+}
+
+/// The property's own check: the unmutated Moveo loads, and a URDF whose diagnostics
+/// would point outside it cannot pass (a rejected file is checked for positions).
+#[test]
+fn the_moveo_urdf_loads_as_the_property_starts() {
+    use mochi::geometry::load_robot;
+    use mochi::source::Span;
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(MOVEO);
+    let mut db = SourceDb::new();
+    let at = Span::new(db.add("test.chor", "robot"), 0, 5);
+    let robot = load_robot(&mut db, &path, at, &mut mochi::fsload::read_bytes).expect("the Moveo loads");
+    assert_eq!(robot.links.len(), 13);
+    urdf_loads_or_points_into_the_file(b"<robot name=\"r\"><link name=\"a\"/></robot>", &mut Default::default());
+}

@@ -86,8 +86,6 @@ pub struct Robot {
     vars: Vec<usize>,
     /// Per joint: `(variable, multiplier, offset)` with value `m · q[variable] + o`.
     drive: Vec<Option<(usize, f64, f64)>>,
-    /// Per link: the joints from the root down to it, root first.
-    chains: Vec<Vec<usize>>,
     /// Per link: the bounding radius of its solids about its frame's origin.
     link_radius: Vec<f64>,
 }
@@ -144,21 +142,20 @@ impl Robot {
             children[jt.parent].push(j);
         }
         let mut order = vec![root];
-        let mut chains = vec![Vec::new(); n];
+        let mut reached = vec![false; n];
+        reached[root] = true;
         let mut i = 0;
         while i < order.len() {
             let l = order[i];
             for &j in &children[l] {
                 let c = joints[j].child;
-                let mut chain = chains[l].clone();
-                chain.push(j);
-                chains[c] = chain;
+                reached[c] = true;
                 order.push(c);
             }
             i += 1;
         }
         if order.len() < n {
-            let l = (0..n).find(|l| !order.contains(l)).unwrap_or(0);
+            let l = (0..n).find(|&l| !reached[l]).unwrap_or(0);
             return Err(err(
                 format!(
                     "link `{}` is not connected to the root `{}`: its joints form a cycle",
@@ -175,38 +172,55 @@ impl Robot {
         for (v, &j) in vars.iter().enumerate() {
             drive[j] = Some((v, 1.0, 0.0));
         }
+        // Each movable joint's drive, following its mimics to a variable. A joint's drive
+        // is resolved once (the path of unresolved mimics is walked, then resolved from its
+        // far end back), so chains of mimics take linear time, not quadratic.
+        let mut on_path = vec![false; joints.len()];
         for j in 0..joints.len() {
-            if !joints[j].kind.is_movable() {
+            if !joints[j].kind.is_movable() || drive[j].is_some() {
                 continue;
             }
-            let (mut m, mut o, mut k, mut steps) = (1.0, 0.0, j, 0);
+            let mut path = vec![j];
+            on_path[j] = true;
+            let mut k = j;
             while let Some(mi) = joints[k].mimic {
-                if mi.master >= joints.len() || !joints[mi.master].kind.is_movable() || steps > joints.len() {
-                    let what = if steps > joints.len() {
+                if mi.master >= joints.len() || !joints[mi.master].kind.is_movable() || on_path[mi.master] {
+                    let what = if mi.master < joints.len() && on_path[mi.master] {
                         "mimics that follow each other in a cycle"
                     } else {
                         "a joint that is not a movable joint"
                     };
                     return Err(err(format!("joint `{}` mimics {what}", joints[k].name), Some(k), None));
                 }
-                o += m * mi.offset;
-                m *= mi.multiplier;
                 k = mi.master;
-                steps += 1;
+                if drive[k].is_some() {
+                    break;
+                }
+                path.push(k);
+                on_path[k] = true;
             }
-            if !(m.is_finite() && o.is_finite()) {
-                return Err(err(
-                    format!("joint `{}` has a mimic multiplier or offset that is not finite", joints[j].name),
-                    Some(j),
-                    None,
-                ));
+            // `k` has a drive: resolve the path back from it (`m · value(master) + o`).
+            for &p in path.iter().rev() {
+                on_path[p] = false;
+                let Some(mi) = joints[p].mimic else { continue };
+                let Some((v, m, o)) = drive[mi.master] else { continue };
+                drive[p] = Some((v, mi.multiplier * m, mi.multiplier * o + mi.offset));
             }
-            let v = vars.iter().position(|&x| x == k).unwrap_or(0);
-            drive[j] = Some((v, m, o));
+        }
+        for (j, d) in drive.iter().enumerate() {
+            if let Some((_, m, o)) = d {
+                if !(m.is_finite() && o.is_finite()) {
+                    return Err(err(
+                        format!("joint `{}` has a mimic multiplier or offset that is not finite", joints[j].name),
+                        Some(j),
+                        None,
+                    ));
+                }
+            }
         }
         let link_radius =
             links.iter().map(|l| l.solids.iter().map(Solid::bounding_radius).fold(0.0, f64::max)).collect();
-        Ok(Robot { name, links, joints, root, order, parent_joint, vars, drive, chains, link_radius })
+        Ok(Robot { name, links, joints, root, order, parent_joint, vars, drive, link_radius })
     }
 
     /// The root link's index.
@@ -275,6 +289,34 @@ impl Robot {
         })
     }
 
+    /// Per link, `(frame, solids)`: upper bounds on the distance from the root's origin of
+    /// the link's frame and of any point of its collision geometry, over every
+    /// configuration within the joint limits. Along the chain: the sum of the joint-origin
+    /// offsets and of each prismatic joint's largest `|value|` within its limits (rotations
+    /// preserve lengths), plus the link's bounding radius for its solids. Infinite when a
+    /// prismatic joint has no limits (a mimic of a continuous joint) or the sum overflows.
+    /// Linear in the number of links.
+    pub fn reach(&self) -> Vec<(f64, f64)> {
+        let n = self.links.len();
+        let mut frame = vec![0.0f64; n];
+        for &c in &self.order[1..] {
+            let Some(j) = self.parent_joint[c] else { continue };
+            let jt = &self.joints[j];
+            let mut r = frame[jt.parent] + jt.origin.translation.vector.norm();
+            if jt.kind == JointKind::Prismatic {
+                r += match self.drive[j] {
+                    Some((v, m, o)) => match self.joints[self.vars[v]].limits {
+                        Some((lo, hi)) => (m * lo + o).abs().max((m * hi + o).abs()),
+                        None => f64::INFINITY,
+                    },
+                    None => 0.0,
+                };
+            }
+            frame[c] = r;
+        }
+        (0..n).map(|l| (frame[l], frame[l] + self.link_radius[l])).collect()
+    }
+
     /// Per link, an upper bound on how far any point of its collision geometry can be from
     /// where it is at `centre` when each variable `i` ranges over `centre[i] ± half_width[i]`
     /// (root fixed). `f64::INFINITY` when a width or a reach is unbounded (callers treat it
@@ -308,27 +350,54 @@ impl Robot {
                 None => (0.0, 0.0),
             }
         };
-        (0..self.links.len())
-            .map(|l| {
-                let mut reach = self.link_radius[l];
-                let mut total = 0.0;
-                for &j in self.chains[l].iter().rev() {
-                    let jt = &self.joints[j];
-                    let (d, r) = delta(j);
-                    match jt.kind {
-                        JointKind::Fixed => {}
-                        JointKind::Revolute | JointKind::Continuous => {
-                            if d > 0.0 {
-                                total += reach * d;
-                            }
-                        }
-                        JointKind::Prismatic => {
-                            total += d;
-                            reach += r;
-                        }
+        // One pass from the root down (parents before children), so the cost is linear in
+        // the number of links however deep the tree. Per link L: `spin[L]` = Σ |δ_j| over
+        // the revolute joints j on L's chain, and `moved[L]` = Σ_revolute |δ_j| · (the
+        // offsets and prismatic reaches on the chain below j, down to L's frame) +
+        // Σ_prismatic |δ_j|. Passing joint j from parent P to child C lengthens the lever of
+        // every revolute joint above j by `|origin_j|` (and j's reach if prismatic):
+        // `moved[C] = moved[P] + spin[P] · (|origin_j| + reach_j) (+ |δ_j| if prismatic)`;
+        // L's own solids then add `spin[L] · radius_L`. This is the sum of the path-length
+        // bound above regrouped (all terms are non-negative, no cancellation); a product
+        // with a zero `spin` is skipped so that an infinite reach below no revolute motion
+        // is not 0 · ∞. A NaN half width makes its links' bounds infinite.
+        let n = self.links.len();
+        let (mut spin, mut moved) = (vec![0.0f64; n], vec![0.0f64; n]);
+        for &c in &self.order[1..] {
+            let Some(j) = self.parent_joint[c] else { continue };
+            let jt = &self.joints[j];
+            let p = jt.parent;
+            let (d, r) = delta(j);
+            let d = if d.is_nan() { f64::INFINITY } else { d };
+            let (mut s, mut m) = (spin[p], moved[p]);
+            let lever = jt.origin.translation.vector.norm();
+            match jt.kind {
+                JointKind::Fixed => {
+                    if s > 0.0 {
+                        m += s * lever;
                     }
-                    reach += jt.origin.translation.vector.norm();
                 }
+                JointKind::Revolute | JointKind::Continuous => {
+                    if s > 0.0 {
+                        m += s * lever;
+                    }
+                    if d > 0.0 {
+                        s += d;
+                    }
+                }
+                JointKind::Prismatic => {
+                    if s > 0.0 {
+                        m += s * (r + lever);
+                    }
+                    m += d;
+                }
+            }
+            spin[c] = s;
+            moved[c] = m;
+        }
+        (0..n)
+            .map(|l| {
+                let total = if spin[l] > 0.0 { moved[l] + spin[l] * self.link_radius[l] } else { moved[l] };
                 let b = total * (1.0 + 1e-9);
                 if b.is_nan() {
                     f64::INFINITY

@@ -1,5 +1,10 @@
 //! URDF files to kinematic trees ([`super::Robot`]), with diagnostics that point into the
-//! URDF file (E0501-E0507).
+//! URDF file (E0501-E0507, E0530).
+//!
+//! URDFs are downloaded, so the text is bounded first (`prescan`: nesting, attributes per
+//! element, namespace declarations), before any parser that is not linear in those sees it,
+//! and a robot must stay within `MAX_REACH` (1e6 m) of its root (E0530) so that no pose or
+//! distance overflows.
 //!
 //! urdf-rs parses the robot; it gives no positions, so the text is also read with
 //! roxmltree, which knows the byte range of every element and attribute: a malformed
@@ -53,9 +58,43 @@ pub fn load_robot(
     };
     let file = db.add(path.display().to_string(), text.clone());
     let span = |r: Range<usize>| Span::new(file, r.start, r.end);
+    // The character at `off` (an empty span at the end of the text: an empty file, or an
+    // error at its end, must still point inside it).
+    let char_at = |off: usize| {
+        let off = off.min(text.len());
+        let len = text.get(off..).and_then(|r| r.chars().next()).map_or(0, char::len_utf8);
+        Span::new(file, off, off + len)
+    };
     if let Some(off) = bad_utf8 {
-        return Err(vec![Diagnostic::error(Code::UrdfInvalid, span(off..off + 1), "the URDF file is not UTF-8")
+        // `off` is where the invalid bytes start; the lossy text holds U+FFFD there.
+        return Err(vec![Diagnostic::error(Code::UrdfInvalid, char_at(off), "the URDF file is not UTF-8")
             .with_help("save the URDF as UTF-8 (XML's default encoding)")]);
+    }
+    // Bound the document's shape before any parser sees it (see `prescan`).
+    if let Some(e) = prescan::excess(&text) {
+        let (off, msg, help) = match e {
+            prescan::Excess::Depth(off) => (
+                off,
+                format!("elements nest deeper than {} levels here", prescan::MAX_NESTING),
+                "a URDF nests about 6 deep (robot, link, collision, geometry, shape): remove the extra nesting",
+            ),
+            prescan::Excess::Attributes(off) => (
+                off,
+                format!("this element has more than {} attributes", prescan::MAX_ATTRIBUTES),
+                "a URDF element has a few attributes (`<inertia>` has the most: 6): remove the extra ones",
+            ),
+            prescan::Excess::Namespaces(off) => (
+                off,
+                format!("the URDF declares more than {} XML namespaces", prescan::MAX_NAMESPACES),
+                "a URDF declares a few namespaces (`xmlns:xacro`, Gazebo's): remove the extra declarations",
+            ),
+        };
+        let end =
+            text[off..].find(|c: char| c.is_ascii_whitespace() || c == '>' || c == '=').map_or(text.len(), |k| off + k);
+        let at = if end > off { span(off..end) } else { char_at(off) };
+        return Err(vec![Diagnostic::error(Code::UrdfInvalid, at, msg)
+            .with_note("mochi bounds a URDF's nesting, attributes and namespaces so that reading it takes time linear in its size")
+            .with_help(help)]);
     }
     let doc = match roxmltree::Document::parse(&text) {
         Ok(d) => d,
@@ -63,7 +102,7 @@ pub fn load_robot(
             let off = offset_of(&text, e.pos().row, e.pos().col);
             return Err(vec![Diagnostic::error(
                 Code::UrdfInvalid,
-                span(off..off + 1),
+                char_at(off),
                 format!("the URDF is not well-formed XML: {e}"),
             )
             .with_help("fix the XML at this position (an unclosed tag, a stray `<` or `&`, unquoted attribute)")]);
@@ -222,7 +261,7 @@ pub fn load_robot(
         return Err(diags);
     }
     // Mimic masters index parsed.joints; every joint was pushed (no error), so they agree.
-    Robot::new(parsed.name.clone(), links, joints).map_err(|e| {
+    let robot = Robot::new(parsed.name.clone(), links, joints).map_err(|e| {
         let at = match (e.joint, e.link) {
             (Some(j), _) => parsed.joints.get(j).and_then(|j| elems.joints.get(&j.name)).map(|e| e.range.clone()),
             (None, Some(l)) => parsed.links.get(l).and_then(|l| elems.links.get(&l.name)).map(|e| e.range.clone()),
@@ -231,7 +270,53 @@ pub fn load_robot(
         let code = if e.message.contains("mimic") { Code::MimicInvalid } else { Code::UrdfNotATree };
         vec![Diagnostic::error(code, span(at.unwrap_or(root.range())), e.message)
             .with_help("a URDF is one tree: one root link, every other link the child of exactly one joint")]
-    })
+    })?;
+    // The robot's size: finite, and small enough that no pose or distance overflows. The
+    // reach only grows down a chain, so the link to blame is one whose parent is within.
+    let reach = robot.reach();
+    let over = |r: f64| !within_reach(r);
+    let blame = (0..robot.links.len())
+        .find(|&l| over(reach[l].1) && robot.parent_joint(l).is_none_or(|j| !over(reach[robot.joints[j].parent].0)));
+    if let Some(l) = blame {
+        let (frame, solids) = reach[l];
+        let link = &robot.links[l];
+        let (at, msg) = match robot.parent_joint(l) {
+            Some(j) if over(frame) => {
+                let name = &robot.joints[j].name;
+                let e = elems.joints.get(name);
+                let at = e.and_then(|e| e.origin.clone()).or_else(|| e.map(|e| e.range.clone()));
+                (at, format!("joint `{name}` places link `{}` {} from the root", link.name, metres(frame)))
+            }
+            _ => (
+                elems.links.get(&link.name).map(|e| e.range.clone()),
+                format!("the collision geometry of link `{}` reaches {} from the root", link.name, metres(solids)),
+            ),
+        };
+        return Err(vec![Diagnostic::error(
+            Code::UrdfTooLarge,
+            span(at.unwrap_or(root.range())),
+            format!("{msg}: beyond mochi's bound of {MAX_REACH:e} m"),
+        )
+        .with_help("check the numbers' units (metres) and magnitudes: a robot fits in a few metres")]);
+    }
+    Ok(robot)
+}
+
+/// How far from its root a robot may reach (metres): every pose and distance mochi computes
+/// for it is then far from overflow (squares of 1e6 are 1e12).
+const MAX_REACH: f64 = 1e6;
+
+/// `r` is a number no larger than [`MAX_REACH`] (NaN is not).
+fn within_reach(r: f64) -> bool {
+    r.is_finite() && r <= MAX_REACH
+}
+
+fn metres(r: f64) -> String {
+    if r.is_finite() {
+        format!("{r:.3e} m")
+    } else {
+        "farther than any number".to_string()
+    }
 }
 
 /// URDF's `<origin xyz rpy>`: rotation `Rz(yaw) Ry(pitch) Rx(roll)` then translation.
@@ -306,6 +391,21 @@ fn load_mesh(
             "convert the mesh to a valid STL or OBJ file".to_string(),
         )
     })?;
+    // The scaled vertices must be finite and within the robot's bound before a hull is
+    // built of them (their products may overflow though each factor is finite).
+    let far =
+        data.vertices.iter().flat_map(|p| (0..3).map(move |i| (p[i] * scale[i]).abs())).find(|&c| !within_reach(c));
+    if let Some(c) = far {
+        return Err((
+            Code::UrdfTooLarge,
+            format!(
+                "collision mesh `{}` scaled by {scale:?} has a vertex {} from its origin: beyond mochi's bound of {MAX_REACH:e} m",
+                at.display(),
+                metres(c)
+            ),
+            "check the mesh's units and the `scale` (a mesh in millimetres takes `scale=\"0.001 0.001 0.001\"`)".to_string(),
+        ));
+    }
     mesh::hull_solid(&data, scale, place, name).ok_or_else(|| {
         (
             Code::MeshUnreadable,
@@ -325,6 +425,16 @@ fn candidates(filename: &str, dir: &Path) -> Vec<PathBuf> {
         return vec![PathBuf::from(abs)];
     }
     vec![dir.join(filename)]
+}
+
+/// An attribute value for a message: in backquotes, cut short after 60 characters (a
+/// hostile file may hold megabytes in one attribute), with how many numbers it holds.
+fn quoted(value: &str, numbers: usize) -> String {
+    const SHOWN: usize = 60;
+    match value.char_indices().nth(SHOWN) {
+        None => format!("`{value}`"),
+        Some((cut, _)) => format!("`{}...` ({numbers} values, {} bytes)", &value[..cut], value.len()),
+    }
 }
 
 /// The byte offset of 1-based `row`, `col` (characters) in `text`.
@@ -353,6 +463,7 @@ struct LinkElems {
 struct JointElems {
     range: Range<usize>,
     type_attr: Option<Range<usize>>,
+    origin: Option<Range<usize>>,
     axis: Option<Range<usize>>,
     mimic: Option<Range<usize>>,
 }
@@ -413,7 +524,7 @@ fn scan(doc: &roxmltree::Document<'_>, file: FileId, diags: &mut Vec<Diagnostic>
                 let mut d = Diagnostic::error(
                     Code::UrdfInvalid,
                     span(a.range_value()),
-                    format!("`{attr}` of `<{el}>` in {tag} `{name}` is `{}`, not {what}", a.value()),
+                    format!("`{attr}` of `<{el}>` in {tag} `{name}` is {}, not {what}", quoted(a.value(), nums.len())),
                 );
                 d = if a.value().contains("$(") || a.value().contains("${") {
                     d.with_note("this is a xacro substitution that was never expanded: the file was generated by xacro without its arguments or environment")
@@ -438,6 +549,7 @@ fn scan(doc: &roxmltree::Document<'_>, file: FileId, diags: &mut Vec<Diagnostic>
         } else {
             let mut je = JointElems { range: item.range(), ..Default::default() };
             je.type_attr = item.attributes().find(|a| a.name() == "type").map(|a| a.range());
+            je.origin = item.children().find(|c| c.has_tag_name("origin")).map(|c| c.range());
             je.axis = item.children().find(|c| c.has_tag_name("axis")).map(|c| c.range());
             je.mimic = item.children().find(|c| c.has_tag_name("mimic")).map(|c| c.range());
             for need in ["parent", "child"] {
@@ -458,5 +570,10 @@ fn scan(doc: &roxmltree::Document<'_>, file: FileId, diags: &mut Vec<Diagnostic>
     out
 }
 
+mod prescan;
+
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod hostile;

@@ -157,7 +157,7 @@ fn displacement_bounds_hold_on_the_robots() {
     }
 }
 
-fn mem_load(urdf: &str, files: &[(&str, &[u8])]) -> (SourceDb, Result<Robot, Vec<Diagnostic>>) {
+pub(super) fn mem_load(urdf: &str, files: &[(&str, &[u8])]) -> (SourceDb, Result<Robot, Vec<Diagnostic>>) {
     let mut db = SourceDb::new();
     let at = Span::new(db.add("test.chor", "robot"), 0, 5);
     let mut read = |p: &Path| -> std::io::Result<Vec<u8>> {
@@ -174,7 +174,7 @@ fn mem_load(urdf: &str, files: &[(&str, &[u8])]) -> (SourceDb, Result<Robot, Vec
     (db, r)
 }
 
-fn one_error(urdf: &str, files: &[(&str, &[u8])]) -> (Code, String, (usize, usize)) {
+pub(super) fn one_error(urdf: &str, files: &[(&str, &[u8])]) -> (Code, String, (usize, usize)) {
     let (db, r) = mem_load(urdf, files);
     let ds = r.expect_err("rejected");
     assert_eq!(ds.len(), 1, "{ds:?}");
@@ -184,9 +184,10 @@ fn one_error(urdf: &str, files: &[(&str, &[u8])]) -> (Code, String, (usize, usiz
     (d.code, d.message.clone(), f.line_col(d.span.start as usize))
 }
 
-const CUBE: &[u8] = b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nf 1 2 3\nf 5 6 7\n";
+pub(super) const CUBE: &[u8] =
+    b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nf 1 2 3\nf 5 6 7\n";
 
-fn arm(mesh: &str, joint_type: &str) -> String {
+pub(super) fn arm(mesh: &str, joint_type: &str) -> String {
     format!(
         "<robot name=\"r\">\n<link name=\"base\"/>\n<link name=\"l1\">\n <collision>\n  <geometry>\n   <mesh filename=\"{mesh}\"/>\n  </geometry>\n </collision>\n</link>\n<joint name=\"j1\" type=\"{joint_type}\">\n <parent link=\"base\"/>\n <child link=\"l1\"/>\n <axis xyz=\"0 0 1\"/>\n <limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/>\n</joint>\n</robot>\n"
     )
