@@ -21,7 +21,7 @@
 //! evaluation reads their ranges from a slice with that numbering (`None`: unbounded or
 //! unknown, as [`super::Ranges`] returns).
 
-use super::{eval, Interval};
+use super::{bounded_var, eval, Interval};
 use crate::hir::expr::{mentions, BinOp, UnOp};
 use crate::hir::{Builtin, Expr, ExprKind, Program, Var};
 
@@ -240,28 +240,12 @@ struct Rule {
     right: Option<(usize, Compiled)>,
 }
 
-/// A variable [`super::ranges_from`] reads a bound of.
-fn bounded_var(e: &Expr) -> Option<&Var> {
-    match &e.kind {
-        ExprKind::Var(v @ (Var::Role(..) | Var::Value(..) | Var::Own(_) | Var::Old(_) | Var::Snap(..))) => Some(v),
-        _ => None,
-    }
-}
-
 impl Facts {
     pub fn new(prog: &Program, facts: &[&Expr]) -> Facts {
         let mut table = VarTable::new();
         let mut rules = Vec::new();
         for c in facts.iter().flat_map(|f| f.conjuncts()) {
-            let ExprKind::Binary(op, a, b) = &c.kind else { continue };
-            let (lhs, rhs, op) = match op {
-                BinOp::Ge => (b, a, BinOp::Le),
-                BinOp::Gt => (b, a, BinOp::Lt),
-                op => (a, b, *op),
-            };
-            if !matches!(op, BinOp::Le | BinOp::Lt | BinOp::Eq) {
-                continue;
-            }
+            let Some((lhs, rhs, op)) = super::as_bound(c) else { continue };
             let left = bounded_var(lhs).map(|v| (table.index(v), Compiled::new(prog, rhs, &mut table)));
             let right = bounded_var(rhs).map(|v| (table.index(v), Compiled::new(prog, lhs, &mut table)));
             rules.push(Rule { eq: op == BinOp::Eq, left, right });

@@ -710,29 +710,36 @@ fn even_powers(e: &Expr, coord: &dyn Fn(&Expr) -> Option<usize>) -> Option<Vec<(
     }
 }
 
+/// A conjunct read as a bound `lhs op rhs` with `op` one of `<=`, `<`, `==` (`>=` and `>`
+/// flipped); `None` for any other conjunct.
+pub(crate) fn as_bound(c: &Expr) -> Option<(&Expr, &Expr, BinOp)> {
+    let ExprKind::Binary(op, a, b) = &c.kind else { return None };
+    let (lhs, rhs, op) = match op {
+        BinOp::Ge => (&**b, &**a, BinOp::Le),
+        BinOp::Gt => (&**b, &**a, BinOp::Lt),
+        op => (&**a, &**b, *op),
+    };
+    matches!(op, BinOp::Le | BinOp::Lt | BinOp::Eq).then_some((lhs, rhs, op))
+}
+
+/// A variable [`ranges_from`] reads a bound of (a state, value, start or snapshot variable).
+pub(crate) fn bounded_var(e: &Expr) -> Option<&Var> {
+    match &e.kind {
+        ExprKind::Var(v @ (Var::Role(..) | Var::Value(..) | Var::Own(_) | Var::Old(_) | Var::Snap(..))) => Some(v),
+        _ => None,
+    }
+}
+
 /// Ranges of variables read off conjuncts of the form `v op e`, `e op v` or `v == e`
 /// where `e` can be bounded from what is already known (two passes, so that
 /// `x == y` after `y == 1` is found).
 pub fn ranges_from(prog: &Program, facts: &[&Expr], start: &dyn Ranges) -> HashMap<Var, Interval> {
     let mut known: HashMap<Var, Interval> = HashMap::new();
     let cs: Vec<&Expr> = facts.iter().flat_map(|f| f.conjuncts()).collect();
-    let is_var = |e: &Expr| match &e.kind {
-        ExprKind::Var(v @ (Var::Role(..) | Var::Value(..) | Var::Own(_) | Var::Old(_) | Var::Snap(..))) => {
-            Some(v.clone())
-        }
-        _ => None,
-    };
+    let is_var = |e: &Expr| bounded_var(e).cloned();
     for _ in 0..2 {
         for c in &cs {
-            let ExprKind::Binary(op, a, b) = &c.kind else { continue };
-            let (lhs, rhs, op) = match op {
-                BinOp::Ge => (b, a, BinOp::Le),
-                BinOp::Gt => (b, a, BinOp::Lt),
-                op => (a, b, *op),
-            };
-            if !matches!(op, BinOp::Le | BinOp::Lt | BinOp::Eq) {
-                continue;
-            }
+            let Some((lhs, rhs, op)) = as_bound(c) else { continue };
             let found = {
                 let lookup = |v: &Var| match (known.get(v).copied(), start.range(v)) {
                     (Some(a), Some(b)) => Some(a.meet(b)),
