@@ -358,6 +358,8 @@ impl Worker<'_> {
             Plan::Parts(parts) => parts,
         };
         let mut unknown = None;
+        // E0243's example: a model of the context without the field's entry predicate.
+        let mut admitted: Option<(Vec<Assignment>, Vec<(String, String, crate::source::Span)>)> = None;
         // Set when a part held only because Σ is unsatisfiable; `sat` when a part's
         // witness showed Σ satisfiable (a sat question asked with all of Σ).
         let mut vacuous = false;
@@ -403,6 +405,12 @@ impl Worker<'_> {
                         let mut blame = true;
                         for b in 0..before.len() {
                             match self.ask(ob, index, k, &Part::Before(b), &mut stats) {
+                                // An enum-typed field (E0243): the context without its entry
+                                // predicate has a model, whose value of the field is one the
+                                // refinement admits and the enum does not: the counterexample.
+                                Answer::Sat { values, bound, .. } if ob.rule == crate::obligation::Rule::EnumEntry => {
+                                    admitted = Some((values, bound));
+                                }
                                 Answer::Sat { .. } => {}
                                 // An `init` that no state satisfies, invariant or not.
                                 Answer::Unsat if ob.rule == crate::obligation::Rule::InitInvariant => {
@@ -436,10 +444,8 @@ impl Worker<'_> {
                 if fails {
                     let which = Some(part.clone());
                     let part = describe(self.prog, ob, part);
-                    return (
-                        Decision::Fails(Failure { part, which, values: Vec::new(), overlap: None, bound: Vec::new() }),
-                        stats,
-                    );
+                    let (values, bound) = admitted.take().unwrap_or_default();
+                    return (Decision::Fails(Failure { part, which, values, overlap: None, bound }), stats);
                 }
                 continue;
             }
@@ -521,7 +527,10 @@ impl Worker<'_> {
             (Part::Before(b), Goal::Reachable { before, .. }) => before.get(*b).cloned(),
             _ => None,
         };
-        if context.is_some_and(|c| goals::witnessed(self.prog, &c)) {
+        // (Not for the context before an enum-typed field's entry predicate, E0243: asked
+        // only when the field fails, and its model is the example the report shows.)
+        let example = ob.rule == crate::obligation::Rule::EnumEntry && matches!(part, Part::Before(_));
+        if !example && context.is_some_and(|c| goals::witnessed(self.prog, &c)) {
             return Answer::Sat { values: Vec::new(), overlap: None, bound: Vec::new(), exact: Default::default() };
         }
         // Bodies the solver cannot represent (URDF links, meshes, a participant riding on
@@ -760,6 +769,7 @@ fn describe(prog: &Program, ob: &Obligation, part: &Part) -> String {
         (Goal::Reachable { .. }, _) if ob.rule == crate::obligation::Rule::InitInvariant => {
             format!("some state satisfies both {} and the kind's invariant", ob.what)
         }
+        (Goal::Reachable { .. }, _) if ob.rule == crate::obligation::Rule::EnumEntry => ob.what.clone(),
         (Goal::Reachable { .. }, _) => format!("{} is satisfiable", ob.what),
         (Goal::Valid(goal), Part::Conjunct(k)) => {
             format!("{}: `{}`", ob.what, crate::hir::print::expr(prog, None, goal.conjuncts()[*k]))

@@ -389,7 +389,12 @@ impl<'a> Contexts<'a> {
                         });
                     }
                 }
+                let before = m.payload.iter().any(|f| f.mav.as_ref().is_some_and(|mav| mav.user && mav.entry.is_some()));
+                let before = before.then(|| sigma.clone());
                 sigma.assume_message(m);
+                if let Some(before) = before {
+                    self.enum_entries(m, &before, &sigma);
+                }
                 Some(sigma)
             }
             Global::Motion(m) => {
@@ -630,6 +635,39 @@ impl<'a> Contexts<'a> {
         }
     }
 
+    /// Enum-typed MAVLink fields (E0243; ARCHITECTURE.md, "Enum-typed fields"). A field
+    /// whose values are entries of an enum has the entry predicate in its refinement (its
+    /// type), so a user refinement only narrows it. This asks, for each such field with a
+    /// user refinement, that the narrowing leaves some entry: Σ after the message (`after`:
+    /// Σ before it, the guard and every field's refinement) is satisfiable, and if it is not
+    /// while Σ after the message *without this field's entry predicate* is, the enum is to
+    /// blame (`Goal::Reachable` with that context as the one before the step). A refinement
+    /// that pins the field to an allowed constant (`x == MAV_BOOL_TRUE`) needs no query.
+    fn enum_entries(&mut self, m: &Msg, before: &Sigma, after: &Sigma) {
+        for (i, f) in m.payload.iter().enumerate() {
+            let Some(check) = f.mav.as_ref().filter(|mav| mav.user).and_then(|mav| mav.entry.as_ref()) else {
+                continue;
+            };
+            if pinned_to_entry(self.prog, f, check) {
+                continue;
+            }
+            let mut without = m.clone();
+            without.payload[i].refinement = crate::lower::refinement_without_entry(self.prog.dialect, f);
+            let mut s = before.clone();
+            s.assume_message(&without);
+            let x = Expr { kind: ExprKind::Var(Var::Value(f.value, f.name.clone())), sort: f.sort.clone(), loc: check.at };
+            let (_, what) = crate::lower::entry_predicate(self.prog.dialect, check, &x);
+            let written = f.mav.as_ref().map_or(f.name.as_str(), |mav| mav.written.as_str());
+            self.obligations.push(Obligation {
+                rule: Rule::EnumEntry,
+                span: check.at.0,
+                what: format!("`{written}` of {}: some value its refinement admits is {what}", m.label),
+                hyps: after.facts().to_vec(),
+                goal: Goal::Reachable { before: vec![s.facts().to_vec()], dead_branch: false },
+            });
+        }
+    }
+
     /// Progress at a choice (E0419): under Σ and the guards' disjunction (whose validity
     /// is total choice's, E0316), some branch has a true guard and a payload its
     /// refinements admit. Asked only when some first message has a refinement: without
@@ -789,6 +827,21 @@ fn or(a: Expr, b: Expr) -> Expr {
 /// fields' refinements. A field defined by an equality `f == e` (e of f's sort, reading no
 /// field of `m`) is replaced by `e` in the other conjuncts (∃f. f == e ∧ P(f) is P(e)), so
 /// that `seq == i` needs no quantifier; the fields still read are left to an existential.
+/// Whether a conjunct of `f`'s refinement is `x == c` (either way round) for a constant `c`
+/// the enum of `check` allows: then the refinement cannot exclude every entry (E0243's
+/// question has its answer without a query).
+fn pinned_to_entry(prog: &Program, f: &Field, check: &EnumCheck) -> bool {
+    let Some(r) = &f.refinement else { return false };
+    r.conjuncts().into_iter().any(|c| {
+        let ExprKind::Binary(BinOp::Eq, a, b) = &c.kind else { return false };
+        [(a, b), (b, a)].into_iter().any(|(x, e)| {
+            matches!(&x.kind, ExprKind::Var(Var::Value(id, _)) if *id == f.value)
+                && e.sort == Sort::Int
+                && crate::hir::expr::const_int(prog, e).is_some_and(|v| crate::lower::entry_allows(prog.dialect, check, v))
+        })
+    })
+}
+
 fn enabled(prog: &Program, m: &Msg) -> Enabled {
     let mut conj: Vec<Expr> = Vec::new();
     for f in &m.payload {
