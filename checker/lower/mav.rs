@@ -629,6 +629,68 @@ pub(crate) fn refinement_without_entry(d: Option<&Dialect>, f: &Field) -> Option
     }
 }
 
+/// Up to this many alternatives, the entry predicate is assumed exactly in the contexts of
+/// the global walk; above, its convex hull (see [`approximate_entries`]).
+const ASSUMED_EXACTLY: usize = 4;
+
+/// A sound over-approximation of the entry predicate, cheaper for the solver, when the exact
+/// one is costly: the hull `lo <= x && x <= hi` of a plain enum of more than
+/// [`ASSUMED_EXACTLY`] runs (MAV_CMD's fifty) or of a float field of more values; a
+/// bitmask's range without its `!has_flag` holes (div/mod). `None` when the exact predicate
+/// is cheap enough to keep. (`true`, when nothing is left.)
+fn entry_approximation(d: Option<&Dialect>, check: &crate::hir::EnumCheck, x: &Expr) -> Option<Expr> {
+    let e = d.and_then(|d| d.enum_(&check.enum_name))?;
+    let loc = x.loc;
+    let cmp = |op, a: Expr, b: Expr| Expr { kind: ExprKind::Binary(op, Box::new(a), Box::new(b)), sort: Sort::Bool, loc };
+    let hull = |lo: i128, hi: i128| {
+        cmp(BinOp::Le, int_literal(lo, loc), x.clone()).and(cmp(BinOp::Le, x.clone(), int_literal(hi, loc)))
+    };
+    let real = x.sort == Sort::Real;
+    if e.bitmask {
+        let (pred, _) = entry_predicate(d, check, x);
+        if real {
+            let mask = e.flag_mask(64);
+            return (mask.count_ones() > ASSUMED_EXACTLY.ilog2() && mask <= i64::MAX as u64)
+                .then(|| hull(0, i128::from(mask)));
+        }
+        let has_holes = pred.conjuncts().iter().any(|c| matches!(c.kind, ExprKind::Unary(UnOp::Not, _)));
+        if !has_holes {
+            return None;
+        }
+        let kept = pred.conjuncts().into_iter().filter(|c| !matches!(c.kind, ExprKind::Unary(UnOp::Not, _))).cloned();
+        return Some(crate::hir::expr::and_all(kept, loc));
+    }
+    let runs = e.value_runs();
+    let (lo, hi) = (runs.first()?.0, runs.last()?.1);
+    let many = if real {
+        runs.iter().map(|(a, b)| i128::from(*b) - i128::from(*a) + 1).sum::<i128>() > ASSUMED_EXACTLY as i128
+    } else {
+        runs.len() > ASSUMED_EXACTLY
+    };
+    many.then(|| hull(i128::from(lo), i128::from(hi)))
+}
+
+/// `m` with each enum-typed field whose entry predicate is costly ([`entry_approximation`])
+/// refined by the approximation instead: what the global walk *assumes* after the message
+/// (Σ). Sound, as a weaker fact: the exact predicate stays in the field's refinement, which
+/// every check that must *establish* it reads (a process's [T-OUT], the progress check's
+/// payload, E0243). `None` when no field changes.
+pub(crate) fn approximate_entries(d: Option<&Dialect>, m: &Msg) -> Option<Msg> {
+    let mut out: Option<Msg> = None;
+    for (i, f) in m.payload.iter().enumerate() {
+        let Some(check) = f.mav.as_ref().and_then(|mav| mav.entry.as_ref()) else { continue };
+        let x = Expr { kind: ExprKind::Var(Var::Value(f.value, f.name.clone())), sort: f.sort.clone(), loc: check.at };
+        let Some(approx) = entry_approximation(d, check, &x) else { continue };
+        let rest = refinement_without_entry(d, f);
+        let new = match rest {
+            Some(r) => approx.and(r),
+            None => approx,
+        };
+        out.get_or_insert_with(|| m.clone()).payload[i].refinement = (!new.is_true()).then_some(new);
+    }
+    out
+}
+
 /// Whether the enum of `check` allows the integer `v` (an entry's value, or for a bitmask
 /// enum a combination of its flags): [`entry_predicate`] on a constant, without a solver.
 pub(crate) fn entry_allows(d: Option<&Dialect>, check: &crate::hir::EnumCheck, v: i64) -> bool {

@@ -476,3 +476,50 @@ fn the_receiver_assumes_the_enum_and_a_process_must_send_an_entry() {
     assert_eq!(procs("MAV_MISSION_ACCEPTED"), (Verdict::Verified, vec![]));
     assert_eq!(procs("42"), (Verdict::Rejected, vec!["E0709"]));
 }
+
+/// Σ assumes a costly entry predicate by a cheaper, weaker one; the field's refinement (what
+/// a sender must establish) keeps the exact one.
+#[test]
+fn the_global_walk_assumes_costly_enums_by_their_hull() {
+    let (p, d) = lower_mav("UAV -> GCS: COMMAND_ACK(command as c, result as r). end");
+    assert!(d.is_empty(), "{d:?}");
+    let m = first_msg(&p);
+    let cmds = p.dialect.and_then(|d| d.enum_("MAV_CMD")).expect("MAV_CMD").value_runs();
+    let (lo, hi) = (cmds[0].0, cmds[cmds.len() - 1].1);
+    let assumed = super::approximate_entries(p.dialect, &m).expect("MAV_CMD is approximated");
+    let text = crate::hir::print::expr(&p, None, assumed.payload[0].refinement.as_ref().expect("refined"));
+    assert_eq!(text, format!("{lo} <= c && c <= {hi} && (0 <= c && c <= 65535)"));
+    // The exact predicate stays in the field's own refinement; MAV_RESULT (one run) is kept.
+    assert!(printed(&p, &m.payload[0]).contains("||"));
+    assert_eq!(assumed.payload[1].refinement, m.payload[1].refinement);
+    // A bitmask's holes (div/mod) are dropped from what is assumed.
+    let (p, f) = first_refinement("GCS -> UAV: SET_ATTITUDE_TARGET(type_mask as k {k != 3}). end");
+    let m = Msg { payload: vec![f], ..first_msg(&p) };
+    let assumed = super::approximate_entries(p.dialect, &m).expect("holes dropped");
+    let text = crate::hir::print::expr(&p, None, assumed.payload[0].refinement.as_ref().expect("refined"));
+    assert_eq!(text, "0 <= k && k <= 255 && k != 3");
+    // Nothing to approximate: no copy.
+    let (p, _) = first_refinement("UAV -> GCS: MISSION_ACK(type as t). end");
+    assert!(super::approximate_entries(p.dialect, &first_msg(&p)).is_none());
+}
+
+/// E0243 asks nothing of a refinement that pins the field to an allowed constant or to a value
+/// of the same enum, in every disjunct.
+#[test]
+fn pinned_enum_fields_ask_nothing() {
+    let asked = |chor: &str| {
+        let (p, d) = lower_mav(chor);
+        assert!(d.is_empty(), "{d:?}");
+        let body = &p.choreography.as_ref().expect("choreography").body;
+        let (obs, d) = crate::wf::scope::check(&p, body);
+        assert!(d.is_empty(), "{d:?}");
+        obs.iter().filter(|o| o.rule == crate::obligation::Rule::EnumEntry).count()
+    };
+    let chor = "GCS -> UAV: MISSION_COUNT(mission_type as mt {mt == MAV_MISSION_TYPE_FENCE || mt == MAV_MISSION_TYPE_RALLY}).
+                UAV -> GCS: MISSION_ACK(type {type != MAV_MISSION_ACCEPTED}, mission_type {mission_type == mt}). end";
+    assert_eq!(asked(chor), 1, "only MISSION_ACK.type");
+    // A constant that is no entry, or a value of another enum, is asked.
+    assert_eq!(asked("GCS -> UAV: MISSION_COUNT(mission_type {mission_type == 3}). end"), 1);
+    let other = "UAV -> GCS: MISSION_ACK(type as t). GCS -> UAV: MISSION_COUNT(mission_type {mission_type == t}). end";
+    assert_eq!(asked(other), 1);
+}

@@ -24,7 +24,7 @@ mod contract;
 mod decl;
 mod expr;
 mod mav;
-pub(crate) use mav::{entry_allows, entry_predicate, refinement_without_entry};
+pub(crate) use mav::{approximate_entries, entry_allows, entry_predicate, refinement_without_entry};
 #[cfg(test)]
 mod mav_tests;
 mod names;
