@@ -359,7 +359,7 @@ impl Worker<'_> {
         };
         let mut unknown = None;
         // E0243's example: a model of the context without the field's entry predicate.
-        let mut admitted: Option<(Vec<Assignment>, Vec<(String, String, crate::source::Span)>)> = None;
+        let mut admitted: Option<Vec<Assignment>> = None;
         // Set when a part held only because Σ is unsatisfiable; `sat` when a part's
         // witness showed Σ satisfiable (a sat question asked with all of Σ).
         let mut vacuous = false;
@@ -407,9 +407,11 @@ impl Worker<'_> {
                             match self.ask(ob, index, k, &Part::Before(b), &mut stats) {
                                 // An enum-typed field (E0243): the context without its entry
                                 // predicate has a model, whose value of the field is one the
-                                // refinement admits and the enum does not: the counterexample.
-                                Answer::Sat { values, bound, .. } if ob.rule == crate::obligation::Rule::EnumEntry => {
-                                    admitted = Some((values, bound));
+                                // refinement admits and the enum does not: the example shown
+                                // (in the failure's text: it falsifies no goal of its own, so
+                                // it is not a counterexample).
+                                Answer::Sat { values, .. } if ob.rule == crate::obligation::Rule::EnumEntry => {
+                                    admitted = Some(values);
                                 }
                                 Answer::Sat { .. } => {}
                                 // An `init` that no state satisfies, invariant or not.
@@ -443,9 +445,15 @@ impl Worker<'_> {
                 };
                 if fails {
                     let which = Some(part.clone());
-                    let part = describe(self.prog, ob, part);
-                    let (values, bound) = admitted.take().unwrap_or_default();
-                    return (Decision::Fails(Failure { part, which, values, overlap: None, bound }), stats);
+                    let mut part = describe(self.prog, ob, part);
+                    if let Some(values) = admitted.take().filter(|v| !v.is_empty()) {
+                        let shown: Vec<String> = values.iter().map(|a| format!("{} = {}", a.name, a.value)).collect();
+                        part = format!("{part}; the refinement admits, for example, {}, and no entry", shown.join(", "));
+                    }
+                    return (
+                        Decision::Fails(Failure { part, which, values: Vec::new(), overlap: None, bound: Vec::new() }),
+                        stats,
+                    );
                 }
                 continue;
             }
