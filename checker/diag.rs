@@ -249,6 +249,15 @@ codes! {
          when it is short, its entries or flags, and the counterexample is a value the \
          refinement admits. A receiver could decode no such message. Compare with the entries' \
          names (`{arm == MAV_BOOL_TRUE}`, flags summed or tested with `has_flag`).";
+    DeprecatedMessage = "E0244", "a deprecated mavlink message",
+        "A warning, not an error. The dialect marks the message `<deprecated>` or \
+         `<superseded>` (MISSION_REQUEST and MISSION_ITEM, replaced by their `_INT` forms in \
+         2020; SET_MODE, superseded by the command MAV_CMD_DO_SET_MODE). The protocol is \
+         checked as written: autopilots still send some deprecated messages, and a protocol \
+         that must accept them (`choreographies/mavlink/mission-upload-tolerant.chor`) lists \
+         them on purpose. The warning names the replacement the XML gives, once per message, \
+         at its first use. (Deprecated enum entries are not reported: the dialect reader does \
+         not read their deprecation.)";
     SelfMessage = "E0301", "message to oneself",
         "Def 4.1 requires `p != q` in `p -> q : l`. A participant cannot send a message to itself; \
          use a local computation in its process instead.";

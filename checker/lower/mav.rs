@@ -160,6 +160,7 @@ impl Lowerer {
             );
             return self.unchecked_fields(fields, viewer, origin, values);
         };
+        self.deprecated(d, msg, label);
         let command = match cmd {
             None => None,
             Some(c) => match self.command(d, msg, c, label) {
@@ -183,6 +184,39 @@ impl Lowerer {
             out.push(self.mav_field(f, &res, command, viewer, origin.clone(), values));
         }
         out
+    }
+
+    /// E0244 (a warning): `msg` is marked `<deprecated>` or `<superseded>` in the dialect.
+    /// Once per message per program, at its first use, naming the replacement the XML gives
+    /// (a message, or a command sent with COMMAND_LONG). Not an error: autopilots still send
+    /// some (MISSION_REQUEST, MISSION_ITEM), and a protocol that must accept them says so.
+    fn deprecated(&mut self, d: &'static Dialect, msg: &'static Message, label: &ast::Ident) {
+        let Some(by) = &msg.deprecated else { return };
+        if !self.deprecated_seen.insert(msg.name.clone()) {
+            return;
+        }
+        let by = by.trim();
+        let replacement = match (by, d.entry(by)) {
+            ("" | "Nothing", _) => None,
+            (_, Some((e, _))) if e.name == "MAV_CMD" => Some(format!("the command `{by}` (`COMMAND_LONG[{by}]`)")),
+            _ => Some(format!("`{by}`")),
+        };
+        let (what, help) = match &replacement {
+            Some(r) => (
+                format!("`{}` is deprecated in `{}`: it is replaced by {r}", msg.name, d.name),
+                format!("use {r} where the autopilots this protocol talks to support it; keep `{}` only where one still sends or expects it", msg.name),
+            ),
+            None => (
+                format!("`{}` is deprecated in `{}`, with no replacement", msg.name, d.name),
+                format!("keep `{}` only where an autopilot still sends or expects it", msg.name),
+            ),
+        };
+        self.diags.push(Diagnostic {
+            severity: crate::diag::Severity::Warning,
+            ..Diagnostic::error(Code::DeprecatedMessage, label.span, what)
+                .with_note("said once per message, at its first use; the protocol is checked as written")
+                .with_help(help)
+        });
     }
 
     /// `COMMAND_LONG[MAV_CMD_X]`: the message has a `command` field of enum `MAV_CMD` and

@@ -452,7 +452,7 @@ fn the_receiver_assumes_the_enum_and_a_process_must_send_an_entry() {
     // Total only because MISSION_ACK.type is a MAV_MISSION_RESULT (0..=15): E0316 before.
     let total = verdict(
         "UAV -> GCS: MISSION_ACK(type as t).
-         ( GCS -> UAV: [t == MAV_MISSION_ACCEPTED] MISSION_SET_CURRENT(seq {seq == 0}). end
+         ( GCS -> UAV: [t == MAV_MISSION_ACCEPTED] MISSION_REQUEST_LIST(mission_type {mission_type == MAV_MISSION_TYPE_MISSION}). end
          + GCS -> UAV: [MAV_MISSION_ERROR <= t && t <= MAV_MISSION_OPERATION_CANCELLED] MISSION_CLEAR_ALL(). end )",
     );
     assert_eq!(total, (Verdict::Verified, vec![]));
@@ -522,4 +522,32 @@ fn pinned_enum_fields_ask_nothing() {
     assert_eq!(asked("GCS -> UAV: MISSION_COUNT(mission_type {mission_type == 3}). end"), 1);
     let other = "UAV -> GCS: MISSION_ACK(type as t). GCS -> UAV: MISSION_COUNT(mission_type {mission_type == t}). end";
     assert_eq!(asked(other), 1);
+}
+
+#[test]
+fn deprecated_messages_are_warned_about_once_naming_the_replacement() {
+    let warnings = |d: &[Diagnostic]| -> Vec<String> {
+        d.iter().filter(|d| d.severity == crate::diag::Severity::Warning).map(|d| d.message.clone()).collect()
+    };
+    // Twice MISSION_REQUEST: one warning, at the first, naming MISSION_REQUEST_INT.
+    let (_, d) = lower_mav(
+        "UAV -> GCS: MISSION_REQUEST(seq {seq == 0}). UAV -> GCS: MISSION_REQUEST(seq {seq == 1}).
+         UAV -> GCS: MISSION_REQUEST_INT(seq {seq == 2}). end",
+    );
+    assert!(d.iter().all(|d| !d.is_error()), "{d:?}");
+    assert_eq!(warnings(&d), ["`MISSION_REQUEST` is deprecated in `common`: it is replaced by `MISSION_REQUEST_INT`"]);
+    assert_eq!(codes(&d), ["E0244"]);
+    assert!(d[0].help.as_deref().unwrap_or("").contains("MISSION_REQUEST_INT"), "{d:?}");
+    // Superseded by a command: named as one.
+    let (_, d) = lower_mav("GCS -> UAV: SET_MODE(base_mode). end");
+    assert_eq!(
+        warnings(&d),
+        ["`SET_MODE` is deprecated in `common`: it is replaced by the command `MAV_CMD_DO_SET_MODE` (`COMMAND_LONG[MAV_CMD_DO_SET_MODE]`)"]
+    );
+    // "Nothing" is no replacement.
+    let (_, d) = lower_mav("GCS -> UAV: PROTOCOL_VERSION(version {version == 200}). end");
+    assert_eq!(warnings(&d), ["`PROTOCOL_VERSION` is deprecated in `common`, with no replacement"]);
+    // Nothing deprecated: nothing said.
+    let (_, d) = lower_mav("GCS -> UAV: MISSION_COUNT(count). end");
+    assert!(d.is_empty(), "{d:?}");
 }
