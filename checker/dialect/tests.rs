@@ -950,7 +950,8 @@ fn enums_summarise_as_runs_and_flag_masks() {
     assert_eq!(e("ATTITUDE_TARGET_TYPEMASK").flag_mask(8), 0b1110_0111);
     assert_eq!(e("MAV_BOOL").flag_mask(8), 1);
     // Duplicated and negative values, and the width: an enum built by hand.
-    let entry = |name: &str, value: i64| Entry { name: name.into(), value, params: Vec::new(), description: String::new() };
+    let entry =
+        |name: &str, value: i64| Entry { name: name.into(), value, params: Vec::new(), description: String::new() };
     let odd = Enum {
         name: "ODD".into(),
         bitmask: true,

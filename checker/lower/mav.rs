@@ -406,9 +406,11 @@ impl Lowerer {
             Some(p) => p.enum_name.clone(),
             None => res.field.enum_name.clone(),
         };
-        let mut entry = enum_name
-            .filter(|_| !fixed && sort != Sort::Str)
-            .map(|enum_name| crate::hir::EnumCheck { enum_name, wire, at: loc });
+        let mut entry = enum_name.filter(|_| !fixed && sort != Sort::Str).map(|enum_name| crate::hir::EnumCheck {
+            enum_name,
+            wire,
+            at: loc,
+        });
         if let Some(check) = &entry {
             // The field's type is the enum, as it is its wire type: the predicate is part of
             // the refinement (assumed by the receiver, proved by a process's [T-OUT]), last
@@ -570,7 +572,8 @@ pub(crate) fn entry_predicate(d: Option<&Dialect>, check: &crate::hir::EnumCheck
     let Some(e) = d.and_then(|d| d.enum_(name)) else {
         return (Expr::bool(false, loc), format!("an entry of `{name}`, which the dialect does not define"));
     };
-    let cmp = |op, a: Expr, b: Expr| Expr { kind: ExprKind::Binary(op, Box::new(a), Box::new(b)), sort: Sort::Bool, loc };
+    let cmp =
+        |op, a: Expr, b: Expr| Expr { kind: ExprKind::Binary(op, Box::new(a), Box::new(b)), sort: Sort::Bool, loc };
     let real = x.sort == Sort::Real;
     if e.bitmask {
         let bits = check.wire.bytes() * 8;
@@ -675,7 +678,8 @@ const ASSUMED_EXACTLY: usize = 4;
 fn entry_approximation(d: Option<&Dialect>, check: &crate::hir::EnumCheck, x: &Expr) -> Option<Expr> {
     let e = d.and_then(|d| d.enum_(&check.enum_name))?;
     let loc = x.loc;
-    let cmp = |op, a: Expr, b: Expr| Expr { kind: ExprKind::Binary(op, Box::new(a), Box::new(b)), sort: Sort::Bool, loc };
+    let cmp =
+        |op, a: Expr, b: Expr| Expr { kind: ExprKind::Binary(op, Box::new(a), Box::new(b)), sort: Sort::Bool, loc };
     let hull = |lo: i128, hi: i128| {
         cmp(BinOp::Le, int_literal(lo, loc), x.clone()).and(cmp(BinOp::Le, x.clone(), int_literal(hi, loc)))
     };

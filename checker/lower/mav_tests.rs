@@ -350,7 +350,8 @@ fn entry_allows_agrees_with_the_entry_predicate() {
         let x = Expr { kind: ExprKind::Var(Var::Value(ValueId(0), "x".into())), sort, loc: Loc::default() };
         let (pred, _) = super::entry_predicate(Some(d), &check, &x);
         for v in (-300i64..=300).chain([400, 511, 4095, 4096, 65535, 1 << 20, (1 << 31) - 1]) {
-            let env = |var: &Var| matches!(var, Var::Value(ValueId(0), _)).then(|| Value::Num(crate::exact::Num::int(v)));
+            let env =
+                |var: &Var| matches!(var, Var::Value(ValueId(0), _)).then(|| Value::Num(crate::exact::Num::int(v)));
             // The wire range is the field's too: compare within it.
             if wire.int_range().is_some_and(|(lo, hi)| !(lo..=hi).contains(&i128::from(v))) {
                 continue;
@@ -384,7 +385,13 @@ fn every_bundled_enum_reference_can_be_checked() {
                 } else {
                     e.value_runs().iter().map(|(lo, hi)| (hi - lo + 1) as u128).sum()
                 };
-                assert!(values <= super::mav::MAX_REAL_VALUES as u128, "{name}: {} param{}: {}", c.name, p.index, e.name);
+                assert!(
+                    values <= super::mav::MAX_REAL_VALUES as u128,
+                    "{name}: {} param{}: {}",
+                    c.name,
+                    p.index,
+                    e.name
+                );
             }
         }
     }
@@ -407,7 +414,8 @@ fn verdict(chor: &str) -> (crate::driver::Verdict, Vec<&'static str>) {
 #[test]
 fn a_refinement_that_leaves_no_entry_is_e0243_and_narrowing_is_fine() {
     use crate::driver::Verdict;
-    let arm = |v: &str| verdict(&format!("GCS -> UAV: COMMAND_LONG[MAV_CMD_COMPONENT_ARM_DISARM](arm {{arm == {v}}}). end"));
+    let arm =
+        |v: &str| verdict(&format!("GCS -> UAV: COMMAND_LONG[MAV_CMD_COMPONENT_ARM_DISARM](arm {{arm == {v}}}). end"));
     // A float parameter of enum MAV_BOOL: 1.0 is MAV_BOOL_TRUE, 1.001 and 7 are none.
     assert_eq!(arm("1.0"), (Verdict::Verified, vec![]));
     assert_eq!(arm("MAV_BOOL_TRUE"), (Verdict::Verified, vec![]));
@@ -515,7 +523,8 @@ fn pinned_enum_fields_ask_nothing() {
         assert!(d.is_empty(), "{d:?}");
         obs.iter().filter(|o| o.rule == crate::obligation::Rule::EnumEntry).count()
     };
-    let chor = "GCS -> UAV: MISSION_COUNT(mission_type as mt {mt == MAV_MISSION_TYPE_FENCE || mt == MAV_MISSION_TYPE_RALLY}).
+    let chor =
+        "GCS -> UAV: MISSION_COUNT(mission_type as mt {mt == MAV_MISSION_TYPE_FENCE || mt == MAV_MISSION_TYPE_RALLY}).
                 UAV -> GCS: MISSION_ACK(type {type != MAV_MISSION_ACCEPTED}, mission_type {mission_type == mt}). end";
     assert_eq!(asked(chor), 1, "only MISSION_ACK.type");
     // A constant that is no entry, or a value of another enum, is asked.

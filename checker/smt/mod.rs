@@ -448,7 +448,8 @@ impl Worker<'_> {
                     let mut part = describe(self.prog, ob, part);
                     if let Some(values) = admitted.take().filter(|v| !v.is_empty()) {
                         let shown: Vec<String> = values.iter().map(|a| format!("{} = {}", a.name, a.value)).collect();
-                        part = format!("{part}; the refinement admits, for example, {}, and no entry", shown.join(", "));
+                        part =
+                            format!("{part}; the refinement admits, for example, {}, and no entry", shown.join(", "));
                     }
                     return (
                         Decision::Fails(Failure { part, which, values: Vec::new(), overlap: None, bound: Vec::new() }),

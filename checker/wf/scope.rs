@@ -688,7 +688,8 @@ impl<'a> Contexts<'a> {
             with.payload[i].refinement = crate::lower::refinement_without_entry(self.prog.dialect, f);
             let mut s = before.clone();
             s.assume_message(&with);
-            let x = Expr { kind: ExprKind::Var(Var::Value(f.value, f.name.clone())), sort: f.sort.clone(), loc: check.at };
+            let x =
+                Expr { kind: ExprKind::Var(Var::Value(f.value, f.name.clone())), sort: f.sort.clone(), loc: check.at };
             let (_, what) = crate::lower::entry_predicate(self.prog.dialect, check, &x);
             let written = f.mav.as_ref().map_or(f.name.as_str(), |mav| mav.written.as_str());
             self.obligations.push(Obligation {
@@ -696,7 +697,10 @@ impl<'a> Contexts<'a> {
                 span: check.at.0,
                 what: format!("`{written}` of {}: some value its refinement admits is {what}", m.label),
                 hyps: crate::smt::goals::cone(self.prog, after.facts(), &x),
-                goal: Goal::Reachable { before: vec![crate::smt::goals::cone(self.prog, s.facts(), &x)], dead_branch: false },
+                goal: Goal::Reachable {
+                    before: vec![crate::smt::goals::cone(self.prog, s.facts(), &x)],
+                    dead_branch: false,
+                },
             });
         }
     }
