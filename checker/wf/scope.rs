@@ -362,7 +362,7 @@ struct Contexts<'a> {
     choice_firsts: std::collections::HashSet<crate::source::Span>,
     /// The enum of each enum-typed payload value met so far (E0243's shortcut for `x == y`
     /// with `y` of the same enum).
-    enum_of: HashMap<ValueId, String>,
+    enum_of: HashMap<ValueId, (String, crate::dialect::Wire)>,
 }
 
 impl<'a> Contexts<'a> {
@@ -649,7 +649,7 @@ impl<'a> Contexts<'a> {
         for (i, f) in m.payload.iter().enumerate() {
             let Some(mav) = &f.mav else { continue };
             let Some(check) = &mav.entry else { continue };
-            self.enum_of.insert(f.value, check.enum_name.clone());
+            self.enum_of.insert(f.value, (check.enum_name.clone(), check.wire));
             let user = match (&f.refinement, mav.implicit) {
                 (Some(r), true) if mav.user => match &r.kind {
                     ExprKind::Binary(BinOp::And, _, u) => Some(&**u),
@@ -860,17 +860,19 @@ fn or(a: Expr, b: Expr) -> Expr {
     Expr { kind: ExprKind::Binary(BinOp::Or, Box::new(a), Box::new(b)), sort: Sort::Bool, loc }
 }
 
-/// When `m` can be sent: its guard, and some payload satisfying the conjunction of its
-/// fields' refinements. A field defined by an equality `f == e` (e of f's sort, reading no
-/// field of `m`) is replaced by `e` in the other conjuncts (∃f. f == e ∧ P(f) is P(e)), so
-/// that `seq == i` needs no quantifier; the fields still read are left to an existential.
 /// Whether the user's refinement `u` of the enum-typed value `x` forces it to a value the
 /// enum allows wherever `u` holds, syntactically: `x == c` for a constant `c` the enum
-/// allows (`lower::entry_allows`), or `x == y` for a value `y` of the same enum (itself an
-/// entry by its type), either way round; a conjunction when one conjunct does; a
+/// allows (`lower::entry_allows`), or `x == y` for a value `y` of the same enum and wire
+/// type (itself an entry by its type), either way round; a conjunction when one conjunct does; a
 /// disjunction when each disjunct does. Then Σ after the message is satisfiable exactly
 /// when it is without `x`'s entry predicate, and E0243 needs no query.
-fn pins_entry(prog: &Program, enum_of: &HashMap<ValueId, String>, x: ValueId, check: &EnumCheck, u: &Expr) -> bool {
+fn pins_entry(
+    prog: &Program,
+    enum_of: &HashMap<ValueId, (String, crate::dialect::Wire)>,
+    x: ValueId,
+    check: &EnumCheck,
+    u: &Expr,
+) -> bool {
     match &u.kind {
         ExprKind::Binary(BinOp::And, a, b) => {
             pins_entry(prog, enum_of, x, check, a) || pins_entry(prog, enum_of, x, check, b)
@@ -883,7 +885,7 @@ fn pins_entry(prog: &Program, enum_of: &HashMap<ValueId, String>, x: ValueId, ch
                 return false;
             }
             match &e.kind {
-                ExprKind::Var(Var::Value(y, _)) => enum_of.get(y) == Some(&check.enum_name),
+                ExprKind::Var(Var::Value(y, _)) => enum_of.get(y) == Some(&(check.enum_name.clone(), check.wire)),
                 _ => {
                     e.sort == Sort::Int
                         && crate::hir::expr::const_int(prog, e)
@@ -895,6 +897,10 @@ fn pins_entry(prog: &Program, enum_of: &HashMap<ValueId, String>, x: ValueId, ch
     }
 }
 
+/// When `m` can be sent: its guard, and some payload satisfying the conjunction of its
+/// fields' refinements. A field defined by an equality `f == e` (e of f's sort, reading no
+/// field of `m`) is replaced by `e` in the other conjuncts (∃f. f == e ∧ P(f) is P(e)), so
+/// that `seq == i` needs no quantifier; the fields still read are left to an existential.
 fn enabled(prog: &Program, m: &Msg) -> Enabled {
     let mut conj: Vec<Expr> = Vec::new();
     for f in &m.payload {
