@@ -235,6 +235,29 @@ codes! {
          no process is typed against its projection, so `verified` says nothing of an \
          implementation. `mochi project FILE --role R` prints what a process of R must do. \
          With one `process`, every participant needs one (E0701).";
+    NotAnEntry = "E0243", "a refinement admits no entry of the field's enum",
+        "A MAVLink field or command parameter whose dialect definition names an enum \
+         (`enum=\"MAV_RESULT\"`; MAV_CMD_COMPONENT_ARM_DISARM's param1 is a `MAV_BOOL`) carries \
+         an entry of that enum, and for an enum marked `bitmask=\"true\"` (MAV_MODE_FLAG) a \
+         combination of its flags (each bit it sets is set by some flag; 0 included). That is \
+         part of the field's type, like its wire range: a refinement narrows it (`{type != \
+         MAV_MISSION_ACCEPTED}` of MISSION_ACK is the fifteen error results), the receiver \
+         assumes it, and a process must send such a value ([T-OUT], E0709). A float parameter \
+         carries the entry's value exactly (`1.0`, not `1.001`). E0243 is a refinement that \
+         leaves no such value where the message is sent (with the guard and what is known \
+         there), although it admits values of the wire type: the message names the enum and, \
+         when it is short, its entries or flags, and the counterexample is a value the \
+         refinement admits. A receiver could decode no such message. Compare with the entries' \
+         names (`{arm == MAV_BOOL_TRUE}`, flags summed or tested with `has_flag`).";
+    DeprecatedMessage = "E0244", "a deprecated mavlink message",
+        "A warning, not an error. The dialect marks the message `<deprecated>` or \
+         `<superseded>` (MISSION_REQUEST and MISSION_ITEM, replaced by their `_INT` forms in \
+         2020; SET_MODE, superseded by the command MAV_CMD_DO_SET_MODE). The protocol is \
+         checked as written: autopilots still send some deprecated messages, and a protocol \
+         that must accept them (`choreographies/mavlink/mission-upload-tolerant.chor`) lists \
+         them on purpose. The warning names the replacement the XML gives, once per message, \
+         at its first use. (Deprecated enum entries are not reported: the dialect reader does \
+         not read their deprecation.)";
     SelfMessage = "E0301", "message to oneself",
         "Def 4.1 requires `p != q` in `p -> q : l`. A participant cannot send a message to itself; \
          use a local computation in its process instead.";

@@ -353,8 +353,15 @@ impl Pipeline {
             .iter()
             .zip(&results)
             .any(|(ob, (d, _))| ob.rule == Rule::TOut && matches!(d, Decision::Fails(_)));
+        // A refinement that leaves an enum-typed field no entry (E0243) leaves its message
+        // no payload: the progress failure (E0419) is the same defect, said once, naming
+        // the enum.
+        let entry_fails = obligations
+            .iter()
+            .zip(&results)
+            .any(|(ob, (d, _))| ob.rule == Rule::EnumEntry && matches!(d, Decision::Fails(_)));
         let explained = |ob: &Obligation, f: &smt::Failure| match (&ob.goal, &f.which) {
-            (Goal::Progress { .. }, _) => send_fails,
+            (Goal::Progress { .. }, _) => send_fails || entry_fails,
             (Goal::Contains { prim }, _) => empty.contains(prim),
             (Goal::Compatible { parts }, Some(Part::CanEnd)) => parts.iter().any(|(_, a)| never_ends.contains(&a.prim)),
             (Goal::Refines { concrete, .. }, Some(Part::Refine(smt::goals::RefineItem::Realisable))) => {
@@ -612,6 +619,7 @@ fn failure(prog: &crate::hir::Program, ob: &Obligation, f: smt::Failure) -> Diag
         (Rule::MeasureBound, _) => Code::MeasureNegative,
         (Rule::MeasureDecrease, _) => Code::MeasureNotDecreasing,
         (Rule::Progress, _) => Code::Stuck,
+        (Rule::EnumEntry, _) => Code::NotAnEntry,
         (Rule::TRecInit, _) => Code::ProcessRecInit,
         (Rule::TRecJump, _) => Code::ProcessRecJump,
         (Rule::TRecArgs, _) => Code::ProcessRecArgs,
@@ -641,6 +649,7 @@ fn failure(prog: &crate::hir::Program, ob: &Obligation, f: smt::Failure) -> Diag
         Code::RecJumpRefinement | Code::ProcessRecJump => "guard the branch that jumps back (e.g. `[n > 0]` before `t(n - 1)`), or pass arguments that satisfy the refinement",
         Code::MeasureNegative => "guard the branch that jumps back so that the measure is still non-negative there (e.g. `[i < count]`), or choose another measure",
         Code::MeasureNotDecreasing => "pass arguments that make the measure smaller (e.g. `t(i + 1)` for `decreases count - i`), or drop `decreases` if the loop may run forever",
+        Code::NotAnEntry => "make the refinement admit an entry named above: compare with the entries' names (`{x == ENTRY}`; flags summed, or tested with `has_flag`), not with numbers that are none",
         Code::Stuck => "weaken the refinement or guard that no value satisfies in the counterexample's state, or add a branch for that state",
         Code::ProcessRecArgs => "pass the loop the same values as the local type's recursion (its initial values and the arguments of its jump), computed from what the process sent and received",
         Code::EmptyFootprint => "write a footprint that contains the robot at every state its guarantee allows (a footprint no point satisfies, such as `false`, hides every collision)",

@@ -40,6 +40,10 @@ pub enum Rule {
     /// Progress: in every reachable state at a message or choice, some branch has a true
     /// guard and a payload its refinements admit.
     Progress,
+    /// An enum-typed MAVLink field (s7-enum): the refinement the protocol writes for it
+    /// (with the guard and what is known there) admits only entries of its enum, or for a
+    /// bitmask enum combinations of its flags.
+    EnumEntry,
     /// [T-REC] with parameters: a process loop's refinement holds of its initial value.
     TRecInit,
     /// [T-VAR] with parameters: ... and of the arguments of each process jump.
@@ -76,6 +80,7 @@ impl Rule {
             Rule::MeasureBound => "termination: the measure is not negative at a jump",
             Rule::MeasureDecrease => "termination: the measure decreases at a jump",
             Rule::Progress => "progress: some branch can be taken",
+            Rule::EnumEntry => "an enum-typed field takes only entries of its enum (MAVLink dialect)",
             Rule::TRecInit => "[T-REC] with parameters",
             Rule::TRecJump => "[T-VAR] with parameters",
             Rule::TRecArgs => "[T-REC]/[T-VAR]: parameters as the type's",
@@ -96,6 +101,7 @@ impl Rule {
             Rule::RecInit | Rule::RecJump => "recursion-parameters",
             Rule::MeasureBound | Rule::MeasureDecrease => "termination",
             Rule::Progress => "progress",
+            Rule::EnumEntry => "enum-entries",
             Rule::Refinement
             | Rule::TMotion
             | Rule::TOut
@@ -126,6 +132,7 @@ impl Rule {
             Rule::MeasureBound => "measurebound",
             Rule::MeasureDecrease => "measuredecrease",
             Rule::Progress => "progress",
+            Rule::EnumEntry => "enumentry",
             Rule::TRecInit => "trecinit",
             Rule::TRecJump => "trecjump",
             Rule::TRecArgs => "trecargs",
@@ -294,6 +301,7 @@ mod tests {
             Rule::MeasureBound,
             Rule::MeasureDecrease,
             Rule::Progress,
+            Rule::EnumEntry,
             Rule::TRecInit,
             Rule::TRecJump,
             Rule::TRecArgs,

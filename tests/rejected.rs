@@ -177,6 +177,13 @@ const NOT_ALONE: &[(&str, &str)] = &[
          (E0406) failure at time 0. Tested in smt::tests::initially_apart_holds_for_distant_bots_and_fails_for_touching_ones",
     ),
     (
+        "E0244",
+        "a warning, not an error: a deprecated MAVLink message is checked as written (autopilots \
+         still send some). Shown by choreographies/mavlink/mission-download.chor and \
+         mission-upload-tolerant.chor (MISSION_REQUEST, MISSION_ITEM; golden snapshots) and \
+         tested in lower::mav_tests::deprecated_messages_are_warned_about_once_naming_the_replacement",
+    ),
+    (
         "E0242",
         "a note, not an error: a program with a dialect and no process is a protocol, verified \
          without typing processes, and says so. Tested in tests/cli.rs::\

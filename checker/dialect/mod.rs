@@ -334,6 +334,31 @@ impl Enum {
     pub fn entry(&self, name: &str) -> Option<&Entry> {
         self.entries.iter().find(|e| e.name == name)
     }
+
+    /// The entries' values as maximal runs of consecutive integers `(lo, hi)`, ascending
+    /// and disjoint (equal values once): MAV_RESULT's 0..=9 is one run, MAV_CMD's values
+    /// some fifty. What a value of a plain (not bitmask) enum may be is their union.
+    pub fn value_runs(&self) -> Vec<(i64, i64)> {
+        let mut values: Vec<i64> = self.entries.iter().map(|e| e.value).collect();
+        values.sort_unstable();
+        values.dedup();
+        let mut runs: Vec<(i64, i64)> = Vec::new();
+        for v in values {
+            match runs.last_mut() {
+                Some((_, hi)) if hi.checked_add(1) == Some(v) => *hi = v,
+                _ => runs.push((v, v)),
+            }
+        }
+        runs
+    }
+
+    /// The bits of the low `bits` (1..=64) that some entry's value sets, its value read in
+    /// two's complement: what a value of a bitmask enum may set (a combination of its flags;
+    /// MAV_MODE_FLAG's eight flags make `0xff`, MAV_BOOL's FALSE = 0 and TRUE = 1 make `1`).
+    pub fn flag_mask(&self, bits: u32) -> u64 {
+        let keep = if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 };
+        self.entries.iter().fold(0u64, |m, e| m | (e.value as u64 & keep))
+    }
 }
 
 /// The hash maps over a dialect's names, built on the first lookup.

@@ -935,3 +935,30 @@ proptest! {
         }
     }
 }
+
+/// The enum summaries the entry predicate (s7-enum) is built from: runs of consecutive values
+/// and the bits of a bitmask's flags.
+#[test]
+fn enums_summarise_as_runs_and_flag_masks() {
+    let d = common();
+    let e = |n: &str| d.enum_(n).unwrap_or_else(|| panic!("{n}"));
+    assert_eq!(e("MAV_RESULT").value_runs(), vec![(0, 10)]);
+    assert_eq!(e("MAV_MISSION_TYPE").value_runs(), vec![(0, 2), (255, 255)]);
+    assert_eq!(e("MAV_PARAM_TYPE").value_runs(), vec![(1, 10)]);
+    assert!(e("MAV_CMD").value_runs().len() < e("MAV_CMD").entries.len() / 2);
+    assert_eq!(e("MAV_MODE_FLAG").flag_mask(8), 0xff);
+    assert_eq!(e("ATTITUDE_TARGET_TYPEMASK").flag_mask(8), 0b1110_0111);
+    assert_eq!(e("MAV_BOOL").flag_mask(8), 1);
+    // Duplicated and negative values, and the width: an enum built by hand.
+    let entry =
+        |name: &str, value: i64| Entry { name: name.into(), value, params: Vec::new(), description: String::new() };
+    let odd = Enum {
+        name: "ODD".into(),
+        bitmask: true,
+        entries: vec![entry("A", 3), entry("B", 3), entry("C", -1), entry("D", 4), entry("E", i64::MAX)],
+        description: String::new(),
+    };
+    assert_eq!(odd.value_runs(), vec![(-1, -1), (3, 4), (i64::MAX, i64::MAX)]);
+    assert_eq!(odd.flag_mask(8), 0xff);
+    assert_eq!(odd.flag_mask(64), u64::MAX);
+}

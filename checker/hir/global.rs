@@ -151,6 +151,25 @@ pub struct MavField {
     pub written: String,
     pub implicit: bool,
     pub user: bool,
+    /// The enum the field's values are entries of (`enum="MAV_BOOL"` of the field or of the
+    /// command parameter it carries), when the dialect names one and the command does not
+    /// fix the value: see [`EnumCheck`].
+    pub entry: Option<EnumCheck>,
+}
+
+/// A payload field whose values are entries of an enum of the dialect (s7-enum; LANGUAGE.md,
+/// "Enum-typed fields"). Without a user refinement, lowering conjoins the entry predicate
+/// to the implicit part (the field's type is the enum); with one, the global walk asks the
+/// refinement to imply it (`Rule::EnumEntry`, E0243). `lower::entry_predicate` builds the
+/// predicate from the dialect.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct EnumCheck {
+    /// The enum's name in the dialect (`MAV_BOOL`).
+    pub enum_name: String,
+    /// The field's wire type: a bitmask's bits are those of its width.
+    pub wire: crate::dialect::Wire,
+    /// The field's name where it is written (the obligation's span; `Loc`s compare equal).
+    pub at: Loc,
 }
 
 /// `dt<(p_i : a_i)>`

@@ -15,7 +15,7 @@ pub mod print;
 pub mod process;
 
 pub use expr::{Builtin, Expr, ExprKind, Slot, Sort, Var};
-pub use global::{labels_overlap, Field, Global, MavField, Motion, Msg, PrimApp, RecParam, RecVar};
+pub use global::{labels_overlap, EnumCheck, Field, Global, MavField, Motion, Msg, PrimApp, RecParam, RecVar};
 pub use local::{Local, LocalArc, RecvBranch, SendBranch};
 pub use process::{Process, RecvArm};
 

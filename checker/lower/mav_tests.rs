@@ -87,8 +87,13 @@ fn commands_fix_the_command_and_name_their_parameters_by_label() {
     let f = &m.payload[0];
     assert_eq!(f.sort, Sort::Real);
     assert_eq!(f.mav.as_ref().map(|m| (m.field.as_str(), m.written.as_str())), Some(("param1", "action")));
-    // A float field has no range: the refinement is the user's alone.
-    assert!(!f.mav.as_ref().is_some_and(|m| m.implicit));
+    // A float field has no range; param1 of DO_PARACHUTE is of enum PARACHUTE_ACTION, whose
+    // values are the implicit part, one by one (a float carries the entry exactly).
+    let mav = f.mav.as_ref().expect("a MAVLink field");
+    assert!(mav.implicit && mav.user);
+    assert_eq!(mav.entry.as_ref().map(|e| e.enum_name.as_str()), Some("PARACHUTE_ACTION"));
+    let text = crate::hir::print::expr(&p, None, f.refinement.as_ref().expect("refined"));
+    assert_eq!(text, "(action == 0 || action == 1 || action == 2) && action == PARACHUTE_RELEASE");
     // `command` listed: fixed to the command by the label.
     let (p, d) = lower_mav("GCS -> UAV: COMMAND_LONG[MAV_CMD_DO_PARACHUTE](command). end");
     assert!(d.is_empty(), "{d:?}");
@@ -253,4 +258,305 @@ fn robot_names_may_not_hide_entries_either() {
          system S { participant A: R; participant GCS; }\nchoreography G = GCS -> A: HEARTBEAT. end;",
     );
     assert_eq!(codes(&d), ["E0240", "E0240", "E0240"]);
+}
+
+// Enum-typed fields (s7-enum): the entry predicate in the field's type, and E0243.
+
+/// The printed refinement of the first field of the first message of `chor`.
+fn first_refinement(chor: &str) -> (Program, Field) {
+    let (p, d) = lower_mav(chor);
+    assert!(d.is_empty(), "{d:?}");
+    let f = first_msg(&p).payload[0].clone();
+    (p, f)
+}
+
+fn printed(p: &Program, f: &Field) -> String {
+    crate::hir::print::expr(p, None, f.refinement.as_ref().expect("a refinement"))
+}
+
+#[test]
+fn enum_typed_fields_carry_their_entries_as_runs_or_flags() {
+    // A plain enum: maximal runs of values. MAV_MISSION_RESULT is 0..=15.
+    let (p, f) = first_refinement("UAV -> GCS: MISSION_ACK(type as t). end");
+    assert_eq!(printed(&p, &f), "0 <= t && t <= 255 && (0 <= t && t <= 15)");
+    let entry = f.mav.as_ref().and_then(|m| m.entry.as_ref()).expect("an enum field");
+    assert_eq!(entry.enum_name, "MAV_MISSION_RESULT");
+    // MAV_MISSION_TYPE is 0, 1, 2 and 255: two runs. A user refinement comes after.
+    let (p, f) = first_refinement("GCS -> UAV: MISSION_COUNT(mission_type as m {m != 1}). end");
+    assert_eq!(printed(&p, &f), "0 <= m && m <= 255 && (0 <= m && m <= 2 || m == 255) && m != 1");
+    // A bitmask enum: bits no flag has are clear. ATTITUDE_TARGET_TYPEMASK has no flag 8 or 16.
+    let (p, f) = first_refinement("GCS -> UAV: SET_ATTITUDE_TARGET(type_mask as k). end");
+    assert_eq!(printed(&p, &f), "0 <= k && k <= 255 && (!has_flag(k, 8) && !has_flag(k, 16))");
+    // POSITION_TARGET_TYPEMASK's twelve flags in a uint16_t: bits 12 to 15 are clear.
+    let (p, f) = first_refinement("GCS -> UAV: SET_POSITION_TARGET_LOCAL_NED(type_mask as k). end");
+    assert_eq!(printed(&p, &f), "0 <= k && k <= 65535 && k <= 4095");
+    // A signed field whose sign bit no flag has: MAV_BOOL in an int8_t is 0 or 1.
+    let (p, f) = first_refinement("UAV -> GCS: CAMERA_IMAGE_CAPTURED(capture_result as c). end");
+    assert_eq!(printed(&p, &f), "(-128) <= c && c <= 127 && (0 <= c && c <= 1)");
+    // A float parameter: the values one by one (it carries the entry exactly).
+    let (p, f) = first_refinement("GCS -> UAV: COMMAND_LONG[MAV_CMD_COMPONENT_ARM_DISARM](arm). end");
+    assert_eq!(printed(&p, &f), "arm == 0 || arm == 1");
+    // Every value of the wire type allowed: nothing to add, nothing to check. MAV_MODE_FLAG
+    // has a flag for each of the eight bits of HEARTBEAT.base_mode.
+    let (p, f) = first_refinement("UAV -> GCS: HEARTBEAT(base_mode as b). end");
+    assert_eq!(printed(&p, &f), "0 <= b && b <= 255");
+    assert!(f.mav.as_ref().is_some_and(|m| m.entry.is_none()));
+    // A command fixed by the label is an entry by construction.
+    let (p, f) = first_refinement("GCS -> UAV: COMMAND_LONG[MAV_CMD_DO_PARACHUTE](command). end");
+    assert_eq!(printed(&p, &f), "0 <= command && command <= 65535 && command == 208");
+    assert!(f.mav.as_ref().is_some_and(|m| m.entry.is_none()));
+}
+
+#[test]
+fn the_refinement_without_the_entry_predicate_is_the_wire_range_and_the_users() {
+    for (chor, want) in [
+        ("UAV -> GCS: MISSION_ACK(type as t {t != 0}). end", Some("0 <= t && t <= 255 && t != 0")),
+        ("UAV -> GCS: MISSION_ACK(type as t). end", Some("0 <= t && t <= 255")),
+        ("GCS -> UAV: COMMAND_LONG[MAV_CMD_COMPONENT_ARM_DISARM](arm {arm == 1.001}). end", Some("arm == 1.001")),
+        ("GCS -> UAV: COMMAND_LONG[MAV_CMD_COMPONENT_ARM_DISARM](arm). end", None),
+        ("GCS -> UAV: SET_ATTITUDE_TARGET(type_mask as k {k == 15}). end", Some("0 <= k && k <= 255 && k == 15")),
+    ] {
+        let (p, f) = first_refinement(chor);
+        let without = super::refinement_without_entry(p.dialect, &f);
+        let text = without.as_ref().map(|e| crate::hir::print::expr(&p, None, e));
+        assert_eq!(text.as_deref(), want, "{chor}");
+    }
+}
+
+/// `entry_allows` (the shortcut for a field pinned to a constant) agrees with the predicate
+/// evaluated exactly, for plain, bitmask, signed and float fields, in and around the ranges.
+#[test]
+fn entry_allows_agrees_with_the_entry_predicate() {
+    use crate::dialect::Wire;
+    use crate::exact::{holds, Tri, Value};
+    let d = crate::dialect::builtin("common").expect("common");
+    let cases = [
+        ("MAV_MISSION_RESULT", Wire::U8),
+        ("MAV_MISSION_TYPE", Wire::U8),
+        ("MAV_CMD", Wire::U16),
+        ("ATTITUDE_TARGET_TYPEMASK", Wire::U8),
+        ("POSITION_TARGET_TYPEMASK", Wire::U16),
+        ("MAV_BOOL", Wire::I8),
+        ("MAV_BOOL", Wire::F32),
+        ("PARACHUTE_ACTION", Wire::F32),
+        ("FENCE_TYPE", Wire::F32),
+        ("MAV_FRAME", Wire::F32),
+        ("HIL_SENSOR_UPDATED_FLAGS", Wire::U32),
+    ];
+    let prog = Program { dialect: Some(d), ..Program::default() };
+    for (name, wire) in cases {
+        let check = crate::hir::EnumCheck { enum_name: name.into(), wire, at: Loc::default() };
+        let sort = if wire.is_float() { Sort::Real } else { Sort::Int };
+        let x = Expr { kind: ExprKind::Var(Var::Value(ValueId(0), "x".into())), sort, loc: Loc::default() };
+        let (pred, _) = super::entry_predicate(Some(d), &check, &x);
+        for v in (-300i64..=300).chain([400, 511, 4095, 4096, 65535, 1 << 20, (1 << 31) - 1]) {
+            let env =
+                |var: &Var| matches!(var, Var::Value(ValueId(0), _)).then(|| Value::Num(crate::exact::Num::int(v)));
+            // The wire range is the field's too: compare within it.
+            if wire.int_range().is_some_and(|(lo, hi)| !(lo..=hi).contains(&i128::from(v))) {
+                continue;
+            }
+            let want = holds(&prog, &pred, &env);
+            assert_ne!(want, Tri::Unknown, "{name} at {v}");
+            assert_eq!(super::entry_allows(Some(d), &check, v), want == Tri::True, "{name} ({wire:?}) at {v}");
+        }
+    }
+}
+
+/// The predicate is never the `false` fallback with a bundled dialect: every enum a field or
+/// parameter names exists, and every float parameter's enum has at most
+/// `MAX_REAL_VALUES` values.
+#[test]
+fn every_bundled_enum_reference_can_be_checked() {
+    for name in crate::dialect::builtin_names() {
+        let d = crate::dialect::builtin(name).expect("bundled");
+        for m in &d.messages {
+            for f in m.fields.iter().filter_map(|f| f.enum_name.as_ref()) {
+                assert!(d.enum_(f).is_some(), "{name}: {}.{f}", m.name);
+            }
+        }
+        let Some(cmds) = d.enum_("MAV_CMD") else { continue };
+        for c in &cmds.entries {
+            for p in c.params.iter() {
+                let Some(e) = p.enum_name.as_ref() else { continue };
+                let e = d.enum_(e).unwrap_or_else(|| panic!("{name}: {} param{} names {e}", c.name, p.index));
+                let values = if e.bitmask {
+                    1u128 << e.flag_mask(64).count_ones()
+                } else {
+                    e.value_runs().iter().map(|(lo, hi)| (hi - lo + 1) as u128).sum()
+                };
+                assert!(
+                    values <= super::mav::MAX_REAL_VALUES as u128,
+                    "{name}: {} param{}: {}",
+                    c.name,
+                    p.index,
+                    e.name
+                );
+            }
+        }
+    }
+}
+
+/// The whole pipeline on `chor` (with the common dialect): the verdict and the codes of the
+/// errors.
+fn verdict(chor: &str) -> (crate::driver::Verdict, Vec<&'static str>) {
+    let src = format!("{SYS}choreography G = {chor};");
+    let report = crate::fsload::check_source(
+        &mut crate::source::SourceDb::new(),
+        "virtual/enum.chor",
+        &src,
+        &crate::driver::Config::default(),
+    );
+    let errors = report.diagnostics.iter().filter(|d| d.is_error()).map(|d| d.code.as_str()).collect();
+    (report.verdict, errors)
+}
+
+#[test]
+fn a_refinement_that_leaves_no_entry_is_e0243_and_narrowing_is_fine() {
+    use crate::driver::Verdict;
+    let arm =
+        |v: &str| verdict(&format!("GCS -> UAV: COMMAND_LONG[MAV_CMD_COMPONENT_ARM_DISARM](arm {{arm == {v}}}). end"));
+    // A float parameter of enum MAV_BOOL: 1.0 is MAV_BOOL_TRUE, 1.001 and 7 are none.
+    assert_eq!(arm("1.0"), (Verdict::Verified, vec![]));
+    assert_eq!(arm("MAV_BOOL_TRUE"), (Verdict::Verified, vec![]));
+    assert_eq!(arm("1.001"), (Verdict::Rejected, vec!["E0243"]));
+    assert_eq!(arm("7"), (Verdict::Rejected, vec!["E0243"]));
+    // A MAV_RESULT of 42 (the progress failure at the same message is not repeated).
+    let ack = |r: &str| {
+        verdict(&format!(
+            "GCS -> UAV: COMMAND_LONG[MAV_CMD_COMPONENT_ARM_DISARM](arm {{arm == MAV_BOOL_TRUE}}).
+             UAV -> GCS: COMMAND_ACK(command {{command == MAV_CMD_COMPONENT_ARM_DISARM}}, result {{{r}}}). end"
+        ))
+    };
+    assert_eq!(ack("result == 42"), (Verdict::Rejected, vec!["E0243"]));
+    assert_eq!(ack("result > MAV_RESULT_NOT_IN_CONTROL"), (Verdict::Rejected, vec!["E0243"]));
+    // A refinement narrows the enum: "every result but ACCEPTED" is the ten others.
+    assert_eq!(ack("result != MAV_RESULT_ACCEPTED"), (Verdict::Verified, vec![]));
+    // Bitmasks: flags summed are a combination, a bit no flag has is not.
+    let mask = |m: &str| verdict(&format!("GCS -> UAV: SET_ATTITUDE_TARGET(type_mask {{type_mask == {m}}}). end"));
+    let flags = "ATTITUDE_TARGET_TYPEMASK_BODY_ROLL_RATE_IGNORE + ATTITUDE_TARGET_TYPEMASK_THROTTLE_IGNORE";
+    assert_eq!(mask(flags), (Verdict::Verified, vec![]));
+    assert_eq!(mask("0"), (Verdict::Verified, vec![]));
+    assert_eq!(mask(&format!("{flags} + 16")), (Verdict::Rejected, vec!["E0243"]));
+    // In a choice, a branch no entry fits is an error (before it was a dead branch, a
+    // warning, at most).
+    let choice = verdict(
+        "UAV -> GCS: MISSION_ACK(type as t {t == 16}). end
+         + UAV -> GCS: MISSION_CURRENT(seq {seq == 0}). end",
+    );
+    assert_eq!(choice, (Verdict::Rejected, vec!["E0243"]));
+    // Where the value depends on the state, the refinement must leave an entry in some
+    // state; a state where it leaves none is the progress check's (E0419).
+    let counted = verdict(
+        "GCS -> UAV: MISSION_COUNT(count as n {n <= 20}).
+         UAV -> GCS: MISSION_ACK(type as t {t == n}). end",
+    );
+    assert_eq!(counted, (Verdict::Rejected, vec!["E0419"]));
+}
+
+#[test]
+fn the_receiver_assumes_the_enum_and_a_process_must_send_an_entry() {
+    use crate::driver::Verdict;
+    // Total only because MISSION_ACK.type is a MAV_MISSION_RESULT (0..=15): E0316 before.
+    let total = verdict(
+        "UAV -> GCS: MISSION_ACK(type as t).
+         ( GCS -> UAV: [t == MAV_MISSION_ACCEPTED] MISSION_REQUEST_LIST(mission_type {mission_type == MAV_MISSION_TYPE_MISSION}). end
+         + GCS -> UAV: [MAV_MISSION_ERROR <= t && t <= MAV_MISSION_OPERATION_CANCELLED] MISSION_CLEAR_ALL(). end )",
+    );
+    assert_eq!(total, (Verdict::Verified, vec![]));
+    // A process sending 42 where the type says MAV_MISSION_RESULT fails [T-OUT] (verified
+    // before: the field's type was the uint8_t range).
+    let procs = |ack: &str| {
+        let src = format!(
+            "{SYS}choreography G = GCS -> UAV: MISSION_COUNT(count {{count == 0}}). UAV -> GCS: MISSION_ACK(type). end;
+             process GCS = UAV!MISSION_COUNT(0).UAV?MISSION_ACK(r).end;
+             process UAV = GCS?MISSION_COUNT(n).GCS!MISSION_ACK({ack}).end;"
+        );
+        let report = crate::fsload::check_source(
+            &mut crate::source::SourceDb::new(),
+            "virtual/enum.chor",
+            &src,
+            &crate::driver::Config::default(),
+        );
+        let errors: Vec<&str> = report.diagnostics.iter().filter(|d| d.is_error()).map(|d| d.code.as_str()).collect();
+        (report.verdict, errors)
+    };
+    assert_eq!(procs("MAV_MISSION_ACCEPTED"), (Verdict::Verified, vec![]));
+    assert_eq!(procs("42"), (Verdict::Rejected, vec!["E0709"]));
+}
+
+/// Σ assumes a costly entry predicate by a cheaper, weaker one; the field's refinement (what
+/// a sender must establish) keeps the exact one.
+#[test]
+fn the_global_walk_assumes_costly_enums_by_their_hull() {
+    let (p, d) = lower_mav("UAV -> GCS: COMMAND_ACK(command as c, result as r). end");
+    assert!(d.is_empty(), "{d:?}");
+    let m = first_msg(&p);
+    let cmds = p.dialect.and_then(|d| d.enum_("MAV_CMD")).expect("MAV_CMD").value_runs();
+    let (lo, hi) = (cmds[0].0, cmds[cmds.len() - 1].1);
+    let assumed = super::approximate_entries(p.dialect, &m).expect("MAV_CMD is approximated");
+    let text = crate::hir::print::expr(&p, None, assumed.payload[0].refinement.as_ref().expect("refined"));
+    assert_eq!(text, format!("{lo} <= c && c <= {hi} && (0 <= c && c <= 65535)"));
+    // The exact predicate stays in the field's own refinement; MAV_RESULT (one run) is kept.
+    assert!(printed(&p, &m.payload[0]).contains("||"));
+    assert_eq!(assumed.payload[1].refinement, m.payload[1].refinement);
+    // A bitmask's holes (div/mod) are dropped from what is assumed.
+    let (p, f) = first_refinement("GCS -> UAV: SET_ATTITUDE_TARGET(type_mask as k {k != 3}). end");
+    let m = Msg { payload: vec![f], ..first_msg(&p) };
+    let assumed = super::approximate_entries(p.dialect, &m).expect("holes dropped");
+    let text = crate::hir::print::expr(&p, None, assumed.payload[0].refinement.as_ref().expect("refined"));
+    assert_eq!(text, "0 <= k && k <= 255 && k != 3");
+    // Nothing to approximate: no copy.
+    let (p, _) = first_refinement("UAV -> GCS: MISSION_ACK(type as t). end");
+    assert!(super::approximate_entries(p.dialect, &first_msg(&p)).is_none());
+}
+
+/// E0243 asks nothing of a refinement that pins the field to an allowed constant or to a value
+/// of the same enum, in every disjunct.
+#[test]
+fn pinned_enum_fields_ask_nothing() {
+    let asked = |chor: &str| {
+        let (p, d) = lower_mav(chor);
+        assert!(d.is_empty(), "{d:?}");
+        let body = &p.choreography.as_ref().expect("choreography").body;
+        let (obs, d) = crate::wf::scope::check(&p, body);
+        assert!(d.is_empty(), "{d:?}");
+        obs.iter().filter(|o| o.rule == crate::obligation::Rule::EnumEntry).count()
+    };
+    let chor =
+        "GCS -> UAV: MISSION_COUNT(mission_type as mt {mt == MAV_MISSION_TYPE_FENCE || mt == MAV_MISSION_TYPE_RALLY}).
+                UAV -> GCS: MISSION_ACK(type {type != MAV_MISSION_ACCEPTED}, mission_type {mission_type == mt}). end";
+    assert_eq!(asked(chor), 1, "only MISSION_ACK.type");
+    // A constant that is no entry, or a value of another enum, is asked.
+    assert_eq!(asked("GCS -> UAV: MISSION_COUNT(mission_type {mission_type == 3}). end"), 1);
+    let other = "UAV -> GCS: MISSION_ACK(type as t). GCS -> UAV: MISSION_COUNT(mission_type {mission_type == t}). end";
+    assert_eq!(asked(other), 1);
+}
+
+#[test]
+fn deprecated_messages_are_warned_about_once_naming_the_replacement() {
+    let warnings = |d: &[Diagnostic]| -> Vec<String> {
+        d.iter().filter(|d| d.severity == crate::diag::Severity::Warning).map(|d| d.message.clone()).collect()
+    };
+    // Twice MISSION_REQUEST: one warning, at the first, naming MISSION_REQUEST_INT.
+    let (_, d) = lower_mav(
+        "UAV -> GCS: MISSION_REQUEST(seq {seq == 0}). UAV -> GCS: MISSION_REQUEST(seq {seq == 1}).
+         UAV -> GCS: MISSION_REQUEST_INT(seq {seq == 2}). end",
+    );
+    assert!(d.iter().all(|d| !d.is_error()), "{d:?}");
+    assert_eq!(warnings(&d), ["`MISSION_REQUEST` is deprecated in `common`: it is replaced by `MISSION_REQUEST_INT`"]);
+    assert_eq!(codes(&d), ["E0244"]);
+    assert!(d[0].help.as_deref().unwrap_or("").contains("MISSION_REQUEST_INT"), "{d:?}");
+    // Superseded by a command: named as one.
+    let (_, d) = lower_mav("GCS -> UAV: SET_MODE(base_mode). end");
+    assert_eq!(
+        warnings(&d),
+        ["`SET_MODE` is deprecated in `common`: it is replaced by the command `MAV_CMD_DO_SET_MODE` (`COMMAND_LONG[MAV_CMD_DO_SET_MODE]`)"]
+    );
+    // "Nothing" is no replacement.
+    let (_, d) = lower_mav("GCS -> UAV: PROTOCOL_VERSION(version {version == 200}). end");
+    assert_eq!(warnings(&d), ["`PROTOCOL_VERSION` is deprecated in `common`, with no replacement"]);
+    // Nothing deprecated: nothing said.
+    let (_, d) = lower_mav("GCS -> UAV: MISSION_COUNT(count). end");
+    assert!(d.is_empty(), "{d:?}");
 }

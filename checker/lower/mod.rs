@@ -24,6 +24,7 @@ mod contract;
 mod decl;
 mod expr;
 mod mav;
+pub(crate) use mav::{approximate_entries, entry_allows, entry_predicate, refinement_without_entry};
 #[cfg(test)]
 mod mav_tests;
 mod names;
@@ -137,6 +138,8 @@ struct Lowerer {
     str_len: HashMap<ValueId, u32>,
     /// The kind of plain participants ([`PLAIN_KIND`]), made on first use.
     plain_kind: Option<KindId>,
+    /// Deprecated MAVLink messages warned about (E0244, once each).
+    deprecated_seen: std::collections::HashSet<String>,
 }
 
 /// Whose variables an unqualified name may denote.

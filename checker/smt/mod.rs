@@ -358,6 +358,8 @@ impl Worker<'_> {
             Plan::Parts(parts) => parts,
         };
         let mut unknown = None;
+        // E0243's example: a model of the context without the field's entry predicate.
+        let mut admitted: Option<Vec<Assignment>> = None;
         // Set when a part held only because Σ is unsatisfiable; `sat` when a part's
         // witness showed Σ satisfiable (a sat question asked with all of Σ).
         let mut vacuous = false;
@@ -403,6 +405,14 @@ impl Worker<'_> {
                         let mut blame = true;
                         for b in 0..before.len() {
                             match self.ask(ob, index, k, &Part::Before(b), &mut stats) {
+                                // An enum-typed field (E0243): the context without its entry
+                                // predicate has a model, whose value of the field is one the
+                                // refinement admits and the enum does not: the example shown
+                                // (in the failure's text: it falsifies no goal of its own, so
+                                // it is not a counterexample).
+                                Answer::Sat { values, .. } if ob.rule == crate::obligation::Rule::EnumEntry => {
+                                    admitted = Some(values);
+                                }
                                 Answer::Sat { .. } => {}
                                 // An `init` that no state satisfies, invariant or not.
                                 Answer::Unsat if ob.rule == crate::obligation::Rule::InitInvariant => {
@@ -435,7 +445,12 @@ impl Worker<'_> {
                 };
                 if fails {
                     let which = Some(part.clone());
-                    let part = describe(self.prog, ob, part);
+                    let mut part = describe(self.prog, ob, part);
+                    if let Some(values) = admitted.take().filter(|v| !v.is_empty()) {
+                        let shown: Vec<String> = values.iter().map(|a| format!("{} = {}", a.name, a.value)).collect();
+                        part =
+                            format!("{part}; the refinement admits, for example, {}, and no entry", shown.join(", "));
+                    }
                     return (
                         Decision::Fails(Failure { part, which, values: Vec::new(), overlap: None, bound: Vec::new() }),
                         stats,
@@ -521,7 +536,10 @@ impl Worker<'_> {
             (Part::Before(b), Goal::Reachable { before, .. }) => before.get(*b).cloned(),
             _ => None,
         };
-        if context.is_some_and(|c| goals::witnessed(self.prog, &c)) {
+        // (Not for the context before an enum-typed field's entry predicate, E0243: asked
+        // only when the field fails, and its model is the example the report shows.)
+        let example = ob.rule == crate::obligation::Rule::EnumEntry && matches!(part, Part::Before(_));
+        if !example && context.is_some_and(|c| goals::witnessed(self.prog, &c)) {
             return Answer::Sat { values: Vec::new(), overlap: None, bound: Vec::new(), exact: Default::default() };
         }
         // Bodies the solver cannot represent (URDF links, meshes, a participant riding on
@@ -760,6 +778,7 @@ fn describe(prog: &Program, ob: &Obligation, part: &Part) -> String {
         (Goal::Reachable { .. }, _) if ob.rule == crate::obligation::Rule::InitInvariant => {
             format!("some state satisfies both {} and the kind's invariant", ob.what)
         }
+        (Goal::Reachable { .. }, _) if ob.rule == crate::obligation::Rule::EnumEntry => ob.what.clone(),
         (Goal::Reachable { .. }, _) => format!("{} is satisfiable", ob.what),
         (Goal::Valid(goal), Part::Conjunct(k)) => {
             format!("{}: `{}`", ob.what, crate::hir::print::expr(prog, None, goal.conjuncts()[*k]))

@@ -166,6 +166,14 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
     }
 }
 
+/// The facts of `hs` in the cone of influence of `seed`'s variables (those sharing a
+/// variable with it, directly or through other facts kept, and the facts over constants
+/// only): the slice every query of a goal about `seed` uses. For the global walk's E0243
+/// contexts (`wf/scope.rs`), which are about one payload value.
+pub fn cone(prog: &Program, hs: &[crate::hir::Expr], seed: &crate::hir::Expr) -> Vec<crate::hir::Expr> {
+    query::slice(prog, hs, query::vars_of(prog, [seed]))
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
