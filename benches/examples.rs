@@ -27,15 +27,15 @@
 //! time (the verdict it prints says whether the times are those of a proof).
 //!
 //! Measured (`--quick`, 2 cores shared with other jobs, session 7): the case study verified
-//! in 211 ms wall (min 207 ms; compatibility 162 ms of worker time, separation 40 ms, typing
-//! obligations 100 ms, geometry stage 35 ms), against PGCD's 2410 s (paper) and more than
-//! 900 s here; 405 ms in session 6, before the geometric search's contraction was compiled
-//! (`bounds::compiled`). The mounted arm verified in 198 ms (compatibility 162 ms; it was
+//! in 220 ms wall (min 204 ms; compatibility about 160 ms of worker time, typing
+//! obligations 100 ms, separation 40 ms, geometry stage 35 ms), against PGCD's 2410 s
+//! (paper) and more than 900 s here; 405 ms in session 6, before the geometric search's
+//! contraction was compiled (`bounds::compiled`). The mounted arm verified in 170 ms (it was
 //! unknown within 10 s per question before session 7); its variant with the rover's circle
-//! too tight rejected in 2.41 s and the Panda variant of the case study in 2.50 s (each
-//! mostly the 2 s the search may spend moving a contact found towards the first). The other
-//! examples: cart-and-arms 134 ms, sorting 158, fetch 105, handover 207, bridge 14,
-//! turn-together 24, diagonal 81.
+//! too tight rejected in 655 ms and the Panda variant of the case study in 728 ms (each
+//! about half the search for a contact, half its refinement towards the first). The other
+//! examples: cart-and-arms 91 ms, sorting 98, fetch 63, handover 144, bridge 12,
+//! turn-together 18, diagonal 49.
 
 use mochi::driver::{Config, Report};
 use mochi::fsload::check_file;

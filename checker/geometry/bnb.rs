@@ -412,6 +412,7 @@ fn confirm(
 /// per search it may ask the scene to confirm (each a solver call).
 const PROBES_PER_BOX: usize = 1;
 const PROBE_WITNESSES: usize = 64;
+const MIN_WITNESSES: usize = 1024;
 /// Probing starts once a search has evaluated this many boxes: most proofs end sooner
 /// and pay nothing for it.
 const PROBE_AFTER: usize = 3_000;
@@ -461,13 +462,16 @@ fn probe(scene: &dyn Scene, b: &QBox, opts: &Options, stats: &mut Stats) -> Opti
 
 /// A configuration of `b` that satisfies the constraints (the scene's witness, asked near a
 /// probe drawn from the box), with the distance there: an attained upper bound for
-/// [`min_distance`]. At most `PROBE_WITNESSES` witnesses per search.
+/// [`min_distance`]. At most `MIN_WITNESSES` witnesses per search (a clearance has its own
+/// time budget, and each witness may lower the attained bound).
 fn probe_min(scene: &dyn Scene, b: &QBox, opts: &Options, stats: &mut Stats) -> Option<(Vec<f64>, Closest)> {
-    if stats.witness_calls >= PROBE_WITNESSES {
+    if stats.witness_calls >= MIN_WITNESSES {
         return None;
     }
     stats.probes += 1;
-    let q = draw(b, stats.probes);
+    // The box's centre first (the box popped is the one with the least bound: its centre is
+    // where the least distance is likeliest), then drawn configurations.
+    let q = if stats.probes % 2 == 1 { b.centre() } else { draw(b, stats.probes) };
     if scene.feasible(&q, &q) == Feasible::No {
         return None;
     }
@@ -495,8 +499,10 @@ fn draw(b: &QBox, seed: usize) -> Vec<f64> {
         .collect()
 }
 
-/// How long the search for the earliest contact may take once a contact is found.
-const REFINE: Duration = Duration::from_secs(2);
+/// How long the search for the earliest contact may take once a contact is found: as long
+/// as finding it took, within these bounds.
+const REFINE_MIN: Duration = Duration::from_millis(250);
+const REFINE_MAX: Duration = Duration::from_secs(2);
 
 /// A box evaluated at its centre.
 struct Node {
@@ -678,13 +684,15 @@ pub fn decide(scene: &dyn Scene, root: &QBox, opts: &Options) -> Decision {
             // Refine: the earliest contact with time ≤ q[t], with the nodes left.
             let mut early = root.clone();
             early.hi[t] = q[t].max(early.lo[t]);
-            // At most REFINE of the time left: the contact stands whatever the refinement
-            // finds, which only moves it earlier and says how far before it all is clear.
+            // As long as finding the contact took (at least REFINE_MIN, at most REFINE_MAX,
+            // within the time left): the contact stands whatever the refinement finds, which
+            // only moves it earlier and says how far before it all is clear.
             let mut o2 = opts.clone();
             let now = Instant::now();
+            let refine = start.elapsed().clamp(REFINE_MIN, REFINE_MAX);
             o2.deadline = Some(match opts.deadline {
-                Some(d) => d.min(now + REFINE.min(d.saturating_duration_since(now))),
-                None => now + REFINE,
+                Some(d) => d.min(now + refine.min(d.saturating_duration_since(now))),
+                None => now + refine,
             });
             let second = pass(scene, &early, &o2, true, opts.max_nodes, &mut stats);
             let (q, at, clear) = match second.end {

@@ -257,6 +257,9 @@ struct Geo<'a> {
     sides: [Vec<Placed<'a>>; 2],
     /// [T-SESS]: the state is the start state.
     initial: bool,
+    /// The clearance report (`Mode::Bodies`): every box's bound is made as tight as the
+    /// stand-ins allow, not only the bounds that fail to prove a box apart.
+    tight: bool,
     /// The last box contracted and its result: the search asks `feasible` and then
     /// `motion_bound` of the same box.
     contracted: std::cell::RefCell<Option<Contracted>>,
@@ -375,6 +378,7 @@ impl<'a> Geo<'a> {
             carrier: HashMap::new(),
             sides,
             initial,
+            tight: mode == Mode::Bodies,
             contracted: std::cell::RefCell::new(None),
             contractions: Vec::new(),
             scratch: Default::default(),
@@ -1054,9 +1058,10 @@ impl Scene for Geo<'_> {
             if best.0.is_nan() {
                 best.0 = f64::NEG_INFINITY;
             }
-            if best.0 <= 0.0 {
-                // Not proved apart directly: try the stand-ins of solids whose frame turns
-                // about z (a mobile base's heading). Each is a sound bound of its own: the
+            if best.0 <= 0.0 || self.tight {
+                // Not proved apart directly (or a clearance, which wants the tightest bound):
+                // try the stand-ins of solids whose frame turns about z (a mobile base's
+                // heading). Each is a sound bound of its own: the
                 // stand-in holds the solid at every heading, and moves by at most its motion
                 // bound over the box; the pair's bound is the best of them.
                 let sides = [(&self.sides[0][i], x), (&self.sides[1][j], y)];
