@@ -53,6 +53,7 @@ pub mod syntax;
 pub(crate) mod testing;
 pub mod typeck;
 pub mod wf;
+pub mod xmlscan;
 
 /// The parallel-lanes generator (not part of the library: it lives beside the example
 /// and the benchmark that use it), for the unit tests that check generated lanes.

@@ -809,6 +809,21 @@ fn builtin_parse_time_common_and_ardupilotmega_well_under_50ms() {
 
 // ---- no panics ----
 
+/// The shared pre-scan's other limits ([`crate::xmlscan`]): an element with 100,000
+/// attributes (quadratic in roxmltree) and a flood of namespace declarations are refused at
+/// once, at the first one past the limit.
+#[test]
+fn attribute_and_namespace_floods_are_refused_before_parsing() {
+    let attrs: String = (0..100_000).map(|k| format!(" a{k}=\"{k}\"")).collect();
+    let t = format!("<mavlink><enums{attrs}/></mavlink>");
+    let e = err("m.xml", &[("m.xml", &t)]);
+    assert!(e.message.contains("more than 64 attributes"), "{e}");
+    assert_eq!((e.line, e.col), (1, (17 + " a0=\"0\"".len() * 10 + " a10=\"10\"".len() * 54) as u32), "{e}");
+    let ns: String = (0..1_000).map(|k| format!("<e xmlns:p{k}=\"u\"/>")).collect();
+    let e = err("m.xml", &[("m.xml", &format!("<mavlink>{ns}</mavlink>"))]);
+    assert!(e.message.contains("more than 64 namespace declarations"), "{e}");
+}
+
 #[test]
 fn deep_nesting_does_not_overflow() {
     let deep = |n: usize| format!("{}x{}", "<d>".repeat(n), "</d>".repeat(n));

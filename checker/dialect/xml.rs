@@ -18,7 +18,8 @@
 //! message's fields or an entry's value, which is all mochi checks against).
 //!
 //! What is refused (a [`DialectError`]): malformed XML (and any DTD: no entity expansion),
-//! elements nested deeper than [`MAX_NESTING`] (roxmltree recurses per level), a root other
+//! elements nested deeper than [`MAX_NESTING`] (roxmltree recurses per level), an element of
+//! more than 64 attributes or more than 64 namespace declarations ([`crate::xmlscan`]), a root other
 //! than `<mavlink>`, a missing required attribute, an unknown wire type, an array
 //! length outside 1..=255, a message id outside MAVLink 2's 24 bits, a message name or id
 //! defined twice with different content, two fields of one name, an entry value that is not
@@ -37,72 +38,9 @@ use std::fmt;
 /// minimal). A bound, so that a loader that makes up files forever cannot exhaust the stack.
 pub const MAX_INCLUDE_DEPTH: usize = 32;
 
-/// How deep elements may nest (MAVLink's files nest 6 deep). roxmltree parses elements by
-/// recursion, so a document nested tens of thousands deep overflows the stack: [`too_deep`]
-/// refuses it before roxmltree sees it.
-pub const MAX_NESTING: usize = 128;
-
-/// The byte offset of the first start tag nested deeper than [`MAX_NESTING`], if any. A
-/// scan that follows roxmltree's tokens (comments to `-->`, CDATA to `]]>`, processing
-/// instructions to `?>`, quoted attribute values, `/>` empty elements) and never counts
-/// fewer open elements than roxmltree would hold at the same point: a close tag hidden in a
-/// comment or a `/>` inside an attribute value does not close anything here either. Where
-/// the two could differ (malformed input), roxmltree stops with an error at that point.
-fn too_deep(text: &str) -> Option<usize> {
-    let b = text.as_bytes();
-    let find = |from: usize, pat: &[u8]| -> usize {
-        b.get(from..)
-            .and_then(|r| r.windows(pat.len()).position(|w| w == pat))
-            .map_or(b.len(), |k| from + k + pat.len())
-    };
-    let (mut i, mut depth) = (0, 0usize);
-    while i < b.len() {
-        if b[i] != b'<' {
-            i += 1;
-            continue;
-        }
-        let rest = &b[i..];
-        i = if rest.starts_with(b"<!--") {
-            find(i + 4, b"-->")
-        } else if rest.starts_with(b"<![CDATA[") {
-            find(i + 9, b"]]>")
-        } else if rest.starts_with(b"<?") {
-            find(i + 2, b"?>")
-        } else if rest.starts_with(b"<!") {
-            find(i + 2, b">")
-        } else if rest.starts_with(b"</") {
-            depth = depth.saturating_sub(1);
-            find(i + 2, b">")
-        } else {
-            let (mut j, mut quote, mut empty) = (i + 1, None, false);
-            while j < b.len() {
-                let c = b[j];
-                match quote {
-                    Some(q) if c == q => quote = None,
-                    Some(_) if c == b'<' => break,
-                    Some(_) => {}
-                    None if c == b'"' || c == b'\'' => quote = Some(c),
-                    None if c == b'>' => {
-                        empty = b[j - 1] == b'/';
-                        j += 1;
-                        break;
-                    }
-                    None if c == b'<' => break,
-                    None => {}
-                }
-                j += 1;
-            }
-            if !empty {
-                depth += 1;
-                if depth > MAX_NESTING {
-                    return Some(i);
-                }
-            }
-            j
-        };
-    }
-    None
-}
+/// How deep elements may nest: the shared pre-scan's limit ([`crate::xmlscan`]), which
+/// runs before roxmltree (it parses elements by recursion) sees a document.
+pub use crate::xmlscan::MAX_NESTING;
 
 /// Why a definition tree could not be read: the file (as the loader was asked for it), the
 /// 1-based line and column of the offending element or attribute, and what is wrong. `line`
@@ -327,8 +265,13 @@ impl Reader<'_> {
         };
         let lines = std::iter::once(0).chain(text.match_indices('\n').map(|(i, _)| i + 1)).collect();
         let f = File { name, text: &text, lines };
-        if let Some(at) = too_deep(&text) {
-            return f.err(at, format!("elements nest deeper than {MAX_NESTING}"));
+        if let Some(e) = crate::xmlscan::excess(&text) {
+            use crate::xmlscan::{Excess, MAX_ATTRIBUTES, MAX_NAMESPACES};
+            return match e {
+                Excess::Depth(at) => f.err(at, format!("elements nest deeper than {MAX_NESTING}")),
+                Excess::Attributes(at) => f.err(at, format!("an element has more than {MAX_ATTRIBUTES} attributes")),
+                Excess::Namespaces(at) => f.err(at, format!("more than {MAX_NAMESPACES} namespace declarations")),
+            };
         }
         let doc = match roxmltree::Document::parse(&text) {
             Ok(d) => d,

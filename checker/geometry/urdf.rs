@@ -1,7 +1,7 @@
 //! URDF files to kinematic trees ([`super::Robot`]), with diagnostics that point into the
 //! URDF file (E0501-E0507, E0530).
 //!
-//! URDFs are downloaded, so the text is bounded first (`prescan`: nesting, attributes per
+//! URDFs are downloaded, so the text is bounded first (`crate::xmlscan`: nesting, attributes per
 //! element, namespace declarations), before any parser that is not linear in those sees it,
 //! and a robot must stay within `MAX_REACH` (1e6 m) of its root (E0530) so that no pose or
 //! distance overflows.
@@ -70,22 +70,22 @@ pub fn load_robot(
         return Err(vec![Diagnostic::error(Code::UrdfInvalid, char_at(off), "the URDF file is not UTF-8")
             .with_help("save the URDF as UTF-8 (XML's default encoding)")]);
     }
-    // Bound the document's shape before any parser sees it (see `prescan`).
-    if let Some(e) = prescan::excess(&text) {
+    // Bound the document's shape before any parser sees it (see `crate::xmlscan`).
+    if let Some(e) = crate::xmlscan::excess(&text) {
         let (off, msg, help) = match e {
-            prescan::Excess::Depth(off) => (
+            crate::xmlscan::Excess::Depth(off) => (
                 off,
-                format!("elements nest deeper than {} levels here", prescan::MAX_NESTING),
+                format!("elements nest deeper than {} levels here", crate::xmlscan::MAX_NESTING),
                 "a URDF nests about 6 deep (robot, link, collision, geometry, shape): remove the extra nesting",
             ),
-            prescan::Excess::Attributes(off) => (
+            crate::xmlscan::Excess::Attributes(off) => (
                 off,
-                format!("this element has more than {} attributes", prescan::MAX_ATTRIBUTES),
+                format!("this element has more than {} attributes", crate::xmlscan::MAX_ATTRIBUTES),
                 "a URDF element has a few attributes (`<inertia>` has the most: 6): remove the extra ones",
             ),
-            prescan::Excess::Namespaces(off) => (
+            crate::xmlscan::Excess::Namespaces(off) => (
                 off,
-                format!("the URDF declares more than {} XML namespaces", prescan::MAX_NAMESPACES),
+                format!("the URDF declares more than {} XML namespaces", crate::xmlscan::MAX_NAMESPACES),
                 "a URDF declares a few namespaces (`xmlns:xacro`, Gazebo's): remove the extra declarations",
             ),
         };
@@ -569,8 +569,6 @@ fn scan(doc: &roxmltree::Document<'_>, file: FileId, diags: &mut Vec<Diagnostic>
     }
     out
 }
-
-mod prescan;
 
 #[cfg(test)]
 mod tests;

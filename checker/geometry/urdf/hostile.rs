@@ -11,7 +11,7 @@ fn nested(n: usize) -> String {
     format!("<robot name=\"r\">{}{}</robot>", "<a>".repeat(n), "</a>".repeat(n))
 }
 
-/// A URDF nested deeper than [`crate::dialect::MAX_NESTING`] is refused by the pre-scan
+/// A URDF nested deeper than [`crate::xmlscan::MAX_NESTING`] is refused by the pre-scan
 /// before roxmltree (which recurses per level) or urdf-rs (quadratic in the depth: 22 s
 /// for 200,000 levels) sees it: E0501 at the first start tag past the limit. Before the
 /// pre-scan this document was E0505 "the robot has no link", after a long parse.
@@ -27,7 +27,7 @@ fn deep_nesting_is_refused_at_the_first_element_past_the_limit() {
     assert!(took < Duration::from_secs(2), "took {took:?}");
 }
 
-/// The limit itself: elements nested exactly [`crate::dialect::MAX_NESTING`] deep (robot,
+/// The limit itself: elements nested exactly [`crate::xmlscan::MAX_NESTING`] deep (robot,
 /// link and 126 unknown elements inside the link) load; one level more is refused, inside
 /// a link as at the top.
 #[test]

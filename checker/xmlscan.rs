@@ -1,7 +1,8 @@
-//! A linear scan of a URDF's text that bounds its shape before any XML parser sees it.
+//! A linear scan of an XML text that bounds its shape before any XML parser sees it: the
+//! URDF reader (`geometry::urdf`, whose files users download) and the MAVLink dialect reader
+//! (`dialect::xml`) both run it first.
 //!
-//! The parsers behind [`super::load_robot`] are not linear in every dimension of a
-//! document: roxmltree recurses per level of nesting (a document nested tens of thousands
+//! The parsers behind them are not linear in every dimension of a document: roxmltree recurses per level of nesting (a document nested tens of thousands
 //! deep exhausts the stack) and checks each attribute against the element's earlier ones
 //! (quadratic in attributes per element: 30 s for one element with 100,000 attributes);
 //! RustyXML, which urdf-rs parses with, looks each element's namespace up through one map
@@ -9,24 +10,23 @@
 //! in scope are copied or searched per element (a 5 MB file that declares 7,200 namespaces
 //! around 300,000 elements each declaring one more ran for over 5 minutes). URDFs nest
 //! about 6 deep, give an element at most 6 attributes and declare a few namespaces, so the
-//! scan refuses documents nested deeper than [`MAX_NESTING`] (the MAVLink dialect reader's
-//! limit, `dialect::xml`), with an element of more than [`MAX_ATTRIBUTES`] attributes, or
+//! scan refuses documents nested deeper than [`MAX_NESTING`] (MAVLink's definitions nest 6
+//! deep), with an element of more than [`MAX_ATTRIBUTES`] attributes, or
 //! with more than [`MAX_NAMESPACES`] namespace declarations; then every parser's work is
 //! linear in the file's size (each step bounded by these constants).
 //!
-//! The scan follows roxmltree's tokens as the dialect reader's nesting scan does (comments
-//! to `-->`, CDATA to `]]>`, processing instructions to `?>`, declarations to `>`, quoted
+//! The scan follows roxmltree's tokens (comments to `-->`, CDATA to `]]>`, processing instructions to `?>`, declarations to `>`, quoted
 //! attribute values, `/>` empty elements) and never counts fewer open elements, or fewer
 //! attributes, than roxmltree would hold at the same point: a close tag hidden in a comment
 //! or a `/>` inside an attribute value closes nothing here either. Where the two could
-//! differ (malformed input), roxmltree stops with an error at that point. (A copy of the
-//! dialect reader's scan, extended by the attribute count: that reader's behaviour is kept
-//! as it is.)
+//! differ (malformed input), roxmltree stops with an error at that point. It is byte
+//! scanning only: no XML crate is named here (tests/tidy.rs).
 
-/// How deep elements may nest: the dialect reader's `MAX_NESTING`.
+/// How deep elements may nest.
 pub const MAX_NESTING: usize = 128;
 
-/// How many attributes one element may have (URDF's `<inertia>` has the most: 6).
+/// How many attributes one element may have (URDF's `<inertia>` has the most: 6; a
+/// MAVLink `<field>` at most a dozen).
 pub const MAX_ATTRIBUTES: usize = 64;
 
 /// How many namespace declarations (`xmlns`, `xmlns:p` attributes) a document may hold
