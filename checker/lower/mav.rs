@@ -114,7 +114,7 @@ impl Lowerer {
     ) -> Vec<Field> {
         if self.dialect_failed {
             // The dialect was not found (E0230): bind the names, check nothing against it.
-            return self.unchecked_fields(fields, viewer, origin, values);
+            return self.plain_fields(fields, viewer, origin, values);
         }
         let Some(d) = self.prog.dialect else {
             if label.name.contains('[') {
@@ -158,14 +158,14 @@ impl Lowerer {
                 format!("`{name}` is not a message of the dialect `{}`", d.name),
                 help,
             );
-            return self.unchecked_fields(fields, viewer, origin, values);
+            return self.plain_fields(fields, viewer, origin, values);
         };
         self.deprecated(d, msg, label);
         let command = match cmd {
             None => None,
             Some(c) => match self.command(d, msg, c, label) {
                 Some(e) => Some(e),
-                None => return self.unchecked_fields(fields, viewer, origin, values),
+                None => return self.plain_fields(fields, viewer, origin, values),
             },
         };
         super::distinct("payload field", fields.iter().map(|f| f.bound()), &mut self.diags);
@@ -173,7 +173,7 @@ impl Lowerer {
         let mut out = Vec::new();
         for f in fields {
             let Some(res) = self.resolve_field(d, msg, command, f) else {
-                out.extend(self.unchecked_fields(std::slice::from_ref(f), viewer, origin.clone(), values));
+                out.extend(self.plain_fields(std::slice::from_ref(f), viewer, origin.clone(), values));
                 continue;
             };
             if let Some((_, first)) = seen.iter().find(|(n, _)| *n == res.field.name) {
@@ -439,18 +439,6 @@ impl Lowerer {
             (i, u) => i.or(u),
         };
         Field { value: v, name: binder.name.clone(), sort, refinement, mav: Some(mav) }
-    }
-
-    /// Binds the fields of a message that could not be resolved (its error is reported):
-    /// their values exist (no cascade of unknown names), of a sort that fits everywhere.
-    fn unchecked_fields(
-        &mut self,
-        fields: &[ast::Field],
-        viewer: RoleId,
-        origin: ValueOrigin,
-        values: &mut Vec<ValueId>,
-    ) -> Vec<Field> {
-        self.plain_fields(fields, viewer, origin, values)
     }
 
     /// E0236: a string literal compared with a `char[N]` field is longer than N.
