@@ -429,7 +429,6 @@ fn probe(scene: &dyn Scene, b: &QBox, opts: &Options, stats: &mut Stats) -> Opti
     if stats.witness_calls >= PROBE_WITNESSES || stats.nodes < PROBE_AFTER {
         return None;
     }
-    let n = b.lo.len();
     for _ in 0..PROBES_PER_BOX {
         stats.probes += 1;
         let q = draw(b, stats.probes);
@@ -440,18 +439,10 @@ fn probe(scene: &dyn Scene, b: &QBox, opts: &Options, stats: &mut Stats) -> Opti
         if scene.distance(&q).distance > 0.0 {
             continue;
         }
-        let half: Vec<f64> = opts.resolution.iter().map(|r| r * 0.5).collect();
-        let lo: Vec<f64> = (0..n).map(|k| (q[k] - half[k]).max(b.lo[k])).collect();
-        let hi: Vec<f64> = (0..n).map(|k| (q[k] + half[k]).min(b.hi[k])).collect();
-        stats.witness_calls += 1;
-        let Some(w) = scene.witness(&lo, &hi, &q) else { continue };
-        if !b.contains(&w) {
-            continue;
-        }
-        stats.distance_calls += 1;
-        let d = scene.distance(&w);
-        if d.distance <= 0.0 {
-            return Some((w, d));
+        if let Some((w, d)) = witness_near(scene, b, &q, opts, stats) {
+            if d.distance <= 0.0 {
+                return Some((w, d));
+            }
         }
         if stats.witness_calls >= PROBE_WITNESSES {
             return None;
@@ -475,14 +466,26 @@ fn probe_min(scene: &dyn Scene, b: &QBox, opts: &Options, stats: &mut Stats) -> 
     if scene.feasible(&q, &q) == Feasible::No {
         return None;
     }
+    witness_near(scene, b, &q, opts, stats).filter(|(_, d)| !d.distance.is_nan())
+}
+
+/// The scene's witness (a configuration that satisfies the constraints) in the part of `b`
+/// within half a resolution of `q` in every dimension, with the two sides' distance there.
+fn witness_near(
+    scene: &dyn Scene,
+    b: &QBox,
+    q: &[f64],
+    opts: &Options,
+    stats: &mut Stats,
+) -> Option<(Vec<f64>, Closest)> {
     let n = q.len();
     let lo: Vec<f64> = (0..n).map(|k| (q[k] - 0.5 * opts.resolution[k]).max(b.lo[k])).collect();
     let hi: Vec<f64> = (0..n).map(|k| (q[k] + 0.5 * opts.resolution[k]).min(b.hi[k])).collect();
     stats.witness_calls += 1;
-    let w = scene.witness(&lo, &hi, &q).filter(|w| b.contains(w))?;
+    let w = scene.witness(&lo, &hi, q).filter(|w| b.contains(w))?;
     stats.distance_calls += 1;
     let d = scene.distance(&w);
-    (!d.distance.is_nan()).then_some((w, d))
+    Some((w, d))
 }
 
 /// The `seed`-th configuration of a fixed pseudo-random sequence (xorshift64*) in `b`.
