@@ -1343,6 +1343,44 @@ mod tests {
         (r.verdict, codes)
     }
 
+    /// A bar 1 m long spinning in place at any heading beside a pillar whose face is `face`
+    /// metres from the bar's centre. Its stand-in (the vertical cylinder of radius 0.5025
+    /// through the bar's box corners, `Solid::z_cylinder`) proves the far pillar clear with
+    /// no split of the heading; for the near one the stand-in touches, and the contact,
+    /// which only some headings make, must still be found: the stand-in never decides a
+    /// pair it does not prove apart.
+    fn spinning_bar(face: &str) -> (Verdict, Vec<Code>) {
+        let src = format!(
+            "robot Bar {{ state x: real, y: real, th: real;
+               geometry: box(1.0, 0.1, 0.2) at pose(x, y, 0, 0, 0, th);
+               invariant: -5 <= x <= 5 && -5 <= y <= 5 && -pi <= th <= pi; }}
+             motion Bar.spin {{ interruptible: false; pre: true; guarantee: x == old(x) && y == old(y);
+               post: x == old(x) && y == old(y); footprint: geometry; duration: [1, 1]; }}
+             system S {{
+               participant B: Bar {{ init: x == 0 && y == 0 && th == pi / 2; }}
+               obstacle Pillar {{ geometry: cylinder(0.1, 1); at: pose({face} + 0.1, 0, 0); }}
+             }}
+             choreography S = dt<B: spin>. end;
+             process B = dt<spin>.end;"
+        );
+        let mut db = crate::source::SourceDb::new();
+        let r = crate::fsload::check_source(
+            &mut db,
+            concat!(env!("CARGO_MANIFEST_DIR"), "/choreographies/geo-test.chor"),
+            &src,
+            &Config::patient(),
+        );
+        let codes = r.diagnostics.iter().filter(|d| d.is_error()).map(|d| d.code).collect();
+        (r.verdict, codes)
+    }
+
+    #[test]
+    fn a_stand_in_proves_a_spinning_bar_clear_and_never_hides_its_contact() {
+        assert_eq!(spinning_bar("0.6"), (Verdict::Verified, vec![]));
+        // 0.45 from the centre: the bar's end (0.5) reaches it at headings near 0 and pi.
+        assert_eq!(spinning_bar("0.45"), (Verdict::Rejected, vec![Code::ObstacleHit]));
+    }
+
     #[test]
     fn a_urdf_robot_is_kept_clear_of_an_obstacle_or_shown_to_touch_it() {
         // The platform is 0.60 x 0.70 (x from -0.30 to 0.30); the arm at home stays above it.
