@@ -1,0 +1,722 @@
+//! A generator of random well-formed motion choreographies with a ground truth of their
+//! own, checked end to end (issue 18: defences that find the next false `verified`).
+//!
+//! Each scene is a few box-shaped carts on a plane, steps in which a leader tells every
+//! other cart to go and then all of them move together (each straight to a target, or
+//! staying where it is), optionally a choice between two such plans, optionally a `*` of
+//! two independent groups. Coordinates are exact thousandths of a metre on a coarse grid,
+//! so footprints often touch exactly or miss by a millimetre: where rounding would hide a
+//! contact.
+//!
+//! **The oracle is independent of mochi.** A cart's footprint during a step is the box its
+//! body sweeps: the hull of its start and target, grown by the cart's half width, the same
+//! at every time of the step. Two closed boxes meet iff their intervals meet on both axes,
+//! which this file decides in integer arithmetic. So the generator knows, without any
+//! solver, whether two carts can share a point:
+//! - a scene where some pair meets must never be `verified` (soundness);
+//! - a scene where no pair meets, without `*`, must be `verified` (completeness: these
+//!   are small linear cells mochi must decide);
+//! - with `*`, separation is asked of whole sides at once, so only soundness is claimed.
+//!
+//! Two metamorphic relations ride on each scene: renaming the carts (to names a user may
+//! pick, `x`, `clock`, `pi` included) and placing every cart's frame at the same far
+//! offset (a rigid motion of the whole scene) must not change the verdict; a renaming to
+//! a name the language refuses must be refused with a syntax or naming error (E01xx,
+//! E02xx), never change a verdict otherwise.
+//!
+//! Budget: `MOCHI_GEN_CASES` scenes (default 12, a debug build on two cores takes about
+//! a minute); `MOCHI_GEN_SEED` picks another sequence. Failures print the scene's source.
+
+use mochi::driver::{Config, Report, Verdict};
+use mochi::source::SourceDb;
+use proptest::prelude::*;
+use proptest::test_runner::{Config as RunnerConfig, RngAlgorithm, TestRng, TestRunner};
+use std::fmt::Write;
+
+/// Half the width of a cart, in thousandths of a metre.
+const R: i64 = 250;
+
+/// One cart's action in a step: go to a target (x, y), or stay.
+#[derive(Clone, Debug)]
+enum Act {
+    Go(i64, i64),
+    Stay,
+}
+
+/// A joint motion of every cart of a group: one action each, `t` seconds.
+#[derive(Clone, Debug)]
+struct Step {
+    acts: Vec<Act>,
+    t: u32,
+}
+
+/// A group of carts that moves together: where they start, and what they do.
+#[derive(Clone, Debug)]
+struct Group {
+    start: Vec<(i64, i64)>,
+    /// One plan, or two for a choice the leader makes.
+    plans: Vec<Vec<Step>>,
+}
+
+#[derive(Clone, Debug)]
+struct Scene {
+    /// One group, or two on the sides of a `*`.
+    groups: Vec<Group>,
+}
+
+/// A closed box [x0, x1] x [y0, y1] in thousandths.
+#[derive(Clone, Copy, Debug)]
+struct Rect {
+    x0: i64,
+    x1: i64,
+    y0: i64,
+    y1: i64,
+}
+
+impl Rect {
+    fn swept(from: (i64, i64), to: (i64, i64)) -> Rect {
+        Rect { x0: from.0.min(to.0) - R, x1: from.0.max(to.0) + R, y0: from.1.min(to.1) - R, y1: from.1.max(to.1) + R }
+    }
+
+    fn meets(&self, o: &Rect) -> bool {
+        self.x0 <= o.x1 && o.x0 <= self.x1 && self.y0 <= o.y1 && o.y0 <= self.y1
+    }
+}
+
+impl Group {
+    /// The footprints of each plan, step by step: `[plan][step][cart]`.
+    fn footprints(&self) -> Vec<Vec<Vec<Rect>>> {
+        self.plans
+            .iter()
+            .map(|plan| {
+                let mut at = self.start.clone();
+                plan.iter()
+                    .map(|step| {
+                        step.acts
+                            .iter()
+                            .enumerate()
+                            .map(|(c, act)| {
+                                let to = match act {
+                                    Act::Go(x, y) => (*x, *y),
+                                    Act::Stay => at[c],
+                                };
+                                let r = Rect::swept(at[c], to);
+                                at[c] = to;
+                                r
+                            })
+                            .collect()
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Two carts of the group share a point in some step of some plan.
+    fn collides(&self) -> Option<String> {
+        for (p, plan) in self.footprints().iter().enumerate() {
+            for (s, rects) in plan.iter().enumerate() {
+                for i in 0..rects.len() {
+                    for j in i + 1..rects.len() {
+                        if rects[i].meets(&rects[j]) {
+                            return Some(format!(
+                                "plan {p}, step {s}: carts {i} and {j} ({:?} and {:?})",
+                                rects[i], rects[j]
+                            ));
+                        }
+                    }
+                }
+            }
+        }
+        None
+    }
+
+    /// Every footprint the group ever has (its carts' bodies always lie in one of them).
+    fn all(&self) -> Vec<Rect> {
+        self.footprints().into_iter().flatten().flatten().collect()
+    }
+}
+
+impl Scene {
+    /// Some two carts can share a point: in a step of one group, or one cart of each side
+    /// of `*` (the sides run at independent times, so any two footprints may coincide).
+    fn collides(&self) -> Option<String> {
+        for g in &self.groups {
+            if let Some(why) = g.collides() {
+                return Some(why);
+            }
+        }
+        if let [a, b] = &self.groups[..] {
+            for ra in a.all() {
+                for rb in b.all() {
+                    if ra.meets(&rb) {
+                        return Some(format!("across `*`: {ra:?} and {rb:?}"));
+                    }
+                }
+            }
+        }
+        None
+    }
+
+    fn n_carts(&self) -> usize {
+        self.groups.iter().map(|g| g.start.len()).sum()
+    }
+}
+
+/// A decimal for thousandths: `1250` → `1.25`, `-5` → `-0.005`.
+fn m(v: i64) -> String {
+    let sign = if v < 0 { "-" } else { "" };
+    let a = v.unsigned_abs();
+    format!("{sign}{}.{:03}", a / 1000, a % 1000)
+}
+
+const LIBRARY: &str = "
+const r: real = 0.25;
+robot Cart {
+  state x: real, y: real;
+  geometry: box(2 * r, 2 * r, 0.2) at pose(x, y, 0);
+}
+motion Cart.go(tx: real, ty: real, T: real) {
+  interruptible: false;
+  pre: T > 0;
+  guarantee: min(old(x), tx) <= x && x <= max(old(x), tx) && min(old(y), ty) <= y && y <= max(old(y), ty);
+  post: x == tx && y == ty;
+  footprint(px, py, pz): min(old(x), tx) - r <= px && px <= max(old(x), tx) + r
+    && min(old(y), ty) - r <= py && py <= max(old(y), ty) + r && 0 <= pz && pz <= 0.2;
+  duration: [T, T];
+}
+motion Cart.stay(T: real) {
+  interruptible: false;
+  pre: T > 0;
+  guarantee: x == old(x) && y == old(y);
+  post: x == old(x) && y == old(y);
+  footprint(px, py, pz): old(x) - r <= px && px <= old(x) + r && old(y) - r <= py && py <= old(y) + r
+    && 0 <= pz && pz <= 0.2;
+  duration: [T, T];
+}
+";
+
+/// How a scene is written: the carts' names (in group order) and the offset of every
+/// cart's frame in the world.
+struct Writing<'a> {
+    names: &'a [String],
+    offset: (&'a str, &'a str),
+}
+
+fn act_text(act: &Act, t: u32) -> String {
+    match act {
+        Act::Go(x, y) => format!("go({}, {}, {t})", m(*x), m(*y)),
+        Act::Stay => format!("stay({t})"),
+    }
+}
+
+/// The source text of `scene`.
+fn render(scene: &Scene, w: &Writing) -> String {
+    let mut s = String::from(LIBRARY);
+    s.push_str("\nsystem Scene {\n");
+    let mut first = 0;
+    let mut ranges = Vec::new();
+    for g in &scene.groups {
+        for (c, (x, y)) in g.start.iter().enumerate() {
+            let _ = writeln!(
+                s,
+                "  participant {}: Cart {{ init: x == {} && y == {}; at: pose({}, {}, 0); }}",
+                w.names[first + c],
+                m(*x),
+                m(*y),
+                w.offset.0,
+                w.offset.1
+            );
+        }
+        ranges.push(first..first + g.start.len());
+        first += g.start.len();
+    }
+    s.push_str("}\n\n");
+    let mut sides = Vec::new();
+    let mut processes = vec![String::new(); scene.n_carts()];
+    for (g, range) in scene.groups.iter().zip(&ranges) {
+        let names = &w.names[range.clone()];
+        let mut branches = Vec::new();
+        let mut proc_branches = vec![Vec::new(); names.len()];
+        for (p, plan) in g.plans.iter().enumerate() {
+            let label = if g.plans.len() == 1 { "s".to_string() } else { ["a", "b"][p].to_string() };
+            let mut text = Vec::new();
+            let mut procs = vec![Vec::new(); names.len()];
+            for (k, step) in plan.iter().enumerate() {
+                for (c, name) in names.iter().enumerate().skip(1) {
+                    text.push(format!("{} -> {name}: {label}{k}", names[0]));
+                    procs[0].push(format!("{name}!{label}{k}"));
+                    procs[c].push(format!("{}?{label}{k}", names[0]));
+                }
+                let parts: Vec<String> =
+                    step.acts.iter().zip(names).map(|(a, n)| format!("{n}: {}", act_text(a, step.t))).collect();
+                text.push(format!("dt<{}>", parts.join(", ")));
+                for (c, a) in step.acts.iter().enumerate() {
+                    procs[c].push(format!("dt<{}>", act_text(a, step.t)));
+                }
+            }
+            branches.push(text.join(". "));
+            for (c, p) in procs.into_iter().enumerate() {
+                proc_branches[c].push(p.join("."));
+            }
+        }
+        sides.push(if branches.len() == 1 { branches.remove(0) } else { format!("({})", branches.join("\n  + ")) });
+        for (c, bs) in proc_branches.into_iter().enumerate() {
+            let body: Vec<String> = bs.into_iter().map(|b| format!("{b}.end")).collect();
+            processes[range.start + c] =
+                if body.len() == 1 { body[0].clone() } else { format!("({})", body.join(" + ")) };
+        }
+    }
+    if sides.len() == 1 {
+        let _ = writeln!(s, "choreography G =\n  {}.\n  end;\n", sides[0]);
+    } else {
+        let sides: Vec<String> = sides.iter().map(|x| format!("({x})")).collect();
+        let _ = writeln!(s, "choreography G =\n  {};\n", sides.join("\n  * "));
+    }
+    for (name, body) in w.names.iter().zip(&processes) {
+        let _ = writeln!(s, "process {name} = {body};");
+    }
+    s
+}
+
+/// A coordinate on the grid (eighths of a metre), sometimes a millimetre off it.
+fn coord() -> impl Strategy<Value = i64> {
+    (-16i64..=16, prop_oneof![8 => Just(0i64), 1 => Just(1i64), 1 => Just(-1i64)]).prop_map(|(k, e)| k * 125 + e)
+}
+
+fn step(n: usize) -> impl Strategy<Value = Step> {
+    let act = prop_oneof![1 => Just(Act::Stay), 2 => (coord(), coord()).prop_map(|(x, y)| Act::Go(x, y))];
+    (prop::collection::vec(act, n), 1u32..=5).prop_map(|(acts, t)| Step { acts, t })
+}
+
+fn group(n: usize, choice: bool) -> impl Strategy<Value = Group> {
+    let plan = prop::collection::vec(step(n), 1..=3);
+    let plans = prop::collection::vec(plan, if choice { 2 } else { 1 });
+    (prop::collection::vec((coord(), coord()), n), plans).prop_map(|(start, plans)| Group { start, plans })
+}
+
+fn scene() -> impl Strategy<Value = Scene> {
+    prop_oneof![
+        3 => (2usize..=4).prop_flat_map(|n| group(n, false)).prop_map(|g| Scene { groups: vec![g] }),
+        2 => (2usize..=3).prop_flat_map(|n| group(n, true)).prop_map(|g| Scene { groups: vec![g] }),
+        1 => ((2usize..=2).prop_flat_map(|n| group(n, false)), (2usize..=2).prop_flat_map(|n| group(n, false)))
+            .prop_map(|(a, b)| Scene { groups: vec![a, b] }),
+    ]
+}
+
+/// Names a user may give a participant: ordinary ones, and ones mochi, the library or the
+/// language use for something else (a state variable, a parameter, a constant, a kind,
+/// a primitive, a built-in).
+const NAMES: &[&str] = &[
+    "Alpha", "b", "cart_2", "Z9", "x", "y", "z", "px", "tx", "T", "r", "clock", "pi", "old", "sqrt", "Cart", "go",
+    "stay", "Scene", "G", "inf", "min", "s0", "a0", "sin",
+];
+
+fn check(src: &str) -> Report {
+    let mut db = SourceDb::new();
+    let mut cfg = Config::patient();
+    cfg.smt.jobs = 1;
+    mochi::fsload::check_source(&mut db, "generated.chor", src, &cfg)
+}
+
+fn codes(r: &Report) -> Vec<String> {
+    let mut c: Vec<String> =
+        r.diagnostics.iter().filter(|d| d.is_error()).map(|d| d.code.as_str().to_string()).collect();
+    c.sort();
+    c.dedup();
+    c
+}
+
+/// Only syntax or naming errors: the renaming picked a name the language refuses here
+/// (`pi` is a keyword: E0103; a participant named like a constant: E02xx).
+fn refused_name(r: &Report) -> bool {
+    r.verdict == Verdict::Rejected && codes(r).iter().all(|c| c.starts_with("E01") || c.starts_with("E02"))
+}
+
+fn cases() -> u32 {
+    std::env::var("MOCHI_GEN_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(12)
+}
+
+fn seed() -> [u8; 32] {
+    let n: u64 = std::env::var("MOCHI_GEN_SEED").ok().and_then(|v| v.parse().ok()).unwrap_or(18);
+    let mut s = [0u8; 32];
+    s[..8].copy_from_slice(&n.to_le_bytes());
+    s
+}
+
+fn run_scene(scene: &Scene, rename: &[usize]) -> Result<(), TestCaseError> {
+    let n = scene.n_carts();
+    let plain: Vec<String> = (0..n).map(|i| format!("C{i}")).collect();
+    let src = render(scene, &Writing { names: &plain, offset: ("0", "0") });
+    let base = check(&src);
+    let truth = scene.collides();
+    let said = format!("verdict {:?}, codes {:?}", base.verdict, codes(&base));
+    match &truth {
+        Some(why) => prop_assert!(
+            base.verdict != Verdict::Verified,
+            "FALSE VERIFIED: two carts share a point ({why}), yet mochi says verified\n{src}"
+        ),
+        None if scene.groups.len() == 1 => prop_assert!(
+            base.verdict == Verdict::Verified,
+            "false alarm: no two footprints meet, yet {said}\n{:#?}\n{src}",
+            base.diagnostics.iter().map(|d| format!("{}: {}", d.code.as_str(), d.message)).collect::<Vec<_>>()
+        ),
+        None => {}
+    }
+    // The same scene under other names, and far from the origin.
+    let mut names: Vec<String> = rename.iter().take(n).map(|&i| NAMES[i % NAMES.len()].to_string()).collect();
+    for i in 0..n {
+        if names[..i].contains(&names[i]) {
+            names[i] = format!("{}_{i}", names[i]);
+        }
+    }
+    let variants = [
+        (render(scene, &Writing { names: &names, offset: ("0", "0") }), "renamed"),
+        (render(scene, &Writing { names: &plain, offset: ("1000.125", "-73250.5") }), "moved far"),
+    ];
+    for (text, what) in variants {
+        let r = check(&text);
+        if what == "renamed" && refused_name(&r) {
+            continue;
+        }
+        prop_assert!(
+            r.verdict == base.verdict && codes(&r) == codes(&base),
+            "{what}: verdict {:?} codes {:?}, the original {said}\n{text}\n--- original ---\n{src}",
+            r.verdict,
+            codes(&r)
+        );
+    }
+    Ok(())
+}
+
+#[test]
+fn generated_cells_agree_with_their_ground_truth() {
+    let mut runner = TestRunner::new_with_rng(
+        RunnerConfig { cases: cases(), failure_persistence: None, ..RunnerConfig::default() },
+        TestRng::from_seed(RngAlgorithm::ChaCha, &seed()),
+    );
+    let strategy = (scene(), prop::collection::vec(0usize..NAMES.len(), 8));
+    let result = runner.run(&strategy, |(scene, rename)| run_scene(&scene, &rename));
+    if let Err(e) = result {
+        panic!("{e}");
+    }
+}
+
+/// The oracle itself: boxes that touch meet, boxes a millimetre apart do not; a cart that
+/// stays sweeps its own body.
+#[test]
+fn the_oracle_counts_touching_boxes_as_meeting() {
+    let a = Rect::swept((0, 0), (1000, 0));
+    assert!(a.meets(&Rect::swept((1500, 0), (1500, 0))), "touching at x = 1.25");
+    assert!(!a.meets(&Rect::swept((1501, 0), (1501, 0))), "a millimetre apart");
+    assert!(a.meets(&Rect::swept((500, 500), (500, 500))), "touching at y = 0.25");
+    assert!(!a.meets(&Rect::swept((500, 501), (500, 501))));
+    let g = Group {
+        start: vec![(0, 0), (2000, 0)],
+        plans: vec![vec![Step { acts: vec![Act::Go(1500, 0), Act::Stay], t: 1 }]],
+    };
+    assert!(g.collides().is_some(), "1.5 + 0.25 reaches 2 - 0.25");
+    assert_eq!(m(-5), "-0.005");
+    assert_eq!(m(1250), "1.250");
+}
+
+/// A written scene is what the generator means: a collision the oracle sees is rejected
+/// with E0404 and its collision-free twin verifies (so the test above can fail both ways).
+#[test]
+fn a_known_collision_is_rejected_and_its_twin_verified() {
+    let scene = |tx: i64| Scene {
+        groups: vec![Group {
+            start: vec![(0, 0), (2000, 0)],
+            plans: vec![vec![Step { acts: vec![Act::Go(tx, 0), Act::Stay], t: 2 }]],
+        }],
+    };
+    let names: Vec<String> = vec!["A".into(), "B".into()];
+    let w = Writing { names: &names, offset: ("0", "0") };
+    let hit = check(&render(&scene(1500), &w));
+    assert!(scene(1500).collides().is_some());
+    assert_eq!(hit.verdict, Verdict::Rejected, "{:?}", codes(&hit));
+    assert!(codes(&hit).iter().any(|c| c == "E0404"), "{:?}", codes(&hit));
+    let miss = check(&render(&scene(1499), &w));
+    assert!(scene(1499).collides().is_none());
+    assert_eq!(miss.verdict, Verdict::Verified, "{:?}", codes(&miss));
+}
+
+// ---------------------------------------------------------------------------------------
+// Refined MAVLink protocols with a ground truth: progress (E0419) decided by interval
+// arithmetic on the wire ranges, and float32 fields decided on the float32 grid.
+
+/// An integer payload field: its message, its name and its wire range.
+struct IntField {
+    msg: &'static str,
+    field: &'static str,
+    lo: i128,
+    hi: i128,
+}
+
+const INT_FIELDS: &[IntField] = &[
+    IntField { msg: "MISSION_COUNT", field: "count", lo: 0, hi: 65_535 },
+    IntField { msg: "MISSION_REQUEST_INT", field: "seq", lo: 0, hi: 65_535 },
+    IntField { msg: "PARAM_REQUEST_READ", field: "param_index", lo: -32_768, hi: 32_767 },
+    IntField { msg: "SET_MODE", field: "custom_mode", lo: 0, hi: 4_294_967_295 },
+    IntField { msg: "GPS_RAW_INT", field: "lat", lo: -2_147_483_648, hi: 2_147_483_647 },
+    IntField { msg: "GPS_RAW_INT", field: "satellites_visible", lo: 0, hi: 255 },
+    IntField { msg: "SYSTEM_TIME", field: "time_boot_ms", lo: 0, hi: 4_294_967_295 },
+];
+
+/// How a field's value is tied to the previous field's.
+#[derive(Clone, Debug)]
+enum Tie {
+    None,
+    /// `v >= prev + c`
+    AtLeast(i128),
+    /// `v <= prev + c`
+    AtMost(i128),
+}
+
+#[derive(Clone, Debug)]
+enum Msg {
+    /// An integer field `INT_FIELDS[f]` with `lo <= v && v <= hi` and a tie.
+    Int { f: usize, lo: i128, hi: i128, tie: Tie },
+    /// PARAM_SET's float `param_value` between two float32 values, each bound strict or not.
+    Float { lo: f32, lo_strict: bool, hi: f32, hi_strict: bool },
+}
+
+#[derive(Clone, Debug)]
+struct Protocol {
+    msgs: Vec<(bool, Msg)>,
+}
+
+/// The smallest float32 above `v` (finite `v`).
+fn next_up(v: f32) -> f32 {
+    if v == 0.0 {
+        return f32::from_bits(1);
+    }
+    let b = v.to_bits();
+    f32::from_bits(if v > 0.0 { b + 1 } else { b - 1 })
+}
+
+impl Protocol {
+    /// The first message no admissible payload fits on some path (`None`: progress holds).
+    /// Integer fields range over their wire range; a float field over the finite float32
+    /// values (LANGUAGE.md's model of MAVLink values).
+    fn stuck(&self) -> Option<usize> {
+        let mut reach: Option<(i128, i128)> = None;
+        for (k, (_, msg)) in self.msgs.iter().enumerate() {
+            match msg {
+                Msg::Int { f, lo, hi, tie } => {
+                    let (l, h) = ((*lo).max(INT_FIELDS[*f].lo), (*hi).min(INT_FIELDS[*f].hi));
+                    let next = match (tie, reach) {
+                        (Tie::AtLeast(c), Some((rl, rh))) => (l.max(rh + c) <= h).then(|| (l.max(rl + c), h)),
+                        (Tie::AtMost(c), Some((rl, rh))) => (h.min(rl + c) >= l).then(|| (l, h.min(rh + c))),
+                        _ => (l <= h).then_some((l, h)),
+                    };
+                    let Some(next) = next else { return Some(k) };
+                    reach = Some(next);
+                }
+                Msg::Float { lo, lo_strict, hi, hi_strict } => {
+                    let first = if *lo_strict { next_up(*lo) } else { *lo };
+                    let ok = if *hi_strict { first < *hi } else { first <= *hi };
+                    if !ok {
+                        return Some(k);
+                    }
+                    reach = None;
+                }
+            }
+        }
+        None
+    }
+}
+
+/// A float32 written exactly, with every digit of its binary value (`m * 2^e` has a
+/// finite decimal expansion: `m * 5^-e` shifted `-e` places when `e < 0`).
+fn exact_f32(v: f32) -> String {
+    use num_bigint::BigUint;
+    let bits = v.to_bits();
+    let sign = if bits >> 31 == 1 { "-" } else { "" };
+    let exp = ((bits >> 23) & 0xff) as i32;
+    let frac = bits & 0x7f_ffff;
+    let (m, e) = if exp == 0 { (frac, -149) } else { (frac | 0x80_0000, exp - 150) };
+    if m == 0 {
+        return "0".into();
+    }
+    if e >= 0 {
+        return format!("{sign}{}", BigUint::from(m) << e as usize);
+    }
+    let k = (-e) as usize;
+    let digits = (BigUint::from(m) * BigUint::from(5u32).pow(k as u32)).to_string();
+    let digits = format!("{digits:0>width$}", width = k + 1);
+    let (int, dec) = digits.split_at(digits.len() - k);
+    let dec = dec.trim_end_matches('0');
+    if dec.is_empty() {
+        format!("{sign}{int}")
+    } else {
+        format!("{sign}{int}.{dec}")
+    }
+}
+
+fn render_protocol(p: &Protocol, binders: &[String]) -> String {
+    let mut s = String::from(
+        "dialect common;\n\nsystem Link {\n  participant GCS;\n  participant UAV;\n}\n\nchoreography Session =\n",
+    );
+    let mut prev_int = false;
+    for (k, (from_gcs, msg)) in p.msgs.iter().enumerate() {
+        let (a, b) = if *from_gcs { ("GCS", "UAV") } else { ("UAV", "GCS") };
+        let v = &binders[k];
+        let text = match msg {
+            Msg::Int { f, lo, hi, tie } => {
+                let fld = &INT_FIELDS[*f];
+                let mut r = format!("{lo} <= {v} && {v} <= {hi}");
+                if prev_int {
+                    let u = &binders[k - 1];
+                    match tie {
+                        Tie::None => {}
+                        Tie::AtLeast(c) => r.push_str(&format!(" && {v} >= {u} + {c}")),
+                        Tie::AtMost(c) => r.push_str(&format!(" && {v} <= {u} + {c}")),
+                    }
+                }
+                prev_int = true;
+                format!("{}({} as {v} {{{r}}})", fld.msg, fld.field)
+            }
+            Msg::Float { lo, lo_strict, hi, hi_strict } => {
+                prev_int = false;
+                let (l, h) = (exact_f32(*lo), exact_f32(*hi));
+                let (lo_op, hi_op) = (if *lo_strict { "<" } else { "<=" }, if *hi_strict { "<" } else { "<=" });
+                format!("PARAM_SET(param_value as {v} {{{l} {lo_op} {v} && {v} {hi_op} {h}}})")
+            }
+        };
+        let _ = writeln!(s, "  {a} -> {b}: {text}.");
+    }
+    s.push_str("  end;\n");
+    s
+}
+
+impl Protocol {
+    /// Ties only where the previous message carries an integer (as `render_protocol`
+    /// writes them), so that `stuck` and the text mean the same protocol.
+    fn normalised(mut self) -> Protocol {
+        let mut prev_int = false;
+        for (_, msg) in &mut self.msgs {
+            if let Msg::Int { tie, .. } = msg {
+                if !prev_int {
+                    *tie = Tie::None;
+                }
+                prev_int = true;
+            } else {
+                prev_int = false;
+            }
+        }
+        self
+    }
+}
+
+/// A bound near the field's wire range or near zero, where off-by-one and range mistakes live.
+fn int_bound() -> impl Strategy<Value = i128> {
+    prop_oneof![
+        4 => -5i128..=20,
+        1 => Just(65_535i128),
+        1 => Just(65_536i128),
+        1 => Just(-32_769i128),
+        1 => Just(4_294_967_295i128),
+        1 => Just(2_147_483_647i128),
+        1 => Just(255i128),
+        1 => Just(256i128),
+    ]
+}
+
+fn float_pair() -> impl Strategy<Value = Msg> {
+    let base = prop_oneof![Just(0.1f32), Just(0.0f32), Just(-1.5f32), Just(1.0e-30f32), Just(3.0e38f32), Just(7.0f32)];
+    (base, 0usize..=3, any::<bool>(), any::<bool>()).prop_map(|(lo, gap, lo_strict, hi_strict)| {
+        let mut hi = lo;
+        for _ in 0..gap {
+            hi = next_up(hi);
+        }
+        Msg::Float { lo, lo_strict, hi, hi_strict }
+    })
+}
+
+fn protocol() -> impl Strategy<Value = Protocol> {
+    let tie = prop_oneof![1 => Just(Tie::None), 2 => (-3i128..=3).prop_map(Tie::AtLeast), 2 => (-3i128..=3).prop_map(Tie::AtMost)];
+    let int = (0..INT_FIELDS.len(), int_bound(), int_bound(), tie).prop_map(|(f, a, b, tie)| Msg::Int {
+        f,
+        lo: a.min(b),
+        hi: a.max(b),
+        tie,
+    });
+    let msg = prop_oneof![4 => int, 1 => float_pair()];
+    prop::collection::vec((any::<bool>(), msg), 1..=4).prop_map(|msgs| Protocol { msgs }.normalised())
+}
+
+/// Binder names a user may pick: plain, a field's own name, a name other dialect items
+/// use, a built-in (the language refuses some: then a syntax or naming error).
+const BINDERS: &[&str] =
+    &["v", "seq", "count", "x", "lat", "param_value", "clock", "end_", "MAV_CMD_NAV_LAST", "pi", "GCS", "i"];
+
+#[test]
+fn generated_protocols_agree_with_their_ground_truth() {
+    let mut runner = TestRunner::new_with_rng(
+        RunnerConfig { cases: cases(), failure_persistence: None, ..RunnerConfig::default() },
+        TestRng::from_seed(RngAlgorithm::ChaCha, &seed()),
+    );
+    let strategy = (protocol(), prop::collection::vec(0usize..BINDERS.len(), 4));
+    let result = runner.run(&strategy, |(p, pick)| {
+        let plain: Vec<String> = (0..p.msgs.len()).map(|k| format!("v{k}")).collect();
+        let src = render_protocol(&p, &plain);
+        let base = check(&src);
+        let said = format!("verdict {:?}, codes {:?}", base.verdict, codes(&base));
+        match p.stuck() {
+            Some(k) => prop_assert!(
+                base.verdict != Verdict::Verified,
+                "FALSE VERIFIED: no admissible payload fits message {k} on some path, yet verified\n{src}"
+            ),
+            None => prop_assert!(
+                base.verdict == Verdict::Verified,
+                "false alarm: every message has an admissible payload, yet {said}\n{:#?}\n{src}",
+                base.diagnostics.iter().map(|d| format!("{}: {}", d.code.as_str(), d.message)).collect::<Vec<_>>()
+            ),
+        }
+        let mut names: Vec<String> = pick.iter().take(p.msgs.len()).map(|&i| BINDERS[i].to_string()).collect();
+        for i in 0..names.len() {
+            if names[..i].contains(&names[i]) {
+                names[i] = format!("{}_{i}", names[i]);
+            }
+        }
+        let text = render_protocol(&p, &names);
+        let r = check(&text);
+        if !refused_name(&r) {
+            prop_assert!(
+                r.verdict == base.verdict && codes(&r) == codes(&base),
+                "renamed binders: verdict {:?} codes {:?}, the original {said}\n{text}\n--- original ---\n{src}",
+                r.verdict,
+                codes(&r)
+            );
+        }
+        Ok(())
+    });
+    if let Err(e) = result {
+        panic!("{e}");
+    }
+}
+
+/// The float oracle: between 0.1f32 and the next float32 up, with both bounds strict,
+/// there is no float32 (there are reals); with one bound closed there is one.
+#[test]
+fn the_float_oracle_sees_the_gap_between_neighbours() {
+    let lo = 0.1f32;
+    let p = |lo_strict, hi_strict| Protocol {
+        msgs: vec![(true, Msg::Float { lo, lo_strict, hi: next_up(lo), hi_strict })],
+    };
+    assert_eq!(p(true, true).stuck(), Some(0));
+    assert_eq!(p(false, true).stuck(), None);
+    assert_eq!(p(true, false).stuck(), None);
+    assert_eq!(exact_f32(0.5), "0.5");
+    assert_eq!(exact_f32(0.1), "0.100000001490116119384765625");
+    assert_eq!(exact_f32(-1.5), "-1.5");
+    assert_eq!(exact_f32(3.0e38), "300000000549775575777803994281145270272");
+    assert!(exact_f32(1.0e-30).starts_with("0.000000000000000000000000000001000000"), "{}", exact_f32(1.0e-30));
+    let q = Protocol {
+        msgs: vec![
+            (true, Msg::Int { f: 5, lo: 250, hi: 300, tie: Tie::None }),
+            (false, Msg::Int { f: 5, lo: 0, hi: 300, tie: Tie::AtLeast(1) }),
+        ],
+    };
+    assert_eq!(q.stuck(), Some(1), "255 + 1 is beyond a uint8");
+}
