@@ -62,6 +62,8 @@ struct Group {
 struct Scene {
     /// One group, or two on the sides of a `*`.
     groups: Vec<Group>,
+    /// Static obstacles: boxes 0.5 x 0.5 x 0.3 centred on these points.
+    obstacles: Vec<(i64, i64)>,
 }
 
 /// A closed box [x0, x1] x [y0, y1] in thousandths.
@@ -145,6 +147,14 @@ impl Scene {
                 return Some(why);
             }
         }
+        for &(x, y) in &self.obstacles {
+            let o = Rect::swept((x, y), (x, y));
+            for g in &self.groups {
+                if let Some(f) = g.all().into_iter().find(|f| f.meets(&o)) {
+                    return Some(format!("obstacle at {x}, {y} meets {f:?}"));
+                }
+            }
+        }
         if let [a, b] = &self.groups[..] {
             for ra in a.all() {
                 for rb in b.all() {
@@ -195,11 +205,24 @@ motion Cart.stay(T: real) {
 }
 ";
 
-/// How a scene is written: the carts' names (in group order) and the offset of every
-/// cart's frame in the world.
+/// How a scene is written: the carts' names (in group order), the frame every cart and
+/// obstacle is placed in (the same for all, so the scene's own geometry is exactly the
+/// same whatever the frame), and whether `stay` writes its footprint as the cart's body.
 struct Writing<'a> {
     names: &'a [String],
     offset: (&'a str, &'a str),
+    yaw: &'a str,
+    stay_as_geometry: bool,
+}
+
+impl<'a> Writing<'a> {
+    fn plain(names: &'a [String]) -> Writing<'a> {
+        Writing { names, offset: ("0", "0"), yaw: "0", stay_as_geometry: false }
+    }
+
+    fn pose(&self) -> String {
+        format!("pose({}, {}, 0, 0, 0, {})", self.offset.0, self.offset.1, self.yaw)
+    }
 }
 
 fn act_text(act: &Act, t: u32) -> String {
@@ -211,20 +234,34 @@ fn act_text(act: &Act, t: u32) -> String {
 
 /// The source text of `scene`.
 fn render(scene: &Scene, w: &Writing) -> String {
-    let mut s = String::from(LIBRARY);
+    let mut s = if w.stay_as_geometry {
+        let at = LIBRARY.find("  footprint(px, py, pz): old(x) - r").expect("stay's footprint");
+        let end = at + LIBRARY[at..].find("duration").expect("stay's duration");
+        format!("{}  footprint: geometry;\n  {}", &LIBRARY[..at], &LIBRARY[end..])
+    } else {
+        String::from(LIBRARY)
+    };
     s.push_str("\nsystem Scene {\n");
+    for (k, (x, y)) in scene.obstacles.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "  obstacle Block{k} {{ geometry: box(0.5, 0.5, 0.3) at pose({}, {}, 0); at: {}; }}",
+            m(*x),
+            m(*y),
+            w.pose()
+        );
+    }
     let mut first = 0;
     let mut ranges = Vec::new();
     for g in &scene.groups {
         for (c, (x, y)) in g.start.iter().enumerate() {
             let _ = writeln!(
                 s,
-                "  participant {}: Cart {{ init: x == {} && y == {}; at: pose({}, {}, 0); }}",
+                "  participant {}: Cart {{ init: x == {} && y == {}; at: {}; }}",
                 w.names[first + c],
                 m(*x),
                 m(*y),
-                w.offset.0,
-                w.offset.1
+                w.pose()
             );
         }
         ranges.push(first..first + g.start.len());
@@ -295,12 +332,14 @@ fn group(n: usize, choice: bool) -> impl Strategy<Value = Group> {
 }
 
 fn scene() -> impl Strategy<Value = Scene> {
-    prop_oneof![
-        3 => (2usize..=4).prop_flat_map(|n| group(n, false)).prop_map(|g| Scene { groups: vec![g] }),
-        2 => (2usize..=3).prop_flat_map(|n| group(n, true)).prop_map(|g| Scene { groups: vec![g] }),
+    let groups = prop_oneof![
+        3 => (2usize..=4).prop_flat_map(|n| group(n, false)).prop_map(|g| vec![g]),
+        2 => (2usize..=3).prop_flat_map(|n| group(n, true)).prop_map(|g| vec![g]),
         1 => ((2usize..=2).prop_flat_map(|n| group(n, false)), (2usize..=2).prop_flat_map(|n| group(n, false)))
-            .prop_map(|(a, b)| Scene { groups: vec![a, b] }),
-    ]
+            .prop_map(|(a, b)| vec![a, b]),
+    ];
+    let obstacles = prop_oneof![2 => Just(Vec::new()), 1 => prop::collection::vec((coord(), coord()), 1..=2)];
+    (groups, obstacles).prop_map(|(groups, obstacles)| Scene { groups, obstacles })
 }
 
 /// Names a user may give a participant: ordinary ones, and ones mochi, the library or the
@@ -346,7 +385,7 @@ fn seed() -> [u8; 32] {
 fn run_scene(scene: &Scene, rename: &[usize]) -> Result<(), TestCaseError> {
     let n = scene.n_carts();
     let plain: Vec<String> = (0..n).map(|i| format!("C{i}")).collect();
-    let src = render(scene, &Writing { names: &plain, offset: ("0", "0") });
+    let src = render(scene, &Writing::plain(&plain));
     let base = check(&src);
     let truth = scene.collides();
     let said = format!("verdict {:?}, codes {:?}", base.verdict, codes(&base));
@@ -370,12 +409,19 @@ fn run_scene(scene: &Scene, rename: &[usize]) -> Result<(), TestCaseError> {
         }
     }
     let variants = [
-        (render(scene, &Writing { names: &names, offset: ("0", "0") }), "renamed"),
-        (render(scene, &Writing { names: &plain, offset: ("1000.125", "-73250.5") }), "moved far"),
+        (render(scene, &Writing::plain(&names)), "renamed"),
+        (render(scene, &Writing { offset: ("1000.125", "-73250.5"), ..Writing::plain(&plain) }), "moved far"),
+        (render(scene, &Writing { offset: ("3.5", "-2.25"), yaw: "0.3", ..Writing::plain(&plain) }), "turned"),
+        (render(scene, &Writing { stay_as_geometry: true, ..Writing::plain(&plain) }), "stay as geometry"),
     ];
     for (text, what) in variants {
         let r = check(&text);
         if what == "renamed" && refused_name(&r) {
+            continue;
+        }
+        // A turned frame encloses cos and sin: where that slack decides, unknown is an
+        // honest answer (never the other definite verdict).
+        if what == "turned" && r.verdict == Verdict::Unknown {
             continue;
         }
         prop_assert!(
@@ -415,6 +461,15 @@ fn the_oracle_counts_touching_boxes_as_meeting() {
         plans: vec![vec![Step { acts: vec![Act::Go(1500, 0), Act::Stay], t: 1 }]],
     };
     assert!(g.collides().is_some(), "1.5 + 0.25 reaches 2 - 0.25");
+    let lone = |o| Scene {
+        groups: vec![Group {
+            start: vec![(0, 0), (0, 3000)],
+            plans: vec![vec![Step { acts: vec![Act::Go(1000, 0), Act::Stay], t: 1 }]],
+        }],
+        obstacles: vec![o],
+    };
+    assert!(lone((1500, 0)).collides().is_some(), "the obstacle's near face at 1.25 touches the cart's front");
+    assert!(lone((1501, 0)).collides().is_none());
     assert_eq!(m(-5), "-0.005");
     assert_eq!(m(1250), "1.250");
 }
@@ -428,9 +483,10 @@ fn a_known_collision_is_rejected_and_its_twin_verified() {
             start: vec![(0, 0), (2000, 0)],
             plans: vec![vec![Step { acts: vec![Act::Go(tx, 0), Act::Stay], t: 2 }]],
         }],
+        obstacles: Vec::new(),
     };
     let names: Vec<String> = vec!["A".into(), "B".into()];
-    let w = Writing { names: &names, offset: ("0", "0") };
+    let w = Writing::plain(&names);
     let hit = check(&render(&scene(1500), &w));
     assert!(scene(1500).collides().is_some());
     assert_eq!(hit.verdict, Verdict::Rejected, "{:?}", codes(&hit));
