@@ -261,7 +261,7 @@ pub(super) fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], pa
 fn without_footprint<'p>(prog: &Program, parts: &'p [(RoleId, PrimApp)]) -> Option<&'p (RoleId, PrimApp)> {
     parts
         .iter()
-        .find(|(_, app)| prog.prim(app.prim).footprint.is_none() && prog.prim(app.prim).footprint_body.is_none())
+        .find(|(_, app)| !prog.prim(app.prim).footprint.is_declared())
 }
 
 /// A world box around a static obstacle (its region's point box: constants only), or

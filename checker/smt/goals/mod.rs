@@ -160,8 +160,20 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
         Goal::Reachable { .. } => Plan::Parts(vec![Part::Context]),
         Goal::Progress { .. } => Plan::Parts(vec![Part::Valid]),
         Goal::Contains { prim } => {
-            let n = prog.kind(prog.prim(*prim).kind).body.as_ref().map_or(0, |b| b.parts.len());
-            Plan::Parts((0..n).map(Part::Contains).collect())
+            let p = prog.prim(*prim);
+            let n = prog.kind(p.kind).body.as_ref().map_or(0, |b| b.parts.len());
+            match &p.footprint {
+                // All space contains every body; `footprint: geometry` is the body itself.
+                crate::hir::Footprint::Everywhere => Plan::Holds(Some("the footprint is all space".into())),
+                f if f.is_own_geometry() => Plan::Holds(Some("the footprint is the robot's own geometry".into())),
+                crate::hir::Footprint::Predicate(_) | crate::hir::Footprint::Shapes { .. } => {
+                    Plan::Parts((0..n).map(Part::Contains).collect())
+                }
+                crate::hir::Footprint::Solid { .. } => Plan::Unknown(Unsupported(format!(
+                    "the footprint of `{}` has a URDF or mesh part, which has no predicate for the SMT solver, so whether it contains the robot's body is not decided; write it as `footprint: geometry;`, shapes, or a predicate",
+                    p.name
+                ))),
+            }
         }
     }
 }
