@@ -5,6 +5,7 @@
 //! capsules is checked by the same queries as a written predicate. The remaining ones
 //! (URDF, meshes, rotation by a state variable) are the geometric decision procedure's.
 
+pub mod contain;
 pub mod region;
 pub mod truth;
 pub mod world;

@@ -169,10 +169,16 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
                 crate::hir::Footprint::Predicate(_) | crate::hir::Footprint::Shapes { .. } => {
                     Plan::Parts((0..n).map(Part::Contains).collect())
                 }
-                crate::hir::Footprint::Solid { .. } => Plan::Unknown(Unsupported(format!(
-                    "the footprint of `{}` has a URDF or mesh part, which has no predicate for the SMT solver, so whether it contains the robot's body is not decided; write it as `footprint: geometry;`, shapes, or a predicate",
-                    p.name
-                ))),
+                // No predicate: decided by the solids when each part of the body lies in a
+                // part of the footprint placed the same way, else unknown.
+                crate::hir::Footprint::Solid { .. } => match crate::space::contain::body_within_footprint(prog, *prim) {
+                    crate::space::contain::Contained::Yes(note) => Plan::Holds(Some(note)),
+                    crate::space::contain::Contained::No(why) => Plan::Fails(why),
+                    crate::space::contain::Contained::Unknown(why) => Plan::Unknown(Unsupported(format!(
+                        "a footprint with a URDF or mesh part (that of `{}`) as a container of the robot's body: {why}; write it as `footprint: geometry;`, with shapes, or as a predicate",
+                        p.name
+                    ))),
+                },
             }
         }
     }

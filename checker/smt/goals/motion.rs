@@ -147,7 +147,7 @@ impl<'a> Inst<'a> {
 /// Why a footprint with a URDF or mesh part is not a formula.
 pub(super) fn no_predicate(prim: &Primitive) -> Unsupported {
     Unsupported(format!(
-        "the footprint of `{}` has a URDF or mesh part, which has no predicate for the SMT solver (and the geometric procedure does not decide this question)",
+        "a footprint with a URDF or mesh part (that of `{}`), which has no predicate, in a question the geometric procedure does not decide",
         prim.name
     ))
 }

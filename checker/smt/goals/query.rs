@@ -191,7 +191,7 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
                 // Planned only when the footprint has a predicate (goals::plan decides
                 // the other kinds without a query, or reports them unknown).
                 Footprint::Everywhere | Footprint::Solid { .. } => {
-                    return Err(Unsupported(format!("the footprint of `{}` has no predicate", p.name)))
+                    return Err(Unsupported(format!("the footprint of `{}`, which has no predicate", p.name)))
                 }
             };
             let body = prog.kind(p.kind).body.as_ref().ok_or_else(|| Unsupported("a kind with no body".into()))?;
@@ -237,7 +237,7 @@ fn initial_body(enc: &mut Encoder, inst: &Inst, prim: &crate::hir::Primitive, p:
         .as_ref()
         .and_then(|b| crate::space::region::region(prog, b, &point))
         .ok_or_else(|| Unsupported(format!(
-            "the first footprint of `{}` has a URDF or mesh part and its robot kind has no `geometry:` of shapes to place it at the start, so whether participants start apart is not decided",
+            "a first footprint with a URDF or mesh part (that of `{}`) of a robot kind with no `geometry:` of shapes to place the robot at the start",
             prim.name
         )))?;
     let local = to_local(enc, inst.role, p)?;

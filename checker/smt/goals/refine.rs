@@ -71,7 +71,7 @@ pub(super) fn within(c: &Primitive, ss: &[&Primitive]) -> Within {
     }
     let unknown = |side: &str, p: &Primitive| {
         Within::Unknown(format!(
-            "the {side} footprint of `{}` has a URDF or mesh part, which has no predicate for the SMT solver, so whether `{}`'s footprint lies within that of `{}` is not decided; write the footprints as predicates or boxes, spheres, cylinders and capsules, or both as `footprint: geometry;`",
+            "a footprint with a URDF or mesh part (the {side} one, of `{}`), which has no predicate, so whether the footprint of `{}` lies within that of `{}` is not decided; write the footprints as predicates or with boxes, spheres, cylinders and capsules, or both as `footprint: geometry;`",
             p.name,
             c.name,
             bounded.iter().map(|s| s.name.as_str()).collect::<Vec<_>>().join("` ∧ `"),
