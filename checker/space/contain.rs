@@ -43,10 +43,11 @@ pub fn body_within_footprint(prog: &Program, prim: PrimId) -> Contained {
     let Footprint::Solid { .. } = &p.footprint else {
         return Contained::Unknown("not a footprint with a URDF or mesh part".into());
     };
-    let (body, fp) = match (pieces(world.kinds.get(p.kind.idx())), pieces(world.prims.get(prim.idx()).and_then(|x| x.as_ref()))) {
-        (Ok(b), Ok(f)) => (b, f),
-        (Err(why), _) | (_, Err(why)) => return Contained::Unknown(why),
-    };
+    let (body, fp) =
+        match (pieces(world.kinds.get(p.kind.idx())), pieces(world.prims.get(prim.idx()).and_then(|x| x.as_ref()))) {
+            (Ok(b), Ok(f)) => (b, f),
+            (Err(why), _) | (_, Err(why)) => return Contained::Unknown(why),
+        };
     for a in body {
         if fp.iter().any(|b| same_place(a, b) && within(a, b)) {
             continue;

@@ -228,9 +228,18 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
 /// `geometry:`), for [T-SESS] when a first footprint (`prim`'s) has no predicate. Unknown
 /// when the kind has no body, or one with a URDF or mesh part (the geometric procedure
 /// takes those), rather than reading the footprint as all space.
-fn initial_body(enc: &mut Encoder, inst: &Inst, prim: &crate::hir::Primitive, p: &[Real; 3]) -> Result<Bool, Unsupported> {
+fn initial_body(
+    enc: &mut Encoder,
+    inst: &Inst,
+    prim: &crate::hir::Primitive,
+    p: &[Real; 3],
+) -> Result<Bool, Unsupported> {
     let prog = enc.prog();
-    let point = [0, 1, 2].map(|i| Expr { kind: crate::hir::ExprKind::Var(Var::Point(i)), sort: crate::hir::Sort::Real, loc: Default::default() });
+    let point = [0, 1, 2].map(|i| Expr {
+        kind: crate::hir::ExprKind::Var(Var::Point(i)),
+        sort: crate::hir::Sort::Real,
+        loc: Default::default(),
+    });
     let region = prog
         .kind(inst.prim.kind)
         .body
