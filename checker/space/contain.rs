@@ -3,8 +3,8 @@
 //! decided with the solids of [`super::world`] where that is exact, and otherwise left
 //! undecided (the caller reports unknown).
 //!
-//! Decided case: every piece of the body lies within one piece of the footprint placed by
-//! the same pose (`at pose(...)` with equal expressions, so that whatever the state, the
+//! Decided case: every piece of the body is the footprint's piece itself (the same mesh
+//! file, read once) or lies within one piece of the footprint placed by the same pose (`at pose(...)` with equal expressions, so that whatever the state, the
 //! two are in one frame and the question does not depend on the state), neither a URDF
 //! link. A piece `A` lies within a convex piece `B` iff every point of a finite set whose
 //! hull holds `A` (a box's corners, a mesh's vertices; a cylinder's bounding box's
@@ -163,6 +163,10 @@ fn exact(b: &Piece) -> bool {
 }
 
 fn within(a: &Piece, b: &Piece) -> bool {
+    // The same solid (one mesh file, cached once by the world builder): within itself.
+    if std::sync::Arc::ptr_eq(&a.solid, &b.solid) {
+        return true;
+    }
     let Some((points, depth)) = core(a) else { return false };
     if !exact(b) || points.is_empty() {
         return false;
@@ -197,8 +201,11 @@ mod tests {
         let inner = piece(Solid::mochi_box(0.5, 0.5, 0.5, at(0.25), "inner").unwrap());
         assert!(within(&inner, &outer));
         assert!(!within(&outer, &inner));
-        // A box is not within itself: its corners are on the boundary, not inside by a margin.
-        assert!(!within(&outer, &outer));
+        // A box is not within an equal one built apart: its corners are on the boundary, not
+        // inside by a margin. The same solid is within itself.
+        let twin = piece(Solid::mochi_box(1.0, 1.0, 1.0, id, "twin").unwrap());
+        assert!(!within(&outer, &twin));
+        assert!(within(&outer, &outer));
         let ball = |r: f64, z: f64| piece(Solid::sphere(r, at(z), "ball").unwrap());
         assert!(within(&ball(0.49, 0.5), &outer));
         assert!(!within(&ball(0.51, 0.5), &outer));

@@ -10,7 +10,8 @@ use super::frames::world_point;
 use super::motion::{end_frame, ends, Inst};
 use super::query::zero;
 use super::{Part, Plan, Query};
-use crate::hir::{Expr, PrimApp, Primitive, Program, RoleId};
+use crate::hir::body::{Body, Shape};
+use crate::hir::{Expr, PrimApp, Primitive, Program, RoleId, Var};
 use z3::ast::Bool;
 
 /// The parts of a refinement obligation: none for a primitive refining itself, a failure
@@ -56,6 +57,40 @@ pub(super) enum Within {
     Unknown(String),
 }
 
+/// Whether two geometric footprints are the same body at every state and time: the same
+/// shapes with equal sizes, files and poses, none reading a parameter (the two primitives'
+/// arguments differ; the state, `old(...)` and `clock` are shared in a refinement).
+fn same_body(a: &Body, b: &Body) -> bool {
+    let no_param = |e: &Expr| !crate::hir::expr::mentions(e, &|v| matches!(v, Var::Param(_)));
+    let exprs = |p: &crate::hir::body::Part| -> Vec<Expr> {
+        let mut out: Vec<Expr> = match &p.shape {
+            Shape::Box(d) => d.to_vec(),
+            Shape::Sphere(r) => vec![r.clone()],
+            Shape::Cylinder(r, h) | Shape::Capsule(r, h) => vec![r.clone(), h.clone()],
+            Shape::Urdf { .. } | Shape::Mesh { .. } => Vec::new(),
+        };
+        out.extend(p.place.iter().flat_map(|pose| pose.args.iter().cloned()));
+        out
+    };
+    let same_shape = |x: &Shape, y: &Shape| match (x, y) {
+        (Shape::Box(_), Shape::Box(_))
+        | (Shape::Sphere(_), Shape::Sphere(_))
+        | (Shape::Cylinder(..), Shape::Cylinder(..))
+        | (Shape::Capsule(..), Shape::Capsule(..)) => true,
+        (Shape::Urdf { path: p, .. }, Shape::Urdf { path: q, .. })
+        | (Shape::Mesh { path: p, .. }, Shape::Mesh { path: q, .. }) => p == q,
+        _ => false,
+    };
+    a.parts.len() == b.parts.len()
+        && a.parts.iter().zip(&b.parts).all(|(x, y)| {
+            let (ex, ey) = (exprs(x), exprs(y));
+            same_shape(&x.shape, &y.shape)
+                && x.place.is_some() == y.place.is_some()
+                && ex == ey
+                && ex.iter().all(no_param)
+        })
+}
+
 pub(super) fn within(c: &Primitive, ss: &[&Primitive]) -> Within {
     use crate::hir::Footprint as F;
     // The abstract footprints that constrain anything (all space drops out of the meet).
@@ -68,6 +103,11 @@ pub(super) fn within(c: &Primitive, ss: &[&Primitive]) -> Within {
     }
     if c.footprint.is_own_geometry() && bounded.iter().all(|s| s.footprint.is_own_geometry()) {
         return Within::Holds;
+    }
+    if let Some(cb) = c.footprint.body() {
+        if bounded.iter().all(|s| s.footprint.body().is_some_and(|sb| same_body(cb, sb))) {
+            return Within::Holds;
+        }
     }
     let unknown = |side: &str, p: &Primitive| {
         Within::Unknown(format!(
@@ -316,17 +356,19 @@ mod tests {
         motion R.own { interruptible: true; footprint: geometry; duration: [0, inf]; }
         motion R.own2 { interruptible: true; footprint: geometry; guarantee: x == old(x); duration: [0, inf]; }
         motion R.wide { interruptible: true; footprint(px, py, pz): px^2 + py^2 + pz^2 <= 100; duration: [0, inf]; }
-        motion R.all { interruptible: true; duration: [0, inf]; }";
+        motion R.all { interruptible: true; duration: [0, inf]; }
+        motion R.mesh2 { interruptible: true; guarantee: x == old(x); footprint: mesh(\"gear.stl\") at pose(x, 0, 0); duration: [0, inf]; }
+        motion R.moved(d: real) { interruptible: true; footprint: mesh(\"gear.stl\") at pose(x + d, 0, 0); duration: [0, inf]; }";
 
     #[test]
     fn a_footprint_without_a_predicate_is_never_read_as_all_space() {
+        let src = format!(
+            "robot R {{ state x: real; invariant: 0 <= x <= 10; geometry: mesh(\"gear.stl\"); }} {GEOMETRIC}
+             system S {{ participant A: R {{ init: x == 1; }} }} choreography G = dt<A: all>. end;"
+        );
+        let (prog, d) = crate::lower::tests::lower_src(&src);
+        assert!(d.is_empty(), "{d:?}");
         let decide = |c: &str, s: &str| {
-            let src = format!(
-                "robot R {{ state x: real; invariant: 0 <= x <= 10; geometry: mesh(\"gear.stl\"); }} {GEOMETRIC}
-                 system S {{ participant A: R {{ init: x == 1; }} }} choreography G = dt<A: all>. end;"
-            );
-            let (prog, d) = crate::lower::tests::lower_src(&src);
-            assert!(d.is_empty(), "{d:?}");
             let app = |name: &str| {
                 let i = prog.prims.iter().position(|p| p.name == name).expect("a primitive");
                 PrimApp { prim: PrimId(i as u32), args: Vec::new(), loc: Default::default() }
@@ -363,6 +405,15 @@ mod tests {
         assert!(matches!(d, Decision::Fails(_)), "own's guarantee is weaker than own2's: {d:?}");
         let (planned, _) = decide("own2", "own");
         assert!(planned.is_ok_and(|p| !p.contains(&Part::Refine(RefineItem::Footprint))));
+        // The same mesh placed by the same pose; one placed by a parameter is not compared.
+        let (planned, d) = decide("mesh2", "mesh");
+        assert!(planned.is_ok_and(|p| !p.contains(&Part::Refine(RefineItem::Footprint))));
+        assert!(matches!(d, Decision::Holds(_)), "{d:?}");
+        let (_, d) = decide("moved", "moved");
+        assert!(matches!(d, Decision::Holds(_)), "a primitive refines itself: {d:?}");
+        let prim = |n: &str| prog.prims.iter().find(|p| p.name == n).expect("a primitive");
+        assert!(matches!(super::within(prim("mesh"), &[prim("moved")]), super::Within::Unknown(_)));
+        assert_eq!(super::within(prim("mesh"), &[prim("mesh2")]), super::Within::Holds);
     }
 
     #[test]
