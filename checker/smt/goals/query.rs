@@ -106,8 +106,8 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
                 for app in apps {
                     let inst = Inst::new(&mut q.enc, *role, app, zero.clone(), "0")?;
                     let fp = match &inst.prim.footprint {
-                        // All space: exact (Def 3.4), and the worst case here (a larger
-                        // footprint can only make the two meet).
+                        // The footprint's predicate; all space is `true`, exact (Def 3.4)
+                        // and the worst case here (a larger footprint only makes two meet).
                         Footprint::Everywhere | Footprint::Predicate(_) | Footprint::Shapes { .. } => {
                             inst.footprint(&mut q.enc, &p)?
                         }
