@@ -711,21 +711,30 @@ pub(crate) fn contracts(prog: &crate::hir::Program, used: &HashSet<crate::hir::P
     let used: Vec<crate::hir::PrimId> =
         (0..prog.prims.len()).map(|i| crate::hir::PrimId(i as u32)).filter(|p| used.contains(p)).collect();
     // Its footprint holds some point (E0412): asked of every primitive of a kind with a
-    // body, witnessed or not. A kind is bodiless (an environment, a sensor) when it declares
-    // no `geometry:` and every footprint of it is literally `false`: it occupies no space.
-    let is_false = |p: crate::hir::PrimId| {
-        prog.prim(p).footprint.as_ref().is_some_and(|f| matches!(f.pred.kind, crate::hir::ExprKind::Bool(false)))
+    // body whose footprint is a predicate, witnessed or not. A geometric footprint holds a
+    // point by construction (shapes of positive sizes, E0511; a mesh or URDF that loaded),
+    // and all space every point. A kind is bodiless (an environment, a sensor) when it
+    // declares no `geometry:` and every footprint of it is literally `false`: it occupies
+    // no space.
+    use crate::hir::Footprint;
+    let is_false = |p: crate::hir::PrimId| match &prog.prim(p).footprint {
+        Footprint::Predicate(f) => matches!(f.pred.kind, crate::hir::ExprKind::Bool(false)),
+        Footprint::Everywhere | Footprint::Shapes { .. } | Footprint::Solid { .. } => false,
     };
     let has_body = |k: crate::hir::KindId| {
         prog.kind(k).body.is_some()
             || (0..prog.prims.len())
                 .map(|i| crate::hir::PrimId(i as u32))
-                .any(|p| prog.prim(p).kind == k && prog.prim(p).footprint.is_some() && !is_false(p))
+                .any(|p| prog.prim(p).kind == k && prog.prim(p).footprint.is_declared() && !is_false(p))
     };
-    let occupies = used.iter().filter(|p| prog.prim(**p).footprint.is_some() && has_body(prog.prim(**p).kind));
+    let asks_a_point = |p: &crate::hir::PrimId| match &prog.prim(*p).footprint {
+        Footprint::Predicate(_) => has_body(prog.prim(*p).kind),
+        Footprint::Everywhere | Footprint::Shapes { .. } | Footprint::Solid { .. } => false,
+    };
+    let occupies = used.iter().filter(|p| asks_a_point(p));
     let occupies = occupies.map(|&p| Obligation {
         rule: Rule::Occupies,
-        span: prog.prim(p).footprint.as_ref().map_or(prog.prim(p).span, |f| f.pred.loc.0),
+        span: prog.prim(p).footprint.span().unwrap_or(prog.prim(p).span),
         what: format!("the footprint of `{}`", prog.prim(p).name),
         hyps: Vec::new(),
         goal: Goal::CanEnd { prim: p },
@@ -737,18 +746,25 @@ pub(crate) fn contracts(prog: &crate::hir::Program, used: &HashSet<crate::hir::P
         hyps: Vec::new(),
         goal: Goal::CanEnd { prim: p },
     });
-    // Its footprint contains the body (E0512), for every kind with a `geometry:`: a written
-    // predicate, or the predicate of a geometric footprint (shapes placed by the state,
-    // which must cover the body too; `footprint: geometry` is the body and holds at once).
+    // Its footprint contains the body (E0512), for every kind with a `geometry:` and every
+    // declared footprint: a written predicate, shapes placed by the state (which must
+    // cover the body too), a mesh or URDF (unknown unless it is the body). All space
+    // holds it at once, and so does `footprint: geometry`, which is the body
+    // (`goals::plan` says so without a query).
     let contains = used
         .iter()
         .filter(|p| {
             let prim = prog.prim(**p);
-            prim.footprint.is_some() && prog.kind(prim.kind).body.is_some()
+            let asked = match &prim.footprint {
+                Footprint::Everywhere => false,
+                f @ (Footprint::Shapes { .. } | Footprint::Solid { .. }) => !f.is_own_geometry(),
+                Footprint::Predicate(_) => true,
+            };
+            asked && prog.kind(prim.kind).body.is_some()
         })
         .map(|&p| Obligation {
             rule: Rule::Contains,
-            span: prog.prim(p).footprint.as_ref().map_or(prog.prim(p).span, |f| f.pred.loc.0),
+            span: prog.prim(p).footprint.span().unwrap_or(prog.prim(p).span),
             what: format!("footprint of `{}`", prog.prim(p).name),
             hyps: Vec::new(),
             goal: Goal::Contains { prim: p },

@@ -792,8 +792,8 @@ impl<'a, 'p> Runner<'a, 'p> {
     fn collide(&mut self, a: &Occupant, b: &Occupant, t: &Rat, context: &str) -> bool {
         let prog = self.prog;
         let (pa, pb) = (prog.prim(a.app.prim), prog.prim(b.app.prim));
-        if pa.footprint.is_none() || pb.footprint.is_none() {
-            let who = if pa.footprint.is_none() { a } else { b };
+        if pa.footprint.predicate().is_none() || pb.footprint.predicate().is_none() {
+            let who = if pa.footprint.predicate().is_none() { a } else { b };
             self.report(
                 Kind::Collision,
                 t,
@@ -846,7 +846,7 @@ impl<'a, 'p> Runner<'a, 'p> {
     /// Whether the world point `p` is in `o`'s footprint, evaluated exactly.
     fn in_footprint(&self, o: &Occupant, p: &[Num; 3]) -> Tri {
         let prog = self.prog;
-        let Some(fp) = &prog.prim(o.app.prim).footprint else { return Tri::True };
+        let Some(fp) = prog.prim(o.app.prim).footprint.predicate() else { return Tri::True };
         let Some(local) = crate::smt::replay::to_local(prog, o.role, p) else { return Tri::Unknown };
         let args = self.arg_values(&o.app);
         let env = frame_env(&o.now, &o.start, &args, &o.clock, &[]);

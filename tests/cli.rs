@@ -355,6 +355,28 @@ fn a_nonlinear_query_beyond_the_encoding_gives_unknown_and_exit_3() {
 }
 
 #[test]
+fn a_mesh_footprint_is_placed_by_the_body_at_the_start_not_read_as_all_space() {
+    // [T-SESS] with mesh first footprints: each robot starts in its body (which E0512
+    // shows lies within the mesh), so the two pucks 1 m apart start apart.
+    let o = mochi(&["check", "tests/data/mesh-footprint-start.chor", "--format", "json"]);
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
+    assert_eq!(v["verdict"], "verified", "{}", stdout(&o));
+    assert_eq!(o.status.code(), Some(0));
+}
+
+#[test]
+fn a_footprint_within_a_mesh_is_not_decided_and_never_passed() {
+    // Refinement with an abstract mesh footprint and a concrete 10 m ball: the SMT solver
+    // has no predicate for the mesh, so the footprint item is unknown with the reason.
+    let o = mochi(&["check", "tests/data/wide-footprint-refines-a-mesh.chor", "--format", "json"]);
+    assert_eq!(o.status.code(), Some(3), "{}", stdout(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
+    assert_eq!(v["verdict"], "unknown");
+    let notes = undecided_notes(&v);
+    assert!(notes.len() == 1 && notes[0].contains("URDF or mesh part") && notes[0].contains("`hold`"), "{notes:?}");
+}
+
+#[test]
 fn dump_smt_writes_one_smt_lib_file_per_query() {
     let dir = TempDir::new("dump");
     let out = dir.0.join("queries");

@@ -473,7 +473,7 @@ fn replay_reading(prog: &Program, ob: &Obligation, part: &Part, model: &Model) -
             for k in [*i, *j] {
                 let (role, app) = parts.get(k).ok_or("no such part")?;
                 let prim = prog.prim(app.prim);
-                let fp = prim.footprint.as_ref().ok_or("no footprint")?;
+                let fp = prim.footprint.predicate().ok_or("no footprint predicate")?;
                 let local = replay::to_local(prog, *role, &[x.clone(), y.clone(), z.clone()]);
                 match eval(&fp.pred, &frame(prog, model, *role, app, Some("t"), local)).0 {
                     Tri::False => return Err(format!("the point is not in the footprint of `{}`", prim.name)),

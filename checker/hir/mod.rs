@@ -113,12 +113,78 @@ impl RobotKind {
     }
 }
 
-/// The footprint of a primitive: a predicate over the point `(x, y, z)` named by the
-/// user, the state and `clock` (Def 3.4). `None` fills all space.
+/// A footprint predicate over the point `(x, y, z)` named by the user (or `x, y, z` for
+/// one derived from shapes), the state, `old(X)`, parameters and `clock` (Def 3.4's FP).
 #[derive(Clone, Debug)]
-pub struct Footprint {
+pub struct PointPred {
     pub point: [String; 3],
     pub pred: Expr,
+}
+
+/// The footprint of a primitive (Def 3.4's FP), one value per way of writing it. Every
+/// check that reads a footprint matches on it exhaustively: a geometric footprint with no
+/// predicate ([`Footprint::Solid`]) is decided by the geometric procedure or reported
+/// unknown, never read as all space where that would let a check pass.
+#[derive(Clone, Debug)]
+pub enum Footprint {
+    /// No `footprint` field: the primitive may occupy all space (Def 3.4 with FP = R³).
+    /// Exact, not an approximation: a check for which all space is the worst case
+    /// (collision, containment of the body, the abstract side of a refinement) reads it so.
+    Everywhere,
+    /// `footprint(px, py, pz): P;`.
+    Predicate(PointPred),
+    /// A geometric footprint (`footprint: geometry;` when `own`, else `footprint: SHAPES;`)
+    /// all of whose parts are boxes, spheres, cylinders or capsules: at time `t` the body
+    /// placed by the state at `t`, with its exact predicate (`space::region`, filled by
+    /// `space::prepare`).
+    Shapes { body: body::Body, own: bool, region: PointPred },
+    /// A geometric footprint with a URDF or mesh part: a body only the geometric decision
+    /// procedure can place; it has no predicate. Lowering makes every geometric footprint
+    /// one of these; `space::prepare` turns those it can write as a predicate into
+    /// [`Footprint::Shapes`].
+    Solid { body: body::Body, own: bool },
+}
+
+impl Footprint {
+    /// The exact predicate of the footprint, if it has one. `None` for
+    /// [`Footprint::Everywhere`] (all space) and [`Footprint::Solid`] (no predicate): a
+    /// caller must tell the two apart.
+    pub fn predicate(&self) -> Option<&PointPred> {
+        match self {
+            Footprint::Predicate(p) | Footprint::Shapes { region: p, .. } => Some(p),
+            Footprint::Everywhere | Footprint::Solid { .. } => None,
+        }
+    }
+
+    /// The body of a geometric footprint.
+    pub fn body(&self) -> Option<&body::Body> {
+        match self {
+            Footprint::Shapes { body, .. } | Footprint::Solid { body, .. } => Some(body),
+            Footprint::Everywhere | Footprint::Predicate(_) => None,
+        }
+    }
+
+    /// Whether the primitive declares a footprint (anything but all space).
+    pub fn is_declared(&self) -> bool {
+        !matches!(self, Footprint::Everywhere)
+    }
+
+    /// Whether the footprint is `footprint: geometry;`, the kind's own body.
+    pub fn is_own_geometry(&self) -> bool {
+        match self {
+            Footprint::Shapes { own, .. } | Footprint::Solid { own, .. } => *own,
+            Footprint::Everywhere | Footprint::Predicate(_) => false,
+        }
+    }
+
+    /// Where the footprint is written, if it is.
+    pub fn span(&self) -> Option<Span> {
+        match self {
+            Footprint::Everywhere => None,
+            Footprint::Predicate(p) => Some(p.pred.loc.0),
+            Footprint::Shapes { body, .. } | Footprint::Solid { body, .. } => Some(body.span),
+        }
+    }
 }
 
 /// `[lo, hi]`, `hi = None` for infinity (Def 3.4's `D`).
@@ -139,11 +205,9 @@ pub struct Primitive {
     pub assume: Expr,
     pub guarantee: Expr,
     pub post: Expr,
-    pub footprint: Option<Footprint>,
-    /// A geometric footprint (`footprint: geometry;` is the kind's body): at time `t` the
-    /// primitive occupies this body placed by the state at `t` (poses may read X,
-    /// `old(X)`, parameters and `clock`). When set, `footprint` is `None`.
-    pub footprint_body: Option<body::Body>,
+    /// A geometric footprint's body is placed at time `t` by the state at `t` (poses may
+    /// read X, `old(X)`, parameters and `clock`).
+    pub footprint: Footprint,
     pub duration: Duration,
     pub interruptible: bool,
     pub span: Span,

@@ -402,7 +402,7 @@ impl Printer<'_> {
             Var::Own(slot) => own(*slot),
             Var::Old(i) => format!("old({})", own(Slot::State(*i))),
             Var::Param(i) => prim.map(|p| p.params[*i].0.clone()).unwrap_or_else(|| format!("param{i}")),
-            Var::Point(i) => match prim.and_then(|p| p.footprint.as_ref()) {
+            Var::Point(i) => match prim.and_then(|p| p.footprint.predicate()) {
                 Some(fp) => fp.point[*i].clone(),
                 None => ["px", "py", "pz"][*i].to_string(),
             },

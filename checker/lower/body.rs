@@ -455,9 +455,10 @@ mod tests {
         assert!(p.kinds[2].body.is_none());
         // `footprint: geometry` is the kind's body; a written one reads params, old and clock.
         let turn = &p.prims[0];
-        assert!(turn.footprint.is_none());
-        assert_eq!(turn.footprint_body.as_ref().unwrap().parts.len(), 2);
-        let slide = p.prims[1].footprint_body.as_ref().expect("a geometric footprint");
+        assert!(matches!(turn.footprint, crate::hir::Footprint::Solid { own: true, .. }));
+        assert_eq!(turn.footprint.body().unwrap().parts.len(), 2);
+        assert!(matches!(p.prims[1].footprint, crate::hir::Footprint::Solid { own: false, .. }));
+        let slide = p.prims[1].footprint.body().expect("a geometric footprint");
         let ExprKind::Call(Builtin::Min, args) = &slide.parts[0].place.as_ref().unwrap().args[0].kind else {
             panic!("min")
         };

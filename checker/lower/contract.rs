@@ -24,8 +24,7 @@ impl Lowerer {
             assume: Expr::bool(true, loc),
             guarantee: Expr::bool(true, loc),
             post: Expr::bool(true, loc),
-            footprint: None,
-            footprint_body: None,
+            footprint: Footprint::Everywhere,
             duration: Duration { lo: Expr { kind: ExprKind::Int(0), sort: Sort::Int, loc }, hi: None },
             interruptible: false,
             span: m.span,
@@ -70,10 +69,13 @@ impl Lowerer {
                         ..base
                     };
                     let pred = self.pred(pred, &env, "a footprint");
-                    prim.footprint = Some(Footprint { point: names.clone(), pred });
+                    prim.footprint = Footprint::Predicate(PointPred { point: names.clone(), pred });
                 }
                 ("footprint", f @ (ast::FieldValue::OwnGeometry(_) | ast::FieldValue::Body(_))) => {
-                    prim.footprint_body = self.footprint_body(kind, &params, f);
+                    if let Some(body) = self.footprint_body(kind, &params, f) {
+                        let own = matches!(f, ast::FieldValue::OwnGeometry(_));
+                        prim.footprint = Footprint::Solid { body, own };
+                    }
                 }
                 ("duration", ast::FieldValue::Duration { lo, hi }) => {
                     let env = Env { state: true, old: true, part: Some("the duration"), ..base };

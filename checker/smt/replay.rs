@@ -13,7 +13,7 @@
 use super::encode::Encoder;
 use super::goals::Part;
 use crate::exact::{self, Num, Tri, Value};
-use crate::hir::{Builtin, Expr, Program, RoleId, Slot, Var};
+use crate::hir::{Builtin, Expr, Footprint, Program, RoleId, Slot, Var};
 use crate::obligation::{Goal, Obligation};
 use std::collections::HashMap;
 
@@ -114,7 +114,11 @@ fn outside_footprint(
 ) -> Option<String> {
     let shared = |v: &Var| shared_var(prog, v, m);
     let prim = prog.prim(app.prim);
-    let fp = prim.footprint.as_ref()?;
+    let fp = match &prim.footprint {
+        Footprint::Predicate(fp) | Footprint::Shapes { region: fp, .. } => fp,
+        // All space holds every point; a body with no predicate is not replayed here.
+        Footprint::Everywhere | Footprint::Solid { .. } => return None,
+    };
     let local = to_local(prog, *r, world)?;
     let args = app.args.iter().map(|a| exact::eval(prog, a, &shared).ok()).collect::<Vec<_>>();
     let env = frame(prog, *r, m, Some("t"), &args, Some(local));

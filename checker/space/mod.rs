@@ -5,6 +5,7 @@
 //! capsules is checked by the same queries as a written predicate. The remaining ones
 //! (URDF, meshes, rotation by a state variable) are the geometric decision procedure's.
 
+pub mod contain;
 pub mod region;
 pub mod truth;
 pub mod world;
@@ -13,18 +14,19 @@ use crate::bounds;
 use crate::diag::{Code, Diagnostic};
 use crate::hir::body::{Body, Shape};
 use crate::hir::expr::{ExprKind, Sort};
-use crate::hir::{Expr, Footprint, Loc, Program, Var};
+use crate::hir::{Expr, Footprint, Loc, PointPred, Program, Var};
 use num_traits::ToPrimitive;
 
 /// Checks every body's sizes and gives each geometric footprint a predicate where one
-/// exists (`Primitive::footprint` from `Primitive::footprint_body`).
+/// exists: a [`Footprint::Solid`] all of whose parts are shapes becomes a
+/// [`Footprint::Shapes`]; one with a URDF or mesh part stays a `Solid`.
 pub fn prepare(prog: &mut Program) -> Vec<Diagnostic> {
     let mut diags = Vec::new();
     let bodies = prog
         .kinds
         .iter()
         .filter_map(|k| k.body.as_ref())
-        .chain(prog.prims.iter().filter_map(|p| p.footprint_body.as_ref()))
+        .chain(prog.prims.iter().filter_map(|p| p.footprint.body()))
         .chain(prog.obstacles.iter().map(|o| &o.body));
     for body in bodies {
         sizes(prog, body, &mut diags);
@@ -33,12 +35,12 @@ pub fn prepare(prog: &mut Program) -> Vec<Diagnostic> {
         return diags;
     }
     for i in 0..prog.prims.len() {
-        let prim = &prog.prims[i];
-        let (None, Some(body)) = (&prim.footprint, &prim.footprint_body) else { continue };
+        let Footprint::Solid { body, own } = &prog.prims[i].footprint else { continue };
         let loc = Loc(body.span);
         let point = [0, 1, 2].map(|k| Expr { kind: ExprKind::Var(Var::Point(k)), sort: Sort::Real, loc });
         if let Some(pred) = region::region(prog, body, &point) {
-            prog.prims[i].footprint = Some(Footprint { point: ["x", "y", "z"].map(String::from), pred });
+            let region = PointPred { point: ["x", "y", "z"].map(String::from), pred };
+            prog.prims[i].footprint = Footprint::Shapes { body: body.clone(), own: *own, region };
         }
     }
     diags

@@ -82,7 +82,7 @@ pub fn build(prog: &Program, db: &mut SourceDb, read: &mut ByteLoader<'_>) -> (W
         world.kinds.push(pieces);
     }
     for prim in &prog.prims {
-        world.prims.push(prim.footprint_body.as_ref().map(|body| b.body(body, Some(prim.kind))));
+        world.prims.push(prim.footprint.body().map(|body| b.body(body, Some(prim.kind))));
     }
     for o in &prog.obstacles {
         world.obstacles.push(b.body(&o.body, None));

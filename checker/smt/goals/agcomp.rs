@@ -259,9 +259,7 @@ pub(super) fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], pa
 /// A part whose primitive declares no footprint at all (neither a predicate nor a body):
 /// it may occupy all space.
 fn without_footprint<'p>(prog: &Program, parts: &'p [(RoleId, PrimApp)]) -> Option<&'p (RoleId, PrimApp)> {
-    parts
-        .iter()
-        .find(|(_, app)| prog.prim(app.prim).footprint.is_none() && prog.prim(app.prim).footprint_body.is_none())
+    parts.iter().find(|(_, app)| !prog.prim(app.prim).footprint.is_declared())
 }
 
 /// A world box around a static obstacle (its region's point box: constants only), or

@@ -9,7 +9,7 @@
 use super::super::encode::Unsupported;
 use super::{Part, Plan};
 use crate::bounds::{self, Interval};
-use crate::hir::{Builtin, Expr, PrimApp, Program, RoleId, Slot, Var};
+use crate::hir::{Builtin, Expr, Footprint, PrimApp, Program, RoleId, Slot, Var};
 use crate::obligation::{Obligation, RoleMotion, Side};
 use std::collections::HashMap;
 
@@ -126,7 +126,13 @@ pub(super) fn app_box(
     shared: &HashMap<Var, Interval>,
 ) -> Option<[Interval; 3]> {
     let prim = prog.prim(app.prim);
-    let fp = prim.footprint.as_ref()?;
+    let fp = match &prim.footprint {
+        Footprint::Predicate(fp) | Footprint::Shapes { region: fp, .. } => fp,
+        // No box: all space is unbounded, and a body with a URDF or mesh part has no
+        // predicate to bound here. `None` is compared with every other box (conservative:
+        // a missing box can only ask more questions).
+        Footprint::Everywhere | Footprint::Solid { .. } => return None,
+    };
     let inv = prog.kind(prim.kind).invariant.as_ref();
     let shared_lookup = |v: &Var| shared.get(v).copied();
     // In the primitive's frame: old(x) and the start are the participant's `Role` vars.

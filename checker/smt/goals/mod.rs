@@ -160,8 +160,26 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
         Goal::Reachable { .. } => Plan::Parts(vec![Part::Context]),
         Goal::Progress { .. } => Plan::Parts(vec![Part::Valid]),
         Goal::Contains { prim } => {
-            let n = prog.kind(prog.prim(*prim).kind).body.as_ref().map_or(0, |b| b.parts.len());
-            Plan::Parts((0..n).map(Part::Contains).collect())
+            let p = prog.prim(*prim);
+            let n = prog.kind(p.kind).body.as_ref().map_or(0, |b| b.parts.len());
+            match &p.footprint {
+                // All space contains every body; `footprint: geometry` is the body itself.
+                crate::hir::Footprint::Everywhere => Plan::Holds(Some("the footprint is all space".into())),
+                f if f.is_own_geometry() => Plan::Holds(Some("the footprint is the robot's own geometry".into())),
+                crate::hir::Footprint::Predicate(_) | crate::hir::Footprint::Shapes { .. } => {
+                    Plan::Parts((0..n).map(Part::Contains).collect())
+                }
+                // No predicate: decided by the solids when each part of the body lies in a
+                // part of the footprint placed the same way, else unknown.
+                crate::hir::Footprint::Solid { .. } => match crate::space::contain::body_within_footprint(prog, *prim) {
+                    crate::space::contain::Contained::Yes(note) => Plan::Holds(Some(note)),
+                    crate::space::contain::Contained::No(why) => Plan::Fails(why),
+                    crate::space::contain::Contained::Unknown(why) => Plan::Unknown(Unsupported(format!(
+                        "a footprint with a URDF or mesh part (that of `{}`) as a container of the robot's body: {why}; write it as `footprint: geometry;`, with shapes, or as a predicate",
+                        p.name
+                    ))),
+                },
+            }
         }
     }
 }

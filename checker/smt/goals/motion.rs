@@ -13,7 +13,7 @@ use super::super::encode::{Encoder, Frame, Term, Unsupported};
 use super::frames::to_local;
 use super::query::zero;
 use super::Query;
-use crate::hir::{Expr, PrimApp, Primitive, RoleId, Slot};
+use crate::hir::{Expr, Footprint, PrimApp, Primitive, RoleId, Slot};
 use z3::ast::{Bool, Real};
 
 /// A participant running a primitive, encoded.
@@ -117,8 +117,16 @@ impl<'a> Inst<'a> {
         Ok(())
     }
 
+    /// "The world point `p` is in the footprint now", exactly: all space is `true` (Def
+    /// 3.4, no footprint written), a predicate or shapes their predicate. A footprint with
+    /// a URDF or mesh part has no predicate: unsupported here (the geometric procedure
+    /// decides the questions it can; every other one is unknown), never `true`.
     pub(super) fn footprint(&self, enc: &mut Encoder, p: &[Real; 3]) -> Result<Bool, Unsupported> {
-        let Some(fp) = &self.prim.footprint else { return Ok(Bool::from_bool(true)) };
+        let fp = match &self.prim.footprint {
+            Footprint::Everywhere => return Ok(Bool::from_bool(true)),
+            Footprint::Predicate(fp) | Footprint::Shapes { region: fp, .. } => fp,
+            Footprint::Solid { .. } => return Err(no_predicate(self.prim)),
+        };
         let local = to_local(enc, self.role, p)?;
         let frame = Frame { point: Some(local), ..self.frame.clone() };
         self.pred(enc, &fp.pred, &frame)
@@ -134,6 +142,14 @@ impl<'a> Inst<'a> {
         };
         Ok((lo, hi))
     }
+}
+
+/// Why a footprint with a URDF or mesh part is not a formula.
+pub(super) fn no_predicate(prim: &Primitive) -> Unsupported {
+    Unsupported(format!(
+        "a footprint with a URDF or mesh part (that of `{}`), which has no predicate, in a question the geometric procedure does not decide",
+        prim.name
+    ))
 }
 
 /// The parts end together at time `t` ([M-PAR]: one elapsed time for all): every part

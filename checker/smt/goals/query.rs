@@ -7,11 +7,11 @@
 use super::super::encode::Encoder;
 use super::super::encode::{Frame, Unsupported};
 use super::agcomp::compat;
-use super::frames::world_point;
+use super::frames::{to_local, world_point};
 use super::motion::{ends, Inst};
 use super::refine::refine;
 use super::{Part, Query};
-use crate::hir::{Expr, PrimApp, Program, RoleId, Slot, Var};
+use crate::hir::{Expr, Footprint, PrimApp, Program, RoleId, Slot, Var};
 use crate::obligation::{Goal, Obligation};
 use std::collections::HashSet;
 use z3::ast::{Bool, Real};
@@ -102,11 +102,30 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
             for (role, apps) in [&firsts[*r], &firsts[*s]] {
                 // Whichever first motion the participant takes, it starts inside it.
                 let mut inside = Vec::new();
+                let mut solid = None;
                 for app in apps {
                     let inst = Inst::new(&mut q.enc, *role, app, zero.clone(), "0")?;
-                    let fp = inst.footprint(&mut q.enc, &p)?;
+                    let fp = match &inst.prim.footprint {
+                        // The footprint's predicate; all space is `true`, exact (Def 3.4)
+                        // and the worst case here (a larger footprint only makes two meet).
+                        Footprint::Everywhere | Footprint::Predicate(_) | Footprint::Shapes { .. } => {
+                            inst.footprint(&mut q.enc, &p)?
+                        }
+                        // No predicate: the robot is placed by its body below instead.
+                        Footprint::Solid { .. } => {
+                            solid = Some(inst.prim);
+                            Bool::from_bool(true)
+                        }
+                    };
                     let start_is_now = inst.at_start();
                     inside.push(Bool::and(&[fp, start_is_now]));
+                }
+                if let (Some(prim), Some(app)) = (solid, apps.first()) {
+                    // The robot at time 0 is its kind's body placed by the start state,
+                    // which lies in every first footprint (E0512 asks it of each).
+                    let inst = Inst::new(&mut q.enc, *role, app, zero.clone(), "0")?;
+                    let body = initial_body(&mut q.enc, &inst, prim, &p)?;
+                    inside.push(Bool::and(&[body, inst.at_start()]));
                 }
                 // Each first footprint contains the robot at time 0, so the robot lies in
                 // their intersection (not merely their union).
@@ -140,7 +159,16 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
             let p = prog.prim(*prim);
             let role = prog.role_ids().find(|r| prog.role(*r).kind == p.kind);
             let Some(role) = role else { return Err(Unsupported("a primitive of a kind no participant has".into())) };
-            let Some(fp) = p.footprint.clone() else { return Ok(q) };
+            let fp = match &p.footprint {
+                Footprint::Predicate(fp) => fp.clone(),
+                // Planned for predicates only (driver::contracts): a body of shapes of
+                // positive sizes (E0511) or a mesh or URDF holds a point by construction,
+                // and all space holds every point. Asked anyway: the empty question.
+                Footprint::Everywhere | Footprint::Shapes { .. } | Footprint::Solid { .. } => {
+                    q.assertions.push(Bool::from_bool(true));
+                    return Ok(q);
+                }
+            };
             let app = PrimApp { prim: *prim, args: Vec::new(), loc: Default::default() };
             let mut inst = Inst::new(&mut q.enc, role, &app, zero(), "t")?;
             inst.frame.params = p.params.iter().map(|(n, sort)| q.enc.named(n, sort)).collect::<Result<_, _>>()?;
@@ -158,7 +186,14 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
             let p = prog.prim(*prim);
             let role = prog.role_ids().find(|r| prog.role(*r).kind == p.kind);
             let Some(role) = role else { return Err(Unsupported("a primitive of a kind no participant has".into())) };
-            let Some(fp) = p.footprint.clone() else { return Err(Unsupported("a primitive with no footprint".into())) };
+            let fp = match &p.footprint {
+                Footprint::Predicate(fp) | Footprint::Shapes { region: fp, .. } => fp.clone(),
+                // Planned only when the footprint has a predicate (goals::plan decides
+                // the other kinds without a query, or reports them unknown).
+                Footprint::Everywhere | Footprint::Solid { .. } => {
+                    return Err(Unsupported(format!("the footprint of `{}`, which has no predicate", p.name)))
+                }
+            };
             let body = prog.kind(p.kind).body.as_ref().ok_or_else(|| Unsupported("a kind with no body".into()))?;
             let part = body.parts.get(*k).ok_or_else(|| Unsupported("a body part out of range".into()))?;
             let one = crate::hir::body::Body { parts: vec![part.clone()], span: part.span };
@@ -187,6 +222,36 @@ pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Quer
         _ => return Err(Unsupported("an obligation split into a part of another kind".into())),
     }
     Ok(q)
+}
+
+/// "The world point `p` is in the body of `inst`'s participant now" (its kind's
+/// `geometry:`), for [T-SESS] when a first footprint (`prim`'s) has no predicate. Unknown
+/// when the kind has no body, or one with a URDF or mesh part (the geometric procedure
+/// takes those), rather than reading the footprint as all space.
+fn initial_body(
+    enc: &mut Encoder,
+    inst: &Inst,
+    prim: &crate::hir::Primitive,
+    p: &[Real; 3],
+) -> Result<Bool, Unsupported> {
+    let prog = enc.prog();
+    let point = [0, 1, 2].map(|i| Expr {
+        kind: crate::hir::ExprKind::Var(Var::Point(i)),
+        sort: crate::hir::Sort::Real,
+        loc: Default::default(),
+    });
+    let region = prog
+        .kind(inst.prim.kind)
+        .body
+        .as_ref()
+        .and_then(|b| crate::space::region::region(prog, b, &point))
+        .ok_or_else(|| Unsupported(format!(
+            "a first footprint with a URDF or mesh part (that of `{}`) of a robot kind with no `geometry:` of shapes to place the robot at the start",
+            prim.name
+        )))?;
+    let local = to_local(enc, inst.role, p)?;
+    let frame = Frame { point: Some(local), ..inst.frame.clone() };
+    inst.pred(enc, &region, &frame)
 }
 
 /// The hypotheses a proof of `ob` rests on, for the vacuity guard: for a validity goal

@@ -10,7 +10,8 @@ use super::frames::world_point;
 use super::motion::{end_frame, ends, Inst};
 use super::query::zero;
 use super::{Part, Plan, Query};
-use crate::hir::{Expr, PrimApp, Primitive, Program, RoleId};
+use crate::hir::body::{Body, Shape};
+use crate::hir::{Expr, PrimApp, Primitive, Program, RoleId, Var};
 use z3::ast::Bool;
 
 /// The parts of a refinement obligation: none for a primitive refining itself, a failure
@@ -30,7 +31,102 @@ pub(super) fn plan(prog: &Program, concrete: &PrimApp, abstract_: &[PrimApp]) ->
         ));
     }
     use RefineItem::*;
-    Plan::Parts([Realisable, Pre, Assume, Guarantee, Post, Footprint, Duration].into_iter().map(Part::Refine).collect())
+    let ss: Vec<&Primitive> = abstract_.iter().map(|a| prog.prim(a.prim)).collect();
+    let items = [Realisable, Pre, Assume, Guarantee, Post, Footprint, Duration];
+    // A footprint item that holds by construction is not asked (see [`within`]).
+    let asked = |i: &RefineItem| *i != Footprint || !matches!(within(c, &ss), Within::Holds);
+    Plan::Parts(items.into_iter().filter(asked).map(Part::Refine).collect())
+}
+
+/// How `FP_c ⊆ FP_s` is decided for the meet of `ss` (the intersection of their
+/// footprints), by the kinds of the footprints (hir::Footprint), exhaustively.
+#[derive(Debug, PartialEq)]
+pub(super) enum Within {
+    /// Both sides have predicates (all space is `true`): one query.
+    Query,
+    /// Holds whatever the state: `c`'s footprint is the kind's body (`footprint:
+    /// geometry`) and so is every abstract one that is not all space, read at the same
+    /// state and time; or every abstract footprint is all space.
+    Holds,
+    /// `c` declares no footprint (all space) and some abstract footprint is a body, which
+    /// is bounded: fails whenever `c` can run from a start the abstract precondition
+    /// allows (the query asks just that; no point is needed).
+    AllSpaceInBody,
+    /// A side has a URDF or mesh part, whose points the SMT solver cannot enumerate: not
+    /// decided (unknown with this reason), never passed.
+    Unknown(String),
+}
+
+/// Whether two geometric footprints are the same body at every state and time: the same
+/// shapes with equal sizes, files and poses, none reading a parameter (the two primitives'
+/// arguments differ; the state, `old(...)` and `clock` are shared in a refinement).
+fn same_body(a: &Body, b: &Body) -> bool {
+    let no_param = |e: &Expr| !crate::hir::expr::mentions(e, &|v| matches!(v, Var::Param(_)));
+    let exprs = |p: &crate::hir::body::Part| -> Vec<Expr> {
+        let mut out: Vec<Expr> = match &p.shape {
+            Shape::Box(d) => d.to_vec(),
+            Shape::Sphere(r) => vec![r.clone()],
+            Shape::Cylinder(r, h) | Shape::Capsule(r, h) => vec![r.clone(), h.clone()],
+            Shape::Urdf { .. } | Shape::Mesh { .. } => Vec::new(),
+        };
+        out.extend(p.place.iter().flat_map(|pose| pose.args.iter().cloned()));
+        out
+    };
+    let same_shape = |x: &Shape, y: &Shape| match (x, y) {
+        (Shape::Box(_), Shape::Box(_))
+        | (Shape::Sphere(_), Shape::Sphere(_))
+        | (Shape::Cylinder(..), Shape::Cylinder(..))
+        | (Shape::Capsule(..), Shape::Capsule(..)) => true,
+        (Shape::Urdf { path: p, .. }, Shape::Urdf { path: q, .. })
+        | (Shape::Mesh { path: p, .. }, Shape::Mesh { path: q, .. }) => p == q,
+        _ => false,
+    };
+    a.parts.len() == b.parts.len()
+        && a.parts.iter().zip(&b.parts).all(|(x, y)| {
+            let (ex, ey) = (exprs(x), exprs(y));
+            same_shape(&x.shape, &y.shape)
+                && x.place.is_some() == y.place.is_some()
+                && ex == ey
+                && ex.iter().all(no_param)
+        })
+}
+
+pub(super) fn within(c: &Primitive, ss: &[&Primitive]) -> Within {
+    use crate::hir::Footprint as F;
+    // The abstract footprints that constrain anything (all space drops out of the meet).
+    let bounded: Vec<&&Primitive> = ss.iter().filter(|s| s.footprint.is_declared()).collect();
+    if bounded.is_empty() {
+        return match &c.footprint {
+            F::Everywhere | F::Predicate(_) | F::Shapes { .. } => Within::Query,
+            F::Solid { .. } => Within::Holds,
+        };
+    }
+    if c.footprint.is_own_geometry() && bounded.iter().all(|s| s.footprint.is_own_geometry()) {
+        return Within::Holds;
+    }
+    if let Some(cb) = c.footprint.body() {
+        if bounded.iter().all(|s| s.footprint.body().is_some_and(|sb| same_body(cb, sb))) {
+            return Within::Holds;
+        }
+    }
+    let unknown = |side: &str, p: &Primitive| {
+        Within::Unknown(format!(
+            "a footprint with a URDF or mesh part (the {side} one, of `{}`), which has no predicate, so whether the footprint of `{}` lies within that of `{}` is not decided; write the footprints as predicates or with boxes, spheres, cylinders and capsules, or both as `footprint: geometry;`",
+            p.name,
+            c.name,
+            bounded.iter().map(|s| s.name.as_str()).collect::<Vec<_>>().join("` ∧ `"),
+        ))
+    };
+    if let Some(s) = bounded.iter().find(|s| matches!(s.footprint, F::Solid { .. })) {
+        return match &c.footprint {
+            F::Everywhere => Within::AllSpaceInBody,
+            F::Predicate(_) | F::Shapes { .. } | F::Solid { .. } => unknown("abstract", s),
+        };
+    }
+    match &c.footprint {
+        F::Everywhere | F::Predicate(_) | F::Shapes { .. } => Within::Query,
+        F::Solid { .. } => unknown("concrete", c),
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -131,6 +227,21 @@ pub(super) fn refine(
                 let g_s = all(q, &|p| &p.guarantee, &ci.frame, true)?;
                 q.assertions.push(g_s.not());
             } else {
+                let ss: Vec<&Primitive> = sis.iter().map(|si| si.prim).collect();
+                match within(ci.prim, &ss) {
+                    Within::Query => {}
+                    // Not planned (it holds by construction); the empty question if asked.
+                    Within::Holds => {
+                        q.assertions.push(Bool::from_bool(false));
+                        return Ok(());
+                    }
+                    // Any run of `c` has points of all space outside the bounded body.
+                    Within::AllSpaceInBody => {
+                        q.times = vec![t];
+                        return Ok(());
+                    }
+                    Within::Unknown(why) => return Err(Unsupported(why)),
+                }
                 let p = world_point(q);
                 let fc = ci.footprint(&mut q.enc, &p)?;
                 let mut fs = Vec::new();
@@ -237,6 +348,72 @@ mod tests {
         assert_eq!(parts(&prog, &ob), Err("holds (None)".into()));
         let (prog, ob) = refines(PRIMS, "wait", "spec");
         assert!(parts(&prog, &ob).is_err_and(|e| e.contains("interruptib")));
+    }
+
+    /// Refinements between footprints of each kind, `R` with a mesh body.
+    const GEOMETRIC: &str = "
+        motion R.mesh { interruptible: true; footprint: mesh(\"gear.stl\") at pose(x, 0, 0); duration: [0, inf]; }
+        motion R.own { interruptible: true; footprint: geometry; duration: [0, inf]; }
+        motion R.own2 { interruptible: true; footprint: geometry; guarantee: x == old(x); duration: [0, inf]; }
+        motion R.wide { interruptible: true; footprint(px, py, pz): px^2 + py^2 + pz^2 <= 100; duration: [0, inf]; }
+        motion R.all { interruptible: true; duration: [0, inf]; }
+        motion R.mesh2 { interruptible: true; guarantee: x == old(x); footprint: mesh(\"gear.stl\") at pose(x, 0, 0); duration: [0, inf]; }
+        motion R.moved(d: real) { interruptible: true; footprint: mesh(\"gear.stl\") at pose(x + d, 0, 0); duration: [0, inf]; }";
+
+    #[test]
+    fn a_footprint_without_a_predicate_is_never_read_as_all_space() {
+        let src = format!(
+            "robot R {{ state x: real; invariant: 0 <= x <= 10; geometry: mesh(\"gear.stl\"); }} {GEOMETRIC}
+             system S {{ participant A: R {{ init: x == 1; }} }} choreography G = dt<A: all>. end;"
+        );
+        let (prog, d) = crate::lower::tests::lower_src(&src);
+        assert!(d.is_empty(), "{d:?}");
+        let decide = |c: &str, s: &str| {
+            let app = |name: &str| {
+                let i = prog.prims.iter().position(|p| p.name == name).expect("a primitive");
+                PrimApp { prim: PrimId(i as u32), args: Vec::new(), loc: Default::default() }
+            };
+            let role = prog.role_ids().next().expect("a participant");
+            let ob = Obligation {
+                rule: Rule::Refinement,
+                span: Default::default(),
+                what: "refinement".into(),
+                hyps: prog.roles.iter().filter_map(|r| r.init.clone()).collect(),
+                goal: Goal::Refines { role, concrete: app(c), abstract_: vec![app(s)] },
+            };
+            let planned = parts(&prog, &ob);
+            let decision = discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0;
+            (planned, decision)
+        };
+        // A 10 m ball within a mesh: not decided (the mesh has no predicate), never passed.
+        let (_, d) = decide("wide", "mesh");
+        let Decision::Unknown { part, why } = d else { panic!("unknown, not {d:?}") };
+        assert!(part.contains("footprint"), "{part}");
+        assert!(format!("{why:?}").contains("URDF or mesh"), "{why:?}");
+        let (_, d) = decide("mesh", "wide");
+        assert!(matches!(d, Decision::Unknown { .. }), "{d:?}");
+        // All space is not within a body, which is bounded.
+        let (_, d) = decide("all", "mesh");
+        let Decision::Fails(f) = d else { panic!("fails, not {d:?}") };
+        assert_eq!(f.which, Some(Part::Refine(RefineItem::Footprint)));
+        // Anything lies within all space; the robot's own geometry within itself.
+        let (planned, d) = decide("mesh", "all");
+        assert!(planned.is_ok_and(|p| !p.contains(&Part::Refine(RefineItem::Footprint))));
+        assert!(matches!(d, Decision::Holds(_)), "{d:?}");
+        let (planned, d) = decide("own", "own2");
+        assert!(planned.is_ok_and(|p| !p.contains(&Part::Refine(RefineItem::Footprint))));
+        assert!(matches!(d, Decision::Fails(_)), "own's guarantee is weaker than own2's: {d:?}");
+        let (planned, _) = decide("own2", "own");
+        assert!(planned.is_ok_and(|p| !p.contains(&Part::Refine(RefineItem::Footprint))));
+        // The same mesh placed by the same pose; one placed by a parameter is not compared.
+        let (planned, d) = decide("mesh2", "mesh");
+        assert!(planned.is_ok_and(|p| !p.contains(&Part::Refine(RefineItem::Footprint))));
+        assert!(matches!(d, Decision::Holds(_)), "{d:?}");
+        let (_, d) = decide("moved", "moved");
+        assert!(matches!(d, Decision::Holds(_)), "a primitive refines itself: {d:?}");
+        let prim = |n: &str| prog.prims.iter().find(|p| p.name == n).expect("a primitive");
+        assert!(matches!(super::within(prim("mesh"), &[prim("moved")]), super::Within::Unknown(_)));
+        assert_eq!(super::within(prim("mesh"), &[prim("mesh2")]), super::Within::Holds);
     }
 
     #[test]

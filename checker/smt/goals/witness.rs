@@ -289,7 +289,8 @@ impl Session<'_> {
     }
 
     /// A world point in the footprints of both occupants at their states and clocks, or
-    /// `None` if they are disjoint. A primitive without a footprint fills all space.
+    /// `None` if they are disjoint. A primitive without a footprint fills all space; a
+    /// footprint with a URDF or mesh part has no predicate and is unsupported here.
     pub fn overlap(&self, prog: &Program, a: &Occupant, b: &Occupant) -> Result<Option<[Num; 3]>, Why> {
         let mut q = query(prog);
         let p = world_point(&mut q);

@@ -72,7 +72,9 @@ pub(crate) fn applies(prog: &Program, ob: &Obligation, part: &Part) -> bool {
     let run = |r: RoleId, app: &PrimApp| {
         let prim = prog.prim(app.prim);
         let pieces = world.prims.get(app.prim.idx()).and_then(|p| p.as_deref());
-        (prim.footprint.is_none() && pieces.is_some()) || pieces.is_some_and(turns) || prog.role(r).mounted_on.is_some()
+        (prim.footprint.predicate().is_none() && pieces.is_some())
+            || pieces.is_some_and(turns)
+            || prog.role(r).mounted_on.is_some()
     };
     match (&ob.goal, part) {
         (Goal::Compatible { parts }, Part::Disjoint(i, j)) => [i, j].iter().any(|k| run(parts[**k].0, &parts[**k].1)),
