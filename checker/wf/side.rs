@@ -438,7 +438,10 @@ mod tests {
         let (p, d) = lower_src(&src);
         assert!(d.is_empty(), "{d:?}");
         let c = p.choreography.as_ref().expect("choreography");
-        super::check(&p, &c.body).into_iter().map(|d| (d.code, d.span.start as usize - src.find("choreography G").unwrap_or(0))).collect()
+        super::check(&p, &c.body)
+            .into_iter()
+            .map(|d| (d.code, d.span.start as usize - src.find("choreography G").unwrap_or(0)))
+            .collect()
     }
 
     #[test]
@@ -455,7 +458,8 @@ mod tests {
         assert_eq!(codes3("mu t(k: real = 0). B -> A : [k > 0] a. A -> C : b. A -> B : c. t(k + 1)"), vec![]);
         assert_eq!(codes3("C -> A : go(n: real). mu t(k: real = n). A -> C : [k > 0] a(m: real). t(m)"), vec![]);
         // A parameter of an inner loop of A and C given to the outer loop, which B is part of.
-        let inner = "mu t(k: real = 0). B -> A : [k > 0] a. A -> B : f. mu s(j: real = 1). A -> C : d. C -> A : e. t(j)";
+        let inner =
+            "mu t(k: real = 0). B -> A : [k > 0] a. A -> B : f. mu s(j: real = 1). A -> C : d. C -> A : e. t(j)";
         assert_eq!(codes3(inner), vec![(Code::GuardNotLocal, at(inner, "j)"))]);
     }
 
