@@ -143,3 +143,35 @@ fn datum_style_conditions_in_refinements_are_checked_by_progress() {
     assert_eq!(value(d[0], "i"), value(d[0], "count"), "stuck at i == count: {}", d[0]);
     assert!(trace(d[0]).iter().any(|l| l.starts_with("mu t: i = ")), "{}", d[0]);
 }
+
+/// Definedness is part of progress (E0419): a refinement `rate == 540 / g` with `g` possibly
+/// 0, or `speed == sqrt(h)` with `h` possibly negative, admits no payload there (the rejected
+/// variants are in `choreographies/mavlink/rejected/E0419-*`). The twins evaluate the
+/// partial operator only where it is defined (a guard), and are verified: definedness makes
+/// no false alarm of them.
+#[test]
+fn partial_operators_evaluated_only_where_defined_are_verified() {
+    for path in [
+        "tests/data/refined/param-set-rate-divided-by-a-nonzero-gain.chor",
+        "tests/data/refined/change-speed-sqrt-above-home.chor",
+    ] {
+        let r = report(path);
+        assert_eq!(r["verdict"], "verified", "{path}: {r}");
+    }
+    for (path, at) in [
+        ("choreographies/mavlink/rejected/E0419-param-set-rate-divided-by-a-zero-gain.chor", ["pitch_ff", "pitch_p"]),
+        (
+            "choreographies/mavlink/rejected/E0419-change-speed-sqrt-of-a-negative-altitude.chor",
+            ["relative_alt", "relative_alt"],
+        ),
+    ] {
+        let r = report(path);
+        let d = diagnostics(&r, "E0419");
+        assert_eq!(d.len(), 1, "{path}: {r}");
+        for name in at {
+            let v = value(d[0], name).unwrap_or_else(|| panic!("{path}: {name} in the counterexample: {r}"));
+            let v: f64 = v.parse().unwrap_or_else(|_| panic!("{path}: {name} = {v}"));
+            assert!(if name == "relative_alt" { v < 0.0 } else { v == 0.0 }, "{path}: {name} = {v}");
+        }
+    }
+}

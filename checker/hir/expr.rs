@@ -421,6 +421,76 @@ pub fn not(a: Expr) -> Expr {
     Expr { kind: ExprKind::Unary(UnOp::Not, Box::new(a)), sort: Sort::Bool, loc }
 }
 
+/// The condition under which evaluating `e` is defined: every division has a non-zero
+/// divisor, every `sqrt` a non-negative argument, every power with a negative exponent a
+/// non-zero base. `&&`, `||`, `=>` and `if` evaluate left to right and only what they
+/// need, so `p != 0 && r == 540 / p` is defined everywhere: the condition of the right
+/// operand is asked only where the left one lets it be evaluated. `true` when `e` has no
+/// partial operator (every other operator and builtin is total). The one definition every
+/// obligation that asks whether a value can be or must be computed conjoins: see
+/// [`defined_and`].
+///
+/// Why: the SMT encoding makes an undefined value an unconstrained one (`sqrt` of a
+/// negative is a fresh real, `x / 0` Z3's unspecified quotient). That is sound where the
+/// expression is *assumed* (a fact about a value that exists says nothing false when the
+/// value is arbitrary), and unsound where it is *proved* or asked to be *satisfiable*: a
+/// refinement `v == sqrt(e)` with `e < 0` is satisfied by some arbitrary `v` in the
+/// encoding, while no value on the wire satisfies it.
+pub fn definedness(e: &Expr) -> Expr {
+    crate::stack::deep(|| {
+        let loc = e.loc;
+        let zero = Expr { kind: ExprKind::Int(0), sort: Sort::Int, loc };
+        let cmp = |op: BinOp, a: &Expr| Expr {
+            kind: ExprKind::Binary(op, Box::new(a.clone()), Box::new(zero.clone())),
+            sort: Sort::Bool,
+            loc,
+        };
+        // `a => d`, folding a `true` consequent (the antecedent is folded by `implies`).
+        let when = |a: Expr, d: Expr| if d.is_true() { d } else { implies(a, d) };
+        // A literal's sign, when it is read off exactly (a decimal that underflows a double
+        // reads as 0: its condition is kept, which only asks more).
+        let sign = |a: &Expr| match &a.kind {
+            ExprKind::Int(i) => Some(i.signum() as f64),
+            ExprKind::Real(r) => r.parse::<f64>().ok().map(|v| if v == 0.0 { 0.0 } else { v.signum() }),
+            _ => None,
+        };
+        let nonzero =
+            |a: &Expr| if sign(a).is_some_and(|s| s != 0.0) { Expr::bool(true, loc) } else { cmp(BinOp::Ne, a) };
+        match &e.kind {
+            ExprKind::Int(_) | ExprKind::Real(_) | ExprKind::Bool(_) | ExprKind::Var(_) => Expr::bool(true, loc),
+            ExprKind::Unary(_, a) | ExprKind::Component(a, _) => definedness(a),
+            ExprKind::Tuple(xs) => and_all(xs.iter().map(definedness), loc),
+            ExprKind::Call(b, xs) => {
+                let args = and_all(xs.iter().map(definedness), loc);
+                match (b, xs.first()) {
+                    (Builtin::Sqrt, Some(a)) if sign(a).is_some_and(|s| s >= 0.0) => args,
+                    (Builtin::Sqrt, Some(a)) => args.and(cmp(BinOp::Ge, a)),
+                    _ => args,
+                }
+            }
+            ExprKind::If(c, x, y) => {
+                definedness(c).and(when((**c).clone(), definedness(x))).and(when(not((**c).clone()), definedness(y)))
+            }
+            ExprKind::Binary(op, a, b) => {
+                let (da, db) = (definedness(a), definedness(b));
+                match op {
+                    BinOp::And | BinOp::Implies => da.and(when((**a).clone(), db)),
+                    BinOp::Or => da.and(when(not((**a).clone()), db)),
+                    BinOp::Div => da.and(db).and(nonzero(b)),
+                    BinOp::Pow if matches!(b.kind, ExprKind::Int(n) if n < 0) => da.and(db).and(nonzero(a)),
+                    _ => da.and(db),
+                }
+            }
+        }
+    })
+}
+
+/// `definedness(e) && e`: `e` holds and can be evaluated. What an obligation proves or asks
+/// to be satisfiable, wherever `e` may apply a partial operator ([`definedness`]).
+pub fn defined_and(e: Expr) -> Expr {
+    definedness(&e).and(e)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -522,5 +592,68 @@ mod tests {
         });
         let (ps, found) = t.expect("spawn").join().expect("no stack overflow");
         assert_eq!((ps, found), (vec![7], true));
+    }
+
+    fn real(v: &str) -> Expr {
+        Expr { kind: ExprKind::Real(v.into()), sort: Sort::Real, loc: Loc::default() }
+    }
+
+    fn text(e: &Expr) -> String {
+        match &e.kind {
+            ExprKind::Int(i) => i.to_string(),
+            ExprKind::Real(r) => r.clone(),
+            ExprKind::Bool(b) => b.to_string(),
+            ExprKind::Var(Var::Param(i)) => format!("p{i}"),
+            ExprKind::Unary(UnOp::Not, a) => format!("!{}", text(a)),
+            ExprKind::Binary(op, a, b) => format!("({} {} {})", text(a), op.symbol(), text(b)),
+            ExprKind::Call(b, xs) => format!("{}({})", b.name(), xs.iter().map(text).collect::<Vec<_>>().join(", ")),
+            other => format!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn definedness_asks_each_partial_operator_where_it_is_evaluated() {
+        let d = |e: Expr| text(&definedness(&e));
+        let sqrt = |a: Expr| Expr { kind: ExprKind::Call(Builtin::Sqrt, vec![a]), ..param(0) };
+        let cmp = |op, a, b| Expr { sort: Sort::Bool, ..bin(op, a, b) };
+        // Total: nothing to ask; a literal divisor or `sqrt` argument of a known sign neither.
+        assert_eq!(d(bin(BinOp::Div, param(0), real("2"))), "true");
+        assert_eq!(d(sqrt(real("0.5"))), "true");
+        assert_eq!(d(bin(BinOp::Div, param(0), real("0.0"))), "(0.0 != 0)");
+        assert_eq!(d(sqrt(real("-1"))), "(-1 >= 0)");
+        assert_eq!(d(bin(BinOp::Add, param(0), bin(BinOp::Mul, param(1), real("2")))), "true");
+        assert_eq!(d(sample()), "true");
+        // Each partial operator, nested ones outermost last.
+        assert_eq!(d(bin(BinOp::Div, real("540"), param(1))), "(p1 != 0)");
+        assert_eq!(d(sqrt(bin(BinOp::Sub, param(0), param(1)))), "((p0 - p1) >= 0)");
+        assert_eq!(d(sqrt(bin(BinOp::Div, param(0), param(1)))), "((p1 != 0) && ((p0 / p1) >= 0))");
+        let neg = Expr { kind: ExprKind::Int(-2), sort: Sort::Int, loc: Loc::default() };
+        assert_eq!(d(bin(BinOp::Pow, param(0), neg)), "(p0 != 0)");
+        // Short-circuit: the right operand only where it is evaluated.
+        let guarded = cmp(
+            BinOp::And,
+            cmp(BinOp::Ne, param(1), real("0")),
+            cmp(BinOp::Eq, param(2), bin(BinOp::Div, real("540"), param(1))),
+        );
+        assert_eq!(d(guarded.clone()), "((p1 != 0) => (p1 != 0))");
+        let or = cmp(
+            BinOp::Or,
+            cmp(BinOp::Eq, param(1), real("0")),
+            cmp(BinOp::Lt, bin(BinOp::Div, real("1"), param(1)), real("2")),
+        );
+        assert_eq!(d(or), "(!(p1 == 0) => (p1 != 0))");
+        let ite = Expr {
+            kind: ExprKind::If(
+                Box::new(cmp(BinOp::Lt, param(0), real("0"))),
+                Box::new(real("0")),
+                Box::new(sqrt(param(0))),
+            ),
+            ..param(0)
+        };
+        assert_eq!(d(ite), "(!(p0 < 0) => (p0 >= 0))");
+        // Both operands of a comparison are evaluated.
+        let both = cmp(BinOp::Lt, bin(BinOp::Div, real("1"), param(1)), sqrt(param(2)));
+        assert_eq!(d(both.clone()), "((p1 != 0) && (p2 >= 0))");
+        assert_eq!(text(&defined_and(both)), "(((p1 != 0) && (p2 >= 0)) && ((1 / p1) < sqrt(p2)))");
     }
 }

@@ -146,14 +146,17 @@ impl Sigma {
     /// the values before it), then, the fields now holding new values (a binding site
     /// met again in a loop rebinds its value), the refinements `P'`.
     pub fn assume_message(&mut self, m: &Msg) {
+        // With their definedness (`hir::expr::definedness`): a message that was sent had a
+        // guard and refinements that could be evaluated, so this is true and says more than
+        // the predicates alone (whose undefined parts the encoder leaves arbitrary).
         if let Some(g) = &m.guard {
-            self.assume(g);
+            self.assume(&crate::hir::expr::defined_and(g.clone()));
         }
         let ids: Vec<ValueId> = m.payload.iter().map(|f| f.value).collect();
         self.forget_values(&ids);
         for f in &m.payload {
             if let Some(r) = &f.refinement {
-                self.assume(r);
+                self.assume(&crate::hir::expr::defined_and(r.clone()));
             }
         }
     }

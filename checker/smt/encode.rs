@@ -4,7 +4,12 @@
 //! - Points and vectors are triples of reals: `+`, `-`, scaling, components, `dot`,
 //!   `norm2` and `==` work componentwise.
 //! - `sqrt(e)` is a fresh `s` with the side condition `e >= 0 => (s >= 0 && s * s == e)`:
-//!   exact wherever the square root is defined.
+//!   exact wherever the square root is defined. Where it is not (`e < 0`), `s` is any real,
+//!   as `x / 0` is Z3's unspecified quotient: sound in a fact that is assumed (it says
+//!   less, never something false), unsound in one that is proved or asked to be
+//!   satisfiable (some `v` equals the arbitrary value). So the obligations conjoin
+//!   [`crate::hir::expr::definedness`] to every predicate they prove or ask to be
+//!   satisfiable, before it reaches this encoder.
 //! - `sin(e)`, `cos(e)` are fresh `s`, `c` (one pair per argument) with side conditions
 //!   that hold of the real functions for every real argument: `s^2 + c^2 == 1`,
 //!   `1 - e^2/2 <= c <= 1 - e^2/2 + e^4/24`, and `e - e^3/6 <= s <= e` for `e >= 0`

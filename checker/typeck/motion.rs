@@ -33,8 +33,13 @@ impl Checker<'_> {
         let prim = self.prog.prim(a.prim);
         // Received values in the arguments take the sorts of their payload fields.
         let args: Vec<Expr> = a.args.iter().map(|e| subst_values(e, &st.vals)).collect();
+        // The arguments can be evaluated, and the precondition holds of them (and can be
+        // evaluated too): an argument `1 / p` with `p == 0` is no value to start with.
         let mut pre = Vec::new();
-        conjuncts(&instantiate(&prim.pre, self.role, &args), &mut pre);
+        for a in &args {
+            conjuncts(&crate::hir::expr::definedness(a), &mut pre);
+        }
+        conjuncts(&crate::hir::expr::defined_and(instantiate(&prim.pre, self.role, &args)), &mut pre);
         if !pre.is_empty() {
             self.obligations.push(Obligation {
                 rule: Rule::TMotion,

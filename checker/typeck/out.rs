@@ -65,7 +65,8 @@ impl Checker<'_> {
                 span: loc.0,
                 what: format!("`{}` may send `{to}!{}`: the guard and payload refinement hold", self.name(), b.label),
                 hyps: st.sigma.facts().to_vec(),
-                goal: Goal::Valid(and_all(goal, loc)),
+                // The guard and refinements hold of the values sent, and can be evaluated.
+                goal: Goal::Valid(crate::hir::expr::defined_and(and_all(goal, loc))),
             });
         }
         st.vals = vals;

@@ -43,7 +43,8 @@ impl<'a> Checker<'a> {
                         print::expr(self.prog, None, v)
                     ),
                     hyps: st.sigma.facts().to_vec(),
-                    goal: Goal::Valid(sigma::subst_params(r, params, values)),
+                    // Held and defined of the values (`hir::expr::definedness`).
+                    goal: Goal::Valid(crate::hir::expr::defined_and(sigma::subst_params(r, params, values))),
                 });
             }
         }
@@ -67,7 +68,7 @@ impl<'a> Checker<'a> {
                         t.name
                     ),
                     hyps: st.sigma.facts().to_vec(),
-                    goal: Goal::Valid(goal),
+                    goal: Goal::Valid(crate::hir::expr::defined_and(goal)),
                 });
             }
         }

@@ -38,7 +38,7 @@
 //! whenever the choreography reaches its point.
 
 use crate::diag::{Code, Diagnostic};
-use crate::hir::expr::BinOp;
+use crate::hir::expr::{and_all, defined_and, definedness, BinOp};
 use crate::hir::*;
 use crate::obligation::{Enabled, Goal, Obligation, RoleMotion, Rule, Side};
 use crate::sigma::Sigma;
@@ -423,7 +423,7 @@ impl<'a> Contexts<'a> {
                     let mut s = sigma.clone();
                     let first = super::side::first_message(b);
                     if let Some(guard) = first.and_then(|m| m.guard.as_ref()) {
-                        s.assume(guard);
+                        s.assume(&defined_and(guard.clone()));
                     }
                     if let (Some(m), true) = (first, branches.len() > 1) {
                         // A dead branch: its guard, or its guard and its payload's
@@ -472,7 +472,7 @@ impl<'a> Contexts<'a> {
                                     args_text(self.prog, &v.args)
                                 ),
                                 hyps: sigma.facts().to_vec(),
-                                goal: Goal::Valid(crate::sigma::subst_params(r, params, &v.args)),
+                                goal: Goal::Valid(defined_and(crate::sigma::subst_params(r, params, &v.args))),
                             });
                         }
                     }
@@ -505,7 +505,7 @@ impl<'a> Contexts<'a> {
             span: v.loc.0,
             what: format!("the measure `{text}` of `{var}` at the jump `{}`", jump_text(self.prog, v)),
             hyps: sigma.facts().to_vec(),
-            goal: Goal::Valid(cmp(BinOp::Le, zero, e.clone())),
+            goal: Goal::Valid(defined_and(cmp(BinOp::Le, zero, e.clone()))),
         });
         let next = crate::sigma::subst_params(e, params, &v.args);
         self.obligations.push(Obligation {
@@ -517,7 +517,7 @@ impl<'a> Contexts<'a> {
                 jump_text(self.prog, v)
             ),
             hyps: sigma.facts().to_vec(),
-            goal: Goal::Valid(cmp(BinOp::Lt, next, e.clone())),
+            goal: Goal::Valid(defined_and(cmp(BinOp::Lt, next, e.clone()))),
         });
     }
 
@@ -620,13 +620,14 @@ impl<'a> Contexts<'a> {
             return; // an unguarded branch: the disjunction is trivially valid
         }
         let Some(m) = branches.first().and_then(super::side::first_message) else { return };
+        // A guard that cannot be evaluated does not hold: each disjunct is defined too.
         let mut disj: Option<Expr> = None;
-        for g in guards.into_iter().flatten() {
+        for g in guards.into_iter().flatten().map(|g| defined_and(g.clone())) {
             disj = Some(match disj {
-                None => g.clone(),
+                None => g,
                 Some(d) => {
                     let loc = d.loc;
-                    Expr { kind: ExprKind::Binary(BinOp::Or, Box::new(d), Box::new(g.clone())), sort: Sort::Bool, loc }
+                    Expr { kind: ExprKind::Binary(BinOp::Or, Box::new(d), Box::new(g)), sort: Sort::Bool, loc }
                 }
             });
         }
@@ -808,7 +809,7 @@ impl<'a> Contexts<'a> {
                     print::expr(self.prog, None, &p.init)
                 ),
                 hyps: sigma.facts().to_vec(),
-                goal: Goal::Valid(crate::sigma::subst_params(r, params, &inits)),
+                goal: Goal::Valid(defined_and(crate::sigma::subst_params(r, params, &inits))),
             });
         }
         let ids: Vec<ValueId> = params.iter().map(|p| p.value).collect();
@@ -901,13 +902,17 @@ fn pins_entry(
 /// fields' refinements. A field defined by an equality `f == e` (e of f's sort, reading no
 /// field of `m`) is replaced by `e` in the other conjuncts (∃f. f == e ∧ P(f) is P(e)), so
 /// that `seq == i` needs no quantifier; the fields still read are left to an existential.
+///
+/// Both are asked to be defined as well ([`definedness`]): a guard that cannot be evaluated
+/// lets no branch be taken, and a payload whose refinement cannot be evaluated is not
+/// admitted. The condition is added before a field is replaced by its definition, so that
+/// `speed == sqrt(e)` leaves `e >= 0` behind (the encoding alone would let `sqrt` of a
+/// negative be any value, and some `speed` would equal it).
 fn enabled(prog: &Program, m: &Msg) -> Enabled {
+    let written = and_all(m.payload.iter().filter_map(|f| f.refinement.clone()), m.loc);
     let mut conj: Vec<Expr> = Vec::new();
-    for f in &m.payload {
-        if let Some(r) = &f.refinement {
-            crate::hir::expr::conjuncts(r, &mut conj);
-        }
-    }
+    crate::hir::expr::conjuncts(&definedness(&written), &mut conj);
+    crate::hir::expr::conjuncts(&written, &mut conj);
     let ids: Vec<ValueId> = m.payload.iter().map(|f| f.value).collect();
     let field = |e: &Expr| match &e.kind {
         ExprKind::Var(Var::Value(id, _)) if ids.contains(id) => Some(*id),
@@ -937,7 +942,7 @@ fn enabled(prog: &Program, m: &Msg) -> Enabled {
         .collect();
     Enabled {
         what: format!("{} -> {}: {}", prog.role_name(m.from), prog.role_name(m.to), m.label),
-        guard: m.guard.clone(),
+        guard: m.guard.clone().map(defined_and),
         fields,
         refinement: rest,
     }

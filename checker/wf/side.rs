@@ -8,10 +8,10 @@
 
 use crate::diag::{Code, Diagnostic};
 use crate::hir::*;
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 
 pub fn check(prog: &Program, g: &Global) -> Vec<Diagnostic> {
-    let mut c = Side { prog, diags: Vec::new() };
+    let mut c = Side { prog, diags: Vec::new(), loops: Vec::new(), holders: HashMap::new() };
     c.walk(g, true, false);
     c.diags
 }
@@ -19,6 +19,14 @@ pub fn check(prog: &Program, g: &Global) -> Vec<Diagnostic> {
 struct Side<'a> {
     prog: &'a Program,
     diags: Vec<Diagnostic>,
+    /// The loops around the node being walked, innermost last: each one's variable, its
+    /// parameters and its participants.
+    loops: Vec<(&'a str, &'a [RecParam], Vec<RoleId>)>,
+    /// Who holds each recursion parameter in scope: the participants of its loop's body.
+    /// Each of them carries the parameters in its projection (`mu t(n = e)` in every local
+    /// type of the loop), so each must know the initial value and every jump argument:
+    /// then each knows the parameter, and a guard of theirs may read it.
+    holders: HashMap<ValueId, Vec<RoleId>>,
 }
 
 /// The first message of a branch, if it starts with one.
@@ -30,12 +38,12 @@ pub fn first_message(g: &Global) -> Option<&Msg> {
     }
 }
 
-impl Side<'_> {
-    fn walk(&mut self, g: &Global, tail: bool, in_par: bool) {
+impl<'a> Side<'a> {
+    fn walk(&mut self, g: &'a Global, tail: bool, in_par: bool) {
         crate::stack::deep(|| self.walk_inner(g, tail, in_par))
     }
 
-    fn walk_inner(&mut self, g: &Global, tail: bool, in_par: bool) {
+    fn walk_inner(&mut self, g: &'a Global, tail: bool, in_par: bool) {
         match g {
             Global::Msg(m) => self.msg(m),
             Global::Motion(m) => self.motion(m),
@@ -57,15 +65,24 @@ impl Side<'_> {
             }
             Global::Rec { var, body, loc, params, decreases } => {
                 self.closes(tail, *loc, &format!("`mu {var}`"));
-                // Every participant of the loop reads its parameters' refinements (each
-                // tests them in its guards): a value is known when each of them sent or
-                // received it.
+                // Every participant of the loop holds its parameters (each local type of
+                // the loop binds them) and assumes their refinements: each must know every
+                // value a parameter is given (its initial value here, the arguments of every
+                // jump below) and every value its refinement reads.
                 let pt = body.participant_list();
+                for p in params {
+                    let what = format!("the initial value of recursion parameter `{}`", p.name);
+                    self.holds(&p.init, &pt, &what, &format!("`mu {var}` is entered with `{} = ", p.name));
+                }
+                for p in params {
+                    self.holders.insert(p.value, pt.clone());
+                }
                 for p in params {
                     if let Some(r) = &p.refinement {
                         self.knows_all(r, &pt, "the refinement of a recursion parameter");
                     }
                 }
+                self.loops.push((var.as_str(), params.as_slice(), pt));
                 if let (Some(m), false) = (decreases, has_exit(body, var)) {
                     self.diags.push(
                         Diagnostic::error(
@@ -92,11 +109,16 @@ impl Side<'_> {
                     );
                 }
                 self.walk(body, true, false);
+                self.loops.pop();
             }
-            // Inside a side of `*` a variable is judged by well-scopedness (E0308), which
-            // is what the paper's once-unfolded labelling reports for it.
-            Global::Var(v) if !in_par => self.closes(tail, v.loc, &format!("`{}`", v.var)),
-            Global::Var(_) => {}
+            Global::Var(v) => {
+                self.jump(v);
+                // Inside a side of `*` a variable is judged by well-scopedness (E0308),
+                // which is what the paper's once-unfolded labelling reports for it.
+                if !in_par {
+                    self.closes(tail, v.loc, &format!("`{}`", v.var))
+                }
+            }
             Global::End(loc) => self.closes(tail, *loc, "`end`"),
         }
     }
@@ -236,6 +258,34 @@ impl Side<'_> {
         }
     }
 
+    /// The jump `t(a)`: each argument is the next value of a parameter of `t`, which every
+    /// participant of `t`'s loop holds, so each of them must know it (E0305). A jump to a
+    /// variable no loop binds, or with the wrong number of arguments, is reported by lowering.
+    fn jump(&mut self, v: &RecVar) {
+        let Some((_, params, pt)) = self.loops.iter().rev().find(|(n, _, _)| *n == v.var) else { return };
+        let (params, pt) = (*params, pt.clone());
+        for (p, a) in params.iter().zip(&v.args) {
+            let what = format!("the argument for recursion parameter `{}` of the jump `{}(..)`", p.name, v.var);
+            self.holds(a, &pt, &what, &format!("the jump `{}` gives `{} = ", v.var, p.name));
+        }
+    }
+
+    /// [`Self::knows_all`] for a value a recursion parameter is given (`e`, described by
+    /// `what`), each report with a note naming the leak: `given` followed by `e`.
+    fn holds(&mut self, e: &Expr, pt: &[RoleId], what: &str, given: &str) {
+        let before = self.diags.len();
+        self.knows_all(e, pt, what);
+        let names: Vec<&str> = pt.iter().map(|r| self.prog.role_name(*r)).collect();
+        let note = format!(
+            "{given}{}`, and every participant of the loop (`{}`) holds the parameter: each must know the value",
+            crate::hir::print::expr(self.prog, None, e),
+            names.join("`, `")
+        );
+        for d in &mut self.diags[before..] {
+            d.notes.push(note.clone());
+        }
+    }
+
     /// E0305: `e` may read only what `viewer` knows.
     /// [`Self::knows`] for each of `viewers` (no participant: what every participant
     /// knows, constants and parameters).
@@ -253,7 +303,7 @@ impl Side<'_> {
     }
 
     fn knows(&mut self, e: &Expr, viewer: Option<RoleId>, what: &str) {
-        let prog = self.prog;
+        let (prog, holders) = (self.prog, &self.holders);
         let mut bad: Vec<(String, Loc, String)> = Vec::new();
         e.visit_vars(&mut |v, loc| match v {
             Var::Role(r, slot) if Some(*r) != viewer => {
@@ -274,6 +324,21 @@ impl Side<'_> {
                             name.clone(),
                             loc,
                             format!("it was sent by `{}` to `{}`", prog.role_name(*from), prog.role_name(*to)),
+                        ));
+                    }
+                } else if let Some(pt) = holders.get(id) {
+                    // A recursion parameter: known to the participants of its loop (each
+                    // knows every value it is given, checked at its entry and jumps).
+                    let known = match viewer {
+                        Some(w) => pt.contains(&w),
+                        None => prog.role_ids().all(|r| pt.contains(&r)),
+                    };
+                    if !known {
+                        let names: Vec<&str> = pt.iter().map(|r| prog.role_name(*r)).collect();
+                        bad.push((
+                            name.clone(),
+                            loc,
+                            format!("it is a parameter of a loop whose participants are `{}`", names.join("`, `")),
                         ));
                     }
                 }
@@ -361,6 +426,41 @@ mod tests {
         assert_eq!(codes("dt<C: idle, C: idle>. end"), vec![Code::DuplicateMotionParticipant]);
         assert_eq!(codes("end. C -> A : go. end"), vec![Code::NotTailPosition]);
         assert_eq!(codes("(C -> A : go. end) * dt<A: work>"), vec![Code::NotTailPosition]);
+    }
+
+    /// [`HEADER`] with a third participant, `B`, an arm like `A`.
+    fn codes3(chor: &str) -> Vec<(Code, usize)> {
+        let header = HEADER.replace(
+            "participant A: Arm { at: pose(2, 1, 0); }",
+            "participant A: Arm { at: pose(2, 1, 0); } participant B: Arm { at: pose(4, 1, 0); }",
+        );
+        let src = format!("{header} choreography G = {chor};");
+        let (p, d) = lower_src(&src);
+        assert!(d.is_empty(), "{d:?}");
+        let c = p.choreography.as_ref().expect("choreography");
+        super::check(&p, &c.body)
+            .into_iter()
+            .map(|d| (d.code, d.span.start as usize - src.find("choreography G").unwrap_or(0)))
+            .collect()
+    }
+
+    #[test]
+    fn every_participant_of_a_loop_knows_the_values_of_its_parameters() {
+        // `n` went from C to A; B's guard reads `k`, which holds `n`: the initial value leaks.
+        let leak = "C -> A : go(n: real). mu t(k: real = n). B -> A : [k > 0] a. A -> C : b. A -> B : c. t(k)";
+        let at = |s: &str, w: &str| s.find(w).expect("in the text") + "choreography G = ".len();
+        assert_eq!(codes3(leak), vec![(Code::GuardNotLocal, at(leak, "n). B"))]);
+        // The jump argument `m` went from A to C, and B holds the parameter too.
+        let jump = "mu t(k: real = 0). B -> A : [k > 0] a. A -> C : r(m: real). A -> B : c. t(m)";
+        assert_eq!(codes3(jump), vec![(Code::GuardNotLocal, at(jump, "m)"))]);
+        // Values every participant of the loop knows: constants, the parameters, and a value
+        // sent between the two participants of a two-party loop.
+        assert_eq!(codes3("mu t(k: real = 0). B -> A : [k > 0] a. A -> C : b. A -> B : c. t(k + 1)"), vec![]);
+        assert_eq!(codes3("C -> A : go(n: real). mu t(k: real = n). A -> C : [k > 0] a(m: real). t(m)"), vec![]);
+        // A parameter of an inner loop of A and C given to the outer loop, which B is part of.
+        let inner =
+            "mu t(k: real = 0). B -> A : [k > 0] a. A -> B : f. mu s(j: real = 1). A -> C : d. C -> A : e. t(j)";
+        assert_eq!(codes3(inner), vec![(Code::GuardNotLocal, at(inner, "j)"))]);
     }
 
     #[test]

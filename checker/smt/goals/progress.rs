@@ -6,6 +6,11 @@
 //! iteration of a loop, stays about that value). The part's query is Σ ∧ ¬∨ branches;
 //! sat is a state of Σ in which no branch can be taken. Quantified queries go to Z3's
 //! default solver (MBQI), never nlsat; undecided is unknown, never a pass.
+//!
+//! The guard and the refinement arrive with their definedness conjoined
+//! (`wf::scope::enabled`, [`crate::hir::expr::definedness`]): the encoder makes `sqrt` of a
+//! negative and a quotient by zero unconstrained values, which some payload would equal, so
+//! without it "some payload exists" held where no value on the wire satisfies the refinement.
 
 use super::super::encode::{Encoder, Term, Unsupported};
 use crate::hir::expr::value_expr;
