@@ -776,3 +776,81 @@ fn the_float_oracle_sees_the_gap_between_neighbours() {
     };
     assert_eq!(q.stuck(), Some(1), "255 + 1 is beyond a uint8");
 }
+
+// ---------------------------------------------------------------------------------------
+// Who knows a recursion parameter: three participants, a value only two of them receive,
+// and a loop entered with it. Every participant of a loop carries its parameters (its
+// projection is `mu t(k = ...)`), so each must know the value the loop is entered with;
+// otherwise a guard reads, or a local type names, a value its participant never saw.
+
+const ROLES: [&str; 3] = ["GCS", "UAV", "CC"];
+
+#[derive(Clone, Debug)]
+struct Relay {
+    /// The first message: `ROLES[a] -> ROLES[b]` with the value `b0`.
+    first: (usize, usize),
+    /// The loop's messages: `ROLES[c] -> ROLES[d]`, guarded by the parameter.
+    looped: (usize, usize),
+    /// The loop is entered with the received value (else with a constant).
+    from_value: bool,
+}
+
+impl Relay {
+    fn leaks(&self) -> bool {
+        let knows = [self.first.0, self.first.1];
+        self.from_value && !(knows.contains(&self.looped.0) && knows.contains(&self.looped.1))
+    }
+
+    fn render(&self) -> String {
+        let r = |i: usize| ROLES[i];
+        let init = if self.from_value { "b0" } else { "50" };
+        format!(
+            "dialect common;\n\nsystem Relay {{\n  participant GCS;\n  participant UAV;\n  participant CC;\n}}\n\n\
+             choreography Relay =\n  {} -> {}: SYS_STATUS(battery_remaining as b0 {{0 <= b0 && b0 <= 100}}).\n  \
+             mu t(k: int {{0 <= k && k <= 100}} = {init}).\n    \
+             ( {} -> {}: [k > 0] MISSION_REQUEST_INT(seq as s {{s == k}}). t(k - 1)\n    \
+             + {} -> {}: [k <= 0] MISSION_CLEAR_ALL. end );\n",
+            r(self.first.0),
+            r(self.first.1),
+            r(self.looped.0),
+            r(self.looped.1),
+            r(self.looped.0),
+            r(self.looped.1)
+        )
+    }
+}
+
+fn pair() -> impl Strategy<Value = (usize, usize)> {
+    (0usize..3, 1usize..3).prop_map(|(a, k)| (a, (a + k) % 3))
+}
+
+#[test]
+fn generated_relays_agree_on_who_knows_a_loop_parameter() {
+    let mut runner = TestRunner::new_with_rng(
+        RunnerConfig { cases: cases(), failure_persistence: None, ..RunnerConfig::default() },
+        TestRng::from_seed(RngAlgorithm::ChaCha, &seed()),
+    );
+    let strategy =
+        (pair(), pair(), any::<bool>()).prop_map(|(first, looped, from_value)| Relay { first, looped, from_value });
+    let result = runner.run(&strategy, |relay| {
+        // Every participant takes part (else E0313 says so, a verdict about another rule).
+        let used = [relay.first.0, relay.first.1, relay.looped.0, relay.looped.1];
+        prop_assume!((0..3).all(|i| used.contains(&i)));
+        let src = relay.render();
+        let r = check(&src);
+        if relay.leaks() {
+            prop_assert!(
+                r.verdict == Verdict::Rejected && codes(&r).contains(&"E0305".to_string()),
+                "a participant of the loop never saw the value it is entered with, yet verdict {:?} codes {:?}\n{src}",
+                r.verdict,
+                codes(&r)
+            );
+        } else {
+            prop_assert!(r.verdict == Verdict::Verified, "verdict {:?} codes {:?}\n{src}", r.verdict, codes(&r));
+        }
+        Ok(())
+    });
+    if let Err(e) = result {
+        panic!("{e}");
+    }
+}
