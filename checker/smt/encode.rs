@@ -206,9 +206,9 @@ impl<'p> Encoder<'p> {
         for q in format.qmin..=format.qmax {
             let scale = real_of_rational(&crate::lower::pow2(q))
                 .ok_or_else(|| Unsupported("a power of two too large for the solver".into()))?;
-            alts.push(x.eq(&Real::mul(&[mr.clone(), scale])));
+            alts.push(x.eq(Real::mul(&[mr.clone(), scale])));
         }
-        Ok(Bool::and(&[m.le(&big), m.ge(&big.unary_minus()), Bool::or(&alts)]))
+        Ok(Bool::and(&[m.le(&big), m.ge(big.unary_minus()), Bool::or(&alts)]))
     }
 
     /// [`Builtin::Float32`] / [`Builtin::Float64`] of `a`: decided exactly for a constant;
