@@ -12,6 +12,11 @@
 //! no code of its own: a value outside it cannot be sent, and a refinement that contradicts
 //! it is unsatisfiable like any other.
 //!
+//! Float fields: a `float` (`double`) field's value is a finite binary32 (binary64), the
+//! conjunct [`Builtin::Float32`] (`Float64`) of its refinement; [`round_to_float`] rounds a
+//! constant a process sends to that format exactly ([`wire_value`]). String literals are
+//! interned as their on-wire value, up to the first NUL ([`Lowerer::string`]).
+//!
 //! Enum-typed fields (s7-enum): a field or command parameter the dialect gives an enum
 //! (`enum="MAV_BOOL"`) takes only the enum's entries, or for a bitmask enum combinations of
 //! its flags ([`entry_predicate`]). Without a user refinement the field's type is the enum:
