@@ -334,6 +334,15 @@ fn eval_inner(prog: &Program, e: &Expr, env: &dyn Env, depth: usize) -> Result<V
                     })
                 }
                 Builtin::Point | Builtin::Vector => Value::Vec3([num(arg(0)?)?, num(arg(1)?)?, num(arg(2)?)?]),
+                Builtin::Float32 | Builtin::Float64 => {
+                    // Decided on an exact value; an enclosure wider than a point is undecided.
+                    let x = num(arg(0)?)?;
+                    let format = crate::lower::float_format(*f).ok_or("a float format")?;
+                    if x.lo != x.hi {
+                        return Ok(Value::Bool(Tri::Unknown));
+                    }
+                    Value::Bool(Tri::of(crate::lower::is_float(&x.lo, format)))
+                }
                 Builtin::HasFlag => {
                     let flag = crate::hir::expr::const_int(prog, arg(1)?).ok_or("a flag that is not a constant")?;
                     let x = num(arg(0)?)?;

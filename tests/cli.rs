@@ -950,6 +950,10 @@ fn mavlink_flags_strings_and_wire_ranges_are_decided_exactly() {
         ("wire-limits", "verified", None),
         ("wire-limits-wrong", "rejected", Some("time_unix_usec = 18446744073709551615")),
         ("parachute-action", "verified", None),
+        // The verified twins of the float32 and NUL regressions in mavlink/rejected/.
+        ("float-window-holds-a-float32", "verified", None),
+        ("float-literal-rounds-inside", "verified", None),
+        ("char-literals-without-nul", "verified", None),
     ] {
         let path = format!("tests/data/mavlink/{file}.chor");
         let o = mochi(&["check", &path]);

@@ -139,6 +139,12 @@ pub enum Builtin {
     /// `(x div 2^k) mod 2 == 1` (Euclidean division, so a negative `x` reads as its
     /// two's complement with infinitely many leading ones).
     HasFlag,
+    /// `x` is a finite IEEE 754 binary32 value (a MAVLink `float` field's value on the
+    /// wire). Not written by users: lowering conjoins it to a `float` field's refinement,
+    /// as it conjoins an integer field's wire range (`lower::mav`, "Floats are float32").
+    Float32,
+    /// `x` is a finite IEEE 754 binary64 value (a MAVLink `double` field).
+    Float64,
 }
 
 impl Builtin {
@@ -173,11 +179,19 @@ impl Builtin {
             Builtin::Norm2 => "norm2",
             Builtin::Pi => "pi",
             Builtin::HasFlag => "has_flag",
+            Builtin::Float32 => "float32",
+            Builtin::Float64 => "float64",
         }
     }
     pub fn arity(self) -> usize {
         match self {
-            Builtin::Sqrt | Builtin::Abs | Builtin::Sin | Builtin::Cos | Builtin::Norm2 => 1,
+            Builtin::Sqrt
+            | Builtin::Abs
+            | Builtin::Sin
+            | Builtin::Cos
+            | Builtin::Norm2
+            | Builtin::Float32
+            | Builtin::Float64 => 1,
             Builtin::Min | Builtin::Max | Builtin::Dot | Builtin::HasFlag => 2,
             Builtin::Point | Builtin::Vector => 3,
             Builtin::Pi => 0,

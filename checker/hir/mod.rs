@@ -304,6 +304,10 @@ pub struct Program {
     /// The string literals of the program, each once: a literal of sort `str` is
     /// `ExprKind::Int(code)` with `code` its index here ([`Sort::Str`]).
     pub strings: Vec<String>,
+    /// The values of MAVLink `float` and `double` fields, with [`Builtin::Float32`] or
+    /// [`Builtin::Float64`]: every such value is a finite float of that format (the
+    /// model of LANGUAGE.md, "Floats are float32"), a fact the encoder may use anywhere.
+    pub wire_floats: std::collections::HashMap<ValueId, Builtin>,
 }
 
 impl Program {

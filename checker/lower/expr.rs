@@ -189,6 +189,8 @@ impl Lowerer {
                 self.expect_sort(&args[0], &Sort::Real, &format!("the argument of `{}`", f.name));
                 Sort::Real
             }
+            // Only lowering of a MAVLink float field makes these (no name reaches them).
+            Builtin::Float32 | Builtin::Float64 => Sort::Bool,
             // Only the parser makes this call (`pi` is reserved, `pi()` does not parse).
             Builtin::Pi => Sort::Real,
             Builtin::HasFlag => {

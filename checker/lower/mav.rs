@@ -12,6 +12,11 @@
 //! no code of its own: a value outside it cannot be sent, and a refinement that contradicts
 //! it is unsatisfiable like any other.
 //!
+//! Float fields: a `float` (`double`) field's value is a finite binary32 (binary64), the
+//! conjunct [`Builtin::Float32`] (`Float64`) of its refinement; [`round_to_float`] rounds a
+//! constant a process sends to that format exactly ([`wire_value`]). String literals are
+//! interned as their on-wire value, up to the first NUL ([`Lowerer::string`]).
+//!
 //! Enum-typed fields (s7-enum): a field or command parameter the dialect gives an enum
 //! (`enum="MAV_BOOL"`) takes only the enum's entries, or for a bitmask enum combinations of
 //! its flags ([`entry_predicate`]). Without a user refinement the field's type is the enum:
@@ -386,6 +391,15 @@ impl Lowerer {
             implicit.push(cmp(BinOp::Le, int_literal(lo, loc), var()));
             implicit.push(cmp(BinOp::Le, var(), int_literal(hi, loc)));
         }
+        if let Some(format) = float_builtin(wire) {
+            // A `float` field's value is a finite binary32 (a `double`'s a binary64): part
+            // of its type, as the wire range is of an integer's. The receiver assumes it
+            // (the encoder knows it of every value of the field), the progress check asks
+            // for a payload of that format, and a process's [T-OUT] sends its literal
+            // rounded to it (`typeck::out`).
+            self.prog.wire_floats.insert(v, format);
+            implicit.push(Expr { kind: ExprKind::Call(format, vec![var()]), sort: Sort::Bool, loc });
+        }
         let fixed = matches!((command, res.field.name.as_str()), (Some(_), "command"));
         if let (Some(c), true) = (command, fixed) {
             let value = Expr { kind: ExprKind::Int(c.value), sort: Sort::Int, loc };
@@ -462,7 +476,13 @@ impl Lowerer {
     }
 
     /// A string literal: its code in [`Program::strings`].
+    ///
+    /// A literal is interned as the value a `char[N]` field carries on the wire: the text
+    /// up to its first NUL byte (MAVLink pads a shorter string with NULs, and a reader
+    /// stops at the first), so `"AB\0C"`, `"AB\0D"` and `"AB"` are one string, never
+    /// three that `==` would tell apart.
     pub(super) fn string(&mut self, s: &str, loc: Loc) -> Expr {
+        let s = s.split('\0').next().unwrap_or_default();
         let code = match self.prog.strings.iter().position(|x| x == s) {
             Some(i) => i,
             None => {
@@ -808,4 +828,154 @@ fn int_literal(n: i128, loc: Loc) -> Expr {
 
 fn quoted<'a>(names: impl Iterator<Item = &'a str>) -> String {
     names.map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ")
+}
+
+/// The predicate a float wire type conjoins to its field's refinement:
+/// [`Builtin::Float32`] for `float`, [`Builtin::Float64`] for `double`.
+pub(crate) fn float_builtin(wire: Wire) -> Option<Builtin> {
+    match wire {
+        Wire::F32 => Some(Builtin::Float32),
+        Wire::F64 => Some(Builtin::Float64),
+        _ => None,
+    }
+}
+
+/// A binary floating-point format as a set of rationals: its finite values are exactly
+/// `m * 2^q` for integers `|m| <= 2^p - 1` and `qmin <= q <= qmax` (`q` the exponent of
+/// the last significand bit: binary32 has `p = 24`, subnormals down to `2^-149`, and its
+/// largest value `(2^24 - 1) * 2^104`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FloatFormat {
+    pub p: u32,
+    pub qmin: i64,
+    pub qmax: i64,
+}
+
+pub const BINARY32: FloatFormat = FloatFormat { p: 24, qmin: -149, qmax: 104 };
+pub const BINARY64: FloatFormat = FloatFormat { p: 53, qmin: -1074, qmax: 971 };
+
+/// The format [`Builtin::Float32`] or [`Builtin::Float64`] stands for.
+pub fn float_format(f: Builtin) -> Option<FloatFormat> {
+    match f {
+        Builtin::Float32 => Some(BINARY32),
+        Builtin::Float64 => Some(BINARY64),
+        _ => None,
+    }
+}
+
+/// `2^k` as an exact rational.
+pub fn pow2(k: i64) -> num_rational::BigRational {
+    use num_bigint::BigInt;
+    let one = BigInt::from(1);
+    if k >= 0 {
+        num_rational::BigRational::from_integer(one << (k as usize))
+    } else {
+        num_rational::BigRational::new(one.clone(), one << (k.unsigned_abs() as usize))
+    }
+}
+
+/// `r` rounded to the nearest value of `f`, ties to even (IEEE 754's default, what an
+/// autopilot's `(float)0.1` does), exactly. `None` when it rounds to an infinity (its
+/// magnitude is at least the largest finite value plus half its ulp), which the
+/// finite-float model excludes.
+pub fn round_to_float(r: &num_rational::BigRational, f: FloatFormat) -> Option<num_rational::BigRational> {
+    use num_traits::{One, Signed, Zero};
+    if r.is_zero() {
+        return Some(r.clone());
+    }
+    let a = r.abs();
+    // e = floor(log2 a): 2^e <= a < 2^(e+1).
+    let mut e = a.numer().bits() as i64 - a.denom().bits() as i64;
+    if a < pow2(e) {
+        e -= 1;
+    }
+    let q = (e - (i64::from(f.p) - 1)).max(f.qmin);
+    let scaled = &a / pow2(q);
+    let mut n = scaled.floor();
+    let twice = (&scaled - &n) * num_rational::BigRational::from_integer(2.into());
+    let odd = !(n.to_integer() % num_bigint::BigInt::from(2)).is_zero();
+    if twice > num_rational::BigRational::one() || (twice.is_one() && odd) {
+        n += num_rational::BigRational::one();
+    }
+    let v = n * pow2(q);
+    let max = num_rational::BigRational::from_integer((num_bigint::BigInt::from(1) << f.p as usize) - 1) * pow2(f.qmax);
+    if v > max {
+        return None;
+    }
+    Some(if r.is_negative() { -v } else { v })
+}
+
+/// Whether `r` is a finite value of `f`.
+pub fn is_float(r: &num_rational::BigRational, f: FloatFormat) -> bool {
+    round_to_float(r, f).as_ref() == Some(r)
+}
+
+/// The exact value of a closed numeric expression (literals, constants, arithmetic), or
+/// `None` when it reads a variable or is not exact.
+pub fn exact_constant(prog: &Program, e: &Expr) -> Option<num_rational::BigRational> {
+    if !matches!(e.sort, Sort::Int | Sort::Real) {
+        return None;
+    }
+    match crate::exact::eval(prog, e, &|_: &Var| None).ok()? {
+        crate::exact::Value::Num(n) if n.lo == n.hi => Some(n.lo),
+        _ => None,
+    }
+}
+
+/// Whether the progress check may replace a field `id` defined by `id == e` by `e`
+/// (`∃x. x == e ∧ P(x)` is `P(e)`): always, unless the field is a `float`/`double`, whose
+/// [`Builtin::Float32`] conjunct then reads `e` and must stay decided: `e` a constant
+/// (decided exactly) or a value of a field of that format or a narrower one (a float by
+/// the model). Otherwise the field stays an existential whose format is encoded exactly.
+pub(crate) fn float_definition_decided(prog: &Program, id: ValueId, e: &Expr) -> bool {
+    let Some(f) = prog.wire_floats.get(&id) else { return true };
+    if exact_constant(prog, e).is_some() {
+        return true;
+    }
+    match &e.kind {
+        ExprKind::Var(Var::Value(v, _)) => {
+            prog.wire_floats.get(v).is_some_and(|w| w == f || (*w == Builtin::Float32 && *f == Builtin::Float64))
+        }
+        _ => false,
+    }
+}
+
+/// A rational whose denominator is a power of two (every float) as its exact decimal,
+/// `-0.100000001490116119384765625`.
+pub fn dyadic_decimal(r: &num_rational::BigRational) -> Option<String> {
+    use num_traits::{One, Signed, Zero};
+    let d = r.denom();
+    let k = d.bits().checked_sub(1)?;
+    if (num_bigint::BigInt::one() << k as usize) != *d {
+        return None;
+    }
+    let n = r.numer().abs() * num_traits::pow(num_bigint::BigInt::from(5), k as usize);
+    let mut digits = n.to_string();
+    let k = k as usize;
+    if k > 0 {
+        if digits.len() <= k {
+            digits = format!("{}{digits}", "0".repeat(k + 1 - digits.len()));
+        }
+        digits.insert(digits.len() - k, '.');
+    } else {
+        digits.push_str(".0");
+    }
+    let sign = if r.is_negative() && !r.is_zero() { "-" } else { "" };
+    Some(format!("{sign}{digits}"))
+}
+
+/// The value a process's argument `a` for the field `field` has on the wire: for a
+/// `float`/`double` field and a constant `a`, `a` rounded to the field's format (ties to
+/// even), as an exact decimal literal; any other argument as it is (a non-constant one
+/// keeps its `float32` conjunct undecided, so its [T-OUT] obligation is unknown unless it
+/// is a value of a float field). `Err` with the rounded-away constant when it rounds to an
+/// infinity, which no finite float field carries.
+pub fn wire_value(prog: &Program, field: ValueId, a: &Expr) -> Result<Expr, String> {
+    let Some(format) = prog.wire_floats.get(&field).and_then(|f| float_format(*f)) else { return Ok(a.clone()) };
+    let Some(r) = exact_constant(prog, a) else { return Ok(a.clone()) };
+    let rounded = round_to_float(&r, format).ok_or_else(|| crate::hir::print::expr(prog, None, a))?;
+    match dyadic_decimal(&rounded) {
+        Some(text) => Ok(Expr { kind: ExprKind::Real(text), sort: Sort::Real, loc: a.loc }),
+        None => Ok(a.clone()),
+    }
 }

@@ -93,7 +93,7 @@ fn commands_fix_the_command_and_name_their_parameters_by_label() {
     assert!(mav.implicit && mav.user);
     assert_eq!(mav.entry.as_ref().map(|e| e.enum_name.as_str()), Some("PARACHUTE_ACTION"));
     let text = crate::hir::print::expr(&p, None, f.refinement.as_ref().expect("refined"));
-    assert_eq!(text, "(action == 0 || action == 1 || action == 2) && action == PARACHUTE_RELEASE");
+    assert_eq!(text, "float32(action) && (action == 0 || action == 1 || action == 2) && action == PARACHUTE_RELEASE");
     // `command` listed: fixed to the command by the label.
     let (p, d) = lower_mav("GCS -> UAV: COMMAND_LONG[MAV_CMD_DO_PARACHUTE](command). end");
     assert!(d.is_empty(), "{d:?}");
@@ -295,7 +295,7 @@ fn enum_typed_fields_carry_their_entries_as_runs_or_flags() {
     assert_eq!(printed(&p, &f), "(-128) <= c && c <= 127 && (0 <= c && c <= 1)");
     // A float parameter: the values one by one (it carries the entry exactly).
     let (p, f) = first_refinement("GCS -> UAV: COMMAND_LONG[MAV_CMD_COMPONENT_ARM_DISARM](arm). end");
-    assert_eq!(printed(&p, &f), "arm == 0 || arm == 1");
+    assert_eq!(printed(&p, &f), "float32(arm) && (arm == 0 || arm == 1)");
     // Every value of the wire type allowed: nothing to add, nothing to check. MAV_MODE_FLAG
     // has a flag for each of the eight bits of HEARTBEAT.base_mode.
     let (p, f) = first_refinement("UAV -> GCS: HEARTBEAT(base_mode as b). end");
@@ -312,8 +312,11 @@ fn the_refinement_without_the_entry_predicate_is_the_wire_range_and_the_users() 
     for (chor, want) in [
         ("UAV -> GCS: MISSION_ACK(type as t {t != 0}). end", Some("0 <= t && t <= 255 && t != 0")),
         ("UAV -> GCS: MISSION_ACK(type as t). end", Some("0 <= t && t <= 255")),
-        ("GCS -> UAV: COMMAND_LONG[MAV_CMD_COMPONENT_ARM_DISARM](arm {arm == 1.001}). end", Some("arm == 1.001")),
-        ("GCS -> UAV: COMMAND_LONG[MAV_CMD_COMPONENT_ARM_DISARM](arm). end", None),
+        (
+            "GCS -> UAV: COMMAND_LONG[MAV_CMD_COMPONENT_ARM_DISARM](arm {arm == 1.001}). end",
+            Some("float32(arm) && arm == 1.001"),
+        ),
+        ("GCS -> UAV: COMMAND_LONG[MAV_CMD_COMPONENT_ARM_DISARM](arm). end", Some("float32(arm)")),
         ("GCS -> UAV: SET_ATTITUDE_TARGET(type_mask as k {k == 15}). end", Some("0 <= k && k <= 255 && k == 15")),
     ] {
         let (p, f) = first_refinement(chor);
@@ -559,4 +562,107 @@ fn deprecated_messages_are_warned_about_once_naming_the_replacement() {
     // Nothing deprecated: nothing said.
     let (_, d) = lower_mav("GCS -> UAV: MISSION_COUNT(count). end");
     assert!(d.is_empty(), "{d:?}");
+}
+
+fn rat(s: &str) -> num_rational::BigRational {
+    crate::bounds::decimal(s).expect("a decimal")
+}
+
+/// Rounding to binary32 agrees with the hardware's `f64 as f32` (round to nearest, ties to
+/// even) on values that are exact doubles, ties and subnormals included; overflow is `None`.
+#[test]
+fn rounding_to_float32_is_the_hardwares_and_exact() {
+    use num_traits::ToPrimitive;
+    let samples = [
+        0.1f64,
+        -0.1,
+        1.0,
+        16_777_217.0,          // 2^24 + 1: a tie, to the even 2^24
+        16_777_219.0,          // 2^24 + 3: a tie, to the even 2^24 + 4
+        3.4028234663852886e38, // the largest binary32
+        3.4028235677973362e38, // just below the tie with 2^128: to the largest
+        1e-45,
+        7e-46,                       // above half the smallest subnormal: rounds up to it
+        1.401298464324817e-45 / 2.0, // exactly half: a tie, to the even 0
+        123456.789,
+        -2.5e-40, // a subnormal
+    ];
+    for v in samples {
+        let r = num_rational::BigRational::from_float(v).expect("finite");
+        let got = crate::lower::round_to_float(&r, crate::lower::BINARY32).expect("finite");
+        assert_eq!(got.to_f64().map(|g| g as f32), Some(v as f32), "{v}");
+        assert_eq!(num_rational::BigRational::from_float(v as f32), Some(got), "{v}");
+    }
+    // From the largest binary32 plus half its ulp on (a tie, to the even 2^128): an
+    // infinity, outside the model.
+    assert_eq!(
+        crate::lower::round_to_float(&rat("340282356779733661637539395458142568448"), crate::lower::BINARY32),
+        None
+    );
+    assert_eq!(crate::lower::round_to_float(&rat("3.5e38"), crate::lower::BINARY32), None);
+    assert_eq!(crate::lower::round_to_float(&rat("-1e39"), crate::lower::BINARY32), None);
+    assert!(crate::lower::round_to_float(&rat("1e300"), crate::lower::BINARY64).is_some());
+    // 0.1 is no binary32; its rounding is, and its decimal is exact.
+    assert!(!crate::lower::is_float(&rat("0.1"), crate::lower::BINARY32));
+    let r = crate::lower::round_to_float(&rat("0.1"), crate::lower::BINARY32).expect("finite");
+    assert!(crate::lower::is_float(&r, crate::lower::BINARY32));
+    assert_eq!(crate::lower::dyadic_decimal(&r).as_deref(), Some("0.100000001490116119384765625"));
+    assert_eq!(crate::lower::dyadic_decimal(&rat("-3")).as_deref(), Some("-3.0"));
+    assert!(crate::lower::is_float(&r, crate::lower::BINARY64));
+    assert!(!crate::lower::is_float(&rat("0.1"), crate::lower::BINARY64));
+}
+
+/// The finite-float model is part of a float field's type: its refinement carries
+/// `float32(v)` (`float64` for a `double`), the conjunct a run-time monitor must check
+/// (a NaN or an infinity in such a field is outside the model: LANGUAGE.md, "Floats are
+/// float32"), and the program records the field's format.
+#[test]
+fn a_float_field_is_refined_by_its_finite_format() {
+    let (p, d) = lower_mav("GCS -> UAV: PARAM_SET(param_value as v {v < 0}). end");
+    assert!(d.is_empty(), "{d:?}");
+    let m = first_msg(&p);
+    let v = &m.payload[0];
+    assert_eq!(v.sort, Sort::Real);
+    assert_eq!(printed(&p, v), "float32(v) && v < 0");
+    assert_eq!(p.wire_floats.get(&v.value), Some(&Builtin::Float32));
+    // An integer field gets no float conjunct.
+    let (p, d) = lower_mav("GCS -> UAV: MISSION_COUNT(count). end");
+    assert!(d.is_empty(), "{d:?}");
+    assert!(p.wire_floats.is_empty());
+}
+
+/// Under the finite-float model, `[v < 0] + [v >= 0]` over a received float is total
+/// (no NaN arrives: the monitor rejects it), the window (0.1, 0.1000000001) holds no
+/// binary32 (E0419) while (0.1, 0.1000001) does, and `v == 0.1` has no binary32 either.
+#[test]
+fn progress_asks_for_a_float32_payload() {
+    use crate::driver::Verdict;
+    let window = |hi: &str| verdict(&format!("GCS -> UAV: PARAM_SET(param_value as v {{0.1 < v && v < {hi}}}). end"));
+    assert_eq!(window("0.1000000001"), (Verdict::Rejected, vec!["E0419"]));
+    assert_eq!(window("0.1000001"), (Verdict::Verified, vec![]));
+    assert_eq!(verdict("GCS -> UAV: PARAM_SET(param_value as v {v == 0.1}). end"), (Verdict::Rejected, vec!["E0419"]));
+    assert_eq!(verdict("GCS -> UAV: PARAM_SET(param_value as v {v == 0.5}). end"), (Verdict::Verified, vec![]));
+    // An echo of a received float is a float.
+    assert_eq!(
+        verdict(
+            "GCS -> UAV: PARAM_SET(param_value as v {0 <= v && v <= 1}). UAV -> GCS: PARAM_VALUE(param_value as w {w == v}). end"
+        ),
+        (Verdict::Verified, vec![])
+    );
+    let total = verdict(
+        "UAV -> GCS: PARAM_VALUE(param_value as v).
+         ( GCS -> UAV: [v < 0] PARAM_REQUEST_LIST(). end
+         + GCS -> UAV: [v >= 0] MISSION_CLEAR_ALL(). end )",
+    );
+    assert_eq!(total, (Verdict::Verified, vec![]));
+}
+
+/// A string literal is its value on the wire: the text up to its first NUL.
+#[test]
+fn string_literals_end_at_their_first_nul() {
+    let (p, d) = lower_mav(
+        "GCS -> UAV: PARAM_SET(param_id {param_id == \"AB\0C\" || param_id == \"AB\0D\" || param_id == \"AB\"}). end",
+    );
+    assert!(d.is_empty(), "{d:?}");
+    assert_eq!(p.strings, vec!["AB".to_string()]);
 }

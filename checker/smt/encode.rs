@@ -95,6 +95,17 @@ struct TrigPair {
     cos: Real,
 }
 
+/// Where a formula occurs in what is asserted ([`Encoder::polarity`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Polarity {
+    /// Positively in a hypothesis: a weaker formula is sound.
+    Assumed,
+    /// Positively in the body of "some payload exists": exact, its witnesses bound.
+    Chosen,
+    /// Anywhere else: exact, or refused.
+    Other,
+}
+
 /// Which solver a query needs ([`crate::smt::solver_for`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Logic {
@@ -124,6 +135,16 @@ pub struct Encoder<'p> {
     /// The variables of sort `str` (integers in the solver), so that a counterexample
     /// shows their values as the strings they stand for.
     strings: std::collections::HashSet<String>,
+    /// Where the formula being encoded occurs: positively in a hypothesis
+    /// ([`Encoder::assumed`]), positively in the body of the progress check's existential
+    /// ([`Encoder::choosing`]), or anywhere else (a goal; under a negation, left of `=>`,
+    /// in a condition or an equality of truth values). Only [`Builtin::Float32`] reads it.
+    polarity: Polarity,
+    /// The payload values the progress check is choosing ([`Encoder::choosing`]): that
+    /// such a value is a float of its field's format is encoded exactly there.
+    choosing: std::collections::HashSet<ValueId>,
+    /// The significands introduced for [`Encoder::choosing`], to be bound with the values.
+    chosen_aux: Vec<Int>,
 }
 
 impl<'p> Encoder<'p> {
@@ -139,7 +160,94 @@ impl<'p> Encoder<'p> {
             value_names: HashMap::new(),
             quantified: false,
             strings: std::collections::HashSet::new(),
+            polarity: Polarity::Other,
+            choosing: std::collections::HashSet::new(),
+            chosen_aux: Vec::new(),
         }
+    }
+
+    /// Encodes `f` as asserted (a hypothesis): [`Builtin::Float32`] of a value not known
+    /// to be a float may then be weakened to `true`.
+    pub fn assumed<T>(&mut self, f: impl FnOnce(&mut Self) -> T) -> T {
+        self.at(Polarity::Assumed, f)
+    }
+
+    fn at<T>(&mut self, p: Polarity, f: impl FnOnce(&mut Self) -> T) -> T {
+        let saved = std::mem::replace(&mut self.polarity, p);
+        let r = f(self);
+        self.polarity = saved;
+        r
+    }
+
+    /// Encodes `f`, the body of "some payload `ids` exists" (asserted positively inside
+    /// the existential): that a chosen value of a `float` field is a binary32 is encoded
+    /// exactly, with an integer significand per value. Returns the significands, which
+    /// the caller binds together with the values.
+    pub fn choosing<T>(&mut self, ids: &[ValueId], f: impl FnOnce(&mut Self) -> T) -> (T, Vec<Int>) {
+        let saved = std::mem::replace(&mut self.choosing, ids.iter().copied().collect());
+        let aux = std::mem::take(&mut self.chosen_aux);
+        let r = self.at(Polarity::Chosen, f);
+        self.choosing = saved;
+        (r, std::mem::replace(&mut self.chosen_aux, aux))
+    }
+
+    /// Encodes `f` in a position that is not positive (see [`Encoder::polarity`]).
+    fn mixed<T>(&mut self, f: impl FnOnce(&mut Self) -> T) -> T {
+        self.at(Polarity::Other, f)
+    }
+
+    /// `x` is a finite float of `format`, exactly: `x = m * 2^q` for an integer `m` with
+    /// `|m| <= 2^p - 1` and one of the format's exponents `q` (a disjunction over them),
+    /// `m` fresh. Correct where it is asserted positively (`m` is an existential's
+    /// witness), so only [`Encoder::choosing`] uses it.
+    fn float_member(&mut self, x: &Real, format: crate::lower::FloatFormat) -> Result<Bool, Unsupported> {
+        let m = Int::fresh_const("significand");
+        self.chosen_aux.push(m.clone());
+        let big = Int::from_i64((1i64 << format.p) - 1);
+        let mr = m.to_real();
+        // The integers first (`m * 2^0`): a witness such as `0` or `1` is found there
+        // without a case split over the exponents.
+        let mut alts = vec![x.eq(&mr)];
+        for q in format.qmin..=format.qmax {
+            let scale = real_of_rational(&crate::lower::pow2(q))
+                .ok_or_else(|| Unsupported("a power of two too large for the solver".into()))?;
+            alts.push(x.eq(Real::mul(&[mr.clone(), scale])));
+        }
+        Ok(Bool::and(&[m.le(&big), m.ge(big.unary_minus()), Bool::or(&alts)]))
+    }
+
+    /// [`Builtin::Float32`] / [`Builtin::Float64`] of `a`: decided exactly for a constant;
+    /// `true` for a value of a field of that format or a narrower one (a fact of the
+    /// model: [`Program::wire_floats`]) unless it is being chosen, exact for a chosen one;
+    /// otherwise `true` in a hypothesis (a weaker one) and refused elsewhere, in an
+    /// existential's body too, where `true` would be stronger (a computed value's rounding
+    /// is not modelled).
+    fn float_call(&mut self, f: Builtin, a: &Expr) -> Result<Term, Unsupported> {
+        let format = crate::lower::float_format(f).ok_or_else(|| Unsupported("a float format".into()))?;
+        if let Some(r) = crate::lower::exact_constant(self.prog, a) {
+            return Ok(Term::B(Bool::from_bool(crate::lower::is_float(&r, format))));
+        }
+        if let ExprKind::Var(Var::Value(id, _)) = &a.kind {
+            if self.choosing.contains(id) {
+                if self.polarity != Polarity::Chosen {
+                    return Err(Unsupported("a float payload value under a negation".into()));
+                }
+                let x = as_real(self.term(a)?)?;
+                return Ok(Term::B(self.float_member(&x, format)?));
+            }
+            let narrower = |w: &Builtin| *w == f || (*w == Builtin::Float32 && f == Builtin::Float64);
+            if self.prog.wire_floats.get(id).is_some_and(narrower) {
+                return Ok(Term::B(Bool::from_bool(true)));
+            }
+        }
+        if self.polarity == Polarity::Assumed {
+            return Ok(Term::B(Bool::from_bool(true)));
+        }
+        Err(Unsupported(format!(
+            "whether `{}` is a {} value (the rounding of a computed value to a MAVLink float is not modelled: send a literal or a value received in a field of that format)",
+            crate::hir::print::expr(self.prog, None, a),
+            if f == Builtin::Float32 { "float32" } else { "float64" }
+        )))
     }
 
     pub fn prog(&self) -> &'p Program {
@@ -371,7 +479,7 @@ impl<'p> Encoder<'p> {
             ExprKind::Int(i) => Term::I(Int::from_i64(*i)),
             ExprKind::Real(r) => Term::R(rational(r).ok_or_else(|| Unsupported(format!("the number `{r}`")))?),
             ExprKind::Var(v) => self.var(v, &e.sort)?,
-            ExprKind::Unary(UnOp::Not, a) => Term::B(self.boolean(a)?.not()),
+            ExprKind::Unary(UnOp::Not, a) => Term::B(self.mixed(|enc| enc.boolean(a))?.not()),
             ExprKind::Unary(UnOp::Neg, a) => match self.term(a)? {
                 Term::I(i) => Term::I(i.unary_minus()),
                 Term::R(r) => Term::R(r.unary_minus()),
@@ -380,7 +488,7 @@ impl<'p> Encoder<'p> {
             },
             ExprKind::Binary(op, a, b) => self.binary(*op, a, b)?,
             ExprKind::If(c, a, b) => {
-                let c = self.boolean(c)?;
+                let c = self.mixed(|enc| enc.boolean(c))?;
                 match (self.term(a)?, self.term(b)?) {
                     (Term::B(x), Term::B(y)) => Term::B(c.ite(&x, &y)),
                     (Term::I(x), Term::I(y)) => Term::I(c.ite(&x, &y)),
@@ -404,7 +512,7 @@ impl<'p> Encoder<'p> {
         Ok(match op {
             And => Term::B(Bool::and(&[self.boolean(a)?, self.boolean(b)?])),
             Or => Term::B(Bool::or(&[self.boolean(a)?, self.boolean(b)?])),
-            Implies => Term::B(self.boolean(a)?.implies(self.boolean(b)?)),
+            Implies => Term::B(self.mixed(|enc| enc.boolean(a))?.implies(self.boolean(b)?)),
             Pow => {
                 let ExprKind::Int(n) = b.kind else {
                     return Err(Unsupported("a power whose exponent is not an integer literal".into()));
@@ -421,7 +529,7 @@ impl<'p> Encoder<'p> {
                 }
             }
             Eq | Ne => {
-                let eq = match (self.term(a)?, self.term(b)?) {
+                let eq = match self.mixed(|enc| Ok::<_, Unsupported>((enc.term(a)?, enc.term(b)?)))? {
                     (Term::B(x), Term::B(y)) => x.eq(&y),
                     (Term::I(x), Term::I(y)) => x.eq(&y),
                     (Term::V(x), Term::V(y)) => Bool::and(&[x[0].eq(&y[0]), x[1].eq(&y[1]), x[2].eq(&y[2])]),
@@ -485,6 +593,10 @@ impl<'p> Encoder<'p> {
         };
         let zero = || Int::from_i64(0).to_real();
         Ok(match f {
+            Builtin::Float32 | Builtin::Float64 => {
+                let a = args.first().ok_or_else(|| Unsupported(format!("`{}` without arguments", f.name())))?;
+                self.float_call(f, a)?
+            }
             Builtin::HasFlag => {
                 // Exact: bit k of x is (x div 2^k) mod 2 (Euclidean, so a negative x reads as
                 // its two's complement), for every bit k of the constant flag.

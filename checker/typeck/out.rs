@@ -48,7 +48,27 @@ impl Checker<'_> {
         st.forget(&fields);
         let mut vals = st.vals.clone();
         for (a, f) in args.iter().zip(&b.payload) {
-            vals.insert(f.value, a.clone());
+            // The value the receiver gets: a literal sent in a MAVLink float field rounded
+            // to the field's format (`lower::wire_value`).
+            let a = match crate::lower::wire_value(self.prog, f.value, a) {
+                Ok(w) => w,
+                Err(text) => {
+                    self.diags.push(
+                        Diagnostic::error(
+                            Code::SendPredicate,
+                            a.loc.0,
+                            format!("`{text}` sent in the float field `{}` rounds to an infinity on the wire", f.name),
+                        )
+                        .with_label(b.loc.0, "the field is declared here")
+                        .with_note(
+                            "a MAVLink float field carries finite values only (LANGUAGE.md, \"Floats are float32\")",
+                        )
+                        .with_help("send a value within the field's format"),
+                    );
+                    a.clone()
+                }
+            };
+            vals.insert(f.value, a);
         }
         let mut goal = Vec::new();
         if let Some(g) = &b.guard {

@@ -924,8 +924,10 @@ fn enabled(prog: &Program, m: &Msg) -> Enabled {
             let ExprKind::Binary(BinOp::Eq, a, b) = &c.kind else { return None };
             [(a, b), (b, a)].into_iter().find_map(|(x, e)| {
                 let id = field(x)?;
-                (!reads_field(e) && (x.sort == e.sort || x.sort == Sort::Real && e.sort == Sort::Int))
-                    .then(|| (k, id, (**e).clone()))
+                (!reads_field(e)
+                    && (x.sort == e.sort || x.sort == Sort::Real && e.sort == Sort::Int)
+                    && crate::lower::float_definition_decided(prog, id, e))
+                .then(|| (k, id, (**e).clone()))
             })
         });
         let Some((k, id, e)) = def else { break };

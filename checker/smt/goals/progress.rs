@@ -31,7 +31,11 @@ pub fn enabled(enc: &mut Encoder, b: &Enabled) -> Result<Bool, Unsupported> {
     for (id, name, sort) in &b.fields {
         bound.push(enc.any(&value_expr(*id, name, sort))?);
     }
-    let body = enc.boolean(&b.refinement)?;
+    // A chosen `float` value is a binary32 (`Encoder::choosing`): its significand is
+    // bound with it.
+    let ids: Vec<_> = b.fields.iter().map(|(id, _, _)| *id).collect();
+    let (body, significands) = enc.choosing(&ids, |enc| enc.boolean(&b.refinement));
+    let body = body?;
     if enc.side_conditions().count() != side_before {
         // A side condition (of `sqrt`, `/`, trigonometry) about a bound value would be
         // asserted outside its quantifier: refuse rather than mis-state it.
@@ -49,6 +53,7 @@ pub fn enabled(enc: &mut Encoder, b: &Enabled) -> Result<Bool, Unsupported> {
             Term::V(xs) => xs.iter().for_each(|x| consts.push(x)),
         }
     }
+    significands.iter().for_each(|m| consts.push(m));
     enc.quantified();
     let some = z3::ast::exists_const(&consts, &[], &body);
     Ok(Bool::and(&[guard, some]))

@@ -345,7 +345,7 @@ pub(super) fn slice(prog: &Program, hs: &[Expr], mut seeds: HashSet<Var>) -> Vec
 
 pub(super) fn hyps(q: &mut Query, hs: &[Expr]) -> Result<(), Unsupported> {
     for h in hs {
-        let b = q.enc.boolean(h)?;
+        let b = q.enc.assumed(|enc| enc.boolean(h))?;
         q.assertions.push(b);
     }
     Ok(())
