@@ -145,6 +145,20 @@ pub struct Encoder<'p> {
     choosing: std::collections::HashSet<ValueId>,
     /// The significands introduced for [`Encoder::choosing`], to be bound with the values.
     chosen_aux: Vec<Int>,
+    /// Which floats a chosen value may be ([`Encoder::integer_witnesses`]).
+    witnesses: FloatWitnesses,
+    /// Whether some chosen value had to be a float ([`Encoder::chose_floats`]).
+    chose_floats: bool,
+}
+
+/// The witnesses "a chosen value is a float of its format" admits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum FloatWitnesses {
+    /// Every finite float of the format: `m * 2^q` over all its exponents.
+    Exact,
+    /// Its integers only (`m * 2^0`, `|m| < 2^p`): a subset, so "some payload exists"
+    /// proved with them holds of the exact question too, at a fraction of its cost.
+    Integers,
 }
 
 impl<'p> Encoder<'p> {
@@ -163,7 +177,24 @@ impl<'p> Encoder<'p> {
             polarity: Polarity::Other,
             choosing: std::collections::HashSet::new(),
             chosen_aux: Vec::new(),
+            witnesses: FloatWitnesses::Exact,
+            chose_floats: false,
         }
+    }
+
+    /// An encoder whose chosen floats are integers only: "some payload exists" becomes a
+    /// stronger statement (fewer witnesses), so a progress query it proves (unsat) is
+    /// proved for every float; a satisfiable one decides nothing and the exact encoding
+    /// is asked ([`crate::smt`]'s worker). Z3 decides the integer form quickly, where the
+    /// disjunction over 254 exponents of the exact form can take seconds.
+    pub fn with_integer_witnesses(prog: &'p Program) -> Encoder<'p> {
+        Encoder { witnesses: FloatWitnesses::Integers, ..Encoder::new(prog) }
+    }
+
+    /// Whether encoding chose a value that must be a float (so that the integer
+    /// witnesses made the question stronger than asked).
+    pub fn chose_floats(&self) -> bool {
+        self.chose_floats
     }
 
     /// Encodes `f` as asserted (a hypothesis): [`Builtin::Float32`] of a value not known
@@ -203,12 +234,18 @@ impl<'p> Encoder<'p> {
     fn float_member(&mut self, x: &Real, format: crate::lower::FloatFormat) -> Result<Bool, Unsupported> {
         let m = Int::fresh_const("significand");
         self.chosen_aux.push(m.clone());
+        self.chose_floats = true;
         let big = Int::from_i64((1i64 << format.p) - 1);
         let mr = m.to_real();
         // The integers first (`m * 2^0`): a witness such as `0` or `1` is found there
         // without a case split over the exponents.
         let mut alts = vec![x.eq(&mr)];
-        for q in format.qmin..=format.qmax {
+        let exponents = match self.witnesses {
+            FloatWitnesses::Exact => format.qmin..=format.qmax,
+            #[allow(clippy::reversed_empty_ranges)]
+            FloatWitnesses::Integers => 1..=0,
+        };
+        for q in exponents {
             let scale = real_of_rational(&crate::lower::pow2(q))
                 .ok_or_else(|| Unsupported("a power of two too large for the solver".into()))?;
             alts.push(x.eq(Real::mul(&[mr.clone(), scale])));

@@ -554,6 +554,16 @@ impl Worker<'_> {
                 goals::geo::GeoAnswer::Unknown(why) => Answer::Unknown(Why::Incomplete(why)),
             };
         }
+        // A payload float chosen by the progress check: first with integer witnesses
+        // only, a stronger question Z3 decides quickly; its unsat proves the part, and
+        // anything else leaves the exact question to ask.
+        let chooses = matches!(ob.goal, Goal::Progress { .. }) && !self.prog.wire_floats.is_empty();
+        if let Some(Ok(q)) = chooses.then(|| goals::build_integer_witnesses(self.prog, ob, part)).flatten() {
+            stats.queries += 1;
+            if matches!(self.solve(q, index, k, false, stats), Answer::Unsat) {
+                return Answer::Unsat;
+            }
+        }
         stats.queries += 1;
         match goals::build(self.prog, ob, part) {
             Err(Unsupported(what)) => Answer::Unknown(Why::Unsupported(what)),

@@ -29,7 +29,7 @@ use z3::ast::{Bool, Real};
 
 pub use boxes::{run_box, side_boxes};
 pub use candidate::witnessed;
-pub use query::{build, context_of};
+pub use query::{build, build_integer_witnesses, context_of};
 pub use refine::RefineItem;
 // For `witness`, which encodes the same motions for the simulator.
 use agcomp::connect;

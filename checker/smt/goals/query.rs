@@ -18,7 +18,27 @@ use z3::ast::{Bool, Real};
 
 /// Builds the query of one part.
 pub fn build<'p>(prog: &'p Program, ob: &Obligation, part: &Part) -> Result<Query<'p>, Unsupported> {
-    let mut q = Query { enc: Encoder::new(prog), assertions: Vec::new(), point: None, times: Vec::new() };
+    build_with(Encoder::new(prog), ob, part)
+}
+
+/// The query of one part with the payload floats it chooses restricted to integers
+/// ([`Encoder::with_integer_witnesses`]): a stronger question, whose unsat answer proves
+/// the part. `None` when the part chooses no float (the query would be the same).
+pub fn build_integer_witnesses<'p>(
+    prog: &'p Program,
+    ob: &Obligation,
+    part: &Part,
+) -> Option<Result<Query<'p>, Unsupported>> {
+    let q = build_with(Encoder::with_integer_witnesses(prog), ob, part);
+    match &q {
+        Ok(q) if !q.enc.chose_floats() => None,
+        _ => Some(q),
+    }
+}
+
+fn build_with<'p>(enc: Encoder<'p>, ob: &Obligation, part: &Part) -> Result<Query<'p>, Unsupported> {
+    let prog = enc.prog();
+    let mut q = Query { enc, assertions: Vec::new(), point: None, times: Vec::new() };
     match (&ob.goal, part) {
         (Goal::Valid(goal), Part::Valid) => {
             let seeds = vars_of(prog, [goal]);
