@@ -227,7 +227,7 @@ impl Interval {
         Interval { lo, hi }
     }
 
-    fn pow(self, n: i64) -> Interval {
+    pub(crate) fn pow(self, n: i64) -> Interval {
         if n == 0 {
             return Interval::point(1.0);
         }
@@ -251,7 +251,7 @@ impl Interval {
         Interval { lo: odd(self.lo, false), hi: odd(self.hi, true) }
     }
 
-    fn sqrt(self) -> Option<Interval> {
+    pub(crate) fn sqrt(self) -> Option<Interval> {
         if self.lo < 0.0 {
             return None;
         }

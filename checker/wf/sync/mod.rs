@@ -31,7 +31,10 @@
 //! - **Common start** (E0317): the participants of a joint motion are released at one
 //!   instant, as [AGCOMP] assumes.
 //! - **Overlapping motions** (E0318): two motions that may run at the same time are parts
-//!   of one dt or on two sides of one `*`, so that some check compares their footprints.
+//!   of one dt or on two sides of one `*`, so that some check compares their footprints; a
+//!   participant standing still after its primitive ended is compared with nothing once a
+//!   part of its dt runs on past the time [AGCOMP] bounds, so that part must keep its own
+//!   participant in place.
 //! - **Interruptions within D** (E0319): a message ending an interruptible motion comes
 //!   when that motion ends, or the primitive is ready at any time (`[0, inf]`, an
 //!   assumption free of inputs).
@@ -792,13 +795,51 @@ mod tests {
         };
         // P's step ends; P is then held up by X (busy on the other side), so Q and V wait on
         // together past the end of the dt, where [AGCOMP] no longer compares them.
+        // P itself stands still meanwhile, seen by neither: one E0318 for Q and V together,
+        // one for each of them and the standing P.
         let late = "(dt<P: step, Q: wait, V: wait> * (dt<W: go, X: wait>. W -> X : m. (dt<W: wait> * dt<X: wait>))). P -> X : a. P -> Q : b. P -> V : c. P -> W : e. dt<P: go, Q: wait, V: wait, W: wait, X: wait>. end";
-        assert_eq!(codes5(late), vec![Code::UncheckedOverlap]);
+        assert_eq!(codes5(late), vec![Code::UncheckedOverlap; 3]);
         // Told in the burst that ends the dt, they stop with it.
         let burst = "(dt<P: step, Q: wait, V: wait> * (dt<W: go, X: wait>. W -> X : m. (dt<W: wait> * dt<X: wait>))). P -> Q : b. P -> V : c. P -> X : a. P -> W : e. end";
         assert_eq!(codes5(burst), vec![]);
         // With a leader whose contract does not bound the time, [AGCOMP] compared them always.
         assert_eq!(codes5(&late.replace("P: step", "P: go")), vec![]);
+    }
+
+    /// A participant whose primitive ends stands still, outside any motion, while a part
+    /// of the same dt that nothing interrupts runs on: [AGCOMP] compared them only while
+    /// the ended primitive ran, so the pair is E0318 unless the part running on keeps its
+    /// participant in place, or is interrupted when the motion ends.
+    #[test]
+    fn a_participant_standing_still_while_another_runs_on() {
+        let sys = "
+            robot R { state x: real, y: real; }
+            motion R.park { interruptible: false; duration: [2, 2]; }
+            motion R.creep { interruptible: true; guarantee: x == old(x) + clock && y == old(y); }
+            motion R.stay { interruptible: true; guarantee: y == old(y) && old(x) == x; }
+            motion R.stay_clocked { interruptible: true; guarantee: x == old(x) && y == old(y);
+              footprint(px, py, pz): px == x + clock && py == y && pz == 0; }
+            system S { participant A: R; participant B: R; }
+        ";
+        let codes = |chor: &str| {
+            let (p, d) = lower_src(&format!("{sys} choreography G = {chor};"));
+            assert!(d.is_empty(), "{d:?}");
+            let c = p.choreography.as_ref().expect("choreography");
+            let ds = super::check(&p, &c.body);
+            assert_eq!(ds.iter().map(|d| format!("{d:?}")).collect::<Vec<_>>(), {
+                let o = super::oracle::check(&p, &c.body);
+                o.iter().map(|d| format!("{d:?}")).collect::<Vec<_>>()
+            });
+            ds.into_iter().map(|d| d.code).collect::<Vec<_>>()
+        };
+        // A parks for 2 s and then stands where it parked; B creeps on for ever.
+        assert_eq!(codes("dt<A: park, B: creep>. end"), vec![Code::UncheckedOverlap]);
+        // Told to stop in the burst that ends the motion, B stops with it.
+        assert_eq!(codes("dt<A: park, B: creep>. A -> B : stop. end"), vec![]);
+        // B keeps to where it started: its footprint is the one [AGCOMP] compared.
+        assert_eq!(codes("dt<A: park, B: stay>. end"), vec![]);
+        // ... unless its footprint moves with the clock.
+        assert_eq!(codes("dt<A: park, B: stay_clocked>. end"), vec![Code::UncheckedOverlap]);
     }
 
     /// A small random global type over [`SYS_ORACLE`]: sequences, choices (open, in the

@@ -26,7 +26,10 @@
 //! - **Common start** (E0317): the participants of a joint motion are released at one
 //!   instant, as [AGCOMP] assumes.
 //! - **Overlapping motions** (E0318): two motions that may run at the same time are parts
-//!   of one dt or on two sides of one `*`, so that some check compares their footprints.
+//!   of one dt or on two sides of one `*`, so that some check compares their footprints; a
+//!   participant standing still after its primitive ended is compared with nothing once a
+//!   part of its dt runs on past the time [AGCOMP] bounds, so that part must keep its own
+//!   participant in place.
 //! - **Interruptions within D** (E0319): a message ending an interruptible motion comes
 //!   when that motion ends, or the primitive is ready at any time (`[0, inf]`, an
 //!   assumption free of inputs).
@@ -774,6 +777,43 @@ impl<'g> Checker<'_, 'g> {
             .with_note("they are interrupted later than the motion ends (or not before `end`); [AGCOMP] compares the footprints of a dt only while all its primitives run")
             .with_help("interrupt them in the burst of messages that ends the motion, or give them a dt (or `*` sides) of their own");
             self.push(d);
+        }
+
+        // A participant standing still after its part ended, and a part of the same dt
+        // running on past the time [AGCOMP] compared them (no third part needed: the
+        // standing part itself may bound the time).
+        for (j, y) in parts.iter().enumerate() {
+            let carrier_still = |c: RoleId| {
+                parts.iter().any(|p| {
+                    p.ev == y.ev
+                        && p.role == c
+                        && (!overruns(p) || super::timing::stationary(self.prog, self.prog.prim(p.app.prim)))
+                })
+            };
+            if !overruns(y)
+                || super::timing::stays_in_place(self.prog, y.role, self.prog.prim(y.app.prim), &carrier_still)
+            {
+                continue;
+            }
+            let bounded = parts.iter().enumerate().any(|(k, q)| q.ev == y.ev && k != j && bounds_time(q));
+            if !bounded {
+                continue;
+            }
+            for (i, x) in parts.iter().enumerate() {
+                if x.ev == y.ev
+                    && i != j
+                    && !overruns(x)
+                    && x.role != y.role
+                    && !super::timing::attached(self.prog, x.role, y.role)
+                {
+                    let d = super::timing::stands_still(
+                        self.ev[y.ev].loc().0,
+                        &self.part_name(y),
+                        self.prog.role_name(x.role),
+                    );
+                    self.push(d);
+                }
+            }
         }
 
         // Group by enclosing `*` sides: whether a pair is covered depends only on them.

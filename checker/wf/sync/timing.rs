@@ -215,6 +215,72 @@ fn open_ended(prim: &Primitive) -> bool {
     lo_zero && prim.duration.hi.is_none() && !reads_input(prim)
 }
 
+/// E0318 for a participant left standing still (its primitive ended) while `running`, a
+/// part of the same dt, runs on past the time [AGCOMP] compared them.
+pub(super) fn stands_still(span: crate::source::Span, running: &str, standing: &str) -> Diagnostic {
+    Diagnostic::error(
+        Code::UncheckedOverlap,
+        span,
+        format!(
+            "`{running}` may run on after this motion ends, while `{standing}` stands still where its primitive left it, and no check compares them then"
+        ),
+    )
+    .with_note("a participant whose primitive has ended waits outside any motion, its body where the primitive left it; [AGCOMP] compares the footprints of a dt only while all its primitives run, and the primitive running on is interrupted later (or not before `end`)")
+    .with_help(format!("interrupt `{running}` in the burst of messages that ends the motion, give it a guarantee that keeps its participant in place (`x == old(x)` for every state variable), or move `{standing}` on with a primitive of its own"))
+}
+
+/// Whether a primitive keeps its participant where it started, with a footprint that
+/// depends on nothing but that state: its guarantee has a conjunct `x == old(x)` (either
+/// way round) for every state variable of its kind, and neither its footprint predicate
+/// nor the poses of its geometric footprint read the clock or an input. Its footprint is
+/// then the same at every time. A footprint written `false` (a participant with no body,
+/// such as an environment) occupies nothing at any time and counts as well.
+pub(super) fn stationary(prog: &Program, prim: &Primitive) -> bool {
+    use crate::hir::expr::{BinOp, ExprKind};
+    let n = prog.kind(prim.kind).state.len();
+    let mut kept = vec![false; n];
+    for c in prim.guarantee.conjuncts() {
+        if let ExprKind::Binary(BinOp::Eq, a, b) = &c.kind {
+            if let (ExprKind::Var(u), ExprKind::Var(v)) = (&a.kind, &b.kind) {
+                for (x, y) in [(u, v), (v, u)] {
+                    if let (Var::Own(Slot::State(i)), Var::Old(k)) = (x, y) {
+                        if i == k && *i < n {
+                            kept[*i] = true;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let moving = |v: &Var| matches!(v, Var::Clock | Var::Own(Slot::Input(_)));
+    let pred_moves = prim.footprint.as_ref().is_some_and(|f| crate::hir::expr::mentions(&f.pred, &moving));
+    let body_moves = prim.footprint_body.as_ref().is_some_and(|b| {
+        b.parts.iter().any(|p| {
+            p.place.as_ref().is_some_and(|pose| pose.args.iter().any(|e| crate::hir::expr::mentions(e, &moving)))
+        })
+    });
+    let occupies_nothing = prim.footprint.as_ref().is_some_and(|f| matches!(f.pred.kind, ExprKind::Bool(false)));
+    occupies_nothing || (kept.iter().all(|k| *k) && !pred_moves && !body_moves)
+}
+
+/// Whether the part `y` (of `role`, running `prim`) stays where it is after its motion ends:
+/// it is [`stationary`], and so is every carrier it rides on (`on:`), which must be a part
+/// of the same motion that stops with it or is itself stationary (`carrier_still`).
+pub(super) fn stays_in_place(
+    prog: &Program,
+    role: RoleId,
+    prim: &Primitive,
+    carrier_still: &dyn Fn(RoleId) -> bool,
+) -> bool {
+    stationary(prog, prim) && prog.carriers(role).iter().all(|m| carrier_still(m.carrier))
+}
+
+/// Whether one of `a`, `b` rides (directly or through other carriers) on the other: they
+/// are attached at the mount, and their mutual clearance is not a question of the protocol.
+pub(super) fn attached(prog: &Program, a: RoleId, b: RoleId) -> bool {
+    prog.carriers(a).iter().any(|m| m.carrier == b) || prog.carriers(b).iter().any(|m| m.carrier == a)
+}
+
 /// Whether the assumption of `prim` reads an input (a partner's guarantee discharges it).
 fn reads_input(prim: &Primitive) -> bool {
     let mut reads = false;
@@ -529,6 +595,45 @@ impl<'g> Checker<'_, 'g> {
             )
             .with_note("they are interrupted later than the motion ends (or not before `end`); [AGCOMP] compares the footprints of a dt only while all its primitives run")
             .with_help("interrupt them in the burst of messages that ends the motion, or give them a dt (or `*` sides) of their own");
+            self.push(d);
+        }
+
+        // A part that does not run on (non-interruptible, or left when the motion ends)
+        // leaves its participant standing still, outside any motion, at its last state; a
+        // part of the same dt that runs on is compared with it by [AGCOMP] only as long as
+        // some other part bounds the query's time. After that the standing body is seen by
+        // no check, unless the part running on stays where it started (its footprint is
+        // then the one [AGCOMP] compared up to the end).
+        let mut standing: Vec<(usize, String, String)> = Vec::new();
+        // Per motion (by its first part): whether some part of it stops with it, computed
+        // once, so that a wide dt whose parts all run on costs one pass.
+        let mut stops: HashMap<usize, bool> = HashMap::new();
+        for (j, y) in parts.iter().enumerate() {
+            let mine = same[j].clone();
+            if !over[j] || !*stops.entry(mine.start).or_insert_with(|| mine.clone().any(|i| !over[i])) {
+                continue;
+            }
+            let carrier_still = |c: RoleId| {
+                parts[mine.clone()]
+                    .iter()
+                    .zip(&over[mine.clone()])
+                    .any(|(p, o)| p.role == c && (!o || stationary(self.prog, self.prog.prim(p.app.prim))))
+            };
+            if stays_in_place(self.prog, y.role, self.prog.prim(y.app.prim), &carrier_still) {
+                continue;
+            }
+            let bounding = *bounding_of.entry(mine.start).or_insert_with(|| bt[mine.clone()].iter().sum());
+            if bounding <= bt[j] {
+                continue;
+            }
+            for (i, x) in parts.iter().enumerate().take(mine.end).skip(mine.start) {
+                if i != j && !over[i] && x.role != y.role && !attached(self.prog, x.role, y.role) {
+                    standing.push((y.ev, self.part_name(y), self.prog.role_name(x.role).to_string()));
+                }
+            }
+        }
+        for (e, y, x) in standing {
+            let d = stands_still(self.ev[e].loc().0, &y, &x);
             self.push(d);
         }
 

@@ -739,6 +739,9 @@ impl<'a> Geo<'a> {
         opts.max_nodes = 400_000;
         opts.time_dim = self.dims.iter().position(|d| *d == Dim::Clock(0));
         let d = bnb::decide(self, &self.root, &opts);
+        if d.outcome.is_vacuous() {
+            return self.all_cut_away(d.stats.nodes);
+        }
         match d.outcome {
             bnb::Outcome::Apart { .. } => GeoAnswer::Apart,
             bnb::Outcome::Contact(c) => {
@@ -918,6 +921,39 @@ impl<'a> Geo<'a> {
             q.assertions.push(Bool::and(&[t.ge(&l), t.le(&h)]));
         }
         Some((q, terms))
+    }
+
+    /// The search cut every box of the root away as infeasible: by the contraction, no
+    /// configuration satisfies the constraints, so the sides never meet. That contradicts
+    /// any configuration Z3 finds satisfying them exactly (the motion can run, the
+    /// can-end question's witness): an enclosure then cut away a feasible configuration,
+    /// and the search decides nothing (unknown, with the witness). Apart only when Z3
+    /// confirms that no configuration of the root satisfies the constraints; unknown when
+    /// it cannot tell.
+    fn all_cut_away(&self, nodes: usize) -> GeoAnswer {
+        let what = format!("every box of the geometric search ({nodes}) was cut away as infeasible");
+        let Some((query, _)) = self.constraints(&self.root.lo, &self.root.hi) else {
+            return GeoAnswer::Unknown(format!("{what}, and the constraints could not be put to Z3 to confirm it"));
+        };
+        let solver = crate::smt::solver_for(&query);
+        for a in query.assertions.iter().chain(query.enc.side_conditions()) {
+            solver.assert(a);
+        }
+        match solver.check() {
+            z3::SatResult::Unsat => GeoAnswer::Apart,
+            z3::SatResult::Sat => {
+                let values = solver.get_model().map(|m| query.enc.assignments(&m)).unwrap_or_default();
+                let at: Vec<String> = values.iter().map(|a| format!("{} = {}", a.name, a.value)).collect();
+                GeoAnswer::Unknown(format!(
+                    "{what}, yet Z3 finds a configuration that satisfies every constraint ({}): the interval contraction contradicts this witness, so the search proves nothing",
+                    if at.is_empty() { "no values shown".to_string() } else { at.join(", ") }
+                ))
+            }
+            z3::SatResult::Unknown => GeoAnswer::Unknown(format!(
+                "{what}, and Z3 could not confirm that no configuration satisfies the constraints ({})",
+                solver.get_reason_unknown().unwrap_or_else(|| "no reason given".into())
+            )),
+        }
     }
 
     /// The counterexample's values at the configuration `q` (a model of the constraints

@@ -9,9 +9,12 @@
 //! - `Σ w^2 >= L` gives `v^2 >= L - Σ_{w ≠ v} max w^2 = s^2`, so `v` lies outside `(-s, s)`:
 //!   a range with `lo > -s` keeps only `[s, hi]`, one with `hi < s` only `[lo, -s]`.
 //!
-//! `U` is the enclosure's upper end and `L` its lower end; every derived bound is rounded
-//! outward by a relative 1e-12 plus 1e-12 (far above the few f64 roundings involved).
+//! `U` is the enclosure's upper end and `L` its lower end; every derived quantity is an
+//! outward-rounded enclosure ([`crate::bounds`]'s interval arithmetic), so the narrowed
+//! range contains every point of the box that satisfies the conjunct exactly, the points
+//! on its boundary included (the property test below draws such witnesses).
 
+use crate::bounds::Interval;
 use crate::hir::expr::{mentions, ExprKind};
 use crate::hir::{Expr, Var};
 use crate::syntax::ast::BinOp;
@@ -74,44 +77,53 @@ fn is_sum(e: &Expr) -> bool {
     squares(e, &mut v) && v.len() >= 2
 }
 
-fn down(x: f64) -> f64 {
-    x - x.abs() * 1e-12 - 1e-12
-}
-fn up(x: f64) -> f64 {
-    x + x.abs() * 1e-12 + 1e-12
-}
-
-/// `min v^2` and `max v^2` over `[lo, hi]`.
-fn sq_range(lo: f64, hi: f64) -> (f64, f64) {
-    let min = if lo <= 0.0 && hi >= 0.0 { 0.0 } else { lo.abs().min(hi.abs()).powi(2) };
-    (min, lo.abs().max(hi.abs()).powi(2))
+/// `Σ_{j ≠ k} w_j^2` over the ranges, outward rounded ([`Interval`]'s arithmetic): every
+/// value the sum takes over the box lies in it.
+fn others(ranges: &[(f64, f64)], k: usize) -> Interval {
+    ranges
+        .iter()
+        .enumerate()
+        .filter(|(j, _)| *j != k)
+        .map(|(_, r)| Interval::new(r.0, r.1).pow(2))
+        .fold(Interval::point(0.0), |a, b| a + b)
 }
 
 /// Narrows `ranges` (one `[lo, hi]` per variable of the sum, in order) by `Σ v^2 <= bound`
 /// (`upper`) or `Σ v^2 >= bound`. `false`: no point of the box satisfies it.
+///
+/// Every quantity is an outward-rounded enclosure ([`crate::bounds`]: one ulp outward
+/// unless an error-free transformation shows the result exact), never a round-to-nearest
+/// value padded afterwards: a padding relative to the derived bound does not cover the
+/// cancellation in `U - Σ w^2` when the sum is large and the room small, and cut away a
+/// point on the boundary.
 pub(super) fn narrow(ranges: &mut [(f64, f64)], bound: f64, upper: bool) -> bool {
     if !bound.is_finite() {
         return true;
     }
+    let b = Interval::point(bound);
     for _ in 0..2 {
         for k in 0..ranges.len() {
-            let others = |pick: fn((f64, f64)) -> f64| -> f64 {
-                ranges.iter().enumerate().filter(|(j, _)| *j != k).map(|(_, r)| pick(sq_range(r.0, r.1))).sum()
-            };
             let (lo, hi) = ranges[k];
+            let rest = others(ranges, k);
             if upper {
-                let room = bound - others(|r| r.0);
-                if up(room) < 0.0 {
-                    return false;
-                }
-                let m = up(room.max(0.0).sqrt());
-                ranges[k] = (lo.max(-m), hi.min(m));
-            } else {
-                let need = bound - others(|r| r.1);
-                if need <= 0.0 {
+                // v^2 <= U - Σ w^2 <= U - min Σ w^2 <= room.hi
+                let room = b + -Interval::point(rest.lo);
+                if room.hi.is_nan() {
                     continue;
                 }
-                let s = down(need.sqrt()).max(0.0);
+                if room.hi < 0.0 {
+                    return false;
+                }
+                let Some(m) = Interval::new(0.0, room.hi).sqrt() else { continue };
+                ranges[k] = (lo.max(-m.hi), hi.min(m.hi));
+            } else {
+                // v^2 >= L - Σ w^2 >= L - max Σ w^2 >= need.lo
+                let need = b + -Interval::point(rest.hi);
+                if need.lo.is_nan() || need.lo <= 0.0 {
+                    continue;
+                }
+                let Some(s) = Interval::new(need.lo, need.lo).sqrt() else { continue };
+                let s = s.lo.max(0.0);
                 let (mut l, mut h) = (lo, hi);
                 if l > -s {
                     l = l.max(s);
@@ -167,6 +179,67 @@ mod tests {
                 if (r1..=r2).contains(&s) {
                     assert!(ok, "a ring point ({x}, {y}) in a box called empty: {bx0:?} {by0:?}");
                     assert!(nb[0].0 <= x && x <= nb[0].1 && nb[1].0 <= y && y <= nb[1].1, "({x}, {y}) lost: {nb:?}");
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod witnesses {
+    use super::narrow;
+    use crate::bounds::Interval;
+    use num_rational::BigRational;
+    use proptest::prelude::*;
+
+    /// A coordinate of any sign over twelve orders of magnitude (1e-6 m to 1e6 m), or 0.
+    fn coord() -> impl Strategy<Value = f64> {
+        prop_oneof![
+            1 => Just(0.0),
+            8 => (any::<bool>(), 1.0f64..10.0, -6i32..7).prop_map(|(neg, m, e)| {
+                let v = m * 10f64.powi(e);
+                if neg { -v } else { v }
+            }),
+        ]
+    }
+
+    /// How far a box reaches past the witness on one side: nothing, a few ulps, or a
+    /// fraction of the coordinate.
+    fn reach() -> impl Strategy<Value = f64> {
+        prop_oneof![Just(0.0), Just(1e-300), 0.0f64..1e-9, 0.0f64..1.0]
+    }
+
+    fn exact_sum_of_squares(p: &[f64]) -> BigRational {
+        p.iter()
+            .map(|v| {
+                let q = BigRational::from_float(*v).expect("finite");
+                &q * &q
+            })
+            .fold(BigRational::from_integer(0.into()), |a, b| a + b)
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(1000))]
+
+        /// A witness on the boundary of `Σ v^2 <= U` (`U` the tightest double above its
+        /// exact sum of squares), or of `Σ v^2 >= L`, is never cut away, whatever box
+        /// around it is narrowed.
+        #[test]
+        fn a_witness_on_the_boundary_is_never_cut_away(
+            p in prop::collection::vec(coord(), 2..4),
+            below in prop::collection::vec(reach(), 3),
+            above in prop::collection::vec(reach(), 3),
+        ) {
+            let s = Interval::of_rational(&exact_sum_of_squares(&p));
+            let rel = |v: f64, r: f64| r * v.abs().max(1.0);
+            let b0: Vec<(f64, f64)> = p.iter().enumerate().map(|(k, v)| (v - rel(*v, below[k]), v + rel(*v, above[k]))).collect();
+            prop_assume!(b0.iter().zip(&p).all(|((l, h), v)| l <= v && v <= h));
+            for (bound, upper) in [(s.hi, true), (s.lo, false)] {
+                let mut b = b0.clone();
+                let kept = narrow(&mut b, bound, upper);
+                prop_assert!(kept, "{p:?} cut away as infeasible (upper {upper}, bound {bound:e}, box {b0:?})");
+                for (k, v) in p.iter().enumerate() {
+                    prop_assert!(b[k].0 <= *v && *v <= b[k].1, "{p:?}: coordinate {k} lost (upper {upper}): {b:?} from {b0:?}");
                 }
             }
         }
