@@ -237,6 +237,7 @@ pub(super) fn stands_still(span: crate::source::Span, running: &str, standing: &
 /// such as an environment) occupies nothing at any time and counts as well.
 pub(super) fn stationary(prog: &Program, prim: &Primitive) -> bool {
     use crate::hir::expr::{BinOp, ExprKind};
+    use crate::hir::Footprint;
     let n = prog.kind(prim.kind).state.len();
     let mut kept = vec![false; n];
     for c in prim.guarantee.conjuncts() {
@@ -253,13 +254,14 @@ pub(super) fn stationary(prog: &Program, prim: &Primitive) -> bool {
         }
     }
     let moving = |v: &Var| matches!(v, Var::Clock | Var::Own(Slot::Input(_)));
-    let pred_moves = prim.footprint.as_ref().is_some_and(|f| crate::hir::expr::mentions(&f.pred, &moving));
-    let body_moves = prim.footprint_body.as_ref().is_some_and(|b| {
+    let pred_moves = prim.footprint.predicate().is_some_and(|f| crate::hir::expr::mentions(&f.pred, &moving));
+    let body_moves = prim.footprint.body().is_some_and(|b| {
         b.parts.iter().any(|p| {
             p.place.as_ref().is_some_and(|pose| pose.args.iter().any(|e| crate::hir::expr::mentions(e, &moving)))
         })
     });
-    let occupies_nothing = prim.footprint.as_ref().is_some_and(|f| matches!(f.pred.kind, ExprKind::Bool(false)));
+    let occupies_nothing =
+        matches!(&prim.footprint, Footprint::Predicate(f) if matches!(f.pred.kind, ExprKind::Bool(false)));
     occupies_nothing || (kept.iter().all(|k| *k) && !pred_moves && !body_moves)
 }
 
