@@ -5,7 +5,7 @@
 
 use mochi::driver::{Config, Verdict};
 use mochi::fsload::{check_file, check_source};
-use mochi::fsload::{read_source, simulate_file};
+use mochi::fsload::{read_bytes, simulate_file};
 use mochi::simulate::{simulate_loaded, Kind, SimConfig, SimReport};
 use mochi::source::SourceDb;
 use std::path::Path;
@@ -92,7 +92,7 @@ fn check_and_simulate(src: &str, c: &SimConfig) -> (Verdict, SimReport) {
     let v = check_source(&mut db, "lanes.chor", src, &Config::default()).verdict;
     let mut db = SourceDb::new();
     let root = db.add("lanes.chor", src);
-    let r = simulate_loaded(&mut db, root, c, &mut read_source).unwrap_or_else(|d| panic!("does not resolve: {d:?}"));
+    let r = simulate_loaded(&mut db, root, c, &mut read_bytes).unwrap_or_else(|d| panic!("does not resolve: {d:?}"));
     (v, r)
 }
 
@@ -147,7 +147,7 @@ fn generated_cart_and_arm_layouts_agree_with_the_verdict() {
         let report = check_source(&mut db, "choreographies/generated.chor", &src, &Config::default());
         let mut db = SourceDb::new();
         let root = db.add("choreographies/generated.chor", src);
-        let r = simulate_loaded(&mut db, root, &cfg(1, 12, case as u64), &mut read_source).expect("resolves");
+        let r = simulate_loaded(&mut db, root, &cfg(1, 12, case as u64), &mut read_bytes).expect("resolves");
         let what = format!("arms at x = {x}, {y} m beside the lane");
         let overlap = report.diagnostics.iter().any(|d| matches!(d.code.as_str(), "E0404" | "E0406"));
         match report.verdict {
