@@ -8,7 +8,7 @@ use super::report::Kind;
 use super::run::{Flow, Runner};
 use super::value_expr;
 use crate::exact::{self, Num, Rat, Tri, Value};
-use crate::hir::{Motion, PrimApp, Program, RoleId, Slot, Var};
+use crate::hir::{Expr, Motion, PrimApp, Program, RoleId, Slot, Var};
 use crate::smt::goals::witness::{Mover, Occupant};
 use num_bigint::BigInt;
 
@@ -31,10 +31,10 @@ impl Runner<'_, '_> {
         for (r, app) in &m.parts {
             let mut args = Vec::new();
             for a in &app.args {
-                match self.eval(a).ok().and_then(|v| value_expr(&v, &a.sort, a.loc).map(|e| (v, e))) {
-                    Some(x) => args.push(x),
-                    None => {
-                        self.report(Kind::Undecided, &t0, format!("{who}: an argument cannot be evaluated exactly"));
+                match self.argument(a) {
+                    Ok(x) => args.push(x),
+                    Err(why) => {
+                        self.report(Kind::Undecided, &t0, format!("{who}: {why}"));
                         return Flow::Stop;
                     }
                 }
@@ -46,6 +46,19 @@ impl Runner<'_, '_> {
             let now_inputs: Vec<Option<Value>> =
                 (0..prog.kind_of(*r).inputs.len()).map(|i| self.lookup(&Var::Role(*r, Slot::Input(i)))).collect();
             let pre = exact::holds(prog, &prim.pre, &frame_env(&start, &start, &vals, &zero, &now_inputs));
+            if pre == Tri::Unknown {
+                self.report(
+                    Kind::Undecided,
+                    &t0,
+                    format!(
+                        "{who}: the precondition of `{}` ({}) cannot be decided: an enclosure of its values lies on both sides of a boundary; {}",
+                        prim.name,
+                        prog.role_name(*r),
+                        self.show_state(*r)
+                    ),
+                );
+                return Flow::Stop;
+            }
             if pre == Tri::False {
                 self.report(
                     Kind::Stuck,
@@ -253,6 +266,28 @@ impl Runner<'_, '_> {
         Flow::Next
     }
 
+    /// An argument of a primitive now: its value (exact, or an enclosure such as that of
+    /// `pi / 2`) and a closed expression for the witness queries: the exact value as a
+    /// literal, or else the argument with every known variable replaced by its exact value
+    /// (so Z3 reads `pi`, `sin`, `sqrt` as the checks' encoding does). `Err` when a value
+    /// it reads is itself only an enclosure, or cannot be evaluated.
+    pub(super) fn argument(&self, a: &Expr) -> Result<(Value, Expr), String> {
+        let v = self.eval(a).map_err(|e| format!("the argument `{}` cannot be evaluated: {e}", show_expr(self.prog, a)))?;
+        if let Some(e) = value_expr(&v, &a.sort, a.loc) {
+            return Ok((v, e));
+        }
+        let closed = self.close(a, &[]);
+        let mut open = false;
+        closed.visit_vars(&mut |x, _| open |= matches!(x, Var::Role(..) | Var::Value(..)));
+        if open {
+            return Err(format!(
+                "the argument `{}` reads a value known only as an enclosure ({v}), which a witness query cannot pin",
+                show_expr(self.prog, a)
+            ));
+        }
+        Ok((v, closed))
+    }
+
     pub(super) fn arg_values(&self, app: &PrimApp) -> Vec<Value> {
         app.args.iter().filter_map(|a| exact::eval(self.prog, a, &|_: &Var| None).ok()).collect()
     }
@@ -305,4 +340,8 @@ pub(super) fn frame_env<'v>(
         Var::Clock => Some(Value::Num(clock.clone())),
         _ => None,
     }
+}
+
+fn show_expr(prog: &Program, e: &Expr) -> String {
+    crate::hir::print::expr(prog, None, e)
 }
