@@ -191,15 +191,10 @@ impl Runner<'_, '_> {
             }
         }
         // At time 0 every participant is at its start state ([TRAJ-BASE]).
-        for i in 0..movers.len() {
-            for j in i + 1..movers.len() {
-                let zero = Num::int(0);
-                let a = occupant(&movers[i], &movers[i].start, &zero);
-                let b = occupant(&movers[j], &movers[j].start, &zero);
-                if !self.collide(&a, &b, &t0, &who) {
-                    return Flow::Stop;
-                }
-            }
+        let zero = Num::int(0);
+        let at_start: Vec<Occupant> = movers.iter().map(|mv| occupant(mv, &mv.start, &zero)).collect();
+        if !self.occupied(&at_start, &t0, &who) {
+            return Flow::Stop;
         }
         // Replay the witness exactly, then compare footprints at each sample.
         for s in &traj.samples {
@@ -226,15 +221,9 @@ impl Runner<'_, '_> {
                     }
                 }
             }
-            for i in 0..movers.len() {
-                for j in i + 1..movers.len() {
-                    let a = occupant(&movers[i], &s.states[i], &s.time);
-                    let b = occupant(&movers[j], &s.states[j], &s.time);
-                    let t = &t0 + s.time.mid();
-                    if !self.collide(&a, &b, &t, &who) {
-                        return Flow::Stop;
-                    }
-                }
+            let now: Vec<Occupant> = movers.iter().zip(&s.states).map(|(mv, st)| occupant(mv, st, &s.time)).collect();
+            if !self.occupied(&now, &(&t0 + s.time.mid()), &who) {
+                return Flow::Stop;
             }
         }
         let end = traj.end.mid();
@@ -266,13 +255,29 @@ impl Runner<'_, '_> {
         Flow::Next
     }
 
+    /// The participants of a joint motion at one time: every pair's footprints apart,
+    /// each footprint clear of the obstacles, each body within its footprint. False when
+    /// the run must stop.
+    pub(super) fn occupied(&mut self, now: &[Occupant], t: &Rat, who: &str) -> bool {
+        let moving: Vec<&Occupant> = now.iter().collect();
+        for i in 0..now.len() {
+            for j in i + 1..now.len() {
+                if !self.collide(&now[i], &now[j], t, who, &moving) {
+                    return false;
+                }
+            }
+        }
+        now.iter().all(|o| self.clear_of_obstacles(o, t, who, &moving) && self.body_in_footprint(o, t, who, &moving))
+    }
+
     /// An argument of a primitive now: its value (exact, or an enclosure such as that of
     /// `pi / 2`) and a closed expression for the witness queries: the exact value as a
     /// literal, or else the argument with every known variable replaced by its exact value
     /// (so Z3 reads `pi`, `sin`, `sqrt` as the checks' encoding does). `Err` when a value
     /// it reads is itself only an enclosure, or cannot be evaluated.
     pub(super) fn argument(&self, a: &Expr) -> Result<(Value, Expr), String> {
-        let v = self.eval(a).map_err(|e| format!("the argument `{}` cannot be evaluated: {e}", show_expr(self.prog, a)))?;
+        let v =
+            self.eval(a).map_err(|e| format!("the argument `{}` cannot be evaluated: {e}", show_expr(self.prog, a)))?;
         if let Some(e) = value_expr(&v, &a.sort, a.loc) {
             return Ok((v, e));
         }

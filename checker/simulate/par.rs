@@ -150,7 +150,7 @@ impl Runner<'_, '_> {
                 self.prog.prim(y.app.prim).name,
                 self.prog.role_name(y.role)
             );
-            if !self.collide(&occ[0], &occ[1], &t, &context) {
+            if !self.collide(&occ[0], &occ[1], &t, &context, &[&occ[0], &occ[1]]) {
                 return false;
             }
         }
