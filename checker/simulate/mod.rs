@@ -75,12 +75,12 @@ impl Default for SimConfig {
 pub fn simulate(prog: &Program, cfg: &SimConfig) -> SimReport {
     let mut report = SimReport { runs: cfg.runs, ..SimReport::default() };
     let Some(chor) = &prog.choreography else { return report };
-    let sessions = session::applies(prog, &chor.body);
+    let sessions = session::applies(&chor.body);
     witness::session(cfg.timeout, |sess| {
         for run in 0..cfg.runs {
             let mut r = run::Runner::new(prog, sess, cfg, run);
             if sessions {
-                session::go(&mut r);
+                r.sessions();
             } else {
                 r.go(&chor.body);
             }

@@ -146,6 +146,7 @@ impl<'a, 'p> Runner<'a, 'p> {
             }
         }
         let states: Vec<String> = prog.role_ids().map(|r| self.show_state(r)).collect();
+        let states: Vec<String> = states.into_iter().filter(|s| !s.is_empty()).collect();
         self.trace.push(format!("t = 0: start; {}", states.join("; ")));
         true
     }
