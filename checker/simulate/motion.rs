@@ -31,6 +31,9 @@ impl Runner<'_, '_> {
         for (r, app) in &m.parts {
             let mut args = Vec::new();
             for a in &app.args {
+                if self.leaks(*r, a, &[], &format!("an argument of `{}`", prog.prim(app.prim).name)) {
+                    return Flow::Stop;
+                }
                 match self.argument(a) {
                     Ok(x) => args.push(x),
                     Err(why) => {

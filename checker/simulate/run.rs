@@ -12,7 +12,7 @@ use crate::smt::goals::witness::Session;
 use crate::smt::Why;
 use num_bigint::BigInt;
 use num_traits::Zero;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// What walking a global type ended with.
 pub(super) enum Flow {
@@ -40,6 +40,11 @@ pub(super) struct Runner<'a, 'p> {
     pub(super) trace: Vec<String>,
     pub(super) findings: Vec<Finding>,
     pub(super) over: bool,
+    /// Per participant, the values it has (the global walk's knowledge: payloads sent or
+    /// received, recursion parameters whose values it could compute).
+    pub(super) known: Vec<HashSet<ValueId>>,
+    /// At a jump, per argument, which participants know its value.
+    pub(super) jump_known: Vec<Vec<bool>>,
 }
 
 impl<'a, 'p> Runner<'a, 'p> {
@@ -58,6 +63,8 @@ impl<'a, 'p> Runner<'a, 'p> {
             trace: Vec::new(),
             findings: Vec::new(),
             over: false,
+            known: vec![HashSet::new(); prog.roles.len()],
+            jump_known: Vec::new(),
         }
     }
 
@@ -179,6 +186,41 @@ impl<'a, 'p> Runner<'a, 'p> {
         exact::holds(self.prog, e, &|v: &Var| self.lookup(v))
     }
 
+    /// `role` reads `e` (sending, or moving): a read of something it does not have is a
+    /// violation. True when reported.
+    pub(super) fn leaks(&mut self, role: RoleId, e: &Expr, keep: &[ValueId], what: &str) -> bool {
+        let known = &self.known[role.idx()];
+        let Some(read) = super::session::unknown_read(self.prog, role, &|id| known.contains(&id), e, keep) else {
+            return false;
+        };
+        let now = self.now();
+        let msg = format!("`{}`: {what} reads {read}, which it does not know", self.prog.role_name(role));
+        self.report(Kind::Violation, &now, msg);
+        true
+    }
+
+    /// Which participants know the value of `e` (they know everything it reads).
+    fn knowers(&self, e: &Expr) -> Vec<bool> {
+        self.prog
+            .role_ids()
+            .map(|r| {
+                let known = &self.known[r.idx()];
+                super::session::unknown_read(self.prog, r, &|id| known.contains(&id), e, &[]).is_none()
+            })
+            .collect()
+    }
+
+    /// A recursion parameter bound: the participants in `who` know it, the others not.
+    fn learn(&mut self, id: ValueId, who: &[bool]) {
+        for (k, set) in self.known.iter_mut().enumerate() {
+            if who.get(k).copied().unwrap_or(false) {
+                set.insert(id);
+            } else {
+                set.remove(&id);
+            }
+        }
+    }
+
     pub(super) fn walk(&mut self, g: &Global) -> Flow {
         if self.over {
             return Flow::Stop;
@@ -186,6 +228,7 @@ impl<'a, 'p> Runner<'a, 'p> {
         match g {
             Global::End(_) => Flow::Stop,
             Global::Var(v) => {
+                self.jump_known = v.args.iter().map(|a| self.knowers(a)).collect();
                 let args: Result<Vec<Value>, String> = v.args.iter().map(|a| self.eval(a)).collect();
                 match args {
                     Ok(args) => Flow::Jump(v.var.clone(), args),
@@ -207,6 +250,7 @@ impl<'a, 'p> Runner<'a, 'p> {
             }
             Global::Rec { var, params, body, .. } => {
                 let mut args = Vec::new();
+                self.jump_known = params.iter().map(|p| self.knowers(&p.init)).collect();
                 for p in params {
                     match self.eval(&p.init) {
                         Ok(v) => args.push(v),
@@ -218,8 +262,10 @@ impl<'a, 'p> Runner<'a, 'p> {
                     }
                 }
                 loop {
-                    for (p, v) in params.iter().zip(&args) {
+                    let who = std::mem::take(&mut self.jump_known);
+                    for (k, (p, v)) in params.iter().zip(&args).enumerate() {
                         self.values.insert(p.value, v.clone());
+                        self.learn(p.value, who.get(k).map(Vec::as_slice).unwrap_or_default());
                         if let Some(r) = &p.refinement {
                             if self.holds(r) == Tri::False {
                                 let now = self.now();
@@ -296,6 +342,23 @@ impl<'a, 'p> Runner<'a, 'p> {
         self.clock[m.from.idx()] = t.clone();
         self.clock[m.to.idx()] = t.clone();
         let who = format!("{} -> {} : {}", prog.role_name(m.from), prog.role_name(m.to), m.label);
+        let fields: Vec<ValueId> = m.payload.iter().map(|f| f.value).collect();
+        if let Some(g) = &m.guard {
+            if self.leaks(m.from, g, &[], &format!("the guard of `{who}`")) {
+                return Flow::Stop;
+            }
+        }
+        for f in &m.payload {
+            if let Some(r) = &f.refinement {
+                if self.leaks(m.from, r, &fields, &format!("the refinement of `{}` in `{who}`", f.name)) {
+                    return Flow::Stop;
+                }
+            }
+        }
+        for id in &fields {
+            self.known[m.from.idx()].insert(*id);
+            self.known[m.to.idx()].insert(*id);
+        }
         if let Some(g) = &m.guard {
             match self.holds(g) {
                 Tri::True => {}
@@ -312,7 +375,6 @@ impl<'a, 'p> Runner<'a, 'p> {
         let mut shown = Vec::new();
         if !m.payload.is_empty() {
             // The refinements, with everything but this message's fields made concrete.
-            let fields: Vec<ValueId> = m.payload.iter().map(|f| f.value).collect();
             let facts: Vec<Expr> =
                 m.payload.iter().filter_map(|f| f.refinement.as_ref()).map(|e| self.close(e, &fields)).collect();
             let want: Vec<Expr> =

@@ -49,15 +49,25 @@ struct Role {
 /// looping for ever.
 const UNFOLD_LIMIT: usize = 64;
 
-/// What a participant does not know, read by an expression: `None` when it knows all.
-fn unknown_read(prog: &Program, role: &Role, e: &Expr, keep: &[ValueId]) -> Option<String> {
+/// What participant `role` does not know, read by `e`: `None` when it knows all. It
+/// knows its own state, the values `known` says it has, and the fields `keep` (those of
+/// the message it is sending).
+pub(super) fn unknown_read(
+    prog: &Program,
+    role: RoleId,
+    known: &dyn Fn(ValueId) -> bool,
+    e: &Expr,
+    keep: &[ValueId],
+) -> Option<String> {
     let mut bad = None;
     e.visit_vars(&mut |v, _| {
         if bad.is_some() {
             return;
         }
-        match prog.source_of(v) {
-            Var::Role(r, slot) if r != role.id => {
+        // As E0305 reads it: a participant's own inputs are its own (sensed), not the
+        // state of their source.
+        match v.clone() {
+            Var::Role(r, slot) if r != role => {
                 bad = Some(format!(
                     "`{}.{}`, the state of `{}`",
                     prog.role_name(r),
@@ -65,12 +75,12 @@ fn unknown_read(prog: &Program, role: &Role, e: &Expr, keep: &[ValueId]) -> Opti
                     prog.role_name(r)
                 ));
             }
-            Var::Value(id, name) if !keep.contains(&id) && !role.known.contains_key(&id) => {
+            Var::Value(id, name) if !keep.contains(&id) && !known(id) => {
                 let how = match &prog.value(id).origin {
                     ValueOrigin::Message { from, to } => {
                         format!("sent by `{}` to `{}`", prog.role_name(*from), prog.role_name(*to))
                     }
-                    ValueOrigin::RecParam => "a recursion parameter it has not bound".to_string(),
+                    ValueOrigin::RecParam => "a recursion parameter whose value it could not compute".to_string(),
                     ValueOrigin::Bound { role } => format!("bound by `{}`", prog.role_name(*role)),
                 };
                 bad = Some(format!("`{name}` ({how})"));
@@ -101,7 +111,9 @@ impl Runner<'_, '_> {
 
     /// `what` reads something `role` does not know: a finding. True when reported.
     fn leak(&mut self, role: &Role, e: &Expr, keep: &[ValueId], what: &str) -> bool {
-        let Some(read) = unknown_read(self.prog, role, e, keep) else { return false };
+        let Some(read) = unknown_read(self.prog, role.id, &|id| role.known.contains_key(&id), e, keep) else {
+            return false;
+        };
         let now = self.now();
         let msg = format!("`{}`: {what} reads {read}, which it does not know", self.prog.role_name(role.id));
         self.report(Kind::Violation, &now, msg);
@@ -280,12 +292,8 @@ impl Runner<'_, '_> {
             .map(|(r, t)| Role { id: *r, at: t.clone(), known: HashMap::new(), loops: HashMap::new() })
             .collect();
         loop {
-            for k in 0..roles.len() {
-                let id = roles[k].id;
-                let mut role = std::mem::replace(&mut roles[k], placeholder(id));
-                let ok = self.settle(&mut role);
-                roles[k] = role;
-                if !ok {
+            for role in &mut roles {
+                if !self.settle(role) {
                     return;
                 }
             }
@@ -382,10 +390,6 @@ fn receive(role: &mut Role, rb: &RecvBranch, vals: &[Value]) {
     role.at = rb.cont.clone();
 }
 
-fn placeholder(id: RoleId) -> Role {
-    Role { id, at: std::sync::Arc::new(Local::End(Loc::default())), known: HashMap::new(), loops: HashMap::new() }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -421,10 +425,12 @@ mod tests {
         };
         let read = var_expr(Var::Value(n, "n".into()), crate::hir::Sort::Int);
         // C never received `n`: a leak; B did.
-        let c = unknown_read(&prog, &role(2, &[]), &read, &[]);
+        let r2 = role(2, &[]);
+        let c = unknown_read(&prog, r2.id, &|id| r2.known.contains_key(&id), &read, &[]);
         assert!(c.is_some_and(|m| m.contains("sent by `A` to `B`")));
-        assert!(unknown_read(&prog, &role(1, &[n]), &read, &[]).is_none());
+        let r1 = role(1, &[n]);
+        assert!(unknown_read(&prog, r1.id, &|id| r1.known.contains_key(&id), &read, &[]).is_none());
         // A field being sent is the sender's own.
-        assert!(unknown_read(&prog, &role(2, &[]), &read, &[n]).is_none());
+        assert!(unknown_read(&prog, r2.id, &|id| r2.known.contains_key(&id), &read, &[n]).is_none());
     }
 }
