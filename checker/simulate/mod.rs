@@ -175,3 +175,34 @@ fn value_expr(v: &Value, sort: &Sort, loc: Loc) -> Option<Expr> {
         }
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exact_values_become_literals_and_enclosures_do_not() {
+        let half = Value::rat(Rat::new(BigInt::from(1), BigInt::from(2)));
+        let e = value_expr(&half, &Sort::Real, Loc::default()).expect("exact");
+        assert!(matches!(&e.kind, ExprKind::Binary(_, a, b)
+            if matches!((&a.kind, &b.kind), (ExprKind::Real(n), ExprKind::Real(d)) if n == "1" && d == "2")));
+        // `pi / 2` is an enclosure: no literal stands for it (the argument's expression is
+        // kept for Z3 instead, `motion::argument`).
+        let pi = exact::pi();
+        assert!(!pi.is_exact());
+        assert!(value_expr(&Value::Num(pi), &Sort::Real, Loc::default()).is_none());
+        assert!(value_expr(&Value::Bool(Tri::Unknown), &Sort::Bool, Loc::default()).is_none());
+    }
+
+    #[test]
+    fn the_generator_is_reproducible_and_fractions_lie_in_the_open_unit_interval() {
+        let (mut a, mut b) = (Rng(7), Rng(7));
+        for _ in 0..100 {
+            let (x, y) = (a.fraction(), b.fraction());
+            assert_eq!(x, y);
+            assert!(x > Rat::from_integer(BigInt::from(0)) && x < Rat::from_integer(BigInt::from(1)));
+            assert!(a.below(3) < 3);
+            b.below(3);
+        }
+    }
+}
