@@ -193,15 +193,7 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut sy
     }
     // Bodies: sizes, and geometric footprints as predicates where Z3 can decide them;
     // then every body as solids (URDFs and meshes read here) for the geometric procedure.
-    let diags = run.stage(|| {
-        let mut diags = space::prepare(&mut prog);
-        if !diags.iter().any(Diagnostic::is_error) {
-            let (world, more) = space::world::build(&prog, db, load);
-            prog.world = Some(std::sync::Arc::new(world));
-            diags.extend(more);
-        }
-        diags
-    });
+    let diags = run.stage(|| geometry(&mut prog, db, load));
     if !run.record("geometry", diags) {
         return run.finish();
     }
@@ -256,6 +248,47 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut sy
     }
     run.decide(db, prog, obligations, cfg);
     run.finish()
+}
+
+/// The geometry stage: bodies' sizes, geometric footprints as predicates where Z3 can
+/// decide them ([`space::prepare`]); then every body as solids (URDFs and meshes read
+/// through `load`) in `prog.world`.
+fn geometry(prog: &mut crate::hir::Program, db: &mut SourceDb, load: &mut syntax::ByteLoader<'_>) -> Vec<Diagnostic> {
+    let mut diags = space::prepare(prog);
+    if !diags.iter().any(Diagnostic::is_error) {
+        let (world, more) = space::world::build(prog, db, load);
+        prog.world = Some(std::sync::Arc::new(world));
+        diags.extend(more);
+    }
+    diags
+}
+
+/// The program of the file `root` as the checks see it: parsed with its imports, lowered,
+/// and through the geometry stage (footprint predicates and solids), with no check run
+/// (for `mochi simulate`). `Err` holds the diagnostics when one of these stages has an
+/// error (the warnings of a good run are dropped: `mochi check` reports them).
+pub fn program(
+    db: &mut SourceDb,
+    root: FileId,
+    load: &mut syntax::ByteLoader<'_>,
+) -> Result<crate::hir::Program, Vec<Diagnostic>> {
+    let mut text = |p: &std::path::Path| {
+        load(p).and_then(|b| syntax::decode(b).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e)))
+    };
+    let (parsed, mut diags) = syntax::parse_with_imports(db, root, &mut text);
+    if diags.iter().any(Diagnostic::is_error) {
+        return Err(diags);
+    }
+    let (mut prog, more) = lower::lower(&parsed);
+    diags.extend(more);
+    if diags.iter().any(Diagnostic::is_error) {
+        return Err(diags);
+    }
+    diags.extend(geometry(&mut prog, db, load));
+    if diags.iter().any(Diagnostic::is_error) {
+        return Err(diags);
+    }
+    Ok(prog)
 }
 
 /// Accumulates diagnostics and check results while the stages run.

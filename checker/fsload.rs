@@ -133,7 +133,7 @@ pub fn simulate_file(
     cfg: &crate::simulate::SimConfig,
 ) -> std::io::Result<Result<crate::simulate::SimReport, Vec<Diagnostic>>> {
     let root = load_root(db, path)?;
-    Ok(crate::simulate::simulate_loaded(db, root, cfg, &mut read_source))
+    Ok(crate::simulate::simulate_loaded(db, root, cfg, &mut read_bytes))
 }
 
 /// Checks the file at `path`, its imports read from disk. A file that is not UTF-8 is a

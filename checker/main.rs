@@ -58,7 +58,8 @@ enum Command {
     Project(ProjectArgs),
     /// Explain a diagnostic code, e.g. `mochi explain E0301`
     Explain(ExplainArgs),
-    /// Run the choreography on concrete trajectories and report collisions and stuck states
+    /// Run the choreography on concrete trajectories (a protocol without motion as each
+    /// participant's projection) and report collisions, stuck states and violations
     Simulate(SimulateArgs),
 }
 

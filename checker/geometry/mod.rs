@@ -126,6 +126,44 @@ pub fn distance(a: &[(Isometry3<f64>, &Solid)], b: &[(Isometry3<f64>, &Solid)]) 
     best
 }
 
+/// Points on the boundary of `s` placed by its owner frame `owner` (world frame): its
+/// support points in the 26 directions of a cube's faces, edges and corners, each moved
+/// `inset` metres towards their mean (a point of the convex solid), so a body that fills
+/// its footprint exactly is not read as leaving it by a rounding. Empty for a shape
+/// without a support map.
+pub fn boundary_points(owner: &Pose3, s: &Solid, inset: f64) -> Vec<[f64; 3]> {
+    let pose = owner * s.pose;
+    let Some(map) = s.shape.as_support_map() else { return Vec::new() };
+    let mut pts = Vec::new();
+    for dx in [-1.0f64, 0.0, 1.0] {
+        for dy in [-1.0f64, 0.0, 1.0] {
+            for dz in [-1.0f64, 0.0, 1.0] {
+                if dx == 0.0 && dy == 0.0 && dz == 0.0 {
+                    continue;
+                }
+                let d = nalgebra::Vector3::new(dx, dy, dz).normalize();
+                pts.push(map.support_point(&pose, &d).coords);
+            }
+        }
+    }
+    let centre = pts.iter().fold(nalgebra::Vector3::zeros(), |a, p| a + p) / pts.len() as f64;
+    pts.iter()
+        .map(|p| {
+            let to_centre = centre - p;
+            let n = to_centre.norm();
+            let q = if n > inset { p + to_centre * (inset / n) } else { centre };
+            [q.x, q.y, q.z]
+        })
+        .collect()
+}
+
+/// Whether the world point `p` lies in one of the solids `a` (each with its owner frame's
+/// world pose), or within `tol` metres of one.
+pub fn contains(a: &[(Pose3, &Solid)], p: [f64; 3], tol: f64) -> bool {
+    let pt = Point3::new(p[0], p[1], p[2]);
+    a.iter().any(|(owner, s)| s.shape.distance_to_point(&(owner * s.pose), &pt, true) <= tol)
+}
+
 fn pair(pa: &Isometry3<f64>, sa: &Solid, pb: &Isometry3<f64>, sb: &Solid) -> Closest {
     use parry3d::query::{self, ClosestPoints};
     let (wa, wb) = (pa * sa.pose, pb * sb.pose);
@@ -183,6 +221,22 @@ mod tests {
         assert!((c.distance + 0.25).abs() < 1e-9, "{c:?}");
         assert_eq!(c.relation, Relation::Contact);
         assert!(distance(&[], &[(near, &b)]).is_none());
+    }
+
+    #[test]
+    fn boundary_points_lie_in_the_solid_and_containment_sees_them() {
+        let id = Isometry3::identity();
+        let a = Solid::mochi_box(1.0, 2.0, 1.0, id, "box").unwrap();
+        let pts = boundary_points(&id, &a, 1e-6);
+        assert_eq!(pts.len(), 26);
+        assert!(pts.iter().all(|p| contains(&[(id, &a)], *p, 0.0)), "{pts:?}");
+        // A corner of the box: (0.5, 1, 1) less the inset (mochi boxes stand on z = 0).
+        assert!(pts
+            .iter()
+            .any(|p| (p[0] - 0.5).abs() < 1e-5 && (p[1] - 1.0).abs() < 1e-5 && (p[2] - 1.0).abs() < 1e-5));
+        // A smaller box does not contain the corners of this one.
+        let small = Solid::mochi_box(1.0, 1.0, 1.0, id, "small").unwrap();
+        assert!(pts.iter().any(|p| !contains(&[(id, &small)], *p, 1e-9)));
     }
 
     /// The minimum over pairs, with the sphere pruning: the second solid of `b` is closest.

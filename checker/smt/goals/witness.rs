@@ -6,7 +6,7 @@
 //! Models come back as exact rationals ([`crate::exact::Value`]); an algebraic number
 //! (from a square root) comes back as a rational enclosure 1e-25 wide.
 
-use super::super::encode::{Encoder, Term};
+use super::super::encode::{Encoder, Frame, Term};
 use super::super::{Watchdog, Why};
 use super::{connect, world_point, Inst, Query};
 use crate::exact::{parse_decimal, Num, Rat, Tri, Value};
@@ -295,25 +295,48 @@ impl Session<'_> {
         let mut q = query(prog);
         let p = world_point(&mut q);
         for (o, tag) in [(a, "a"), (b, "b")] {
-            let clock = q.enc.named_real(&format!("clock {tag}"));
-            q.assertions.push(in_range(&clock, &o.clock).ok_or_else(unreadable)?);
-            let inst = Inst::new(&mut q.enc, o.role, &o.app, clock, tag).map_err(unsupported)?;
-            pin_start(&mut q, o.role, &o.start)?;
-            for (i, v) in o.now.iter().enumerate() {
-                let t = inst.frame.own.get(&Slot::State(i)).ok_or_else(unreadable)?;
-                let b = pin(t, v).ok_or_else(unreadable)?;
-                q.assertions.push(b);
-            }
-            let fp = inst.footprint(&mut q.enc, &p).map_err(unsupported)?;
-            q.assertions.push(fp);
+            occupies(&mut q, o, tag, &p)?;
         }
-        let Some(m) = self.solve(&q)? else { return Ok(None) };
+        self.point(&q, &p)
+    }
+
+    /// A world point in the footprint of `a` at its state and clock and in `region` (a
+    /// predicate over the world point, as an obstacle's), or `None` if there is none.
+    pub fn overlap_region(&self, prog: &Program, a: &Occupant, region: &Expr) -> Result<Option<[Num; 3]>, Why> {
+        let mut q = query(prog);
+        let p = world_point(&mut q);
+        occupies(&mut q, a, "a", &p)?;
+        let frame = Frame { point: Some(p.clone()), ..Frame::default() };
+        let inside = q.enc.in_frame(&frame, |enc| enc.boolean(region)).map_err(unsupported)?;
+        q.assertions.push(inside);
+        self.point(&q, &p)
+    }
+
+    /// The point `p` of a model of `q`, or `None` if `q` is unsatisfiable.
+    fn point(&self, q: &Query, p: &[Real; 3]) -> Result<Option<[Num; 3]>, Why> {
+        let Some(m) = self.solve(q)? else { return Ok(None) };
         let c = |r: &Real| match value_of(&m, &Term::R(r.clone())) {
             Some(Value::Num(n)) => Some(n),
             _ => None,
         };
         Ok(Some([c(&p[0]).ok_or_else(unreadable)?, c(&p[1]).ok_or_else(unreadable)?, c(&p[2]).ok_or_else(unreadable)?]))
     }
+}
+
+/// `o` at its state and clock, and the world point `p` in its footprint.
+fn occupies(q: &mut Query, o: &Occupant, tag: &str, p: &[Real; 3]) -> Result<(), Why> {
+    let clock = q.enc.named_real(&format!("clock {tag}"));
+    q.assertions.push(in_range(&clock, &o.clock).ok_or_else(unreadable)?);
+    let inst = Inst::new(&mut q.enc, o.role, &o.app, clock, tag).map_err(unsupported)?;
+    pin_start(q, o.role, &o.start)?;
+    for (i, v) in o.now.iter().enumerate() {
+        let t = inst.frame.own.get(&Slot::State(i)).ok_or_else(unreadable)?;
+        let b = pin(t, v).ok_or_else(unreadable)?;
+        q.assertions.push(b);
+    }
+    let fp = inst.footprint(&mut q.enc, p).map_err(unsupported)?;
+    q.assertions.push(fp);
+    Ok(())
 }
 
 /// The motion is running at its clock: `t >= 0`, its guarantee and the invariant hold

@@ -1,0 +1,436 @@
+//! Protocols without motion (MAVLink sessions among them) run as each participant's
+//! projection ([`crate::project`], Def 4.7), every participant with only what it knows:
+//! its own state, the payloads it sent or received, and the recursion parameters it bound
+//! itself (their initial values and jump arguments evaluated by it).
+//!
+//! A step is a message: a participant at a send picks at random a branch whose guard is
+//! true (evaluated with its knowledge), the receiver must be waiting for that label from
+//! it, and the payload is a Z3 model of the refinements with everything the sender knows
+//! pinned (replayed exactly). Findings:
+//! - a guard, refinement, initial value or jump argument that reads a value the
+//!   participant does not have: a **violation** (a knowledge leak, E0305's question);
+//! - no admissible payload, every guard false, or no participant able to send while some
+//!   have not ended: **stuck**;
+//! - a recursion parameter whose value breaks its refinement: a **violation**.
+
+use super::report::Kind;
+use super::run::Runner;
+use super::var_expr;
+use crate::exact::{self, Tri, Value};
+use crate::hir::expr::map_vars;
+use crate::hir::local::{Local, LocalArc, RecvBranch, SendBranch};
+use crate::hir::{Expr, Global, Loc, Program, RecParam, RoleId, Slot, ValueId, ValueOrigin, Var};
+use std::collections::HashMap;
+
+/// Whether the global type has no motion and no `*`: it runs as projections.
+pub(super) fn applies(g: &Global) -> bool {
+    fn motion_free(g: &Global) -> bool {
+        match g {
+            Global::Motion(_) | Global::Par(..) => false,
+            Global::Seq(items, _) | Global::Choice(items, _) => items.iter().all(motion_free),
+            Global::Rec { body, .. } => motion_free(body),
+            Global::Msg(_) | Global::Var(_) | Global::End(_) => true,
+        }
+    }
+    motion_free(g)
+}
+
+/// One participant running its local type.
+struct Role {
+    id: RoleId,
+    at: LocalArc,
+    /// The values it has: payloads sent and received, its recursion parameters.
+    known: HashMap<ValueId, Value>,
+    /// Its loops by name: parameters and body.
+    loops: HashMap<String, (Vec<RecParam>, LocalArc)>,
+}
+
+/// Unfoldings of `mu`/jumps in a row without a message before a participant counts as
+/// looping for ever.
+const UNFOLD_LIMIT: usize = 64;
+
+/// What participant `role` does not know, read by `e`: `None` when it knows all. It
+/// knows its own state, the values `known` says it has, and the fields `keep` (those of
+/// the message it is sending).
+pub(super) fn unknown_read(
+    prog: &Program,
+    role: RoleId,
+    known: &dyn Fn(ValueId) -> bool,
+    e: &Expr,
+    keep: &[ValueId],
+) -> Option<String> {
+    let mut bad = None;
+    e.visit_vars(&mut |v, _| {
+        if bad.is_some() {
+            return;
+        }
+        // As E0305 reads it: a participant's own inputs are its own (sensed), not the
+        // state of their source.
+        match v.clone() {
+            Var::Role(r, slot) if r != role => {
+                bad = Some(format!(
+                    "`{}.{}`, the state of `{}`",
+                    prog.role_name(r),
+                    prog.slot_name(prog.role(r).kind, slot),
+                    prog.role_name(r)
+                ));
+            }
+            Var::Value(id, name) if !keep.contains(&id) && !known(id) => {
+                let how = match &prog.value(id).origin {
+                    ValueOrigin::Message { from, to } => {
+                        format!("sent by `{}` to `{}`", prog.role_name(*from), prog.role_name(*to))
+                    }
+                    ValueOrigin::RecParam => "a recursion parameter whose value it could not compute".to_string(),
+                    ValueOrigin::Bound { role } => format!("bound by `{}`", prog.role_name(*role)),
+                };
+                bad = Some(format!("`{name}` ({how})"));
+            }
+            _ => {}
+        }
+    });
+    bad
+}
+
+impl Runner<'_, '_> {
+    /// A value as `role` sees it: its own state, the values it has.
+    fn lookup_as(&self, role: &Role, v: &Var) -> Option<Value> {
+        match self.prog.source_of(v) {
+            Var::Role(r, Slot::State(i)) if r == role.id => self.state.get(r.idx())?.get(i).cloned(),
+            Var::Value(id, _) => role.known.get(&id).cloned(),
+            _ => None,
+        }
+    }
+
+    fn eval_as(&self, role: &Role, e: &Expr) -> Result<Value, String> {
+        exact::eval(self.prog, e, &|v: &Var| self.lookup_as(role, v))
+    }
+
+    fn holds_as(&self, role: &Role, e: &Expr) -> Tri {
+        exact::holds(self.prog, e, &|v: &Var| self.lookup_as(role, v))
+    }
+
+    /// `what` reads something `role` does not know: a finding. True when reported.
+    fn leak(&mut self, role: &Role, e: &Expr, keep: &[ValueId], what: &str) -> bool {
+        let Some(read) = unknown_read(self.prog, role.id, &|id| role.known.contains_key(&id), e, keep) else {
+            return false;
+        };
+        let now = self.now();
+        let msg = format!("`{}`: {what} reads {read}, which it does not know", self.prog.role_name(role.id));
+        self.report(Kind::Violation, &now, msg);
+        true
+    }
+
+    /// Binds `params` to `args` for `role`, checking their refinements. False when the run
+    /// must stop.
+    fn bind(&mut self, role: &mut Role, params: &[RecParam], args: Vec<Value>) -> bool {
+        for (p, v) in params.iter().zip(args) {
+            role.known.insert(p.value, v.clone());
+            if let Some(r) = &p.refinement {
+                if self.leak(role, r, &[], &format!("the refinement of `{}`", p.name)) {
+                    return false;
+                }
+                if self.holds_as(role, r) == Tri::False {
+                    let now = self.now();
+                    let msg = format!(
+                        "`{}`: the recursion parameter `{} = {v}` breaks its refinement",
+                        self.prog.role_name(role.id),
+                        p.name
+                    );
+                    self.report(Kind::Violation, &now, msg);
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// Values of `exprs` as `role` evaluates them (`what` names them in findings).
+    fn values_as(&mut self, role: &Role, exprs: &[&Expr], what: &str) -> Option<Vec<Value>> {
+        let mut out = Vec::new();
+        for e in exprs {
+            if self.leak(role, e, &[], what) {
+                return None;
+            }
+            match self.eval_as(role, e) {
+                Ok(v) => out.push(v),
+                Err(err) => {
+                    let now = self.now();
+                    self.report(Kind::Undecided, &now, format!("{what} of `{}`: {err}", self.prog.role_name(role.id)));
+                    return None;
+                }
+            }
+        }
+        Some(out)
+    }
+
+    /// Unfolds `mu` and jumps until `role` is at a send, a receive or the end. False when
+    /// the run must stop.
+    fn settle(&mut self, role: &mut Role) -> bool {
+        for _ in 0..UNFOLD_LIMIT {
+            let at = role.at.clone();
+            match &*at {
+                Local::Rec { var, params, body, .. } => {
+                    let inits: Vec<&Expr> = params.iter().map(|p| &p.init).collect();
+                    let Some(args) = self.values_as(role, &inits, &format!("the initial values of `{var}`")) else {
+                        return false;
+                    };
+                    role.loops.insert(var.clone(), (params.clone(), body.clone()));
+                    if !self.bind(role, params, args) {
+                        return false;
+                    }
+                    role.at = body.clone();
+                }
+                Local::Var { var, args, .. } => {
+                    let Some((params, body)) = role.loops.get(var).cloned() else {
+                        let now = self.now();
+                        self.report(Kind::Undecided, &now, format!("`{var}` is not a loop of this participant"));
+                        return false;
+                    };
+                    let exprs: Vec<&Expr> = args.iter().collect();
+                    let Some(vals) = self.values_as(role, &exprs, &format!("the arguments of `{var}`")) else {
+                        return false;
+                    };
+                    if !self.bind(role, &params, vals) {
+                        return false;
+                    }
+                    role.at = body;
+                }
+                Local::Motion { .. } => {
+                    let now = self.now();
+                    self.report(Kind::Undecided, &now, "a motion in a protocol run as projections".into());
+                    return false;
+                }
+                Local::Send { .. } | Local::Recv { .. } | Local::End(_) => return true,
+            }
+        }
+        let now = self.now();
+        let msg = format!("`{}` loops without a message", self.prog.role_name(role.id));
+        self.report(Kind::Stuck, &now, msg);
+        false
+    }
+
+    /// The branches of a send of `role` whose guards hold (evaluated with its knowledge).
+    /// `None` when the run must stop.
+    fn enabled(&mut self, role: &Role, branches: &[SendBranch]) -> Option<Vec<usize>> {
+        let mut out = Vec::new();
+        for (k, b) in branches.iter().enumerate() {
+            let Some(g) = &b.guard else {
+                out.push(k);
+                continue;
+            };
+            if self.leak(role, g, &[], &format!("the guard of `{}`", b.label)) {
+                return None;
+            }
+            match self.holds_as(role, g) {
+                Tri::True => out.push(k),
+                Tri::False => {}
+                Tri::Unknown => {
+                    let now = self.now();
+                    let msg = format!(
+                        "`{}`: the guard of `{}` cannot be evaluated exactly",
+                        self.prog.role_name(role.id),
+                        b.label
+                    );
+                    self.report(Kind::Undecided, &now, msg);
+                    return None;
+                }
+            }
+        }
+        Some(out)
+    }
+
+    /// The payload of `b` sent by `from`: a model of its refinements with everything the
+    /// sender knows pinned. `None` when the run must stop.
+    fn payload(&mut self, from: &Role, b: &SendBranch, who: &str) -> Option<Vec<Value>> {
+        let prog = self.prog;
+        let fields: Vec<ValueId> = b.payload.iter().map(|f| f.value).collect();
+        let mut facts = Vec::new();
+        for f in &b.payload {
+            let Some(r) = &f.refinement else { continue };
+            if self.leak(from, r, &fields, &format!("the refinement of `{}` in `{who}`", f.name)) {
+                return None;
+            }
+            facts.push(map_vars(r, &mut |v, sort| match v {
+                Var::Value(id, _) if fields.contains(id) => None,
+                Var::Role(..) | Var::Value(..) => {
+                    self.lookup_as(from, v).and_then(|val| super::value_expr(&val, sort, Loc::default()))
+                }
+                _ => None,
+            }));
+        }
+        let want: Vec<Expr> =
+            b.payload.iter().map(|f| var_expr(Var::Value(f.value, f.name.clone()), f.sort.clone())).collect();
+        let nudge = self.nudge(want.len());
+        let now = self.now();
+        match self.sess.values_nudged(prog, &facts, &want, nudge) {
+            Ok(Some(vs)) => Some(vs),
+            Ok(None) => {
+                self.report(Kind::Stuck, &now, format!("`{who}`: no payload satisfies its refinements"));
+                None
+            }
+            Err(why) => {
+                self.undecided(&now, &format!("`{who}`'s payload"), why);
+                None
+            }
+        }
+    }
+
+    /// Runs every participant's projection of the choreography.
+    pub(super) fn sessions(&mut self) {
+        if !self.init() {
+            return;
+        }
+        let prog = self.prog;
+        let (locals, diags) = crate::project::project_all(prog);
+        if let Some(d) = diags.iter().find(|d| d.is_error()) {
+            let msg = format!("the projections cannot be computed: {}", d.message);
+            self.report(Kind::Undecided, &Default::default(), msg);
+            return;
+        }
+        let mut roles: Vec<Role> = locals
+            .iter()
+            .map(|(r, t)| Role { id: *r, at: t.clone(), known: HashMap::new(), loops: HashMap::new() })
+            .collect();
+        loop {
+            for role in &mut roles {
+                if !self.settle(role) {
+                    return;
+                }
+            }
+            if roles.iter().all(|r| matches!(&*r.at, Local::End(_))) {
+                return;
+            }
+            if self.steps >= self.cfg.steps {
+                return;
+            }
+            // Every send whose guard holds and whose receiver waits for it.
+            let mut ready: Vec<(usize, usize, usize)> = Vec::new();
+            let mut blocked = Vec::new();
+            for (s, role) in roles.iter().enumerate() {
+                let Local::Send { branches, .. } = &*role.at else { continue };
+                let Some(enabled) = self.enabled(role, branches) else { return };
+                if enabled.is_empty() {
+                    let now = self.now();
+                    let msg = format!("`{}`: every guard of its choice is false", prog.role_name(role.id));
+                    self.report(Kind::Stuck, &now, msg);
+                    return;
+                }
+                for k in enabled {
+                    let b = &branches[k];
+                    let waits = roles.iter().position(|q| {
+                        q.id == b.to
+                            && matches!(&*q.at, Local::Recv { branches, .. }
+                                if branches.iter().any(|rb| rb.from == role.id && rb.label == b.label))
+                    });
+                    match waits {
+                        Some(q) => ready.push((s, k, q)),
+                        None => blocked.push(format!(
+                            "`{}` -> `{}`: {}",
+                            prog.role_name(role.id),
+                            prog.role_name(b.to),
+                            b.label
+                        )),
+                    }
+                }
+            }
+            if ready.is_empty() {
+                let now = self.now();
+                let waiting: Vec<String> = roles
+                    .iter()
+                    .filter(|r| !matches!(&*r.at, Local::End(_)))
+                    .map(|r| format!("`{}` at {}", prog.role_name(r.id), crate::hir::print::describe(prog, &r.at)))
+                    .collect();
+                let msg = format!(
+                    "no participant can send: {}; sends not awaited: {}",
+                    waiting.join("; "),
+                    if blocked.is_empty() { "none".to_string() } else { blocked.join(", ") }
+                );
+                self.report(Kind::Stuck, &now, msg);
+                return;
+            }
+            let (s, k, q) = ready[self.rng.below(ready.len())];
+            let Local::Send { branches, .. } = &*roles[s].at.clone() else { return };
+            let b = &branches[k];
+            let who = format!("{} -> {} : {}", prog.role_name(roles[s].id), prog.role_name(b.to), b.label);
+            self.steps += 1;
+            let Some(vals) = self.payload(&roles[s], b, &who) else { return };
+            let mut shown = Vec::new();
+            for (f, v) in b.payload.iter().zip(&vals) {
+                shown.push(format!("{} = {v}", f.name));
+                roles[s].known.insert(f.value, v.clone());
+            }
+            // Replayed exactly, with what the sender knows.
+            for f in &b.payload {
+                if let Some(r) = &f.refinement {
+                    if self.holds_as(&roles[s], r) == Tri::False {
+                        let now = self.now();
+                        let msg =
+                            format!("`{who}`: Z3's payload does not satisfy the refinement of `{}` exactly", f.name);
+                        self.report(Kind::Replay, &now, msg);
+                        return;
+                    }
+                }
+            }
+            let Local::Recv { branches: rbs, .. } = &*roles[q].at.clone() else { return };
+            let Some(rb) = rbs.iter().find(|rb| rb.from == roles[s].id && rb.label == b.label) else { return };
+            receive(&mut roles[q], rb, &vals);
+            roles[s].at = b.cont.clone();
+            let now = self.now();
+            self.trace.push(format!("t = {}: {who}({})", exact::decimal(&now), shown.join(", ")));
+        }
+    }
+}
+
+/// The receiver takes the payload: its fields are its values now (the receiver's local
+/// type names them by its own value ids).
+fn receive(role: &mut Role, rb: &RecvBranch, vals: &[Value]) {
+    for (f, v) in rb.payload.iter().zip(vals) {
+        role.known.insert(f.value, v.clone());
+    }
+    role.at = rb.cont.clone();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lower::tests::lower_src;
+
+    const SYSTEM: &str = "system S { participant A; participant B; participant C; }\n";
+
+    fn chor(src: &str) -> (Program, Global) {
+        let (prog, diags) = lower_src(&format!("{SYSTEM}{src}"));
+        assert!(diags.iter().all(|d| !d.is_error()), "{diags:?}");
+        let g = prog.choreography.as_ref().expect("a choreography").body.clone();
+        (prog, g)
+    }
+
+    #[test]
+    fn only_motion_free_protocols_run_as_projections() {
+        let (prog, g) = chor("choreography P = A -> B: go(n: int {n == 1}). end;");
+        assert!(applies(&g));
+        let _ = prog;
+        let par = Global::Par(vec![g.clone(), g.clone()], Loc::default());
+        assert!(!applies(&Global::Seq(vec![g, par], Loc::default())));
+    }
+
+    #[test]
+    fn a_value_another_participant_received_is_unknown() {
+        let (prog, _) = chor("choreography P = A -> B: go(n: int {n == 1}). B -> C: back(m: int {m == n}). end;");
+        let n = (0..prog.values.len()).map(|i| ValueId(i as u32)).find(|id| prog.value(*id).name == "n").expect("n");
+        let role = |r: u32, known: &[ValueId]| Role {
+            id: RoleId(r),
+            at: std::sync::Arc::new(Local::End(Loc::default())),
+            known: known.iter().map(|id| (*id, Value::Num(exact::Num::int(1)))).collect(),
+            loops: HashMap::new(),
+        };
+        let read = var_expr(Var::Value(n, "n".into()), crate::hir::Sort::Int);
+        // C never received `n`: a leak; B did.
+        let r2 = role(2, &[]);
+        let c = unknown_read(&prog, r2.id, &|id| r2.known.contains_key(&id), &read, &[]);
+        assert!(c.is_some_and(|m| m.contains("sent by `A` to `B`")));
+        let r1 = role(1, &[n]);
+        assert!(unknown_read(&prog, r1.id, &|id| r1.known.contains_key(&id), &read, &[]).is_none());
+        // A field being sent is the sender's own.
+        assert!(unknown_read(&prog, r2.id, &|id| r2.known.contains_key(&id), &read, &[n]).is_none());
+    }
+}
