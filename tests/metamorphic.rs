@@ -1,0 +1,2 @@
+#[path = "metamorphic/common.rs"]
+mod common;
