@@ -465,3 +465,19 @@ fn the_generator_makes_verified_and_rejected_lanes() {
     let _ = std::fs::remove_dir_all(&dir);
     assert_eq!(got, vec![Verdict::Verified, Verdict::Rejected]);
 }
+
+/// The rewritings reach the imported files and the pipeline reads them: a renaming of
+/// countdown.chor rewrites its library too, keeps the verdict, and the same renaming with the
+/// library's new text left out (the root's names no longer match the library's) is rejected.
+/// So a relation that holds is not one that compared a file with itself.
+#[test]
+fn rewritten_imports_are_what_the_pipeline_reads() {
+    let f = Path::new("choreographies/countdown.chor");
+    let (p, map) = transform::rename(f, &mut |i, _| format!("renamed_{i}")).expect("countdown renames");
+    assert!(map.iter().any(|(a, _)| a == "Bot"), "the kind declared in the library is renamed: {map:?}");
+    let lib = p.texts.keys().find(|k| k.ends_with("bot.mochi")).expect("the library is rewritten").clone();
+    assert_eq!(check(&p, &config(1, false)), baseline(f));
+    let mut root_only = p.clone();
+    root_only.texts.remove(&lib);
+    assert_eq!(check(&root_only, &config(1, false)).verdict, Verdict::Rejected);
+}
