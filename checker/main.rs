@@ -106,6 +106,10 @@ struct CheckArgs {
     /// Write every SMT query as an SMT-LIB file into DIR
     #[arg(long, value_name = "DIR")]
     dump_smt: Option<PathBuf>,
+    /// Reuse no solver answer: ask Z3 every query afresh (slower; for comparing verdicts
+    /// with the cache on and off)
+    #[arg(long)]
+    no_cache: bool,
     /// Also list, for each pair of participants moving together (and each participant and
     /// obstacle), the least distance between their bodies and where and when it occurs
     #[arg(long)]
@@ -257,6 +261,7 @@ fn check(args: &CheckArgs, color: ColorChoice) -> Outcome {
     if let Some(j) = args.jobs {
         config.smt.jobs = j;
     }
+    config.smt.no_cache = args.no_cache;
     if let Some(dir) = &args.dump_smt {
         if let Err(e) = writable_dir(dir) {
             eprintln_safe(&format!("error: --dump-smt {}: cannot write there: {e}", dir.display()));

@@ -8,7 +8,11 @@
 //!
 //! - **Folding.** Syntactically trivial obligations never reach Z3, and separation is
 //!   first tried with boxes from interval arithmetic ([`crate::bounds`]).
-//! - **Caching.** Results are cached by the query's SMT-LIB text.
+//! - **Caching.** Results are cached by the query's SMT-LIB text, the vacuity guard's by
+//!   the hypotheses, and a primitive shown able to end by one obligation witnesses its
+//!   contract (E0409) for the others. [`SmtConfig::no_cache`] turns all three off (every
+//!   query asked of Z3 afresh; `mochi check --no-cache`), which the differential tests use
+//!   to show that no verdict depends on an answer reused from another query.
 //! - **Parallelism.** Obligations are discharged on `jobs` worker threads, each with
 //!   its own Z3 context (the `z3` crate's thread-local context), in a [`pool`].
 //! - **Timeouts.** Each query has a limit enforced by a watchdog that interrupts the
@@ -65,6 +69,11 @@ pub struct SmtConfig {
     pub dump: Option<DumpSink>,
     /// Where progress is reported (none: not reported).
     pub on_progress: Option<ProgressSink>,
+    /// Reuse no answer: no query answered from the cache (by its text, or up to renaming),
+    /// no vacuity guard answered by another obligation's with the same hypotheses, no
+    /// contract (E0409) witnessed by another obligation's can-end question. Slower, and
+    /// meant to give the same verdicts (tests/differential.rs checks it).
+    pub no_cache: bool,
 }
 
 impl std::fmt::Debug for SmtConfig {
@@ -74,6 +83,7 @@ impl std::fmt::Debug for SmtConfig {
             .field("jobs", &self.jobs)
             .field("dump", &self.dump.is_some())
             .field("on_progress", &self.on_progress.is_some())
+            .field("no_cache", &self.no_cache)
             .finish()
     }
 }
@@ -89,6 +99,7 @@ impl Default for SmtConfig {
             jobs: std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1),
             dump: None,
             on_progress: None,
+            no_cache: false,
         }
     }
 }
@@ -270,6 +281,7 @@ fn work(lease: &pool::Lease<Caches>) {
             // could end (the driver puts these obligations last).
             Goal::CanEnd { prim }
                 if ob.rule == crate::obligation::Rule::Contract
+                    && !sh.cfg.no_cache
                     && sh.extra.witnessed.lock().is_ok_and(|w| w.contains(prim)) =>
             {
                 (Decision::Holds(None), Stats { folded: 1, ..Stats::default() })
@@ -499,7 +511,11 @@ impl Worker<'_> {
         if !vacuous && !sat && !covered && !ob.hyps.is_empty() {
             // Obligations with the same hypotheses share the answer.
             let context = goals::context_of(self.prog, ob);
-            let known = self.caches.contexts.lock().ok().and_then(|c| c.get(&context).cloned());
+            let known = if self.cfg.no_cache {
+                None
+            } else {
+                self.caches.contexts.lock().ok().and_then(|c| c.get(&context).cloned())
+            };
             let answer = match known {
                 Some(a) => {
                     stats.cached += 1;
@@ -507,7 +523,7 @@ impl Worker<'_> {
                 }
                 None => {
                     let a = self.ask(ob, index, parts.len(), &Part::Context, &mut stats);
-                    if !matches!(a, Answer::Unknown(Why::Timeout(_))) {
+                    if !self.cfg.no_cache && !matches!(a, Answer::Unknown(Why::Timeout(_))) {
                         if let Ok(mut c) = self.caches.contexts.lock() {
                             c.insert(context, a.clone());
                         }
@@ -599,7 +615,13 @@ impl Worker<'_> {
         // Exact text first (any answer); then the text up to renaming of its variables,
         // which only answers without a model carry over (the model's names differ).
         let canonical = canonical(&text);
-        if let Some(a) = self.caches.cache.lock().ok().and_then(|c| c.get(&text).cloned()) {
+        let cached = |key: &String| {
+            if self.cfg.no_cache {
+                return None;
+            }
+            self.caches.cache.lock().ok().and_then(|c| c.get(key).cloned())
+        };
+        if let Some(a) = cached(&text) {
             stats.cached += 1;
             // The same text may come from other values of the same names: where this
             // query's values are bound is this query's.
@@ -610,7 +632,7 @@ impl Worker<'_> {
                 other => other,
             };
         }
-        if let Some(a) = self.caches.cache.lock().ok().and_then(|c| c.get(&canonical).cloned()) {
+        if let Some(a) = cached(&canonical) {
             if !model || !matches!(a, Answer::Sat { .. }) {
                 stats.cached += 1;
                 return a;
@@ -664,7 +686,7 @@ impl Worker<'_> {
             }
         };
         // A timeout depends on the machine's load: do not cache it.
-        if !matches!(answer, Answer::Unknown(Why::Timeout(_))) {
+        if !self.cfg.no_cache && !matches!(answer, Answer::Unknown(Why::Timeout(_))) {
             if let Ok(mut c) = self.caches.cache.lock() {
                 c.insert(canonical, answer.clone());
                 c.insert(text, answer.clone());

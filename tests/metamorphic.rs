@@ -1,0 +1,483 @@
+//! Metamorphic relations: rewritings of a program that must not change its verdict. Each
+//! relation is checked two ways: a **sweep** over every file of the corpus
+//! (`choreographies/**`, verified and rejected, motion and MAVLink, and `tests/data/**`), one
+//! rewriting each with parameters drawn from the file's index, and a **property** (proptest)
+//! that draws the file and the rewriting's parameters at random.
+//!
+//! The relation, for a file with outcome `before` (verdict and sorted diagnostic codes) and
+//! its rewriting with outcome `after`:
+//! - `after == before` holds;
+//! - `after` verified and `before` not is a **false verified** (one of the two outcomes is
+//!   wrong, and the rewriting changed nothing a proof may depend on): always a failure;
+//! - otherwise a failure, except where a relation allows a refusal: a rigid motion of the
+//!   scene may turn a verdict into unknown (an enclosure of a rotation may be too wide to
+//!   decide), and a renaming to one of mochi's own words ([`transform::TRICKY`]) may be an
+//!   error (the name is taken, or reserved).
+//!
+//! A failure prints the minimal case: the file, the rewriting, both outcomes, and the
+//! rewritten texts. Budget: the sweeps cover the corpus without the heavy geometric files
+//! (common.rs, `HEAVY`), the properties run a few cases; `MOCHI_META_CASES=N` runs N cases
+//! per property and the heavy files too.
+
+#[path = "metamorphic/common.rs"]
+mod common;
+#[path = "metamorphic/transform.rs"]
+mod transform;
+
+use common::{baseline, cases, check, config, corpus, par_map, Outcome, Program};
+use mochi::driver::Verdict;
+use proptest::prelude::*;
+use std::path::{Path, PathBuf};
+use transform::Rigid;
+
+/// What a relation allows besides an equal outcome.
+#[derive(Clone, Copy)]
+struct Allow {
+    unknown: bool,
+    error: bool,
+}
+
+const STRICT: Allow = Allow { unknown: false, error: false };
+
+/// Checks the relation for `file` rewritten as `p` (described by `what`); `Err` with the
+/// report of a violation.
+fn relate(file: &Path, what: &str, p: &Program, allow: Allow) -> Result<(), String> {
+    let before = baseline(file);
+    let after = check(p, &config(1, false));
+    if verdict_kept(&before, &after, allow) {
+        return Ok(());
+    }
+    let mut texts: Vec<_> = p.texts.iter().collect();
+    texts.sort();
+    let shown: Vec<String> = texts.iter().map(|(n, t)| format!("---- {n}\n{t}")).collect();
+    Err(format!(
+        "{}: {what}\n  before: {before}\n  after:  {after}{}\n{}",
+        file.display(),
+        if after.verdict == Verdict::Verified && before.verdict != Verdict::Verified {
+            "   <== FALSE VERIFIED"
+        } else {
+            ""
+        },
+        shown.join("\n")
+    ))
+}
+
+fn verdict_kept(before: &Outcome, after: &Outcome, allow: Allow) -> bool {
+    if before == after {
+        return true;
+    }
+    if after.verdict == Verdict::Verified {
+        return false;
+    }
+    (allow.unknown && refused(before, after))
+        || (allow.error && after.verdict == Verdict::Rejected && !after.error_codes().is_empty())
+}
+
+/// Whether `after` is `before` with some parts left undecided: the same errors, the same
+/// verdict or unknown, and only undecided parts (U codes) added.
+fn refused(before: &Outcome, after: &Outcome) -> bool {
+    let mut extra = after.codes.clone();
+    for c in &before.codes {
+        match extra.iter().position(|x| x == c) {
+            Some(i) => {
+                extra.remove(i);
+            }
+            None if c.starts_with('U') => {}
+            None => return false,
+        }
+    }
+    (after.verdict == before.verdict || after.verdict == Verdict::Unknown) && extra.iter().all(|c| c.starts_with('U'))
+}
+
+/// Runs `one` on every corpus file (two at a time) and fails with every violation found.
+fn sweep(name: &str, one: impl Fn(usize, &Path) -> Result<(), String> + Sync) {
+    let files: Vec<(usize, PathBuf)> = corpus().into_iter().enumerate().collect();
+    assert!(files.len() > 100, "the corpus was found ({} files)", files.len());
+    let bad: Vec<String> = par_map(&files, 2, |(i, p)| one(*i, p)).into_iter().filter_map(Result::err).collect();
+    assert!(bad.is_empty(), "{name}: {} violation(s)\n\n{}", bad.len(), bad.join("\n\n"));
+}
+
+/// A small deterministic generator for the sweeps' parameters (SplitMix64).
+fn mix(mut x: u64) -> u64 {
+    x = x.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    x ^ (x >> 31)
+}
+
+// ---------------------------------------------------------------- renaming
+
+/// A new name for the `i`-th binder: a fresh one, or (when `tricky`) one of mochi's own.
+fn new_name(seed: u64, i: usize, tricky: bool) -> String {
+    let r = mix(seed ^ (i as u64).wrapping_mul(0x1000_0001));
+    if tricky && r % 3 == 0 {
+        transform::TRICKY[(r / 3) as usize % transform::TRICKY.len()].to_string()
+    } else {
+        // Fresh names of assorted shapes: short, long, with digits and underscores.
+        let stems = ["q", "Zed", "n_", "long_name_for_a_binder_", "A1", "_u"];
+        format!("{}{}", stems[(r >> 8) as usize % stems.len()], r % 1000)
+    }
+}
+
+/// Codes whose defect is a name itself: a binder that hides a MAVLink enum entry (E0240).
+/// Renaming it to a free name rightly removes the error, so such files keep the relation
+/// out of the renaming (the names are not free to choose).
+const NAME_DEFECTS: &[&str] = &["E0240"];
+
+fn rename_case(file: &Path, seed: u64, tricky: bool) -> Result<(), String> {
+    if baseline(file).codes.iter().any(|c| NAME_DEFECTS.contains(&c.as_str())) {
+        return Ok(());
+    }
+    let Some((p, map)) = transform::rename(file, &mut |i, _| new_name(seed, i, tricky)) else { return Ok(()) };
+    let used_tricky = map.iter().any(|(_, n)| transform::TRICKY.contains(&n.as_str()));
+    let shown: Vec<String> = map.iter().map(|(a, b)| format!("{a}->{b}")).collect();
+    relate(file, &format!("renamed {}", shown.join(" ")), &p, Allow { unknown: false, error: used_tricky })
+}
+
+#[test]
+fn renaming_every_binder_keeps_the_verdict() {
+    sweep("renaming", |i, f| rename_case(f, mix(i as u64), i % 2 == 1));
+}
+
+// ---------------------------------------------------------------- constants
+
+fn constants_case(file: &Path, seed: u64) -> Result<(), String> {
+    let mut picked = Vec::new();
+    let Some(p) = transform::rewrite_constants(file, &mut |k| {
+        let yes = mix(seed ^ k as u64) % 2 == 0;
+        if yes {
+            picked.push(k);
+        }
+        yes
+    }) else {
+        return Ok(());
+    };
+    let r = relate(file, &format!("numeric literals {picked:?} written as equal expressions"), &p, STRICT);
+    // Finding 2 (findings/pi-over-2-plus-2.chor): refinement fails when the type's and the
+    // process's arguments are equal values written differently.
+    // Finding 3 (findings/countdown-init-as-fraction.chor): a precondition at a loop's
+    // joint motion fails (E0402) at a state never reached when a value is written as a
+    // fraction.
+    if r.is_err() {
+        let (before, after) = (baseline(file), check(&p, &config(1, false)));
+        if only_refinement_added(&before, &after) || only_added(&before, &after, "E0402") {
+            return Ok(());
+        }
+    }
+    r
+}
+
+#[test]
+fn finding_a_fraction_at_the_start_breaks_a_precondition_in_a_loop() {
+    let f = Path::new("findings/countdown-init-as-fraction.chor");
+    let fraction = check(&Program::on_disk(f), &config(1, false));
+    assert_eq!(fraction.error_codes(), vec!["E0402".to_string(); 2], "fixed? then drop finding 3: {fraction}");
+    let decimal = baseline(Path::new("choreographies/countdown.chor"));
+    assert_eq!(decimal.verdict, Verdict::Verified, "the same file with `s == 0.5` verifies: {decimal}");
+}
+
+#[test]
+fn finding_equal_arguments_written_differently_break_refinement() {
+    let f = Path::new("findings/pi-over-2-plus-2.chor");
+    let differently = check(&Program::on_disk(f), &config(1, false));
+    assert_eq!(differently.error_codes(), vec!["E0407".to_string()], "fixed? then drop finding 2: {differently}");
+    let same = baseline(Path::new("choreographies/diagonal.chor"));
+    assert_eq!(same.verdict, Verdict::Verified, "the same file with `pi / 4` on both sides verifies: {same}");
+}
+
+#[test]
+fn a_constant_written_as_an_equal_expression_keeps_the_verdict() {
+    sweep("constants", |i, f| constants_case(f, mix(i as u64 + 77)));
+}
+
+// ---------------------------------------------------------------- reordering
+
+fn permutation(seed: u64, n: usize) -> Vec<usize> {
+    let mut v: Vec<usize> = (0..n).collect();
+    for i in (1..n).rev() {
+        let j = (mix(seed ^ i as u64) % (i as u64 + 1)) as usize;
+        v.swap(i, j);
+    }
+    v
+}
+
+fn reorder_case(file: &Path, seed: u64) -> Result<(), String> {
+    let mut perms = Vec::new();
+    let Some(p) = transform::reorder(file, &mut |n| {
+        let v = permutation(seed ^ n as u64, n);
+        perms.push(v.clone());
+        v
+    }) else {
+        return Ok(());
+    };
+    relate(file, &format!("items reordered {perms:?}"), &p, STRICT)
+}
+
+#[test]
+fn reordering_the_items_keeps_the_verdict() {
+    sweep("reordering", |i, f| reorder_case(f, mix(i as u64 + 1234)));
+}
+
+// ---------------------------------------------------------------- rigid motion
+
+/// Offsets near and very far, angles that are no multiple of a quarter turn.
+const SHIFTS: &[[f64; 3]] =
+    &[[0.37, -1.25, 0.0], [12.5, 7.75, 0.5], [-1234.5, 987.25, 0.0], [100000.25, -25000.5, 3.0]];
+const ANGLES: &[f64] = &[0.0, 0.3, 1.1, -2.5, 0.78];
+
+/// Whether `after` is `before` with E0407s (a primitive does not refine the type's) added
+/// and nothing else: findings 1 and 2 (findings/README.md), false alarms of primitive
+/// refinement, which the tests named `finding_*` assert still happen.
+fn only_refinement_added(before: &Outcome, after: &Outcome) -> bool {
+    only_added(before, after, "E0407")
+}
+
+/// Whether `after` is `before` with errors `code` added and nothing else.
+fn only_added(before: &Outcome, after: &Outcome, code: &str) -> bool {
+    let mut extra = after.codes.clone();
+    for c in &before.codes {
+        match extra.iter().position(|x| x == c) {
+            Some(i) => {
+                extra.remove(i);
+            }
+            None => return false,
+        }
+    }
+    after.verdict == Verdict::Rejected
+        && !extra.is_empty()
+        && extra.iter().all(|c| c == code)
+        && !before.codes.iter().any(|c| c == code)
+}
+
+/// Finding 1 (findings/rotated-pose-breaks-refinement.chor): a pose turned by a non-special
+/// angle makes primitive refinement fail (E0407) where the unturned scene refines.
+fn finding_1(before: &Outcome, after: &Outcome, m: Rigid) -> bool {
+    m.angle != 0.0 && only_refinement_added(before, after)
+}
+
+fn rigid_case(file: &Path, m: Rigid) -> Result<(), String> {
+    let Some(p) = transform::move_scene(file, m) else { return Ok(()) };
+    let r = relate(file, &format!("scene moved by {m:?}"), &p, Allow { unknown: true, error: false });
+    if r.is_err() && finding_1(&baseline(file), &check(&p, &config(1, false)), m) {
+        return Ok(());
+    }
+    r
+}
+
+#[test]
+fn finding_rotated_pose_breaks_refinement() {
+    let f = Path::new("findings/rotated-pose-breaks-refinement.chor");
+    let turned = check(&Program::on_disk(f), &config(1, false));
+    assert_eq!(turned.error_codes(), vec!["E0407".to_string()], "fixed? then drop finding_1: {turned}");
+    let text = std::fs::read_to_string(f).expect("the finding");
+    let mut p = Program::on_disk(f);
+    p.texts.insert(f.display().to_string(), text.replace("at: pose(0, 0, 0, 0, 0, 0.3)", "at: pose(0, 0, 0)"));
+    let straight = check(&p, &config(1, false));
+    assert_eq!(straight.verdict, Verdict::Verified, "the unturned scene verifies: {straight}");
+}
+
+#[test]
+fn a_rigid_motion_of_the_scene_keeps_the_verdict() {
+    sweep("rigid motion", |i, f| {
+        let r = mix(i as u64 + 99);
+        rigid_case(
+            f,
+            Rigid { angle: ANGLES[r as usize % ANGLES.len()], shift: SHIFTS[(r >> 8) as usize % SHIFTS.len()] },
+        )
+    });
+}
+
+// ---------------------------------------------------------------- box as mesh
+
+fn mesh_case(file: &Path) -> Result<(), String> {
+    static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("mochi-meta-{}-{n}", std::process::id()));
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    let Some((p, exact)) = transform::boxes_as_meshes(file, &dir) else { return Ok(()) };
+    // Finding 4 (findings/README.md): a body outside its footprint by far (E0512) is only
+    // unknown once the body is a mesh. Today's outcome asserted, so this fails once fixed.
+    if file == Path::new("choreographies/rejected/E0512-footprint-shorter-than-the-body.chor") {
+        let after = check(&p, &config(1, false));
+        let _ = std::fs::remove_dir_all(&dir);
+        let known = Outcome { verdict: Verdict::Unknown, codes: vec!["U0001".to_string()] };
+        return if after == known { Ok(()) } else { Err(format!("finding 4 changed (fixed? then drop it): {after}")) };
+    }
+    // A mesh's vertices are binary floats: a size such as 0.4 becomes the float next to it,
+    // a box some 1e-17 m larger or smaller. Where the footprints touch the body exactly (as
+    // many here do), an exact check cannot then be made and unknown is the right answer;
+    // with sizes that are binary fractions (0.5, 0.25) the mesh is the box and the verdict
+    // must be the same.
+    let r = relate(
+        file,
+        &format!("boxes written as meshes (exact: {exact}; OBJ files in {})", dir.display()),
+        &p,
+        Allow { unknown: !exact, error: false },
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    r
+}
+
+#[test]
+fn a_box_written_as_a_mesh_keeps_the_verdict() {
+    sweep("box as mesh", |_, f| mesh_case(f));
+}
+
+// ---------------------------------------------------------------- properties
+
+fn pick_file() -> impl Strategy<Value = PathBuf> {
+    let files = corpus();
+    (0..files.len()).prop_map(move |i| files[i].clone())
+}
+
+fn proptest_config(default: u32) -> ProptestConfig {
+    ProptestConfig {
+        cases: cases(default),
+        max_shrink_iters: 16,
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    }
+}
+
+proptest! {
+    #![proptest_config(proptest_config(6))]
+
+    #[test]
+    fn prop_renaming(file in pick_file(), seed in any::<u64>(), tricky in any::<bool>()) {
+        rename_case(&file, seed, tricky).map_err(TestCaseError::fail)?;
+    }
+
+    #[test]
+    fn prop_constants(file in pick_file(), seed in any::<u64>()) {
+        constants_case(&file, seed).map_err(TestCaseError::fail)?;
+    }
+
+    #[test]
+    fn prop_reordering(file in pick_file(), seed in any::<u64>()) {
+        reorder_case(&file, seed).map_err(TestCaseError::fail)?;
+    }
+
+    #[test]
+    fn prop_rigid_motion(
+        file in pick_file(),
+        angle in -3.1f64..3.1,
+        dx in prop_oneof![-5.0f64..5.0, -2.0e5f64..2.0e5],
+        dy in prop_oneof![-5.0f64..5.0, -2.0e5f64..2.0e5],
+        dz in 0.0f64..2.0,
+    ) {
+        rigid_case(&file, Rigid { angle, shift: [dx, dy, dz] }).map_err(TestCaseError::fail)?;
+    }
+}
+
+// ---------------------------------------------------------------- generated inputs
+
+/// A small generated choreography: `n` carts on parallel lanes `gap` apart, each driving
+/// out to `target` and back while the others hold, the first telling each. Lanes closer than
+/// a cart's width (0.3 m) collide (rejected), others verify.
+fn generated(n: usize, gap: f64, target: f64, yaw: f64) -> String {
+    let mut src = String::from(
+        "robot Cart {\n  state x: real, y: real;\n  geometry: box(0.4, 0.3, 0.2) at pose(x, y, 0);\n  invariant: -10 <= x <= 10;\n}\n\
+         motion Cart.drive(xf: real) {\n  interruptible: false;\n  pre: -10 <= xf <= 10;\n\
+         \x20 guarantee: min(old(x), xf) <= x <= max(old(x), xf) && y == old(y);\n  post: x == xf && y == old(y);\n\
+         \x20 footprint(px, py, pz): min(old(x), xf) - 0.2 <= px <= max(old(x), xf) + 0.2\n\
+         \x20   && y - 0.15 <= py <= y + 0.15 && 0 <= pz <= 0.2;\n\
+         \x20 duration: [abs(xf - old(x)) / 0.5, abs(xf - old(x)) / 0.1];\n}\n\
+         motion Cart.hold {\n  interruptible: true;\n  guarantee: x == old(x) && y == old(y);\n  post: x == old(x) && y == old(y);\n\
+         \x20 footprint(px, py, pz): x - 0.2 <= px <= x + 0.2 && y - 0.15 <= py <= y + 0.15 && 0 <= pz <= 0.2;\n\
+         \x20 duration: [0, inf];\n}\nsystem Lanes {\n",
+    );
+    for i in 0..n {
+        src.push_str(&format!(
+            "  participant C{i}: Cart {{ init: x == 0 && y == {:?}; at: pose(0, 0, 0, 0, 0, {yaw:?}); }}\n",
+            i as f64 * gap
+        ));
+    }
+    src.push_str("}\nchoreography Lanes =\n");
+    let holds = |except: usize| -> String {
+        (0..n).filter(|j| *j != except).map(|j| format!(", C{j}: hold")).collect::<String>()
+    };
+    for i in 1..n {
+        src.push_str(&format!("  C0 -> C{i}: go{i} . dt<C0: drive({target:?}){}> .\n", holds(0)));
+        src.push_str(&format!("  C0 -> C{i}: back{i} . dt<C0: drive(0){}> .\n", holds(0)));
+    }
+    src.push_str("  end;\n");
+    // Processes: C0 sends every message and drives; the others receive and hold.
+    let mut p0 = String::from("process C0 = ");
+    for i in 1..n {
+        p0.push_str(&format!("C{i}!go{i}.dt<drive({target:?})>.C{i}!back{i}.dt<drive(0)>."));
+    }
+    p0.push_str("end;\n");
+    src.push_str(&p0);
+    for i in 1..n {
+        let mut p = format!("process C{i} = ");
+        for j in 1..n {
+            if j == i {
+                p.push_str(&format!("C0?go{j}.dt<hold>.C0?back{j}.dt<hold>."));
+            } else {
+                p.push_str("dt<hold>.dt<hold>.");
+            }
+        }
+        p.push_str("end;\n");
+        src.push_str(&p);
+    }
+    src
+}
+
+proptest! {
+    #![proptest_config(proptest_config(3))]
+
+    #[test]
+    fn prop_generated(
+        n in 2usize..4,
+        gap in prop_oneof![0.1f64..0.29, 0.31f64..2.0],
+        target in 0.5f64..5.0,
+        yaw in prop_oneof![Just(0.0f64), -3.0f64..3.0],
+        relation in 0u8..4,
+        seed in any::<u64>(),
+    ) {
+        static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let k = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let dir = std::env::temp_dir().join(format!("mochi-meta-gen-{}-{k}", std::process::id()));
+        std::fs::create_dir_all(&dir).map_err(|e| TestCaseError::fail(e.to_string()))?;
+        let file = dir.join("lanes.chor");
+        std::fs::write(&file, generated(n, gap, target, yaw)).map_err(|e| TestCaseError::fail(e.to_string()))?;
+        let r = match relation {
+            0 => rename_case(&file, seed, seed % 2 == 0),
+            1 => constants_case(&file, seed),
+            2 => reorder_case(&file, seed),
+            _ => rigid_case(&file, Rigid { angle: (seed % 600) as f64 / 100.0 - 3.0, shift: [1234.5, -0.75, 0.0] }),
+        };
+        let _ = std::fs::remove_dir_all(&dir);
+        r.map_err(TestCaseError::fail)?;
+    }
+}
+
+#[test]
+fn the_generator_makes_verified_and_rejected_lanes() {
+    let dir = std::env::temp_dir().join(format!("mochi-meta-gen-{}-fixed", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a temp dir");
+    let file = dir.join("lanes.chor");
+    let mut got = Vec::new();
+    for gap in [1.0, 0.2] {
+        std::fs::write(&file, generated(2, gap, 1.0, 0.0)).expect("written");
+        got.push(check(&Program::on_disk(&file), &config(1, false)).verdict);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(got, vec![Verdict::Verified, Verdict::Rejected]);
+}
+
+/// The rewritings reach the imported files and the pipeline reads them: a renaming of
+/// countdown.chor rewrites its library too, keeps the verdict, and the same renaming with the
+/// library's new text left out (the root's names no longer match the library's) is rejected.
+/// So a relation that holds is not one that compared a file with itself.
+#[test]
+fn rewritten_imports_are_what_the_pipeline_reads() {
+    let f = Path::new("choreographies/countdown.chor");
+    let (p, map) = transform::rename(f, &mut |i, _| format!("renamed_{i}")).expect("countdown renames");
+    assert!(map.iter().any(|(a, _)| a == "Bot"), "the kind declared in the library is renamed: {map:?}");
+    let lib = p.texts.keys().find(|k| k.ends_with("bot.mochi")).expect("the library is rewritten").clone();
+    assert_eq!(check(&p, &config(1, false)), baseline(f));
+    let mut root_only = p.clone();
+    root_only.texts.remove(&lib);
+    assert_eq!(check(&root_only, &config(1, false)).verdict, Verdict::Rejected);
+}
