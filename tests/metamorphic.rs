@@ -153,9 +153,9 @@ fn constants_case(file: &Path, seed: u64) -> Result<(), String> {
         return Ok(());
     };
     let r = relate(file, &format!("numeric literals {picked:?} written as equal expressions"), &p, STRICT);
-    // Finding 2 (findings/pi-over-2-plus-2.chor): refinement fails when the type's and the
+    // Finding 2 (tests/findings/pi-over-2-plus-2.chor): refinement fails when the type's and the
     // process's arguments are equal values written differently.
-    // Finding 3 (findings/countdown-init-as-fraction.chor): a precondition at a loop's
+    // Finding 3 (tests/findings/countdown-init-as-fraction.chor): a precondition at a loop's
     // joint motion fails (E0402) at a state never reached when a value is written as a
     // fraction.
     if r.is_err() {
@@ -169,7 +169,7 @@ fn constants_case(file: &Path, seed: u64) -> Result<(), String> {
 
 #[test]
 fn finding_a_fraction_at_the_start_breaks_a_precondition_in_a_loop() {
-    let f = Path::new("findings/countdown-init-as-fraction.chor");
+    let f = Path::new("tests/findings/countdown-init-as-fraction.chor");
     let fraction = check(&Program::on_disk(f), &config(1, false));
     assert_eq!(fraction.error_codes(), vec!["E0402".to_string(); 2], "fixed? then drop finding 3: {fraction}");
     let decimal = baseline(Path::new("choreographies/countdown.chor"));
@@ -178,7 +178,7 @@ fn finding_a_fraction_at_the_start_breaks_a_precondition_in_a_loop() {
 
 #[test]
 fn finding_equal_arguments_written_differently_break_refinement() {
-    let f = Path::new("findings/pi-over-2-plus-2.chor");
+    let f = Path::new("tests/findings/pi-over-2-plus-2.chor");
     let differently = check(&Program::on_disk(f), &config(1, false));
     assert_eq!(differently.error_codes(), vec!["E0407".to_string()], "fixed? then drop finding 2: {differently}");
     let same = baseline(Path::new("choreographies/diagonal.chor"));
@@ -226,7 +226,7 @@ const SHIFTS: &[[f64; 3]] =
 const ANGLES: &[f64] = &[0.0, 0.3, 1.1, -2.5, 0.78];
 
 /// Whether `after` is `before` with E0407s (a primitive does not refine the type's) added
-/// and nothing else: findings 1 and 2 (findings/README.md), false alarms of primitive
+/// and nothing else: findings 1 and 2 (tests/findings/README.md), false alarms of primitive
 /// refinement, which the tests named `finding_*` assert still happen.
 fn only_refinement_added(before: &Outcome, after: &Outcome) -> bool {
     only_added(before, after, "E0407")
@@ -249,7 +249,7 @@ fn only_added(before: &Outcome, after: &Outcome, code: &str) -> bool {
         && !before.codes.iter().any(|c| c == code)
 }
 
-/// Finding 1 (findings/rotated-pose-breaks-refinement.chor): a pose turned by a non-special
+/// Finding 1 (tests/findings/rotated-pose-breaks-refinement.chor): a pose turned by a non-special
 /// angle makes primitive refinement fail (E0407) where the unturned scene refines.
 fn finding_1(before: &Outcome, after: &Outcome, m: Rigid) -> bool {
     m.angle != 0.0 && only_refinement_added(before, after)
@@ -266,7 +266,7 @@ fn rigid_case(file: &Path, m: Rigid) -> Result<(), String> {
 
 #[test]
 fn finding_rotated_pose_breaks_refinement() {
-    let f = Path::new("findings/rotated-pose-breaks-refinement.chor");
+    let f = Path::new("tests/findings/rotated-pose-breaks-refinement.chor");
     let turned = check(&Program::on_disk(f), &config(1, false));
     assert_eq!(turned.error_codes(), vec!["E0407".to_string()], "fixed? then drop finding_1: {turned}");
     let text = std::fs::read_to_string(f).expect("the finding");
@@ -295,7 +295,7 @@ fn mesh_case(file: &Path) -> Result<(), String> {
     let dir = std::env::temp_dir().join(format!("mochi-meta-{}-{n}", std::process::id()));
     std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
     let Some((p, exact)) = transform::boxes_as_meshes(file, &dir) else { return Ok(()) };
-    // Finding 4 (findings/README.md): a body outside its footprint by far (E0512) is only
+    // Finding 4 (tests/findings/README.md): a body outside its footprint by far (E0512) is only
     // unknown once the body is a mesh. Today's outcome asserted, so this fails once fixed.
     if file == Path::new("choreographies/rejected/E0512-footprint-shorter-than-the-body.chor") {
         let after = check(&p, &config(1, false));
