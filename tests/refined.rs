@@ -150,28 +150,22 @@ fn datum_style_conditions_in_refinements_are_checked_by_progress() {
 /// partial operator only where it is defined (a guard), and are verified: definedness makes
 /// no false alarm of them.
 #[test]
-fn partial_operators_evaluated_only_where_defined_are_verified() {
+fn partial_operators_in_float_payloads_are_undecided_never_verified() {
+    // A float payload equal to a quotient or a root must be a float32 that equals it; the
+    // rounding of a computed value is not modelled (LANGUAGE.md, "MAVLink messages"), so
+    // the progress check is undecided for all four, whether or not the partial operation
+    // is defined where it is evaluated. Before the definedness rule the two defective
+    // ones were verified (a quotient by zero was some number a payload could equal).
     for path in [
         "tests/data/refined/param-set-rate-divided-by-a-nonzero-gain.chor",
         "tests/data/refined/change-speed-sqrt-above-home.chor",
+        "tests/data/refined/param-set-rate-divided-by-a-zero-gain.chor",
+        "tests/data/refined/change-speed-sqrt-of-a-negative-altitude.chor",
     ] {
         let r = report(path);
-        assert_eq!(r["verdict"], "verified", "{path}: {r}");
-    }
-    for (path, at) in [
-        ("choreographies/mavlink/rejected/E0419-param-set-rate-divided-by-a-zero-gain.chor", ["pitch_ff", "pitch_p"]),
-        (
-            "choreographies/mavlink/rejected/E0419-change-speed-sqrt-of-a-negative-altitude.chor",
-            ["relative_alt", "relative_alt"],
-        ),
-    ] {
-        let r = report(path);
-        let d = diagnostics(&r, "E0419");
-        assert_eq!(d.len(), 1, "{path}: {r}");
-        for name in at {
-            let v = value(d[0], name).unwrap_or_else(|| panic!("{path}: {name} in the counterexample: {r}"));
-            let v: f64 = v.parse().unwrap_or_else(|_| panic!("{path}: {name} = {v}"));
-            assert!(if name == "relative_alt" { v < 0.0 } else { v == 0.0 }, "{path}: {name} = {v}");
-        }
+        assert_eq!(r["verdict"], "unknown", "{path}: {r}");
+        assert!(diagnostics(&r, "E0419").is_empty(), "{path}: {r}");
+        let u = diagnostics(&r, "U0001");
+        assert_eq!(u.len(), 1, "{path}: {r}");
     }
 }
