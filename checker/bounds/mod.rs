@@ -377,6 +377,14 @@ pub fn exact(prog: &Program, e: &Expr) -> Option<BigRational> {
     value(prog, e, &closed).and_then(|v| v.exact)
 }
 
+/// Whether `a` and `b` denote the same value however they are written: the same
+/// expression, or two constants with the same exact value (`0.5` and `(5 / 10)`). A check
+/// that compares poses or sizes by their text would treat equal values written apart as
+/// different (the metamorphic tests rewrite constants to find such checks).
+pub fn same_value(prog: &Program, a: &Expr, b: &Expr) -> bool {
+    a == b || matches!((exact(prog, a), exact(prog, b)), (Some(x), Some(y)) if x == y)
+}
+
 thread_local! {
     /// Values of constants (by index) while a [`ConstCache`] is alive on this thread: the
     /// geometric procedure evaluates the same predicates over millions of boxes, and a

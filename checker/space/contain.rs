@@ -49,12 +49,12 @@ pub fn body_within_footprint(prog: &Program, prim: PrimId) -> Contained {
             (Err(why), _) | (_, Err(why)) => return Contained::Unknown(why),
         };
     for a in body {
-        if fp.iter().any(|b| same_place(a, b) && within(a, b)) {
+        if fp.iter().any(|b| same_place(prog, a, b) && within(a, b)) {
             continue;
         }
         // Outside: every footprint part is placed as `a` is, and a point of `a` lies
         // beyond all their bounding spheres about that frame's origin.
-        if let Some(q) = beyond(a, fp) {
+        if let Some(q) = beyond(prog, a, fp) {
             return Contained::No(format!(
                 "the footprint contains the robot's body, but the point ({:.4}, {:.4}, {:.4}) m of the body's `{}` (in the frame of its `at pose(...)`) lies outside every part of the footprint, placed by the same pose, at every state",
                 q.x, q.y, q.z, a.solid.name
@@ -70,8 +70,8 @@ pub fn body_within_footprint(prog: &Program, prim: PrimId) -> Contained {
 
 /// A point of `a` farther from its frame's origin than any point of the parts `fp`, all
 /// placed as `a` is.
-fn beyond(a: &Piece, fp: &[Piece]) -> Option<Point<f64>> {
-    if !fp.iter().all(|b| same_place(a, b)) {
+fn beyond(prog: &Program, a: &Piece, fp: &[Piece]) -> Option<Point<f64>> {
+    if !fp.iter().all(|b| same_place(prog, a, b)) {
         return None;
     }
     let reach = fp.iter().map(|b| b.solid.bounding_radius()).fold(0.0, f64::max);
@@ -100,10 +100,14 @@ fn pieces(p: Option<&Vec<Piece>>) -> Result<&Vec<Piece>, String> {
     }
 }
 
-fn same_place(a: &Piece, b: &Piece) -> bool {
+/// Both placed by the same pose: equal arguments, by value ([`crate::bounds::same_value`]).
+fn same_place(prog: &Program, a: &Piece, b: &Piece) -> bool {
     match (&a.place, &b.place) {
         (None, None) => true,
-        (Some(x), Some(y)) => x.args == y.args,
+        (Some(x), Some(y)) => {
+            x.args.len() == y.args.len()
+                && x.args.iter().zip(&y.args).all(|(u, v)| crate::bounds::same_value(prog, u, v))
+        }
         _ => false,
     }
 }

@@ -493,9 +493,9 @@ fn fraction(text: &str) -> Option<String> {
     let digits = digits.trim_start_matches('0');
     let digits = if digits.is_empty() { "0" } else { digits };
     let scale = frac.len() as i32 - exp;
-    // A numerator beyond 64 bits would not be an integer literal (the lexer reads
-    // `18446744073709551615` as a real): such literals stay.
-    if !(-30..=30).contains(&scale) || digits.len() + (-scale).max(0) as usize > 18 {
+    // A numerator or a denominator beyond 64 bits would not be an integer literal (E0104:
+    // `1e-20` cannot be written `1 / 100000000000000000000`): such literals stay.
+    if !(-30..=18).contains(&scale) || digits.len() + (-scale).max(0) as usize > 18 {
         return None;
     }
     if scale <= 0 {

@@ -34,7 +34,7 @@ pub(super) fn plan(prog: &Program, concrete: &PrimApp, abstract_: &[PrimApp]) ->
     let ss: Vec<&Primitive> = abstract_.iter().map(|a| prog.prim(a.prim)).collect();
     let items = [Realisable, Pre, Assume, Guarantee, Post, Footprint, Duration];
     // A footprint item that holds by construction is not asked (see [`within`]).
-    let asked = |i: &RefineItem| *i != Footprint || !matches!(within(c, &ss), Within::Holds);
+    let asked = |i: &RefineItem| *i != Footprint || !matches!(within(prog, c, &ss), Within::Holds);
     Plan::Parts(items.into_iter().filter(asked).map(Part::Refine).collect())
 }
 
@@ -60,7 +60,7 @@ pub(super) enum Within {
 /// Whether two geometric footprints are the same body at every state and time: the same
 /// shapes with equal sizes, files and poses, none reading a parameter (the two primitives'
 /// arguments differ; the state, `old(...)` and `clock` are shared in a refinement).
-fn same_body(a: &Body, b: &Body) -> bool {
+fn same_body(prog: &Program, a: &Body, b: &Body) -> bool {
     let no_param = |e: &Expr| !crate::hir::expr::mentions(e, &|v| matches!(v, Var::Param(_)));
     let exprs = |p: &crate::hir::body::Part| -> Vec<Expr> {
         let mut out: Vec<Expr> = match &p.shape {
@@ -86,12 +86,13 @@ fn same_body(a: &Body, b: &Body) -> bool {
             let (ex, ey) = (exprs(x), exprs(y));
             same_shape(&x.shape, &y.shape)
                 && x.place.is_some() == y.place.is_some()
-                && ex == ey
+                && ex.len() == ey.len()
+                && ex.iter().zip(&ey).all(|(u, v)| crate::bounds::same_value(prog, u, v))
                 && ex.iter().all(no_param)
         })
 }
 
-pub(super) fn within(c: &Primitive, ss: &[&Primitive]) -> Within {
+pub(super) fn within(prog: &Program, c: &Primitive, ss: &[&Primitive]) -> Within {
     use crate::hir::Footprint as F;
     // The abstract footprints that constrain anything (all space drops out of the meet).
     let bounded: Vec<&&Primitive> = ss.iter().filter(|s| s.footprint.is_declared()).collect();
@@ -105,7 +106,7 @@ pub(super) fn within(c: &Primitive, ss: &[&Primitive]) -> Within {
         return Within::Holds;
     }
     if let Some(cb) = c.footprint.body() {
-        if bounded.iter().all(|s| s.footprint.body().is_some_and(|sb| same_body(cb, sb))) {
+        if bounded.iter().all(|s| s.footprint.body().is_some_and(|sb| same_body(prog, cb, sb))) {
             return Within::Holds;
         }
     }
@@ -228,7 +229,7 @@ pub(super) fn refine(
                 q.assertions.push(g_s.not());
             } else {
                 let ss: Vec<&Primitive> = sis.iter().map(|si| si.prim).collect();
-                match within(ci.prim, &ss) {
+                match within(q.enc.prog(), ci.prim, &ss) {
                     Within::Query => {}
                     // Not planned (it holds by construction); the empty question if asked.
                     Within::Holds => {
@@ -412,8 +413,8 @@ mod tests {
         let (_, d) = decide("moved", "moved");
         assert!(matches!(d, Decision::Holds(_)), "a primitive refines itself: {d:?}");
         let prim = |n: &str| prog.prims.iter().find(|p| p.name == n).expect("a primitive");
-        assert!(matches!(super::within(prim("mesh"), &[prim("moved")]), super::Within::Unknown(_)));
-        assert_eq!(super::within(prim("mesh"), &[prim("mesh2")]), super::Within::Holds);
+        assert!(matches!(super::within(&prog, prim("mesh"), &[prim("moved")]), super::Within::Unknown(_)));
+        assert_eq!(super::within(&prog, prim("mesh"), &[prim("mesh2")]), super::Within::Holds);
     }
 
     #[test]
