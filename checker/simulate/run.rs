@@ -373,6 +373,7 @@ impl<'a, 'p> Runner<'a, 'p> {
             }
         }
         let mut shown = Vec::new();
+        let mut rounded = false;
         if !m.payload.is_empty() {
             // The refinements, with everything but this message's fields made concrete.
             let facts: Vec<Expr> =
@@ -383,6 +384,8 @@ impl<'a, 'p> Runner<'a, 'p> {
             match self.sess.values_nudged(prog, &facts, &want, nudge) {
                 Ok(Some(vs)) => {
                     for (f, v) in m.payload.iter().zip(vs) {
+                        let (v, moved) = super::on_wire(prog, f.value, v);
+                        rounded |= moved;
                         shown.push(format!("{} = {v}", f.name));
                         self.values.insert(f.value, v);
                     }
@@ -398,6 +401,11 @@ impl<'a, 'p> Runner<'a, 'p> {
             }
             for f in &m.payload {
                 if let Some(r) = &f.refinement {
+                    if self.holds(r) == Tri::False && rounded {
+                        let msg = format!("`{who}`'s payload: Z3's value rounded to the wire's float leaves the refinement of `{}` (the simulator draws real payloads)", f.name);
+                        self.report(Kind::Undecided, &t, msg);
+                        return Flow::Stop;
+                    }
                     if self.holds(r) == Tri::False {
                         self.report(
                             Kind::Replay,

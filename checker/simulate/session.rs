@@ -355,6 +355,17 @@ impl Runner<'_, '_> {
             self.steps += 1;
             let Some(vals) = self.payload(&roles[s], b, &who) else { return };
             let mut shown = Vec::new();
+            let mut rounded = false;
+            let vals: Vec<Value> = b
+                .payload
+                .iter()
+                .zip(vals)
+                .map(|(f, v)| {
+                    let (v, moved) = super::on_wire(prog, f.value, v);
+                    rounded |= moved;
+                    v
+                })
+                .collect();
             for (f, v) in b.payload.iter().zip(&vals) {
                 shown.push(format!("{} = {v}", f.name));
                 roles[s].known.insert(f.value, v.clone());
@@ -362,6 +373,12 @@ impl Runner<'_, '_> {
             // Replayed exactly, with what the sender knows.
             for f in &b.payload {
                 if let Some(r) = &f.refinement {
+                    if self.holds_as(&roles[s], r) == Tri::False && rounded {
+                        let now = self.now();
+                        let msg = format!("`{who}`'s payload: Z3's value rounded to the wire's float leaves the refinement of `{}` (the simulator draws real payloads)", f.name);
+                        self.report(Kind::Undecided, &now, msg);
+                        return;
+                    }
                     if self.holds_as(&roles[s], r) == Tri::False {
                         let now = self.now();
                         let msg =
