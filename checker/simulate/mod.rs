@@ -176,6 +176,23 @@ fn value_expr(v: &Value, sort: &Sort, loc: Loc) -> Option<Expr> {
     })
 }
 
+/// `v` as the wire carries the field `id`: a value of a MAVLink `float` (`double`) field
+/// rounded to the nearest float32 (float64), exactly; every other value as it is. The
+/// second part says whether rounding changed it. Z3 draws payloads over the reals; the
+/// checks model floats as finite float32 (LANGUAGE.md), so a drawn value is sent rounded.
+pub(super) fn on_wire(prog: &Program, id: crate::hir::ValueId, v: Value) -> (Value, bool) {
+    let Some(format) = prog.wire_floats.get(&id).and_then(|b| crate::lower::float_format(*b)) else {
+        return (v, false);
+    };
+    match &v {
+        Value::Num(n) if n.lo == n.hi => match crate::lower::round_to_float(&n.lo, format) {
+            Some(r) if r != n.lo => (Value::rat(r), true),
+            _ => (v, false),
+        },
+        _ => (v, false),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -204,22 +221,5 @@ mod tests {
             assert!(a.below(3) < 3);
             b.below(3);
         }
-    }
-}
-
-/// `v` as the wire carries the field `id`: a value of a MAVLink `float` (`double`) field
-/// rounded to the nearest float32 (float64), exactly; every other value as it is. The
-/// second part says whether rounding changed it. Z3 draws payloads over the reals; the
-/// checks model floats as finite float32 (LANGUAGE.md), so a drawn value is sent rounded.
-pub(super) fn on_wire(prog: &Program, id: crate::hir::ValueId, v: Value) -> (Value, bool) {
-    let Some(format) = prog.wire_floats.get(&id).and_then(|b| crate::lower::float_format(*b)) else {
-        return (v, false);
-    };
-    match &v {
-        Value::Num(n) if n.lo == n.hi => match crate::lower::round_to_float(&n.lo, format) {
-            Some(r) if r != n.lo => (Value::rat(r), true),
-            _ => (v, false),
-        },
-        _ => (v, false),
     }
 }
