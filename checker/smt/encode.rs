@@ -240,12 +240,8 @@ impl<'p> Encoder<'p> {
         // The integers first (`m * 2^0`): a witness such as `0` or `1` is found there
         // without a case split over the exponents.
         let mut alts = vec![x.eq(&mr)];
-        let exponents = match self.witnesses {
-            FloatWitnesses::Exact => format.qmin..=format.qmax,
-            #[allow(clippy::reversed_empty_ranges)]
-            FloatWitnesses::Integers => 1..=0,
-        };
-        for q in exponents {
+        let every_exponent = self.witnesses == FloatWitnesses::Exact;
+        for q in (format.qmin..=format.qmax).filter(|_| every_exponent) {
             let scale = real_of_rational(&crate::lower::pow2(q))
                 .ok_or_else(|| Unsupported("a power of two too large for the solver".into()))?;
             alts.push(x.eq(Real::mul(&[mr.clone(), scale])));
