@@ -31,6 +31,10 @@ use nalgebra::{Isometry3, Point3};
 /// name nalgebra (`tests/tidy.rs`).
 pub type Pose3 = Isometry3<f64>;
 
+/// A point in a frame, in the engine's own type (the checks outside this module name no
+/// geometry crate: tests/tidy.rs).
+pub type FramePoint = Point3<f64>;
+
 /// The identity pose.
 pub fn identity() -> Pose3 {
     Isometry3::identity()

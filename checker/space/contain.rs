@@ -21,8 +21,8 @@
 //! projection), on top of the depth it needs.
 
 use super::world::Piece;
+use crate::geometry::FramePoint as Point;
 use crate::hir::{Footprint, PrimId, Program};
-use parry3d::math::Point;
 use std::collections::HashSet;
 
 /// Whether the body of a kind lies within a footprint, decided by the solids.
@@ -70,7 +70,7 @@ pub fn body_within_footprint(prog: &Program, prim: PrimId) -> Contained {
 
 /// A point of `a` farther from its frame's origin than any point of the parts `fp`, all
 /// placed as `a` is.
-fn beyond(prog: &Program, a: &Piece, fp: &[Piece]) -> Option<Point<f64>> {
+fn beyond(prog: &Program, a: &Piece, fp: &[Piece]) -> Option<Point> {
     if !fp.iter().all(|b| same_place(prog, a, b)) {
         return None;
     }
@@ -113,9 +113,9 @@ fn same_place(prog: &Program, a: &Piece, b: &Piece) -> bool {
 }
 
 /// The points (in the piece's owner frame) whose hull, thickened by the depth, holds `a`.
-fn core(a: &Piece) -> Option<(Vec<Point<f64>>, f64)> {
+fn core(a: &Piece) -> Option<(Vec<Point>, f64)> {
     let s = &a.solid;
-    let at = |p: Point<f64>| s.pose * p;
+    let at = |p: Point| s.pose * p;
     let shape = &s.shape;
     if let Some(c) = shape.as_cuboid() {
         let h = c.half_extents;
@@ -161,7 +161,7 @@ fn exact(b: &Piece) -> bool {
     let s = &b.solid;
     let Some(poly) = s.shape.as_convex_polyhedron() else { return s.triangles.is_none() };
     let Some(t) = s.triangles.as_ref() else { return false };
-    let key = |p: &Point<f64>| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+    let key = |p: &Point| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
     let verts: HashSet<[u64; 3]> = t.vertices.iter().map(key).collect();
     poly.points().iter().all(|p| verts.contains(&key(p)))
 }
