@@ -308,19 +308,25 @@ mod tests {
         );
         let (prog, d) = crate::lower::tests::lower_src(&src);
         assert!(d.is_empty(), "{d:?}");
+        let ob = refinement(&prog, concrete, abstract_);
+        (prog, ob)
+    }
+
+    /// The refinement obligation of the only participant: `concrete` (by name) refines
+    /// `abstract_`, under the participants' `init`s.
+    fn refinement(prog: &Program, concrete: &str, abstract_: &str) -> Obligation {
         let app = |name: &str| {
             let i = prog.prims.iter().position(|p| p.name == name).expect("a primitive");
             PrimApp { prim: PrimId(i as u32), args: Vec::new(), loc: Default::default() }
         };
         let role = prog.role_ids().next().expect("a participant");
-        let ob = Obligation {
+        Obligation {
             rule: Rule::Refinement,
             span: Default::default(),
             what: "refinement".into(),
             hyps: prog.roles.iter().filter_map(|r| r.init.clone()).collect(),
             goal: Goal::Refines { role, concrete: app(concrete), abstract_: vec![app(abstract_)] },
-        };
-        (prog, ob)
+        }
     }
 
     const PRIMS: &str = "
@@ -370,18 +376,7 @@ mod tests {
         let (prog, d) = crate::lower::tests::lower_src(&src);
         assert!(d.is_empty(), "{d:?}");
         let decide = |c: &str, s: &str| {
-            let app = |name: &str| {
-                let i = prog.prims.iter().position(|p| p.name == name).expect("a primitive");
-                PrimApp { prim: PrimId(i as u32), args: Vec::new(), loc: Default::default() }
-            };
-            let role = prog.role_ids().next().expect("a participant");
-            let ob = Obligation {
-                rule: Rule::Refinement,
-                span: Default::default(),
-                what: "refinement".into(),
-                hyps: prog.roles.iter().filter_map(|r| r.init.clone()).collect(),
-                goal: Goal::Refines { role, concrete: app(c), abstract_: vec![app(s)] },
-            };
+            let ob = refinement(&prog, c, s);
             let planned = parts(&prog, &ob);
             let decision = discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0;
             (planned, decision)
