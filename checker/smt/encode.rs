@@ -497,6 +497,13 @@ impl<'p> Encoder<'p> {
 
     /// Every argument of `sin`/`cos` equals 0, where the encoding's enclosure is exact
     /// (`sin 0 = 0`, `cos 0 = 1`): a model with these added is a genuine one.
+    /// Whether the query has variables that stand for real functions' values only
+    /// through enclosures (`sin`, `cos`, `pi`): a point of the encoding need not be one of
+    /// the functions (`guess.rs` guesses no such query).
+    pub fn encloses(&self) -> bool {
+        !self.trig.is_empty() || self.pi.is_some()
+    }
+
     pub fn trig_at_zero(&self) -> Vec<Bool> {
         let zero = Int::from_i64(0).to_real();
         self.trig.iter().map(|t| t.arg.eq(&zero)).collect()

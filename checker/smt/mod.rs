@@ -8,11 +8,15 @@
 //!
 //! - **Folding.** Syntactically trivial obligations never reach Z3, and separation is
 //!   first tried with boxes from interval arithmetic ([`crate::bounds`]).
-//! - **Caching.** Results are cached by the query's SMT-LIB text, the vacuity guard's by
-//!   the hypotheses, and a primitive shown able to end by one obligation witnesses its
-//!   contract (E0409) for the others. [`SmtConfig::no_cache`] turns all three off (every
-//!   query asked of Z3 afresh; `mochi check --no-cache`), which the differential tests use
-//!   to show that no verdict depends on an answer reused from another query.
+//! - **Caching.** Results are cached by the query itself, read off its terms before any
+//!   solver exists (exactly, and up to renaming: [`key`]), the vacuity guard's by the
+//!   hypotheses, and a primitive shown able to end by one obligation witnesses its
+//!   contract (E0409) for the others.
+//! - **Guessing.** A sat question whose definitions give a point that satisfies it, checked
+//!   in exact arithmetic, needs no solver ([`guess`]).
+//! - [`SmtConfig::no_cache`] turns all of these off (every query asked of Z3 afresh;
+//!   `mochi check --no-cache`), which the differential tests use to show that no verdict
+//!   depends on an answer reused from another query or on a guessed point.
 //! - **Parallelism.** Obligations are discharged on `jobs` worker threads, each with
 //!   its own Z3 context (the `z3` crate's thread-local context), in a [`pool`].
 //! - **Timeouts.** Each query has a limit enforced by a watchdog that interrupts the
@@ -23,6 +27,8 @@
 
 mod encode;
 pub mod goals;
+mod guess;
+mod key;
 pub mod pool;
 pub mod replay;
 
@@ -69,8 +75,8 @@ pub struct SmtConfig {
     pub dump: Option<DumpSink>,
     /// Where progress is reported (none: not reported).
     pub on_progress: Option<ProgressSink>,
-    /// Reuse no answer: no query answered from the cache (by its text, or up to renaming),
-    /// no vacuity guard answered by another obligation's with the same hypotheses, no
+    /// Reuse no answer: no query answered from the cache (by its terms, or up to
+    /// renaming), none by a guessed point, no vacuity guard answered by another obligation's with the same hypotheses, no
     /// contract (E0409) witnessed by another obligation's can-end question. Slower, and
     /// meant to give the same verdicts (tests/differential.rs checks it).
     pub no_cache: bool,
@@ -179,6 +185,9 @@ pub struct Stats {
     pub queries: usize,
     /// Queries answered from the cache.
     pub cached: usize,
+    /// Sat questions answered by a point guessed from their definitions and checked
+    /// exactly, without a solver (`guess.rs`).
+    pub witnessed: usize,
     /// Obligations settled without Z3 (trivial, or separated by boxes).
     pub folded: usize,
     /// Parts decided by the geometric procedure (branch and bound; Z3 only for witnesses).
@@ -199,6 +208,7 @@ impl Stats {
     pub fn add(&mut self, o: &Stats) {
         self.queries += o.queries;
         self.cached += o.cached;
+        self.witnessed += o.witnessed;
         self.geometric += o.geometric;
         self.folded += o.folded;
         self.millis += o.millis;
@@ -576,34 +586,37 @@ impl Worker<'_> {
         let chooses = matches!(ob.goal, Goal::Progress { .. }) && !self.prog.wire_floats.is_empty();
         if let Some(Ok(q)) = chooses.then(|| goals::build_integer_witnesses(self.prog, ob, part)).flatten() {
             stats.queries += 1;
-            if matches!(self.solve(q, index, k, false, stats), Answer::Unsat) {
+            if matches!(self.solve(q, index, k, false, false, stats), Answer::Unsat) {
                 return Answer::Unsat;
             }
         }
         stats.queries += 1;
         match goals::build(self.prog, ob, part) {
             Err(Unsupported(what)) => Answer::Unknown(Why::Unsupported(what)),
-            Ok(q) => self.solve(q, index, k, !part.is_sat_question() && *part != Part::Context, stats),
+            Ok(q) => self.solve(q, index, k, !part.is_sat_question() && *part != Part::Context, !example, stats),
         }
     }
 
     /// Solves `q`. Without `model`, a satisfiable answer found under other names serves
-    /// (sat questions need the verdict, not the witness).
-    fn solve(&self, q: Query, index: usize, k: usize, model: bool, stats: &mut Stats) -> Answer {
-        let assert_all = |solver: &z3::Solver| {
+    /// (sat questions need the verdict, not the witness), and with `guess` too a point
+    /// guessed from the query's definitions (`guess.rs`), whose values are not reported.
+    fn solve(&self, q: Query, index: usize, k: usize, model: bool, guess: bool, stats: &mut Stats) -> Answer {
+        let label = self.labels.get(index).cloned().unwrap_or_else(|| format!("obligation-{index}"));
+        let solver_of = |q: &Query| {
+            let solver = solver_for(q);
             for a in q.assertions.iter().chain(q.enc.side_conditions()) {
                 solver.assert(a);
             }
+            solver
         };
-        let solver = solver_for(&q);
-        assert_all(&solver);
-        let text = solver.to_string();
-        let label = self.labels.get(index).cloned().unwrap_or_else(|| format!("obligation-{index}"));
+        // `--dump`: every query's text, answered from the cache or not.
+        let mut solver = None;
         if let Some(dump) = &self.cfg.dump {
             if !self.caches.dump_failed.load(Ordering::Relaxed) {
+                let s = solver.insert(solver_of(&q));
                 let n = self.caches.dumped.fetch_add(1, Ordering::Relaxed);
                 let name = format!("{n:05}-{label}-{k}");
-                if let Err(e) = dump(&name, &format!("; mochi: {label}, part {k}\n{text}(check-sat)\n")) {
+                if let Err(e) = dump(&name, &format!("; mochi: {label}, part {k}\n{s}(check-sat)\n")) {
                     // The first failure is reported (with this obligation); later ones
                     // would only repeat it.
                     if !self.caches.dump_failed.swap(true, Ordering::Relaxed) {
@@ -612,32 +625,36 @@ impl Worker<'_> {
                 }
             }
         }
-        // Exact text first (any answer); then the text up to renaming of its variables,
-        // which only answers without a model carry over (the model's names differ).
-        let canonical = canonical(&text);
-        let cached = |key: &String| {
-            if self.cfg.no_cache {
-                return None;
-            }
-            self.caches.cache.lock().ok().and_then(|c| c.get(key).cloned())
-        };
-        if let Some(a) = cached(&text) {
-            stats.cached += 1;
-            // The same text may come from other values of the same names: where this
-            // query's values are bound is this query's.
-            return match a {
-                Answer::Sat { values, overlap, exact, .. } => {
-                    Answer::Sat { values, overlap, bound: q.enc.shared_names(), exact }
-                }
-                other => other,
-            };
-        }
-        if let Some(a) = cached(&canonical) {
-            if !model || !matches!(a, Answer::Sat { .. }) {
+        // The exact key first (any answer); then the key up to renaming of the free
+        // constants, which only answers without a model carry over (the model's names
+        // differ). Both are read off the terms: a query answered here builds no solver.
+        let keys = (!self.cfg.no_cache).then(|| key::of(&q, q.enc.logic()));
+        let cached = |key: &String| self.caches.cache.lock().ok().and_then(|c| c.get(key).cloned());
+        if let Some(keys) = &keys {
+            if let Some(a) = cached(&keys.exact) {
                 stats.cached += 1;
-                return a;
+                // The same query may come from other values of the same names: where this
+                // query's values are bound is this query's.
+                return match a {
+                    Answer::Sat { values, overlap, exact, .. } => {
+                        Answer::Sat { values, overlap, bound: q.enc.shared_names(), exact }
+                    }
+                    other => other,
+                };
+            }
+            if let Some(a) = keys.canonical.as_ref().and_then(cached) {
+                if !model || !matches!(a, Answer::Sat { .. }) {
+                    stats.cached += 1;
+                    return a;
+                }
             }
         }
+        // A sat question whose definitions give a point that satisfies it: a model.
+        if !model && guess && !self.cfg.no_cache && guess::satisfied(&q) {
+            stats.witnessed += 1;
+            return Answer::Sat { values: Vec::new(), overlap: None, bound: Vec::new(), exact: Default::default() };
+        }
+        let solver = solver.unwrap_or_else(|| solver_of(&q));
         let seq = self.watchdog.arm(self.cfg.timeout);
         #[cfg(test)]
         pool::maybe_hang(&label);
@@ -686,10 +703,12 @@ impl Worker<'_> {
             }
         };
         // A timeout depends on the machine's load: do not cache it.
-        if !self.cfg.no_cache && !matches!(answer, Answer::Unknown(Why::Timeout(_))) {
+        if let Some(keys) = keys.filter(|_| !matches!(answer, Answer::Unknown(Why::Timeout(_)))) {
             if let Ok(mut c) = self.caches.cache.lock() {
-                c.insert(canonical, answer.clone());
-                c.insert(text, answer.clone());
+                if let Some(canonical) = keys.canonical {
+                    c.insert(canonical, answer.clone());
+                }
+                c.insert(keys.exact, answer.clone());
             }
         }
         answer
@@ -705,52 +724,6 @@ pub(crate) fn solver_for(q: &Query) -> z3::Solver {
         Logic::Nra => z3::Solver::new_for_logic("QF_NRA").unwrap_or_default(),
         Logic::WithIntegers => z3::Solver::new(),
     }
-}
-
-/// The SMT-LIB text with its declared symbols renamed `v0`, `v1`, ... in order of first
-/// appearance: two queries with the same canonical text are equisatisfiable.
-fn canonical(text: &str) -> String {
-    // Tokens: `(`, `)`, `|quoted symbols|`, and runs of other non-space characters.
-    let mut tokens: Vec<&str> = Vec::new();
-    let bytes = text.as_bytes();
-    let mut i = 0;
-    while i < bytes.len() {
-        match bytes[i] {
-            b'(' | b')' => {
-                tokens.push(&text[i..i + 1]);
-                i += 1;
-            }
-            b if b.is_ascii_whitespace() => i += 1,
-            b'|' => {
-                let end = text[i + 1..].find('|').map(|e| i + e + 2).unwrap_or(bytes.len());
-                tokens.push(&text[i..end]);
-                i = end;
-            }
-            _ => {
-                let start = i;
-                while i < bytes.len() && !matches!(bytes[i], b'(' | b')' | b'|') && !bytes[i].is_ascii_whitespace() {
-                    i += 1;
-                }
-                tokens.push(&text[start..i]);
-            }
-        }
-    }
-    let mut declared: HashMap<&str, usize> = HashMap::new();
-    for w in tokens.windows(2) {
-        if w[0] == "declare-fun" {
-            let n = declared.len();
-            declared.entry(w[1]).or_insert(n);
-        }
-    }
-    let mut out = String::with_capacity(text.len());
-    for t in tokens {
-        match declared.get(t) {
-            Some(n) => out.push_str(&format!("v{n}")),
-            None => out.push_str(t),
-        }
-        out.push(' ');
-    }
-    out
 }
 
 /// What a part checks, in the user's terms.
@@ -1112,15 +1085,6 @@ pub(crate) mod tests {
                 assert!(matches!(check_valid(&prog, &facts, &none, &SmtConfig::default()), Validity::Fails(_)), "{p}");
             }
         }
-    }
-
-    #[test]
-    fn canonical_text_forgets_names_only() {
-        let a = "(declare-fun |C1.x| () Real)\n(assert (<= |C1.x| 10.0))\n";
-        let b = "(declare-fun |C2.x| () Real)\n(assert (<= |C2.x| 10.0))\n";
-        let c = "(declare-fun |C2.x| () Real)\n(assert (<= |C2.x| 11.0))\n";
-        assert_eq!(canonical(a), canonical(b));
-        assert_ne!(canonical(a), canonical(c));
     }
 
     /// The hard limit: a query during which Z3 ignores the watchdog (the test hook hangs
