@@ -250,13 +250,16 @@ impl Runner<'_, '_> {
             if self.leak(from, r, &fields, &format!("the refinement of `{}` in `{who}`", f.name)) {
                 return None;
             }
-            facts.push(map_vars(r, &mut |v, sort| match v {
+            // A value on the wire satisfies the refinement only where it can be evaluated:
+            // `s == 100 / n` has no solution at `n = 0` (Z3 alone would give the quotient
+            // some value, and the run would go on past a stuck state).
+            facts.push(crate::hir::expr::defined_and(map_vars(r, &mut |v, sort| match v {
                 Var::Value(id, _) if fields.contains(id) => None,
                 Var::Role(..) | Var::Value(..) => {
                     self.lookup_as(from, v).and_then(|val| super::value_expr(&val, sort, Loc::default()))
                 }
                 _ => None,
-            }));
+            })));
         }
         let want: Vec<Expr> =
             b.payload.iter().map(|f| var_expr(Var::Value(f.value, f.name.clone()), f.sort.clone())).collect();
