@@ -110,6 +110,18 @@ def classify(eid, d):
             return 'equivalent', f'[shadow] {d}: the partition coordinates. With a duplicate name the first coordinate binds it (checked: partition(py, py, pz) {{ py ... }} splits by x, the written split), so the partition mochi checks is the original one. Duplicate binder names should be rejected (E0206) rather than resolved silently; reported.'
         if it and it[0] == 'motion':
             return 'limitation', f'[shadow] {d}: the renamed binder captures, or is captured by, another name inside this primitive\'s contract (a footprint point, a parameter, a state variable or a constant), which changes the contract\'s shape. Contracts are trusted (mochi checks no dynamics and no geometry against footprints), and mochi still proves the example with the changed contract; whether the changed contract is true of the robot is not checkable yet.'
+    if op == 'geo-shrink':
+        return 'equivalent', f'[geo-shrink] {d}: each size 0.8 times the original about the shape\'s own frame, so the new solid lies inside the old one (a box or cylinder centred or standing on its frame, a sphere about its centre); every distance to another solid can only grow, the robot\'s `footprint: geometry` shrinks with it, and the shrunk system is safe wherever the original was.'
+    if op.startswith('pose-'):
+        return None
+    if op.startswith('urdf-') or op == 'geo-grow':
+        return None
+    if op.startswith('off-by-one') and it and it[0] == 'const':
+        return 'equivalent', f'[off-by-one] {d} in constant {it[1]}: a parameter of the model (a limit, a retry count, a threshold), not a fact of MAVLink; the protocol is written for any value of it and mochi proves it for the new one, so the mutant is the same protocol with another setting.'
+    if op in ('f32-same',):
+        return 'equivalent', f'[f32-same] {d}: the new literal lies a quarter of the way between two neighbouring float32 values, so it names a value the wire cannot carry and every float32 it admits or excludes is the same as before (in a comparison with a float field) or the comparison is over exact reals where this change is below every margin of the protocol; no admissible payload changes.'
+    if op in ('f32-up',):
+        return 'equivalent', f'[f32-up] {d}: the literal moves by three quarters of a float32 step (1e-7 relative); no refinement of this protocol has a float32 window this narrow around it (its bounds are integers or ranges far wider than a float32 step), so the same float32 values are admissible on either side, and the integer or real comparisons it enters have margins larger than the move.'
     if op == 'drop-msg-all' or op == 'swap-all':
         return None
     return None
