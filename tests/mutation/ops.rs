@@ -949,7 +949,9 @@ pub fn urdf_mutants(text: &str) -> Vec<Mutant> {
         let tag = &text[at..end];
         let k = tag.find(&format!(" {name}=\"")).or_else(|| tag.find(&format!("\n{name}=\"")));
         let k = k.or_else(|| tag.find(&format!("\t{name}=\""))).or_else(|| {
-            tag.match_indices(&format!("{name}=\"")).map(|(i, _)| i).find(|&i| i > 0 && tag.as_bytes()[i - 1].is_ascii_whitespace())
+            tag.match_indices(&format!("{name}=\""))
+                .map(|(i, _)| i)
+                .find(|&i| i > 0 && tag.as_bytes()[i - 1].is_ascii_whitespace())
         })?;
         let vs = at + k + name.len() + 3;
         let ve = vs + text[vs..].find('"')?;
@@ -957,7 +959,12 @@ pub fn urdf_mutants(text: &str) -> Vec<Mutant> {
     };
     let scaled = |v: &str, f: f64| -> Option<String> {
         let xs: Vec<f64> = v.split_whitespace().map(|x| x.parse().ok()).collect::<Option<_>>()?;
-        Some(xs.iter().map(|x| fmt_num(x * f).trim_matches(|c| c == '(' || c == ')').to_string()).collect::<Vec<_>>().join(" "))
+        Some(
+            xs.iter()
+                .map(|x| fmt_num(x * f).trim_matches(|c| c == '(' || c == ')').to_string())
+                .collect::<Vec<_>>()
+                .join(" "),
+        )
     };
     let mut out = Vec::new();
     let mut from = 0;
@@ -993,10 +1000,16 @@ pub fn urdf_mutants(text: &str) -> Vec<Mutant> {
                 None => Some((at + 5, at + 5, " scale=\"1.2 1.2 1.2\"".to_string())),
             };
             if let Some(e) = edit {
-                out.push(Mutant { id: format!("{}:urdf-scale", pos(at)), desc: "collision mesh scaled by 1.2".into(), edits: vec![e] });
+                out.push(Mutant {
+                    id: format!("{}:urdf-scale", pos(at)),
+                    desc: "collision mesh scaled by 1.2".into(),
+                    edits: vec![e],
+                });
             }
         }
-        for (tag, names) in [("<box", &["size"][..]), ("<cylinder", &["radius", "length"][..]), ("<sphere", &["radius"][..])] {
+        for (tag, names) in
+            [("<box", &["size"][..]), ("<cylinder", &["radius", "length"][..]), ("<sphere", &["radius"][..])]
+        {
             let Some(m) = body.find(tag) else { continue };
             let at = cs + m;
             let edits: Vec<_> = names
@@ -1077,7 +1090,10 @@ fn mav_numbers(src: &Src, out: &mut Vec<Mutant>) {
             let r = exact_decimal(f + (up - f) * w);
             out.push(Mutant {
                 id: format!("{}:{op}", src.pos(i)),
-                desc: format!("literal {lit} -> {r} (not a float32; the wire rounds it to {})", if w > 0.5 { up } else { f }),
+                desc: format!(
+                    "literal {lit} -> {r} (not a float32; the wire rounds it to {})",
+                    if w > 0.5 { up } else { f }
+                ),
                 edits: vec![(src.s(i), src.e(i), r)],
             });
         }
@@ -1134,7 +1150,10 @@ fn mav_steps(src: &Src, items: &[Item], out: &mut Vec<Mutant>) {
                 let text = src.slice(s.a, s.b);
                 out.push(Mutant {
                     id: format!("{}:dup-msg", src.pos(s.a)),
-                    desc: format!("choreography: `{}` sent twice", text.split_whitespace().collect::<Vec<_>>().join(" ")),
+                    desc: format!(
+                        "choreography: `{}` sent twice",
+                        text.split_whitespace().collect::<Vec<_>>().join(" ")
+                    ),
                     edits: vec![(src.s(s.a), src.s(s.a), format!("{text}.\n"))],
                 });
             }
@@ -1142,7 +1161,8 @@ fn mav_steps(src: &Src, items: &[Item], out: &mut Vec<Mutant>) {
             if !src.is_p(s.b, ")") {
                 continue;
             }
-            let Some(open) = (s.a..s.b).rev().find(|&k| src.is_p(k, "(") && src.matching(k, s.b + 1) == Some(s.b)) else {
+            let Some(open) = (s.a..s.b).rev().find(|&k| src.is_p(k, "(") && src.matching(k, s.b + 1) == Some(s.b))
+            else {
                 continue;
             };
             let Some((fs, _)) = args(src, open) else { continue };
