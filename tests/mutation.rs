@@ -1,8 +1,13 @@
-//! Mutation test of the checker (issue 7). Every verified example under `choreographies/`
-//! (not `rejected/`) is mutated, together with the `.mochi` libraries it imports, by the
-//! operators of `tests/mutation/ops.rs`, and each mutant is checked. A mutant is *killed* when
-//! mochi does not say `verified` (rejected, or unknown: a timeout is not a pass, but the table
-//! records the difference); it *survives* when mochi still says `verified`.
+//! Mutation test of the checker. Every verified example under `choreographies/` (not
+//! `rejected/`; motion, geometry and MAVLink) is mutated, together with the `.mochi`
+//! libraries it imports and the URDF files its robots name, by the operators of
+//! `tests/mutation/ops.rs` (the MAVLink ones for examples with a `dialect`), and each mutant
+//! is checked. A mutant is *killed* when mochi rejects it, or says unknown for a reason no
+//! machine changes (an unsupported construct, an incomplete theory); it *survives* when
+//! mochi still says `verified`. A mutant that is unknown only because a limit was reached (a
+//! query's timeout, the geometric search's time or box budget) is neither: it is checked
+//! again with a longer limit ([`RETRY_TIMEOUT`]) and, if still undecided, reported as timed
+//! out (printed and in the table), never counted as a kill.
 //!
 //! Every survivor must be listed in `tests/mutation-survivors.toml` with an explanation:
 //! `status = "equivalent"` (the mutated protocol is still correct, and why) or
@@ -17,14 +22,19 @@
 //! Environment:
 //! - `MOCHI_MUTATION_BLESS=1` rewrites the list: current survivors keep their entry (status and
 //!   explanation, keyed by the mutation id), new ones are added as `unexplained`, stale ones go.
-//! - `MOCHI_MUTATION_ONLY=substring` runs only the mutants whose id contains it (no blessing,
-//!   no stale report).
+//! - `MOCHI_MUTATION_ONLY=substring` runs only the mutants whose id contains it, all of them
+//!   (not only the sample's; no stale report). With `MOCHI_MUTATION_BLESS=1` it blesses
+//!   those and keeps every other entry (e.g. `MOCHI_MUTATION_ONLY=mavlink/`: every MAVLink
+//!   mutant, not only the sampled ones, is in the list).
 //! - `MOCHI_MUTATION_JOBS=n` mutants checked in parallel (default 2, one SMT thread each).
-//! - Which mutants run: all of them with `MOCHI_MUTATION_FULL=1` (about seven times the
-//!   sample, which is 1,299 mutants and about three minutes in a release build on two cores
-//!   since the sorting case study joined); otherwise, and so on CI, a fixed sample: one
-//!   mutant in [`SAMPLE`], chosen by a hash of its id (the same every run), so that `cargo test`
-//!   stays quick. The sample is a subset of the full set, so one survivors list serves both.
+//! - Which mutants run: all of them with `MOCHI_MUTATION_FULL=1` (9,114, seven times the
+//!   sample); otherwise, and so on CI, a fixed sample: one mutant in [`SAMPLE`] (1,303),
+//!   chosen by a hash of its id (the same every run), so that `cargo test` stays quick. The
+//!   sample is a subset of the full set, so one survivors list serves both. `cargo test`
+//!   builds mochi optimised (`[profile.test.package.mochi]` in Cargo.toml), so the sample runs
+//!   at about the speed of a release build.
+//! - `MOCHI_MUTATION_LIST=1` only lists the mutants (counts per operator on stderr, ids and
+//!   descriptions in `target/mutation/list.tsv`).
 //! - Blessing updates the entries of the mutants that ran and keeps the others (a sampled bless
 //!   does not forget the full run's survivors; entries whose mutant no longer exists go). It
 //!   checks again with a long timeout ([`BLESS_TIMEOUT`]) every mutant that came back unknown: a
@@ -50,6 +60,8 @@ const LIST: &str = "tests/mutation-survivors.toml";
 const TIMEOUT: Duration = Duration::from_secs(2);
 /// The per-query timeout for the second look at unknown mutants when blessing.
 const BLESS_TIMEOUT: Duration = Duration::from_secs(30);
+/// The per-query timeout for the second look at mutants that ran out of time.
+const RETRY_TIMEOUT: Duration = Duration::from_secs(10);
 /// Outside CI, one mutant in this many runs (chosen by a hash of its id).
 const SAMPLE: u64 = 7;
 
@@ -74,6 +86,7 @@ fn cfg(timeout: Duration) -> Config {
 
 /// A mutant ready to run: the example (relative to `choreographies/`), the mutated file
 /// (relative to the package root) and its new text.
+#[derive(Clone)]
 struct Job {
     id: String,
     desc: String,
@@ -89,6 +102,32 @@ struct Outcome {
     verdict: Verdict,
     codes: Vec<String>,
     millis: u128,
+    /// Unknown only because a limit was reached (a Z3 timeout, an abandoned query, the
+    /// geometric search's time or box budget): neither a kill nor a survivor, reported apart.
+    timed_out: bool,
+}
+
+/// Whether an unknown report is unknown only for want of time or search budget: every
+/// undecided obligation says so. An undecided obligation for another reason (an unsupported
+/// construct, Z3's incompleteness on a nonlinear fact) is a kill: mochi refuses the mutant
+/// whatever the machine.
+fn timed_out(report: &mochi::driver::Report) -> bool {
+    const LIMITS: &[&str] = &[
+        "timed out",
+        "ran out of time",
+        "abandoned",
+        "time limit reached",
+        "boxes searched",
+        "timeout",
+        "canceled",
+        "not asked",
+    ];
+    // The undecided obligations (U0001 notes with their reason; the "and N more" line has none).
+    let undecided: Vec<_> =
+        report.diagnostics.iter().filter(|d| d.code.as_str() == "U0001" && !d.notes.is_empty()).collect();
+    report.verdict == Verdict::Unknown
+        && !undecided.is_empty()
+        && undecided.iter().all(|d| d.notes.iter().any(|n| LIMITS.iter().any(|l| n.contains(l))))
 }
 
 /// The verified examples: every `.chor` under `choreographies/` except `rejected/`.
@@ -120,7 +159,14 @@ fn verified_examples() -> Vec<String> {
         .collect()
 }
 
-/// The files an example reads (itself and its imports), relative to the package root.
+/// The MAVLink dialect of an example (`dialect NAME;`), for the MAVLink operators.
+fn dialect_of(text: &str) -> Option<&'static mochi::dialect::Dialect> {
+    let line = text.lines().find_map(|l| l.trim().strip_prefix("dialect "))?;
+    mochi::dialect::builtin(line.trim().trim_end_matches(';').trim())
+}
+
+/// The files an example reads (itself, its imports and the URDF files its robots name),
+/// relative to the package root.
 fn closure(example: &str) -> Vec<String> {
     let mut db = SourceDb::new();
     let path = root().join("choreographies").join(example);
@@ -142,6 +188,19 @@ fn closure(example: &str) -> Vec<String> {
             out.strip_prefix(root()).unwrap_or(&out).display().to_string()
         })
         .collect();
+    // The URDF files named by `urdf("...")` (relative to the file that names them), in case
+    // the structural stages did not read them.
+    for f in files.clone() {
+        let Ok(text) = std::fs::read_to_string(root().join(&f)) else { continue };
+        for (k, _) in text.match_indices("urdf(\"") {
+            let rest = &text[k + 6..];
+            let Some(end) = rest.find('"') else { continue };
+            let p = Path::new(&f).parent().unwrap_or(Path::new("")).join(&rest[..end]);
+            if root().join(&p).is_file() {
+                files.push(p.display().to_string());
+            }
+        }
+    }
     files.sort();
     files.dedup();
     files
@@ -157,17 +216,23 @@ fn jobs_of(filter: Option<&str>, all: bool) -> Vec<Job> {
     for ex in verified_examples() {
         let files = closure(&ex);
         let (mut consts, mut states) = (Vec::new(), Vec::new());
-        for f in &files {
+        for f in files.iter().filter(|f| !f.ends_with(".urdf")) {
             let (c, s) = ops::declared_names(&std::fs::read_to_string(root().join(f)).unwrap());
             consts.extend(c);
             states.extend(s);
         }
         states.sort();
         states.dedup();
+        let dialect = dialect_of(&std::fs::read_to_string(root().join("choreographies").join(&ex)).unwrap());
         for f in &files {
             let text = std::fs::read_to_string(root().join(f)).unwrap();
             let prefix = if f == &format!("choreographies/{ex}") { ex.clone() } else { format!("{ex}@{f}") };
-            for m in ops::mutants(&text, &states, &consts) {
+            let ms = if f.ends_with(".urdf") {
+                ops::urdf_mutants(&text)
+            } else {
+                ops::mutants(&text, &states, &consts, dialect)
+            };
+            for m in ms {
                 let id = format!("{prefix}:{}", m.id);
                 if filter.is_some_and(|s| !id.contains(s)) || (filter.is_none() && !all && !in_sample(&id)) {
                     continue;
@@ -210,9 +275,10 @@ fn run(jobs: &[Job], workers: usize, timeout: Duration) -> Vec<Outcome> {
     let run_id = RUNS.fetch_add(1, Ordering::SeqCst);
     let next = AtomicUsize::new(0);
     let results = Mutex::new(Vec::new());
+    let started = Instant::now();
     std::thread::scope(|s| {
         for w in 0..workers {
-            let (next, results) = (&next, &results);
+            let (next, results, started) = (&next, &results, &started);
             std::thread::Builder::new()
                 .stack_size(256 << 20)
                 .spawn_scoped(s, move || {
@@ -229,7 +295,12 @@ fn run(jobs: &[Job], workers: usize, timeout: Duration) -> Vec<Outcome> {
                             .expect("readable");
                         std::fs::write(&target, original).unwrap();
                         if (i + 1) % 100 == 0 {
-                            eprintln!("mutation: {} of {} mutants checked", i + 1, jobs.len());
+                            eprintln!(
+                                "mutation: {} of {} mutants checked ({:.0?})",
+                                i + 1,
+                                jobs.len(),
+                                started.elapsed()
+                            );
                         }
                         let mut codes: Vec<String> =
                             report.diagnostics.iter().map(|d| d.code.as_str().to_string()).collect();
@@ -241,6 +312,7 @@ fn run(jobs: &[Job], workers: usize, timeout: Duration) -> Vec<Outcome> {
                             verdict: report.verdict,
                             codes,
                             millis: t.elapsed().as_millis(),
+                            timed_out: timed_out(&report),
                         });
                     }
                 })
@@ -336,7 +408,7 @@ fn write_list(entries: &[(Entry, String)]) -> String {
 #[test]
 fn every_survivor_is_explained() {
     let filter = std::env::var("MOCHI_MUTATION_ONLY").ok().filter(|s| !s.is_empty());
-    let bless = std::env::var("MOCHI_MUTATION_BLESS").is_ok_and(|v| v == "1") && filter.is_none();
+    let bless = std::env::var("MOCHI_MUTATION_BLESS").is_ok_and(|v| v == "1");
     let allow_bugs = std::env::var("MOCHI_MUTATION_ALLOW_KNOWN_BUGS").is_ok_and(|v| v == "1");
     let workers = std::env::var("MOCHI_MUTATION_JOBS").ok().and_then(|v| v.parse().ok()).unwrap_or(2usize);
     let t = Instant::now();
@@ -349,9 +421,26 @@ fn every_survivor_is_explained() {
             *per_op.entry(op).or_default() += 1;
         }
         eprintln!("mutation: {} mutants (not run): {per_op:?}", jobs.len());
+        let ids: String = jobs.iter().map(|j| format!("{}\t{}\n", j.id, j.desc)).collect();
+        let dir = root().join("target").join("mutation");
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("list.tsv"), ids).unwrap();
         return;
     }
     let mut outcomes = run(&jobs, workers.max(1), TIMEOUT);
+    eprintln!("mutation: first pass over {} mutants in {:.0?} ({} worker(s))", jobs.len(), t.elapsed(), workers.max(1));
+    // A second look, with a longer limit, at every mutant that ran out of time: a timeout is
+    // neither a kill nor a survivor.
+    let slow: Vec<&Job> = jobs.iter().filter(|j| outcomes.iter().any(|o| o.id == j.id && o.timed_out)).collect();
+    if !slow.is_empty() && !bless {
+        eprintln!("mutation: {} mutant(s) ran out of time; checked again with a {RETRY_TIMEOUT:?} limit", slow.len());
+        let again: Vec<Job> = slow.into_iter().map(|j| Job { ..j.clone() }).collect();
+        for o in run(&again, workers.max(1), RETRY_TIMEOUT) {
+            if let Some(slot) = outcomes.iter_mut().find(|x| x.id == o.id) {
+                *slot = o;
+            }
+        }
+    }
     if bless {
         // A second look, with a long timeout, at every mutant that came back unknown.
         let again: Vec<Job> = jobs
@@ -372,9 +461,9 @@ fn every_survivor_is_explained() {
     let mut table = String::from("id\tverdict\tcodes\tms\tdescription\n");
     for o in &outcomes {
         table.push_str(&format!(
-            "{}\t{:?}\t{}\t{}\t{}\n",
+            "{}\t{}\t{}\t{}\t{}\n",
             o.id,
-            o.verdict,
+            if o.timed_out { "TimedOut".to_string() } else { format!("{:?}", o.verdict) },
             o.codes.join(","),
             o.millis,
             o.desc.replace('\t', " ")
@@ -382,15 +471,20 @@ fn every_survivor_is_explained() {
     }
     std::fs::write(dir.join("table.tsv"), &table).unwrap();
 
-    let count = |v: Verdict| outcomes.iter().filter(|o| o.verdict == v).count();
+    let count = |v: Verdict| outcomes.iter().filter(|o| o.verdict == v && !o.timed_out).count();
+    let timeouts: Vec<&Outcome> = outcomes.iter().filter(|o| o.timed_out).collect();
     eprintln!(
-        "mutation: {} mutants in {:.0?}: {} rejected, {} unknown (killed), {} verified (survived); table in target/mutation/table.tsv",
+        "mutation: {} mutants in {:.0?}: {} rejected, {} unknown (killed: undecided whatever the time), {} timed out (not killed, not survived), {} verified (survived); table in target/mutation/table.tsv",
         outcomes.len(),
         t.elapsed(),
         count(Verdict::Rejected),
         count(Verdict::Unknown),
+        timeouts.len(),
         count(Verdict::Verified)
     );
+    for o in &timeouts {
+        eprintln!("mutation: timed out (undecided within {RETRY_TIMEOUT:?} a query): {}  ({})", o.id, o.desc);
+    }
 
     let list_text = std::fs::read_to_string(root().join(LIST)).unwrap_or_default();
     let list = parse_list(&list_text).unwrap_or_else(|e| panic!("{LIST}: {e}"));
@@ -468,11 +562,11 @@ fn every_survivor_is_explained() {
 // ---- the harness's own tests -------------------------------------------------------------
 
 fn ids(text: &str) -> Vec<String> {
-    ops::mutants(text, &["x".into()], &["k".into()]).into_iter().map(|m| m.id).collect()
+    ops::mutants(text, &["x".into()], &["k".into()], None).into_iter().map(|m| m.id).collect()
 }
 
 fn mutant(text: &str, id: &str) -> String {
-    let ms = ops::mutants(text, &["x".into()], &["k".into()]);
+    let ms = ops::mutants(text, &["x".into()], &["k".into()], None);
     ms.iter().find(|m| m.id == id).unwrap_or_else(|| panic!("no mutant {id} in {:?}", ids(text))).apply(text)
 }
 
@@ -542,6 +636,75 @@ fn binders_shadow_with_their_uses_and_conjuncts_drop() {
     assert!(mutant(t, "1:34:shadow(v->k)").contains("{k > x && k < k}"));
     assert!(mutant(t, "1:43:drop-conj").contains("{v < k}"));
     assert!(mutant(t, "1:52:drop-conj").contains("{v > x}"));
+}
+
+#[test]
+fn shapes_grow_and_shrink_and_poses_move() {
+    let t = "robot R { state x: real; geometry: box(a, 0.2, 0.3) at pose(x, 0, 0, 0, 0, th); mount d: pose(x, 0, h); }";
+    let g = mutant(t, "1:36:geo-grow");
+    assert!(g.contains("box((a) * 1.2, (0.2) * 1.2, (0.3) * 1.2)"), "{g}");
+    assert!(mutant(t, "1:36:geo-shrink").contains("box((a) * 0.8, (0.2) * 0.8, (0.3) * 0.8)"));
+    assert!(mutant(t, "1:56:pose-x+").contains("pose((x) + 0.05, 0, 0, 0, 0, th)"));
+    assert!(mutant(t, "1:56:pose-yaw-").contains("pose(x, 0, 0, 0, 0, (th) - 0.1)"));
+    assert!(mutant(t, "1:90:pose-z-").contains("mount d: pose(x, 0, (h) - 0.05)"));
+    let all = ids(t);
+    assert!(!all.contains(&"1:90:pose-yaw+".to_string()), "a pose of three has no yaw: {all:?}");
+}
+
+#[test]
+fn urdf_collisions_scale_grow_and_move_but_visuals_do_not() {
+    let t = "<link name=\"a\">\n<visual><geometry><sphere radius=\"0.5\"/></geometry></visual>\n\
+             <collision><origin xyz=\"0 0 .13\" rpy=\"0 0 0\"/>\n<geometry><mesh filename=\"m.stl\"/></geometry></collision>\n\
+             <collision><origin xyz=\"1 2 3\"/><geometry><cylinder length=\"0.03\" radius=\"0.09\"/></geometry></collision></link>";
+    let ms = ops::urdf_mutants(t);
+    let get = |id: &str| {
+        ms.iter()
+            .find(|m| m.id == id)
+            .unwrap_or_else(|| panic!("no {id}: {:?}", ms.iter().map(|m| &m.id).collect::<Vec<_>>()))
+            .apply(t)
+    };
+    assert!(get("3:12:urdf-move-z").contains("xyz=\"0 0 0.1\""));
+    assert!(get("3:12:urdf-move+x").contains("xyz=\"0.03 0 0.13\""));
+    assert!(get("4:11:urdf-scale").contains("<mesh scale=\"1.2 1.2 1.2\" filename=\"m.stl\"/>"));
+    let c = get("5:43:urdf-grow");
+    assert!(c.contains("length=\"0.036\" radius=\"0.108\""), "{c}");
+    assert!(!ms.iter().any(|m| m.id.starts_with("2:")), "the visual sphere is left alone");
+}
+
+#[test]
+fn mavlink_operators_know_the_dialect_and_the_wire() {
+    let d = mochi::dialect::builtin("common").expect("common");
+    let t = "choreography U =\n  GCS -> UAV: MISSION_COUNT(count {1 <= count && count < 500}, mission_type {mission_type == MAV_MISSION_TYPE_MISSION}).\n  \
+             ( UAV -> GCS: [i < count] MISSION_ACK(type {type == MAV_MISSION_ACCEPTED}). end\n  + GCS -> UAV: PARAM_SET(param_value {param_value == 0.1}). end );";
+    let ms = ops::mutants(t, &[], &[], Some(d));
+    let get = |id: &str| {
+        ms.iter()
+            .find(|m| m.id == id)
+            .unwrap_or_else(|| panic!("no {id}: {:?}", ms.iter().map(|m| &m.id).collect::<Vec<_>>()))
+            .apply(t)
+    };
+    assert!(get("2:58:off-by-one-1").contains("count < 499}"));
+    assert!(get("3:20:guard-neg").contains("[i >= count]"));
+    assert!(get("3:55:enum(MAV_MISSION_ACCEPTED->MAV_MISSION_ERROR)").contains("type == MAV_MISSION_ERROR}"));
+    let dup = get("2:3:dup-msg");
+    assert_eq!(dup.matches("MISSION_COUNT(").count(), 2, "{dup}");
+    assert!(get("2:29:field-swap")
+        .contains("MISSION_COUNT(mission_type {1 <= count && count < 500}, count {mission_type =="));
+    assert!(get("3:5:drop-msg").contains("( end\n"), "a guarded step is dropped whole");
+    assert!(get("2:36:drop-conj").contains("count {count < 500}"));
+    // 0.1 is not a float32: the literal becomes a number between float32 neighbours.
+    let up = get("4:55:f32-up");
+    let value = |m: &str| -> f64 {
+        let at = m.find("param_value == ").unwrap() + 15;
+        m[at..at + m[at..].find('}').unwrap()].parse().unwrap()
+    };
+    let v = value(&up);
+    let (lo, hi) = (f64::from(0.1f32), f64::from(f32::from_bits(0.1f32.to_bits() + 1)));
+    assert!(lo < v && v < hi && (v as f32) == hi as f32, "{v} between {lo} and {hi}, rounding up");
+    let same = get("4:55:f32-same");
+    let w = value(&same);
+    assert!(lo < w && w < hi && (w as f32) == 0.1f32, "{w} rounds back to 0.1f32");
+    assert!(ops::mutants(t, &[], &[], None).iter().all(|m| !m.id.contains("enum(") && !m.id.ends_with("dup-msg")));
 }
 
 #[test]

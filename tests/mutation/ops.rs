@@ -25,11 +25,26 @@
 //! - `drop-conj`: one conjunct of a top-level `&&` chain dropped from a contract part
 //!   (`pre`, `assume`, `guarantee`, `post`, `footprint`, `invariant`, `init`) or a payload
 //!   refinement `{...}`.
+//! - Geometry: `geo-grow`, `geo-shrink` (every size of a `box`, `cylinder` or `sphere` times
+//!   1.2 or 0.8), `pose-x+` ... `pose-z-` (one coordinate of a `pose(...)`, a participant's
+//!   place, a body part's, a mount point's or a mounted participant's offset, moved by
+//!   0.05 m), `pose-yaw+`, `pose-yaw-` (its yaw by 0.1 rad).
+//! - URDF files ([`urdf_mutants`]): `urdf-scale` (a collision mesh scaled by 1.2),
+//!   `urdf-grow` (a collision box, cylinder or sphere 1.2 times as large), `urdf-move+x`,
+//!   `urdf-move+y`, `urdf-move-z` (a collision element moved by 0.03 m).
+//! - MAVLink (examples with a `dialect`): `off-by-one+1`, `off-by-one-1` (an integer literal
+//!   moved by one), `f32-up`, `f32-same` (a literal replaced by a number between two
+//!   neighbouring float32 values, which the wire rounds up or back), `enum(A->B)` (an enum
+//!   entry replaced by its neighbour in the same enum), `guard-neg` (a branch guard's
+//!   comparison negated), `dup-msg` (a message sent twice), `field-swap` (the names of two
+//!   adjacent fields of a message swapped). `drop-conj` also drops conjuncts of a field's
+//!   refinement and of a branch guard.
 //!
 //! The `*-all` mutants drop the file's `local` declarations: they only restate the projection
 //! (E0601 compares them), and a consistent change of the protocol would otherwise be killed
 //! for the stale restatement alone.
 
+use mochi::dialect::Dialect;
 use mochi::source::SourceDb;
 use mochi::syntax::lexer::{lex, Tok, Token};
 
@@ -229,8 +244,10 @@ fn fmt_num(v: f64) -> String {
 }
 
 /// Every mutant of `text`. `state_vars` are the robot state variables of the whole program
-/// (binder shadowing targets); `consts` its constants.
-pub fn mutants(text: &str, state_vars: &[String], consts: &[String]) -> Vec<Mutant> {
+/// (binder shadowing targets); `consts` its constants; `dialect` the MAVLink dialect of the
+/// example the file belongs to (`None` for motion choreographies), which turns on the MAVLink
+/// operators.
+pub fn mutants(text: &str, state_vars: &[String], consts: &[String], dialect: Option<&Dialect>) -> Vec<Mutant> {
     let src = Src::new(text);
     let items = src.items();
     let mut out = Vec::new();
@@ -244,6 +261,13 @@ pub fn mutants(text: &str, state_vars: &[String], consts: &[String]) -> Vec<Muta
         shadows(&src, it, state_vars, consts, &mut out);
     }
     messages(&src, &items, &mut out);
+    shapes(&src, &mut out);
+    poses(&src, &mut out);
+    if let Some(d) = dialect {
+        mav_numbers(&src, &mut out);
+        mav_enums(&src, d, &mut out);
+        mav_steps(&src, &items, &mut out);
+    }
     // Unique ids (two operators never share a name, but be safe).
     let mut seen = std::collections::HashMap::<String, usize>::new();
     for m in &mut out {
@@ -318,10 +342,23 @@ fn context(src: &Src, i: usize) -> String {
 /// Contract parts and refinements: conjunct drops, and footprint widening.
 fn clauses(src: &Src, it: &Item, out: &mut Vec<Mutant>) {
     let mut i = it.start;
+    let mut parens = 0i32;
     while i < it.end {
+        match src.punct(i) {
+            Some("(") => parens += 1,
+            Some(")") => parens -= 1,
+            _ => {}
+        }
         // `pre:` ... or `footprint(px, py, pz):` ...
         let mut body = None;
-        if let Some(k) = src.ident(i) {
+        // A MAVLink field's refinement (`count {...}`, `seq as x {...}`: a `{` after a name,
+        // inside a message's parentheses) and a branch guard (`p -> q: [...]`).
+        if src.is_p(i, "{") && parens > 0 && i > 0 && src.ident(i - 1).is_some_and(|k| !SORTS.contains(&k)) {
+            body = Some(("refinement".to_string(), i + 1));
+        } else if src.is_p(i, "[") && i >= 4 && src.is_p(i - 1, ":") && src.is_p(i - 3, "->") {
+            body = Some(("guard".to_string(), i + 1));
+        }
+        if let Some(k) = src.ident(i).filter(|_| body.is_none()) {
             if CLAUSES.contains(&k) {
                 if src.is_p(i + 1, ":") {
                     body = Some((k.to_string(), i + 2));
@@ -639,13 +676,24 @@ fn steps(src: &Src, it: &Item) -> Vec<Step> {
             i = j + 1;
             continue;
         }
-        if let (Some(p), true, Some(q), true, Some(l)) =
-            (src.ident(i), src.is_p(i + 1, "->"), src.ident(i + 2), src.is_p(i + 3, ":"), src.ident(i + 4))
+        if let (Some(p), true, Some(q), true) =
+            (src.ident(i), src.is_p(i + 1, "->"), src.ident(i + 2), src.is_p(i + 3, ":"))
         {
-            let b = end_of_label(i + 4);
-            out.push(Step { a: i, b, msg: Some((p.into(), q.into(), l.into())) });
-            i = b + 1;
-            continue;
+            // `p -> q: [guard] LABEL[COMMAND](fields)`: the guard and the command are optional.
+            let mut l = i + 4;
+            if src.is_p(l, "[") {
+                l = src.matching(l, it.end).map_or(l, |c| c + 1);
+            }
+            if let Some(label) = src.ident(l) {
+                let mut b = l;
+                if src.is_p(b + 1, "[") {
+                    b = src.matching(b + 1, it.end).unwrap_or(b);
+                }
+                let b = end_of_label(b);
+                out.push(Step { a: i, b, msg: Some((p.into(), q.into(), label.into())) });
+                i = b + 1;
+                continue;
+            }
         }
         if let (Some(q), Some(d @ ("!" | "?")), Some(l)) = (src.ident(i), src.punct(i + 1), src.ident(i + 2)) {
             let b = end_of_label(i + 2);
@@ -813,4 +861,320 @@ pub fn declared_names(text: &str) -> (Vec<String>, Vec<String>) {
         }
     }
     (consts, states)
+}
+
+// ---- geometry ----------------------------------------------------------------------------
+
+/// The top-level arguments of the call whose `(` is token `open`: token ranges [a, b]
+/// (inclusive) and the closing parenthesis.
+fn args(src: &Src, open: usize) -> Option<(Vec<(usize, usize)>, usize)> {
+    let close = src.matching(open, src.toks.len())?;
+    let mut out = Vec::new();
+    let mut a = open + 1;
+    while a < close {
+        let e = src.region_end(a, close);
+        if e == a {
+            return None;
+        }
+        out.push((a, e - 1));
+        a = e + 1;
+    }
+    Some((out, close))
+}
+
+/// `geo-grow`, `geo-shrink`: every size of a `box(...)`, `cylinder(...)` or `sphere(...)`
+/// (a body, an obstacle's part or a footprint) scaled by 1.2 or 0.8 at once.
+fn shapes(src: &Src, out: &mut Vec<Mutant>) {
+    for i in 0..src.toks.len() {
+        let Some("box" | "cylinder" | "sphere") = src.ident(i) else { continue };
+        if !src.is_p(i + 1, "(") {
+            continue;
+        }
+        let Some((xs, _)) = args(src, i + 1) else { continue };
+        for (op, f) in [("geo-grow", "1.2"), ("geo-shrink", "0.8")] {
+            let edits: Vec<_> =
+                xs.iter().map(|&(a, b)| (src.s(a), src.e(b), format!("({}) * {f}", src.slice(a, b)))).collect();
+            out.push(Mutant {
+                id: format!("{}:{op}", src.pos(i)),
+                desc: format!("`{}` with every size times {f}", context(src, i)),
+                edits,
+            });
+        }
+    }
+}
+
+/// `pose-x+`, `pose-x-`, `pose-y+`, ..., `pose-yaw+`, `pose-yaw-`: one component of a
+/// `pose(...)` (a participant's place, a mount point `mount deck: pose(...)` or a mounted
+/// participant's offset on it, a body part's place) moved by 0.05 m, or its yaw by 0.1 rad.
+fn poses(src: &Src, out: &mut Vec<Mutant>) {
+    for i in 0..src.toks.len() {
+        if src.ident(i) != Some("pose") || !src.is_p(i + 1, "(") {
+            continue;
+        }
+        let Some((xs, _)) = args(src, i + 1) else { continue };
+        let mut moves: Vec<(usize, &str, &str)> = Vec::new();
+        for (k, axis) in ["x", "y", "z"].iter().enumerate().take(xs.len()) {
+            moves.push((k, axis, "0.05"));
+        }
+        if xs.len() == 6 {
+            moves.push((5, "yaw", "0.1"));
+        }
+        for (k, axis, by) in moves {
+            let (a, b) = xs[k];
+            for sign in ["+", "-"] {
+                out.push(Mutant {
+                    id: format!("{}:pose-{axis}{sign}", src.pos(i)),
+                    desc: format!("`{}`: {axis} {sign} {by}", src.slice(i, xs.last().unwrap().1 + 1)),
+                    edits: vec![(src.s(a), src.e(b), format!("({}) {sign} {by}", src.slice(a, b)))],
+                });
+            }
+        }
+    }
+}
+
+/// The mutants of a URDF file: `urdf-scale` (a collision mesh scaled by 1.2 about its
+/// origin: `scale` added or multiplied), `urdf-grow` (a collision box, cylinder or sphere
+/// 1.2 times as large), `urdf-move+x`, `urdf-move+y`, `urdf-move-z` (a collision element's
+/// origin moved by 0.03 m). Only `<collision>` elements: visuals are not read.
+pub fn urdf_mutants(text: &str) -> Vec<Mutant> {
+    let mut lines = vec![0];
+    lines.extend(text.match_indices('\n').map(|(i, _)| i + 1));
+    let pos = |off: usize| {
+        let line = lines.partition_point(|&l| l <= off);
+        format!("{line}:{}", text[lines[line - 1]..off].chars().count() + 1)
+    };
+    // The attribute `name="..."` of the element starting at `at` (up to its `>`): value span.
+    let attr = |at: usize, name: &str| -> Option<(usize, usize)> {
+        let end = at + text[at..].find('>')?;
+        let tag = &text[at..end];
+        let k = tag.find(&format!(" {name}=\"")).or_else(|| tag.find(&format!("\n{name}=\"")));
+        let k = k.or_else(|| tag.find(&format!("\t{name}=\""))).or_else(|| {
+            tag.match_indices(&format!("{name}=\""))
+                .map(|(i, _)| i)
+                .find(|&i| i > 0 && tag.as_bytes()[i - 1].is_ascii_whitespace())
+        })?;
+        let vs = at + k + name.len() + 3;
+        let ve = vs + text[vs..].find('"')?;
+        Some((vs, ve))
+    };
+    let scaled = |v: &str, f: f64| -> Option<String> {
+        let xs: Vec<f64> = v.split_whitespace().map(|x| x.parse().ok()).collect::<Option<_>>()?;
+        Some(
+            xs.iter()
+                .map(|x| fmt_num(x * f).trim_matches(|c| c == '(' || c == ')').to_string())
+                .collect::<Vec<_>>()
+                .join(" "),
+        )
+    };
+    let mut out = Vec::new();
+    let mut from = 0;
+    while let Some(k) = text[from..].find("<collision") {
+        let cs = from + k;
+        let Some(ce) = text[cs..].find("</collision>").map(|e| cs + e) else { break };
+        from = ce;
+        let body = &text[cs..ce];
+        if let Some(o) = body.find("<origin") {
+            let at = cs + o;
+            if let Some((vs, ve)) = attr(at, "xyz") {
+                let xyz: Option<Vec<f64>> = text[vs..ve].split_whitespace().map(|x| x.parse().ok()).collect();
+                if let Some(xyz) = xyz.filter(|v| v.len() == 3) {
+                    for (axis, d) in [(0usize, 0.03f64), (1, 0.03), (2, -0.03)] {
+                        let mut v = xyz.clone();
+                        v[axis] += d;
+                        let nv = v.iter().map(|x| format!("{x}")).collect::<Vec<_>>().join(" ");
+                        let name = ["x", "y", "z"][axis];
+                        let sign = if d > 0.0 { "+" } else { "-" };
+                        out.push(Mutant {
+                            id: format!("{}:urdf-move{sign}{name}", pos(at)),
+                            desc: format!("collision origin xyz=\"{}\" -> \"{nv}\"", &text[vs..ve]),
+                            edits: vec![(vs, ve, nv)],
+                        });
+                    }
+                }
+            }
+        }
+        if let Some(m) = body.find("<mesh") {
+            let at = cs + m;
+            let edit = match attr(at, "scale") {
+                Some((vs, ve)) => scaled(&text[vs..ve], 1.2).map(|nv| (vs, ve, nv)),
+                None => Some((at + 5, at + 5, " scale=\"1.2 1.2 1.2\"".to_string())),
+            };
+            if let Some(e) = edit {
+                out.push(Mutant {
+                    id: format!("{}:urdf-scale", pos(at)),
+                    desc: "collision mesh scaled by 1.2".into(),
+                    edits: vec![e],
+                });
+            }
+        }
+        for (tag, names) in
+            [("<box", &["size"][..]), ("<cylinder", &["radius", "length"][..]), ("<sphere", &["radius"][..])]
+        {
+            let Some(m) = body.find(tag) else { continue };
+            let at = cs + m;
+            let edits: Vec<_> = names
+                .iter()
+                .filter_map(|n| attr(at, n))
+                .filter_map(|(vs, ve)| scaled(&text[vs..ve], 1.2).map(|nv| (vs, ve, nv)))
+                .collect();
+            if edits.len() == names.len() {
+                out.push(Mutant {
+                    id: format!("{}:urdf-grow", pos(at)),
+                    desc: format!("collision {} 1.2 times as large", &tag[1..]),
+                    edits,
+                });
+            }
+        }
+    }
+    out
+}
+
+// ---- MAVLink -----------------------------------------------------------------------------
+
+/// The float32 nearest to `v` and the next float32 above it.
+fn f32_neighbours(v: f64) -> (f64, f64) {
+    let f = v as f32;
+    let up = f32::from_bits(if f >= 0.0 { f.to_bits() + 1 } else { f.to_bits() - 1 });
+    let up = if f == 0.0 { f32::from_bits(1) } else { up };
+    (f64::from(f), f64::from(up))
+}
+
+/// Every decimal digit of a finite f64 (exact: a binary fraction has a finite decimal).
+fn exact_decimal(v: f64) -> String {
+    let s = format!("{v:.60}");
+    let s = s.trim_end_matches('0');
+    let s = s.strip_suffix('.').map_or(s.to_string(), |t| format!("{t}.0"));
+    if v < 0.0 {
+        format!("({s})")
+    } else {
+        s
+    }
+}
+
+/// `off-by-one+1`, `off-by-one-1`: an integer literal (a refinement's bound, a loop's start,
+/// a constant) moved by one. `f32-up`, `f32-same`: a literal replaced by a number that is
+/// not a float32: three quarters of the way (rounds on the wire to the next float32 up), or
+/// a quarter of the way (rounds back to the literal's own float32) from the literal's
+/// float32 to the next one.
+fn mav_numbers(src: &Src, out: &mut Vec<Mutant>) {
+    for i in 0..src.toks.len() {
+        if i > 0 && src.is_p(i - 1, "^") {
+            continue;
+        }
+        let lit = src.slice(i, i).to_string();
+        let v = match &src.toks[i].tok {
+            Tok::Int(n) => {
+                for (op, d) in [("off-by-one+1", 1i64), ("off-by-one-1", -1)] {
+                    let r = n.checked_add(d).map(|x| if x < 0 { format!("({x})") } else { x.to_string() });
+                    if let Some(r) = r {
+                        out.push(Mutant {
+                            id: format!("{}:{op}", src.pos(i)),
+                            desc: format!("literal {lit} -> {r} in `{}`", context(src, i)),
+                            edits: vec![(src.s(i), src.e(i), r)],
+                        });
+                    }
+                }
+                *n as f64
+            }
+            Tok::Real(s) => match s.parse::<f64>() {
+                Ok(v) => v,
+                Err(_) => continue,
+            },
+            _ => continue,
+        };
+        let (f, up) = f32_neighbours(v);
+        if !f.is_finite() || !up.is_finite() {
+            continue;
+        }
+        for (op, w) in [("f32-up", 0.75), ("f32-same", 0.25)] {
+            let r = exact_decimal(f + (up - f) * w);
+            out.push(Mutant {
+                id: format!("{}:{op}", src.pos(i)),
+                desc: format!(
+                    "literal {lit} -> {r} (not a float32; the wire rounds it to {})",
+                    if w > 0.5 { up } else { f }
+                ),
+                edits: vec![(src.s(i), src.e(i), r)],
+            });
+        }
+    }
+}
+
+/// `enum(A->B)`: an entry of the dialect's enums replaced by its neighbour in the same enum
+/// (the next entry, the previous one for the last).
+fn mav_enums(src: &Src, d: &Dialect, out: &mut Vec<Mutant>) {
+    for i in 0..src.toks.len() {
+        let Some(name) = src.ident(i) else { continue };
+        let Some((en, _)) = d.entry(name) else { continue };
+        let Some(k) = en.entries.iter().position(|e| e.name == name) else { continue };
+        let other = en.entries.get(k + 1).or_else(|| k.checked_sub(1).and_then(|j| en.entries.get(j)));
+        let Some(other) = other else { continue };
+        out.push(Mutant {
+            id: format!("{}:enum({name}->{})", src.pos(i), other.name),
+            desc: format!("`{name}` -> `{}` (its neighbour in {}) in `{}`", other.name, en.name, context(src, i)),
+            edits: vec![(src.s(i), src.e(i), other.name.clone())],
+        });
+    }
+}
+
+/// `guard-neg` (a comparison of a branch guard `[...]` negated: `<` to `>=`, `==` to `!=`,
+/// ...), `dup-msg` (a message step of the choreography sent twice), `field-swap` (the names
+/// of two adjacent fields of a message swapped, their refinements kept in place).
+fn mav_steps(src: &Src, items: &[Item], out: &mut Vec<Mutant>) {
+    for i in 4..src.toks.len() {
+        if !(src.is_p(i, "[") && src.is_p(i - 1, ":") && src.is_p(i - 3, "->")) {
+            continue;
+        }
+        let Some(close) = src.matching(i, src.toks.len()) else { continue };
+        for j in i + 1..close {
+            let to = match src.punct(j) {
+                Some("<") => ">=",
+                Some("<=") => ">",
+                Some(">") => "<=",
+                Some(">=") => "<",
+                Some("==") => "!=",
+                Some("!=") => "==",
+                _ => continue,
+            };
+            out.push(Mutant {
+                id: format!("{}:guard-neg", src.pos(j)),
+                desc: format!("guard: `{}` -> `{to}` in `{}`", src.slice(j, j), context(src, j)),
+                edits: vec![(src.s(j), src.e(j), to.to_string())],
+            });
+        }
+    }
+    for it in items.iter().filter(|it| it.kw == "choreography") {
+        for s in steps(src, it) {
+            let Some((_, _, label)) = &s.msg else { continue };
+            if src.is_p(s.b + 1, ".") {
+                let text = src.slice(s.a, s.b);
+                out.push(Mutant {
+                    id: format!("{}:dup-msg", src.pos(s.a)),
+                    desc: format!(
+                        "choreography: `{}` sent twice",
+                        text.split_whitespace().collect::<Vec<_>>().join(" ")
+                    ),
+                    edits: vec![(src.s(s.a), src.s(s.a), format!("{text}.\n"))],
+                });
+            }
+            // The fields: `LABEL(` ... `)` at the end of the step.
+            if !src.is_p(s.b, ")") {
+                continue;
+            }
+            let Some(open) = (s.a..s.b).rev().find(|&k| src.is_p(k, "(") && src.matching(k, s.b + 1) == Some(s.b))
+            else {
+                continue;
+            };
+            let Some((fs, _)) = args(src, open) else { continue };
+            for w in fs.windows(2) {
+                let (x, y) = (w[0].0, w[1].0);
+                let (Some(nx), Some(ny)) = (src.ident(x), src.ident(y)) else { continue };
+                out.push(Mutant {
+                    id: format!("{}:field-swap", src.pos(x)),
+                    desc: format!("{label}: fields `{nx}` and `{ny}` swapped (refinements kept in place)"),
+                    edits: vec![(src.s(x), src.e(x), ny.to_string()), (src.s(y), src.e(y), nx.to_string())],
+                });
+            }
+        }
+    }
 }
