@@ -529,7 +529,10 @@ enum Last {
 
 fn names(prog: &Program, rs: &[RoleId]) -> String {
     let v: Vec<_> = rs.iter().map(|r| format!("`{}`", prog.role_name(*r))).collect();
-    v.join(", ")
+    match v.split_last() {
+        Some((last, rest)) if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
+        _ => v.join(""),
+    }
 }
 
 /// Whether a primitive may be interrupted at any time after it starts, with an assumption
@@ -699,7 +702,7 @@ impl<'g> Checker<'_, 'g> {
             Code::UnsynchronisedStart,
             self.ev[e].loc().0,
             format!(
-                "{} and {} may start this joint motion at different times: nothing ties the moments they are released",
+                "{} may start this joint motion at another time than {}: nothing ties the moments they are released",
                 who(&same),
                 who(&other)
             ),
