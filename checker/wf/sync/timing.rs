@@ -11,7 +11,10 @@
 //! end of the motion it was running) and its receiver's (its previous message, or the
 //! start of the interruptible motion it is running). A participant starts a motion at its
 //! previous message, or where its previous (non-interruptible, lone) motion ends. Instants
-//! are ordered by a DAG whose edges say "not later than"; the same instant is one node.
+//! are ordered by a DAG whose edges say "not later than"; the same instant is one node. The
+//! durations of non-interruptible parts order more of them, and may prove two nodes the same
+//! time (`clock.rs`). Sequences of choices are read segment by segment between
+//! synchronisation points ([`Checker::timing`]).
 
 use super::*;
 
