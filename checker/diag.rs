@@ -381,6 +381,10 @@ codes! {
          (a gap in the paper). mochi requires every participant of a joint motion to be released at \
          the same instant: by the same burst of messages, which happens when one sender becomes ready \
          (its motion ends) and every receiver is in an interruptible motion or already in the burst. \
+         The durations count: a receiver whose side's non-interruptible motions end, by their \
+         durations (evaluated from their arguments), no later than the sender's is ready when the \
+         message comes, so a relay after `*` (P tells Q, Q at once tells V) is one instant when \
+         the sides' durations say so. \
          Fix: end the other sides in interruptible motions and let one side's last sender tell each of \
          them, as Example 4.2 (4) does, or keep the joint motion on one side of the `*`.";
     UncheckedOverlap = "E0318", "two motions may run at the same time with nothing checking them together",
@@ -394,7 +398,10 @@ codes! {
          sides of one `*`. Likewise two interruptible primitives of one dt that run on after the \
          dt ends (interrupted later, or never before `end`) while a third primitive's contract \
          bounded the times [AGCOMP] compared them. The check reads each path through the choices of the once-unfolded \
-         type; beyond 4096 paths it gives up with this code rather than pass unchecked.";
+         type, choice by choice where every participant is synchronised between the choices (each \
+         last took part in a message at one instant, no primitive running); beyond 4,096 paths \
+         between two such points it gives up with this code rather than pass unchecked: end each \
+         branch with a burst of messages after its last motion.";
     InterruptOutsideDuration = "E0319", "a message may interrupt a motion outside its duration",
         "Fig 3 [INTERRUPT] consumes an interruptible motion only while its clock t is in its \
          duration D (Def 4.11 (5), (8b)); its contract, and every check of its footprint, speaks of \

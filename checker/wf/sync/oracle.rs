@@ -63,6 +63,7 @@ pub fn check(prog: &Program, g: &Global) -> Vec<Diagnostic> {
     // by one sender, who is ready): run them only on a synchronisable type.
     if c.diags.is_empty() {
         c.timing(&b.branches, &b.ends);
+        super::timing::canonical_order(&mut c.diags);
     }
     c.diags
 }
@@ -463,11 +464,13 @@ struct Instants {
     /// `below[i]`: the instants not later than `i` (other than `i`).
     below: Vec<FixedBitSet>,
     cap: usize,
+    /// What the durations say about the distance between instants.
+    off: super::clock::Offsets,
 }
 
 impl Instants {
     fn new(cap: usize) -> Instants {
-        Instants { below: vec![FixedBitSet::with_capacity(cap)], cap }
+        Instants { below: vec![FixedBitSet::with_capacity(cap)], cap, off: super::clock::Offsets::new() }
     }
     /// A new instant not earlier than each of `after`.
     fn add(&mut self, after: &[usize]) -> usize {
@@ -480,7 +483,11 @@ impl Instants {
         self.below.len() - 1
     }
     fn le(&self, a: usize, b: usize) -> bool {
-        a == b || self.below[b].contains(a)
+        a == b || self.below[b].contains(a) || self.off.le(a, b)
+    }
+    /// Whether `a` and `b` are the same time: one instant, or two the durations prove equal.
+    fn same(&self, a: usize, b: usize) -> bool {
+        a == b || (self.le(a, b) && self.le(b, a))
     }
     /// The later of two instants: one of them when they are ordered, else a new one.
     fn max(&mut self, a: usize, b: usize) -> usize {
@@ -489,6 +496,7 @@ impl Instants {
         } else if self.le(b, a) {
             a
         } else {
+            self.off.later_of(a, b);
             self.add(&[a, b])
         }
     }
@@ -521,7 +529,10 @@ enum Last {
 
 fn names(prog: &Program, rs: &[RoleId]) -> String {
     let v: Vec<_> = rs.iter().map(|r| format!("`{}`", prog.role_name(*r))).collect();
-    v.join(", ")
+    match v.split_last() {
+        Some((last, rest)) if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
+        _ => v.join(""),
+    }
 }
 
 /// Whether a primitive may be interrupted at any time after it starts, with an assumption
@@ -545,6 +556,10 @@ fn reads_input(prim: &Primitive) -> bool {
 
 impl<'g> Checker<'_, 'g> {
     fn timing(&mut self, branches: &HashMap<u32, u32>, ends: &[Vec<(u32, u32, bool)>]) {
+        // Without a motion there is nothing to time.
+        if !self.ev.iter().any(Event::is_motion) {
+            return;
+        }
         let Some(paths) = paths(self.ev, branches) else {
             let loc = self.ev.first().map(Event::loc).unwrap_or_default();
             self.push(
@@ -589,8 +604,8 @@ impl<'g> Checker<'_, 'g> {
                             Some(Last::Part(x)) => (*r, parts[*x].end_of_motion, Some(parts[*x].ev)),
                         })
                         .collect();
-                    if starts.iter().any(|s| s.1 != starts[0].1) {
-                        self.unsynchronised_start(e, &starts);
+                    if starts.iter().any(|s| !inst.same(s.1, starts[0].1)) {
+                        self.unsynchronised_start(e, &starts, &inst);
                         return;
                     }
                     let start = starts.first().map(|s| s.1).unwrap_or(0);
@@ -600,6 +615,7 @@ impl<'g> Checker<'_, 'g> {
                             parts[x].left = Some(start);
                         }
                     }
+                    inst.off.after(start, &super::clock::motion_window(self.prog, m));
                     let end = inst.add(&[start]);
                     for (r, app) in &m.parts {
                         parts.push(Part { ev: e, role: *r, app, start, end_of_motion: end, left: None });
@@ -628,7 +644,7 @@ impl<'g> Checker<'_, 'g> {
                             let interruptible = self.prog.prim(parts[x].app.prim).interruptible;
                             parts[x].left = Some(if interruptible { at } else { parts[x].end_of_motion });
                             let prim = self.prog.prim(parts[x].app.prim);
-                            if interruptible && at != parts[x].end_of_motion && !open_ended(prim) {
+                            if interruptible && !inst.same(at, parts[x].end_of_motion) && !open_ended(prim) {
                                 self.interrupted_untied(e, &parts[x]);
                             }
                         }
@@ -678,15 +694,15 @@ impl<'g> Checker<'_, 'g> {
         (lo, hi)
     }
 
-    fn unsynchronised_start(&mut self, e: usize, starts: &[(RoleId, usize, Option<usize>)]) {
+    fn unsynchronised_start(&mut self, e: usize, starts: &[(RoleId, usize, Option<usize>)], inst: &Instants) {
         let first = starts[0].1;
-        let (same, other): (Vec<_>, Vec<_>) = starts.iter().partition(|s| s.1 == first);
+        let (same, other): (Vec<_>, Vec<_>) = starts.iter().partition(|s| inst.same(s.1, first));
         let who = |v: &[&(RoleId, usize, Option<usize>)]| names(self.prog, &v.iter().map(|s| s.0).collect::<Vec<_>>());
         let mut d = Diagnostic::error(
             Code::UnsynchronisedStart,
             self.ev[e].loc().0,
             format!(
-                "{} and {} may start this joint motion at different times: nothing ties the moments they are released",
+                "{} may start this joint motion at another time than {}: nothing ties the moments they are released",
                 who(&same),
                 who(&other)
             ),
@@ -737,7 +753,7 @@ impl<'g> Checker<'_, 'g> {
         let overruns = |p: &Part| {
             self.prog.prim(p.app.prim).interruptible
                 && match p.left {
-                    Some(l) => l != p.end_of_motion,
+                    Some(l) => !inst.same(l, p.end_of_motion),
                     None => ends_here,
                 }
         };

@@ -11,34 +11,50 @@
 //! end of the motion it was running) and its receiver's (its previous message, or the
 //! start of the interruptible motion it is running). A participant starts a motion at its
 //! previous message, or where its previous (non-interruptible, lone) motion ends. Instants
-//! are ordered by a DAG whose edges say "not later than"; the same instant is one node.
+//! are ordered by a DAG whose edges say "not later than"; the same instant is one node. The
+//! durations of non-interruptible parts order more of them, and may prove two nodes the same
+//! time (`clock.rs`). Sequences of choices are read segment by segment between
+//! synchronisation points ([`Checker::timing`]).
 
 use super::*;
 
-/// Past this many paths through choices the timing checks give up with an error.
+/// Past this many paths through the choices of one segment (see [`Checker::timing`]) the
+/// timing checks give up with an error.
 const MAX_PATHS: usize = 4096;
 
-/// The paths of the once-unfolded tree, one after the other: `visit` gets, for each, the
-/// events on it in tree order and the branch it takes at each choice it meets. Returns
-/// `false` (before visiting any) if there are more than [`MAX_PATHS`].
+/// The paths of the once-unfolded tree through the events `range`, one after the other:
+/// `visit` gets, for each, the events on it in tree order and the branch it takes at each
+/// choice it meets. Returns `false` (before visiting any) if there are more than `limit`.
 ///
 /// A first pass only counts (the decision depends on the counts alone), so that the paths
 /// are then visited as they are found rather than all held at once (4,096 copies of a long
 /// sequence took gigabytes).
-fn paths(ev: &[Event], branches: &HashMap<u32, u32>, mut visit: impl FnMut(&[usize], &HashMap<u32, u32>)) -> bool {
-    walk_paths(ev, branches, None) && walk_paths(ev, branches, Some(&mut visit))
+fn paths(
+    ev: &[Event],
+    range: std::ops::Range<usize>,
+    branches: &HashMap<u32, u32>,
+    limit: usize,
+    mut visit: impl FnMut(&[usize], &HashMap<u32, u32>),
+) -> bool {
+    walk_paths(ev, range.clone(), branches, limit, None) && walk_paths(ev, range, branches, limit, Some(&mut visit))
 }
 
 /// What [`paths`] calls on each path.
 type Visit<'v> = &'v mut dyn FnMut(&[usize], &HashMap<u32, u32>);
 
 /// One pass of [`paths`]; without `visit`, only the count is checked.
-fn walk_paths(ev: &[Event], branches: &HashMap<u32, u32>, mut visit: Option<Visit>) -> bool {
+fn walk_paths(
+    ev: &[Event],
+    range: std::ops::Range<usize>,
+    branches: &HashMap<u32, u32>,
+    limit: usize,
+    mut visit: Option<Visit>,
+) -> bool {
     let keep = visit.is_some();
     let mut done = 0usize;
-    let mut work: Vec<(HashMap<u32, u32>, Vec<usize>, usize)> = vec![(HashMap::new(), Vec::new(), 0)];
+    let mut work: Vec<(HashMap<u32, u32>, Vec<usize>, usize)> = vec![(HashMap::new(), Vec::new(), range.start)];
     while let Some((mut assign, mut list, mut i)) = work.pop() {
-        'ev: while i < ev.len() {
+        'ev: while i < range.end {
             for &(node, b, choice) in &ev[i].path {
                 if !choice {
                     continue;
@@ -47,7 +63,7 @@ fn walk_paths(ev: &[Event], branches: &HashMap<u32, u32>, mut visit: Option<Visi
                     Some(&x) => x,
                     None => {
                         let n = branches.get(&node).copied().unwrap_or(1);
-                        if done + work.len() + n as usize > MAX_PATHS {
+                        if done + work.len() + n as usize > limit {
                             return false;
                         }
                         for k in 1..n {
@@ -77,6 +93,58 @@ fn walk_paths(ev: &[Event], branches: &HashMap<u32, u32>, mut visit: Option<Visi
     true
 }
 
+/// What the timing checks need of the tree besides its events (from [`Builder`]).
+pub(super) struct Layout<'b> {
+    /// Number of branches of each choice node.
+    pub branches: &'b HashMap<u32, u32>,
+    /// The internal nodes above each `end`.
+    pub ends: &'b [Vec<(u32, u32, bool)>],
+    /// The `*` nodes.
+    pub pars: &'b HashSet<u32>,
+    /// How many events precede the first `end`.
+    pub first_end: usize,
+}
+
+/// Where the paths may be cut: before the first event of a choice whose enclosing nodes are
+/// all sequences (no choice or `*` has events on both sides of the cut), and before any
+/// `end` (a path goes on past the cut). Ascending, each in `1..ev.len()`.
+fn cut_points(ev: &[Event], layout: &Layout) -> Vec<usize> {
+    let mut cuts = Vec::new();
+    for (i, e) in ev.iter().enumerate().skip(1) {
+        if i >= layout.first_end {
+            break;
+        }
+        // The outermost choice or `*` above the event, if any.
+        let Some(k) = e.path.iter().position(|(n, _, choice)| *choice || layout.pars.contains(n)) else {
+            continue;
+        };
+        let (node, _, choice) = e.path[k];
+        let first_of_node = !ev[i - 1].path.iter().any(|(n, _, _)| *n == node);
+        if choice && first_of_node {
+            cuts.push(i);
+        }
+    }
+    cuts
+}
+
+/// The state at a *synchronisation point* of a path: every participant that has an event
+/// so far last took part in a message at one instant, and every part has been left. Each
+/// participant's last message (for the labels of E0317), by participant.
+type Seed = Vec<(RoleId, usize)>;
+
+/// Sorts the timing diagnostics by place, code and text: the paths (or the segments of
+/// paths) are read in an order that says nothing to the user.
+pub(super) fn canonical_order(diags: &mut [Diagnostic]) {
+    diags.sort_by(|a, b| {
+        (a.span.file.0, a.span.start, a.code.as_str(), &a.message).cmp(&(
+            b.span.file.0,
+            b.span.start,
+            b.code.as_str(),
+            &b.message,
+        ))
+    });
+}
+
 /// Instants and the order "not later than" between them; node 0 is the start.
 ///
 /// An instant is only ever below instants created after it, and tree order puts the
@@ -87,13 +155,16 @@ struct Instants {
     /// `below[i]`: the instants not later than `i` (other than `i`), as sorted, disjoint,
     /// non-adjacent half-open ranges.
     below: Vec<Vec<(usize, usize)>>,
+    /// What the durations say about the distance between instants.
+    off: clock::Offsets,
 }
 
 impl Instants {
     fn new() -> Instants {
-        Instants { below: vec![Vec::new()] }
+        Instants { below: vec![Vec::new()], off: clock::Offsets::new() }
     }
-    /// A new instant not earlier than each of `after`.
+    /// A new instant not earlier than each of `after` (its place in [`clock::Offsets`] is
+    /// the caller's to register).
     fn add(&mut self, after: &[usize]) -> usize {
         let mut ranges: Vec<(usize, usize)> = Vec::new();
         for &a in after {
@@ -111,6 +182,12 @@ impl Instants {
         self.below.push(set);
         self.below.len() - 1
     }
+    /// The end of a motion that starts at `start` and ends within `w` of it.
+    fn end(&mut self, start: usize, w: &clock::Window) -> usize {
+        self.off.after(start, w);
+        self.add(&[start])
+    }
+    /// Whether `a` is not later than `b`: by the events, or by the durations.
     fn le(&self, a: usize, b: usize) -> bool {
         if a == b {
             return true;
@@ -118,7 +195,11 @@ impl Instants {
         let set = &self.below[b];
         // The last range starting at or before `a`.
         let k = set.partition_point(|r| r.0 <= a);
-        k > 0 && a < set[k - 1].1
+        (k > 0 && a < set[k - 1].1) || self.off.le(a, b)
+    }
+    /// Whether `a` and `b` are the same time: one instant, or two the durations prove equal.
+    fn same(&self, a: usize, b: usize) -> bool {
+        a == b || (self.le(a, b) && self.le(b, a))
     }
     /// The later of two instants: one of them when they are ordered, else a new one.
     fn max(&mut self, a: usize, b: usize) -> usize {
@@ -127,6 +208,7 @@ impl Instants {
         } else if self.le(b, a) {
             a
         } else {
+            self.off.later_of(a, b);
             self.add(&[a, b])
         }
     }
@@ -189,6 +271,16 @@ struct Part<'g> {
     retired: usize,
 }
 
+/// How a path of a segment ends (see [`Checker::timing`]).
+enum PathEnd {
+    /// At an E0317: the path is read no further.
+    Stopped,
+    /// At a synchronisation point, from which the next segment is read.
+    Synchronised(Seed),
+    /// With a part still running or participants at different instants.
+    Running,
+}
+
 /// A participant's last event on the path so far.
 #[derive(Clone, Copy)]
 enum Last {
@@ -200,7 +292,10 @@ enum Last {
 
 fn names(prog: &Program, rs: &[RoleId]) -> String {
     let v: Vec<_> = rs.iter().map(|r| format!("`{}`", prog.role_name(*r))).collect();
-    v.join(", ")
+    match v.split_last() {
+        Some((last, rest)) if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
+        _ => v.join(""),
+    }
 }
 
 /// Whether a primitive may be interrupted at any time after it starts, with an assumption
@@ -291,26 +386,89 @@ fn reads_input(prim: &Primitive) -> bool {
 }
 
 impl<'g> Checker<'_, 'g> {
-    pub(super) fn timing(&mut self, branches: &HashMap<u32, u32>, ends: &[Vec<(u32, u32, bool)>]) {
-        // Whether a path reaches an `end` (rather than only a recursion variable, whose next
-        // round the unfolded copy already shows).
+    /// Reads every path of the once-unfolded tree as a schedule (module comment).
+    ///
+    /// The paths through a sequence of `k` choices are `2^k`; they are read *segment by
+    /// segment*. The events are cut before each choice that only sequences enclose
+    /// ([`cut_points`]); a segment's paths are read from each state a path of the segments
+    /// before may reach the cut in, when that is a synchronisation point ([`Seed`]): every
+    /// participant's last event a message at one instant `X`, every part left. What comes
+    /// after such a point depends on what came before only through the messages each
+    /// participant last took part in: every earlier part was left at an instant not later
+    /// than `X`, every later part starts at `X` or later, so no earlier part is compared
+    /// with a later one (E0318), no later message interrupts an earlier part (E0319) and
+    /// later starts are compared with `X` or later instants only (E0317); `X` is then the
+    /// start (instant 0) of the next segment's reading. Where some path does not reach a
+    /// synchronisation point, the segment runs on to the next cut (what it reported is
+    /// dropped and the longer segment read again), so the paths are then read whole, as
+    /// without cuts. Only a segment with more than [`MAX_PATHS`] paths (times the states it
+    /// starts from) is beyond the check: an error, never a pass.
+    pub(super) fn timing(&mut self, layout: &Layout) {
         let ev = self.ev;
-        let all = paths(ev, branches, |path, assign| {
-            let ends_here =
-                ends.iter().any(|e| e.iter().filter(|n| n.2).all(|(node, b, _)| assign.get(node) == Some(b)));
-            self.timing_path(path, ends_here);
-        });
-        if !all {
-            let loc = self.ev.first().map(Event::loc).unwrap_or_default();
-            self.push(
-                Diagnostic::error(
-                    Code::UncheckedOverlap,
-                    loc.0,
-                    format!("more than {MAX_PATHS} paths through the choices: mochi cannot check which motions overlap in time"),
-                )
-                .with_note("the timing checks read each path of the once-unfolded type separately")
-                .with_help("split the choreography, or reduce the nesting of choices"),
-            );
+        // Without a motion there is nothing to time.
+        if !ev.iter().any(Event::is_motion) {
+            return;
+        }
+        let everyone: HashSet<RoleId> = ev.iter().flat_map(Event::participants).collect();
+        let cuts = cut_points(ev, layout);
+        let mut seeds: Vec<Seed> = vec![Vec::new()];
+        let mut lo = 0;
+        let mut k = 0;
+        while lo < ev.len() && !seeds.is_empty() {
+            let hi = cuts.get(k).copied().unwrap_or(ev.len());
+            let last = hi == ev.len();
+            let mark = (self.diags.len(), self.reported.clone());
+            let mut next: Vec<Seed> = Vec::new();
+            let mut synchronised = true;
+            let mut within = true;
+            let limit = MAX_PATHS / seeds.len();
+            for seed in &seeds {
+                within &= paths(ev, lo..hi, layout.branches, limit, |path, assign| {
+                    // Whether the path reaches an `end` (rather than only a recursion
+                    // variable, whose next round the unfolded copy already shows); every
+                    // `end` lies in the last segment.
+                    let ends_here = last
+                        && layout
+                            .ends
+                            .iter()
+                            .any(|e| e.iter().filter(|n| n.2).all(|(node, b, _)| assign.get(node) == Some(b)));
+                    match self.timing_path(path, seed, ends_here, &everyone) {
+                        PathEnd::Stopped => {}
+                        PathEnd::Synchronised(s) => next.push(s),
+                        PathEnd::Running => synchronised = false,
+                    }
+                });
+                if !within {
+                    break;
+                }
+            }
+            if !within {
+                self.diags.truncate(mark.0);
+                self.reported = mark.1;
+                let loc = ev.get(lo).map(Event::loc).unwrap_or_default();
+                self.push(
+                    Diagnostic::error(
+                        Code::UncheckedOverlap,
+                        loc.0,
+                        format!("more than {MAX_PATHS} paths through the choices from here: mochi cannot check which motions overlap in time"),
+                    )
+                    .with_note("the timing checks read each path through the choices as a schedule; a sequence of choices is read one choice at a time only where every participant is synchronised between them (each last took part in a message at one instant, no primitive still running)")
+                    .with_help("synchronise the participants between the choices: end each branch with a burst of messages after its last motion (its non-interruptible participant telling every other one), so that no motion runs on into the next choice; or split the choreography"),
+                );
+                return;
+            }
+            if last || synchronised {
+                next.sort_unstable();
+                next.dedup();
+                seeds = next;
+                lo = hi;
+                k += 1;
+            } else {
+                // Some path runs on into the next segment: read the longer one instead.
+                self.diags.truncate(mark.0);
+                self.reported = mark.1;
+                k += 1;
+            }
         }
     }
 
@@ -318,11 +476,12 @@ impl<'g> Checker<'_, 'g> {
         format!("{}: {}", self.prog.role_name(p.role), self.prog.prim(p.app.prim).name)
     }
 
-    fn timing_path(&mut self, path: &[usize], ends_here: bool) {
+    /// Reads one path (of a segment, from the state `seed`: see [`Checker::timing`]).
+    fn timing_path(&mut self, path: &[usize], seed: &Seed, ends_here: bool, everyone: &HashSet<RoleId>) -> PathEnd {
         let ev = self.ev;
         let mut inst = Instants::new();
         let mut parts: Vec<Part<'g>> = Vec::new();
-        let mut last: HashMap<RoleId, Last> = HashMap::new();
+        let mut last: HashMap<RoleId, Last> = seed.iter().map(|&(r, by)| (r, Last::Msg(0, by))).collect();
         let mut relevant = Relevant::new(ev, path);
         let mut live: std::collections::VecDeque<usize> = std::collections::VecDeque::new();
         for &e in path {
@@ -339,9 +498,9 @@ impl<'g> Checker<'_, 'g> {
                             Some(Last::Part(x)) => (*r, parts[*x].end_of_motion, Some(parts[*x].ev)),
                         })
                         .collect();
-                    if starts.iter().any(|s| s.1 != starts[0].1) {
-                        self.unsynchronised_start(e, &starts);
-                        return;
+                    if starts.iter().any(|s| !inst.same(s.1, starts[0].1)) {
+                        self.unsynchronised_start(e, &starts, &inst);
+                        return PathEnd::Stopped;
                     }
                     let start = starts.first().map(|s| s.1).unwrap_or(0);
                     for (r, _) in &m.parts {
@@ -350,7 +509,7 @@ impl<'g> Checker<'_, 'g> {
                             parts[x].left = Some(start);
                         }
                     }
-                    let end = inst.add(&[start]);
+                    let end = inst.end(start, &clock::motion_window(self.prog, m));
                     for (r, app) in &m.parts {
                         parts.push(Part {
                             ev: e,
@@ -387,7 +546,7 @@ impl<'g> Checker<'_, 'g> {
                             let interruptible = self.prog.prim(parts[x].app.prim).interruptible;
                             parts[x].left = Some(if interruptible { at } else { parts[x].end_of_motion });
                             let prim = self.prog.prim(parts[x].app.prim);
-                            if interruptible && at != parts[x].end_of_motion && !open_ended(prim) {
+                            if interruptible && !inst.same(at, parts[x].end_of_motion) && !open_ended(prim) {
                                 self.interrupted_untied(e, &parts[x]);
                             }
                         }
@@ -413,6 +572,24 @@ impl<'g> Checker<'_, 'g> {
             }
         }
         self.overlaps(&parts, &inst, ends_here);
+        // A synchronisation point: every part left, every participant's last event a
+        // message at one instant (0 too for those yet to appear, unless all have).
+        let mut at: Option<usize> = None;
+        let mut seed: Seed = Vec::with_capacity(last.len());
+        for (r, l) in &last {
+            let Last::Msg(i, by) = *l else { return PathEnd::Running };
+            if at.is_some_and(|x| x != i) {
+                return PathEnd::Running;
+            }
+            at = Some(i);
+            seed.push((*r, by));
+        }
+        let everyone_here = everyone.iter().all(|r| last.contains_key(r));
+        if parts.iter().any(|p| p.left.is_none()) || (at.is_some_and(|x| x != 0) && !everyone_here) {
+            return PathEnd::Running;
+        }
+        seed.sort_unstable();
+        PathEnd::Synchronised(seed)
     }
 
     /// Marks the oldest parts that every later part they could be paired with starts
@@ -477,15 +654,15 @@ impl<'g> Checker<'_, 'g> {
         (lo, hi)
     }
 
-    fn unsynchronised_start(&mut self, e: usize, starts: &[(RoleId, usize, Option<usize>)]) {
+    fn unsynchronised_start(&mut self, e: usize, starts: &[(RoleId, usize, Option<usize>)], inst: &Instants) {
         let first = starts[0].1;
-        let (same, other): (Vec<_>, Vec<_>) = starts.iter().partition(|s| s.1 == first);
+        let (same, other): (Vec<_>, Vec<_>) = starts.iter().partition(|s| inst.same(s.1, first));
         let who = |v: &[&(RoleId, usize, Option<usize>)]| names(self.prog, &v.iter().map(|s| s.0).collect::<Vec<_>>());
         let mut d = Diagnostic::error(
             Code::UnsynchronisedStart,
             self.ev[e].loc().0,
             format!(
-                "{} and {} may start this joint motion at different times: nothing ties the moments they are released",
+                "{} may start this joint motion at another time than {}: nothing ties the moments they are released",
                 who(&same),
                 who(&other)
             ),
@@ -536,7 +713,7 @@ impl<'g> Checker<'_, 'g> {
         let overruns = |p: &Part| {
             self.prog.prim(p.app.prim).interruptible
                 && match p.left {
-                    Some(l) => l != p.end_of_motion,
+                    Some(l) => !inst.same(l, p.end_of_motion),
                     None => ends_here,
                 }
         };
