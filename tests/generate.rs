@@ -595,7 +595,8 @@ fn exact_f32(v: f32) -> String {
         return "0".into();
     }
     if e >= 0 {
-        return format!("{sign}{}", BigUint::from(m) << e as usize);
+        // A real literal: an integer literal beyond 64 bits is malformed (E0104).
+        return format!("{sign}{}.0", BigUint::from(m) << e as usize);
     }
     let k = (-e) as usize;
     let digits = (BigUint::from(m) * BigUint::from(5u32).pow(k as u32)).to_string();
@@ -766,7 +767,7 @@ fn the_float_oracle_sees_the_gap_between_neighbours() {
     assert_eq!(exact_f32(0.5), "0.5");
     assert_eq!(exact_f32(0.1), "0.100000001490116119384765625");
     assert_eq!(exact_f32(-1.5), "-1.5");
-    assert_eq!(exact_f32(3.0e38), "300000000549775575777803994281145270272");
+    assert_eq!(exact_f32(3.0e38), "300000000549775575777803994281145270272.0");
     assert!(exact_f32(1.0e-30).starts_with("0.000000000000000000000000000001000000"), "{}", exact_f32(1.0e-30));
     let q = Protocol {
         msgs: vec![
