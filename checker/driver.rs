@@ -836,6 +836,7 @@ fn counterexample_text(cx: &Counterexample, code: Code) -> Option<String> {
         let (frame, where_) = match code {
             Code::FootprintMissesBody => ("in the robot's own frame ", "is a point of the body outside the footprint"),
             Code::ObstacleHit => ("", "is in the footprint and in the obstacle"),
+            Code::RefinementFails => ("", "is in the concrete footprint and outside the abstract one"),
             _ => ("", "is in both footprints"),
         };
         parts.push(format!("{at}the point (x, y, z) = ({}, {}, {}) m {frame}{where_}", p[0], p[1], p[2]));
