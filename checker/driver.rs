@@ -540,6 +540,7 @@ impl Pipeline {
 
     fn finish(mut self) -> Report {
         diag::sort(&mut self.diagnostics);
+        diag::dedupe(&mut self.diagnostics);
         let verdict = if self.checks.iter().any(|c| c.status == Status::Fail)
             || self.diagnostics.iter().any(Diagnostic::is_error)
         {

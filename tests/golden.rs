@@ -533,6 +533,11 @@ fn every_counterexample_shown_falsifies_its_goal() {
     // The corruption is read as the original was (the same binding of names to values):
     // another reading could bind a changed name to a namesake the goal does not read.
     for (path, prog, ob, part, d, reading) in &decided {
+        // A violation that needs no value (all space is within no bounded footprint, so
+        // any run of the concrete primitive falsifies the refinement): nothing to corrupt.
+        if replay::replay(prog, ob, part, &Default::default()) == replay::Replay::Falsifies {
+            continue;
+        }
         let cx = d.counterexample.as_deref().expect("a counterexample");
         let caught = (0..cx.values.len()).any(|i| {
             ["0", "1", "-1", "0.5", "1000", "-1000", "true", "false"].iter().any(|other| {

@@ -851,8 +851,21 @@ fn describe(prog: &Program, ob: &Obligation, part: &Part) -> String {
         (Goal::Compatible { parts }, Part::CommonEnd(n, j)) => {
             let lasts = |i: usize| {
                 let p = prog.prim(parts[i].1.prim);
-                let lo = crate::hir::print::expr(prog, Some(parts[i].1.prim), &p.duration.lo);
-                let hi = p.duration.hi.as_ref().map(|h| crate::hir::print::expr(prog, Some(parts[i].1.prim), h));
+                // The bounds with the arguments put in (`[d, d]` of `stroke(20)` is
+                // `[20, 20]`), a constant printed as its value.
+                let bound = |e: &crate::hir::Expr| {
+                    let e = crate::sigma::instantiate(e, parts[i].0, &parts[i].1.args);
+                    match crate::exact::eval(prog, &e, &|_: &crate::hir::Var| None) {
+                        Ok(crate::exact::Value::Num(n))
+                            if n.is_exact() && !crate::exact::decimal(&n.lo).starts_with('≈') =>
+                        {
+                            crate::exact::decimal(&n.lo)
+                        }
+                        _ => crate::hir::print::expr(prog, None, &e),
+                    }
+                };
+                let lo = bound(&p.duration.lo);
+                let hi = p.duration.hi.as_ref().map(bound);
                 format!(
                     "`{}` ({}, duration [{lo}, {}])",
                     prim(&parts[i].1),
