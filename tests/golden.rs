@@ -277,7 +277,7 @@ fn printed_projections_parse_back_to_the_same_type() {
 
 use mochi::exact::{self, Tri, Value};
 use mochi::hir::{Program, Var};
-use mochi::obligation::{Goal, Obligation};
+use mochi::obligation::Obligation;
 use mochi::smt::{goals::Part, replay, Decision};
 use std::collections::HashMap;
 
