@@ -452,6 +452,9 @@ fn shown_counterexamples(path: &Path) -> Vec<(Program, Obligation, Part, Diagnos
         .diagnostics
         .into_iter()
         .filter(|d| d.counterexample.as_deref().is_some_and(|c| !c.values.is_empty() || c.overlap.is_some()))
+        // Parry's contacts are not read back here (see the test), and which pair the
+        // geometric search meets first depends on its time budget: not matched either.
+        .filter(|d| !d.notes.iter().any(|n| n.contains("found by the geometric procedure")))
         .collect();
     if shown.is_empty() {
         return Vec::new();
