@@ -813,9 +813,45 @@ pub fn sort(diags: &mut [Diagnostic]) {
     });
 }
 
+/// Drops every diagnostic that repeats an earlier one as the user reads it (the same
+/// code, severity, place, message, labels, notes and help): two obligations of one send
+/// (a process's [T-OUT] asked from two paths that meet) failing alike are one finding.
+pub fn dedupe(diags: &mut Vec<Diagnostic>) {
+    let same = |a: &Diagnostic, b: &Diagnostic| {
+        a.code == b.code
+            && a.severity == b.severity
+            && a.span == b.span
+            && a.message == b.message
+            && a.labels == b.labels
+            && a.notes == b.notes
+            && a.help == b.help
+    };
+    let mut kept: Vec<Diagnostic> = Vec::with_capacity(diags.len());
+    for d in diags.drain(..) {
+        if !kept.iter().any(|k| same(k, &d)) {
+            kept.push(d);
+        }
+    }
+    *diags = kept;
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_diagnostic_repeated_as_printed_is_shown_once() {
+        let f = crate::source::FileId(0);
+        let d =
+            |msg: &str| Diagnostic::error(Code::SendPredicate, Span::new(f, 3, 9), msg).with_note("required: x > 0");
+        let mut ds = vec![d("a send"), d("another send"), d("a send")];
+        dedupe(&mut ds);
+        assert_eq!(ds.iter().map(|d| d.message.as_str()).collect::<Vec<_>>(), ["a send", "another send"]);
+        // A different note is a different finding.
+        let mut ds = vec![d("a send"), d("a send").with_note("counterexample: x = 0")];
+        dedupe(&mut ds);
+        assert_eq!(ds.len(), 2);
+    }
 
     #[test]
     fn codes_are_unique_and_parse_back() {

@@ -540,6 +540,7 @@ impl Pipeline {
 
     fn finish(mut self) -> Report {
         diag::sort(&mut self.diagnostics);
+        diag::dedupe(&mut self.diagnostics);
         let verdict = if self.checks.iter().any(|c| c.status == Status::Fail)
             || self.diagnostics.iter().any(Diagnostic::is_error)
         {
@@ -836,6 +837,7 @@ fn counterexample_text(cx: &Counterexample, code: Code) -> Option<String> {
         let (frame, where_) = match code {
             Code::FootprintMissesBody => ("in the robot's own frame ", "is a point of the body outside the footprint"),
             Code::ObstacleHit => ("", "is in the footprint and in the obstacle"),
+            Code::RefinementFails => ("", "is in the concrete footprint and outside the abstract one"),
             _ => ("", "is in both footprints"),
         };
         parts.push(format!("{at}the point (x, y, z) = ({}, {}, {}) m {frame}{where_}", p[0], p[1], p[2]));

@@ -277,7 +277,7 @@ fn printed_projections_parse_back_to_the_same_type() {
 
 use mochi::exact::{self, Tri, Value};
 use mochi::hir::{Program, Var};
-use mochi::obligation::{Goal, Obligation};
+use mochi::obligation::Obligation;
 use mochi::smt::{goals::Part, replay, Decision};
 use std::collections::HashMap;
 
@@ -386,13 +386,13 @@ impl Model {
 /// How a counterexample fared when its obligation was evaluated under it.
 #[derive(Debug, PartialEq)]
 enum Replay {
-    /// Every hypothesis about the values shown true and the part violated, exactly: a
-    /// `Valid` goal false, a precondition false, a point inside both footprints.
+    /// No hypothesis false and the part's goal violated, exactly ([`replay::replay`]):
+    /// a `Valid` goal false, a precondition or assumption false, a point inside both
+    /// footprints, a duration outside another, a refinement item broken.
     Violated,
-    /// Not contradicted, but not decided by this test either: a part it does not
-    /// evaluate itself (assumptions, durations, separation, refinement: the SMT stage's
-    /// own replay only), or an evaluation that stays open.
-    NotContradicted,
+    /// Not contradicted, but not decided either, with why (a value shown only
+    /// approximately, an enclosure that straddles a boundary).
+    Undecided(String),
 }
 
 /// Evaluates obligation `ob`'s failed `part` under the values diagnostic `d` shows: the
@@ -418,102 +418,29 @@ fn replay_readings(
 
 fn replay_reading(prog: &Program, ob: &Obligation, part: &Part, model: &Model) -> Result<Replay, String> {
     // The SMT stage's replay (the one it runs on Z3's exact model), now on the values the
-    // user is shown.
-    if let Some(why) = replay::refutes(prog, ob, part, &model.valuation()) {
-        return Err(why);
-    }
-    // This test's own evaluation, for the parts it knows: the `Valid` goal false, a
-    // joint motion's precondition false, or the point in both footprints. A hypothesis
-    // that reads none of the values shown is about variables the query left out (it is
-    // sliced to what the goal depends on): it does not bear on the counterexample. Every
-    // other one must be true.
+    // user is shown: the part's own goal evaluated, for every kind of part.
+    let verdict = replay::replay(prog, ob, part, &model.valuation());
+    // A hypothesis that reads none of the values shown is about variables the query left
+    // out (it is sliced to what the goal depends on): it does not bear on the
+    // counterexample. Every other one must not be false (the replay checks that too).
     let print = |e| mochi::hir::print::expr(prog, None, e);
     let shared = |v: &Var| model.get(prog, v);
-    let eval = |e, env: &dyn Fn(&Var) -> Option<Value>| {
-        let read = std::cell::Cell::new(false);
-        let env = |v: &Var| {
-            let value = env(v);
-            read.set(read.get() || value.is_some());
-            value
-        };
-        (exact::holds(prog, e, &env), read.get())
-    };
-    let mut open = false;
     for h in &ob.hyps {
-        match eval(h, &shared) {
-            (Tri::True, _) | (Tri::Unknown, false) => {}
-            (Tri::False, _) => return Err(format!("the hypothesis `{}` is false", print(h))),
-            (Tri::Unknown, true) => open = true,
+        if exact::holds(prog, h, &shared) == Tri::False {
+            return Err(format!("the hypothesis `{}` is false", print(h)));
         }
     }
-    let decided = |violated: bool| if violated && !open { Replay::Violated } else { Replay::NotContradicted };
-    match (&ob.goal, part) {
-        (Goal::Valid(goal), Part::Valid | Part::Conjunct(_)) => {
-            let goal = match part {
-                Part::Conjunct(k) => *goal.conjuncts().get(*k).ok_or("no such conjunct")?,
-                _ => goal,
-            };
-            match eval(goal, &shared).0 {
-                Tri::True => Err(format!("the goal `{}` holds", print(goal))),
-                t => Ok(decided(t == Tri::False)),
-            }
-        }
-        (Goal::Compatible { parts }, Part::Pre(i)) => {
-            let (role, app) = parts.get(*i).ok_or("no such part")?;
-            let prim = prog.prim(app.prim);
-            match eval(&prim.pre, &frame(prog, model, *role, app, None, None)).0 {
-                Tri::True => Err(format!("the precondition of `{}` holds", prim.name)),
-                t => Ok(decided(t == Tri::False)),
-            }
-        }
-        (Goal::Compatible { parts }, Part::Disjoint(i, j)) => {
-            let point = ["point.x", "point.y", "point.z"].map(|n| model.by_name.get(n)?.num().ok().cloned());
-            let [Some(x), Some(y), Some(z)] = point else { return Ok(Replay::NotContradicted) };
-            let mut inside = true;
-            for k in [*i, *j] {
-                let (role, app) = parts.get(k).ok_or("no such part")?;
-                let prim = prog.prim(app.prim);
-                let fp = prim.footprint.predicate().ok_or("no footprint predicate")?;
-                let local = replay::to_local(prog, *role, &[x.clone(), y.clone(), z.clone()]);
-                match eval(&fp.pred, &frame(prog, model, *role, app, Some("t"), local)).0 {
-                    Tri::False => return Err(format!("the point is not in the footprint of `{}`", prim.name)),
-                    t => inside &= t == Tri::True,
-                }
-            }
-            Ok(decided(inside))
-        }
-        _ => Ok(Replay::NotContradicted),
+    match verdict {
+        replay::Replay::Falsifies => Ok(Replay::Violated),
+        replay::Replay::Refuted(why) => Err(why),
+        replay::Replay::Undecided(why) => Ok(Replay::Undecided(why)),
     }
 }
 
-/// The variables of `role`'s primitive `app` as a counterexample names them: its own
-/// variables at time `tag` (`Cart.x(t)`) or at the start (`Cart.x`), `old(x)` the start,
-/// its parameters the arguments' values, the clock `time`, the footprint's point `local`
-/// (in the robot's frame).
-fn frame<'a>(
-    prog: &'a Program,
-    model: &'a Model,
-    role: mochi::hir::RoleId,
-    app: &'a mochi::hir::PrimApp,
-    tag: Option<&'a str>,
-    local: Option<[exact::Num; 3]>,
-) -> impl Fn(&Var) -> Option<Value> + 'a {
-    use mochi::hir::Slot;
-    move |v: &Var| match v {
-        Var::Own(slot) => {
-            let name = &prog.kind_of(role).var(*slot).0;
-            match (tag, slot) {
-                (Some(t), _) => model.by_name.get(&format!("{}.{name}({t})", prog.role_name(role))).cloned(),
-                (None, Slot::State(_)) => model.get(prog, &Var::Role(role, *slot)),
-                (None, Slot::Input(_)) => model.by_name.get(&format!("{}.{name}", prog.role_name(role))).cloned(),
-            }
-        }
-        Var::Old(i) => model.get(prog, &Var::Role(role, Slot::State(*i))),
-        Var::Param(i) => exact::eval(prog, app.args.get(*i)?, &|v: &Var| model.get(prog, v)).ok(),
-        Var::Clock => model.by_name.get("time").cloned(),
-        Var::Point(k) => local.as_ref().and_then(|p| p.get(*k).cloned()).map(Value::Num),
-        other => model.get(prog, other),
-    }
+/// The kind of a part, for the coverage of the corpus's counterexamples.
+fn part_kind(p: &Part) -> String {
+    let text = format!("{p:?}");
+    text.split(['(', ' ', '{']).next().unwrap_or_default().to_string()
 }
 
 /// Every counterexample a report shows, with the obligation and part it refutes.
@@ -525,6 +452,9 @@ fn shown_counterexamples(path: &Path) -> Vec<(Program, Obligation, Part, Diagnos
         .diagnostics
         .into_iter()
         .filter(|d| d.counterexample.as_deref().is_some_and(|c| !c.values.is_empty() || c.overlap.is_some()))
+        // Parry's contacts are not read back here (see the test), and which pair the
+        // geometric search meets first depends on its time budget: not matched either.
+        .filter(|d| !d.notes.iter().any(|n| n.contains("found by the geometric procedure")))
         .collect();
     if shown.is_empty() {
         return Vec::new();
@@ -566,31 +496,51 @@ fn shown_counterexamples(path: &Path) -> Vec<(Program, Obligation, Part, Diagnos
 /// corruption must be caught.
 #[test]
 fn every_counterexample_shown_falsifies_its_goal() {
-    let (mut violated, mut replayed, mut failures) = (0, 0, Vec::new());
+    // `geometric`: counterexamples this test cannot read back (parry's contacts, values
+    // shown only approximately); each was replayed exactly before it was shown.
+    let (mut violated, mut geometric, mut failures) = (0, 0, Vec::new());
     let mut decided = Vec::new();
+    let mut kinds = std::collections::BTreeSet::new();
     for path in chor_files() {
         for (prog, ob, part, d) in shown_counterexamples(&path) {
+            // Parry's contact between bodies with no predicate: nothing here to evaluate
+            // (the geometric procedure replays its own contacts).
+            if d.notes.iter().any(|n| n.contains("found by the geometric procedure")) {
+                geometric += 1;
+                continue;
+            }
+            // A value shown only approximately (`≈`, an algebraic number or a long
+            // fraction) cannot be read back: the SMT stage replayed Z3's exact model.
+            let approximate =
+                d.counterexample.as_deref().is_some_and(|c| c.values.iter().any(|a| a.value.starts_with('≈')));
             match replay_readings(&prog, &ob, &part, &d) {
+                (Ok(Replay::Undecided(_)), _) if approximate => geometric += 1,
                 (Ok(Replay::Violated), Some(reading)) => {
                     violated += 1;
+                    kinds.insert(part_kind(&part));
                     decided.push((path.clone(), prog, ob, part, d, reading));
                 }
                 (Ok(Replay::Violated), None) => unreachable!("a violation comes from a reading"),
-                (Ok(Replay::NotContradicted), _) => replayed += 1,
-                (Err(why), _) => failures.push(format!("{}: {} ({}): {why}", path.display(), d.code, d.message)),
+                (Ok(Replay::Undecided(why)), _) | (Err(why), _) => {
+                    failures.push(format!("{}: {} ({}) [{part:?}]: {why}", path.display(), d.code, d.message))
+                }
             }
         }
     }
     assert!(failures.is_empty(), "counterexamples that do not falsify their goal:\n{}", failures.join("\n"));
-    // Not vacuous: `Valid` goals are decided, not merely not refuted (7 of 19 in the
-    // corpus when this was written; the others are [AGCOMP], separation and refinement
-    // parts, which only the SMT stage's replay evaluates).
-    assert!(violated >= 8, "only {violated} counterexamples decided violated ({replayed} only replayed)");
-    eprintln!("{violated} counterexamples decided violated, {replayed} only replayed");
+    // Not vacuous: counterexamples of many kinds of part are decided violated.
+    assert!(violated >= 20, "only {violated} counterexamples decided violated");
+    assert!(geometric <= 4, "{geometric} counterexamples cannot be read back");
+    eprintln!("{violated} counterexamples decided violated ({geometric} not readable), of parts {kinds:?}");
     // The check can fail: a corrupted counterexample is caught.
     // The corruption is read as the original was (the same binding of names to values):
     // another reading could bind a changed name to a namesake the goal does not read.
     for (path, prog, ob, part, d, reading) in &decided {
+        // A violation that needs no value (all space is within no bounded footprint, so
+        // any run of the concrete primitive falsifies the refinement): nothing to corrupt.
+        if replay::replay(prog, ob, part, &Default::default()) == replay::Replay::Falsifies {
+            continue;
+        }
         let cx = d.counterexample.as_deref().expect("a counterexample");
         let caught = (0..cx.values.len()).any(|i| {
             ["0", "1", "-1", "0.5", "1000", "-1000", "true", "false"].iter().any(|other| {

@@ -1156,8 +1156,11 @@ mod constant_arg_tests {
         let name = "choreographies/quarter-turn-test.chor";
         assert_eq!(check(name, &src("pi / 2")), (Verdict::Verified, vec![]));
         // (They also share a point at time 0: [T-SESS] reports it too.)
+        // Not a quarter turn: the footprints meet (cos(t) is 1.9e-17 > 0), but Z3's model
+        // may be a point of a neighbouring cosine the enclosure admits, which is no
+        // counterexample (checker/smt/replay.rs): rejected or unknown, never verified.
         let (verdict, codes) = check(name, &src("1.5707963267948966"));
-        assert_eq!(verdict, Verdict::Rejected);
-        assert!(codes.contains(&Code::FootprintsOverlap), "{codes:?}");
+        assert_ne!(verdict, Verdict::Verified);
+        assert!(verdict == Verdict::Unknown || codes.contains(&Code::FootprintsOverlap), "{codes:?}");
     }
 }

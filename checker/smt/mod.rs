@@ -483,17 +483,25 @@ impl Worker<'_> {
             match answer {
                 Answer::Unsat => {}
                 Answer::Sat { values, overlap, bound, exact } => {
-                    // A counterexample is shown only if it replays in exact arithmetic;
-                    // one that does not is a bug of the encoding, never a failure.
-                    if let Some(why) = replay::refutes(self.prog, ob, part, &exact) {
-                        let why = Why::Incomplete(format!("its model did not replay in exact arithmetic ({why}); please report this as a bug in mochi"));
-                        unknown.get_or_insert((describe(self.prog, ob, part), why));
+                    // A counterexample is shown only if, evaluated exactly, it falsifies
+                    // the part's own goal; one that does not is unknown, never a failure
+                    // (the geometric procedure's contact is parry's, replayed there).
+                    let geometric = goals::geo::applies(self.prog, ob, part);
+                    let replayed =
+                        if geometric { replay::Replay::Falsifies } else { replay::replay(self.prog, ob, part, &exact) };
+                    let why = match replayed {
+                        replay::Replay::Falsifies => None,
+                        replay::Replay::Refuted(why) => Some(format!("its model does not falsify the goal in exact arithmetic ({why}); the encoding's enclosure of a pose turned by an angle that is not an exact multiple of `pi / 2` admits such models, otherwise please report this as a bug in mochi")),
+                        replay::Replay::Undecided(why) => Some(format!("its model is not confirmed as a counterexample in exact arithmetic ({why}): the encoding's enclosures (of a pose's rotation, `sin`, `cos`, `sqrt`) may admit it where the real functions do not")),
+                    };
+                    if let Some(why) = why {
+                        unknown.get_or_insert((describe(self.prog, ob, part), Why::Incomplete(why)));
                         continue;
                     }
                     let which = Some(part.clone());
                     // Say which engine found it: Z3's model, or the geometric procedure's
                     // contact (parry, at a configuration a Z3 model of the contracts gave).
-                    let engine = if goals::geo::applies(self.prog, ob, part) {
+                    let engine = if geometric {
                         " [found by the geometric procedure: parry's contact at a state and time Z3 showed the contracts allow]"
                     } else {
                         ""
@@ -816,8 +824,21 @@ fn describe(prog: &Program, ob: &Obligation, part: &Part) -> String {
         (Goal::Compatible { parts }, Part::CommonEnd(n, j)) => {
             let lasts = |i: usize| {
                 let p = prog.prim(parts[i].1.prim);
-                let lo = crate::hir::print::expr(prog, Some(parts[i].1.prim), &p.duration.lo);
-                let hi = p.duration.hi.as_ref().map(|h| crate::hir::print::expr(prog, Some(parts[i].1.prim), h));
+                // The bounds with the arguments put in (`[d, d]` of `stroke(20)` is
+                // `[20, 20]`), a constant printed as its value.
+                let bound = |e: &crate::hir::Expr| {
+                    let e = crate::sigma::instantiate(e, parts[i].0, &parts[i].1.args);
+                    match crate::exact::eval(prog, &e, &|_: &crate::hir::Var| None) {
+                        Ok(crate::exact::Value::Num(n))
+                            if n.is_exact() && !crate::exact::decimal(&n.lo).starts_with('≈') =>
+                        {
+                            crate::exact::decimal(&n.lo)
+                        }
+                        _ => crate::hir::print::expr(prog, None, &e),
+                    }
+                };
+                let lo = bound(&p.duration.lo);
+                let hi = p.duration.hi.as_ref().map(bound);
                 format!(
                     "`{}` ({}, duration [{lo}, {}])",
                     prim(&parts[i].1),
@@ -964,7 +985,8 @@ pub(crate) mod tests {
     fn sqrt_and_powers_are_encoded_soundly() {
         assert_eq!(valid("", "x >= 0 => sqrt(x)^2 == x"), Validity::Holds);
         assert_eq!(valid("", "x^2 >= 0"), Validity::Holds);
-        assert!(matches!(valid("", "sqrt(x) >= 1"), Validity::Fails(_)));
+        // (Guarded: a model with `x < 0`, where `sqrt(x)` is undefined, falsifies nothing.)
+        assert!(matches!(valid("", "x >= 0 => sqrt(x) >= 1"), Validity::Fails(_)));
     }
 
     #[test]

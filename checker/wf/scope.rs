@@ -465,7 +465,7 @@ impl<'a> Contexts<'a> {
                                 rule: Rule::RecJump,
                                 span: v.loc.0,
                                 what: format!(
-                                    "the refinement `{}` of parameter `{}` of `{}` holds of the argument{}",
+                                    "the refinement `{}` of parameter `{}` of `{}` must hold of the argument{}",
                                     print::expr(self.prog, None, r),
                                     p.name,
                                     v.var,
@@ -512,9 +512,9 @@ impl<'a> Contexts<'a> {
             rule: Rule::MeasureDecrease,
             span: v.loc.0,
             what: format!(
-                "the measure `{text}` of `{var}` is `{}` after the jump `{}`",
-                print::expr(self.prog, None, &next),
-                jump_text(self.prog, v)
+                "the measure `{text}` of `{var}` must decrease at the jump `{}` (to `{}`)",
+                jump_text(self.prog, v),
+                print::expr(self.prog, None, &next)
             ),
             hyps: sigma.facts().to_vec(),
             goal: Goal::Valid(defined_and(cmp(BinOp::Lt, next, e.clone()))),

@@ -115,7 +115,13 @@ pub fn lines(prog: &Program, steps: &[Step], values: &[Assignment], bound: &[(St
                 let fields: Vec<String> = m
                     .payload
                     .iter()
-                    .map(|f| value(f.value, &f.name, f.mav.as_ref().map_or(&f.name, |m| &m.written)))
+                    .map(|f| {
+                        let text = value(f.value, &f.name, f.mav.as_ref().map_or(&f.name, |m| &m.written));
+                        match f.mav.as_ref().and_then(|m| m.entry.as_ref()) {
+                            Some(check) => entry_named(prog, &check.enum_name, text),
+                            None => text,
+                        }
+                    })
                     .collect();
                 let payload = if fields.is_empty() { String::new() } else { format!("({})", fields.join(", ")) };
                 let which = branch.map(|(k, n)| format!("   (branch {k} of {n})")).unwrap_or_default();
@@ -147,6 +153,21 @@ pub fn lines(prog: &Program, steps: &[Step], values: &[Assignment], bound: &[(St
         }
     }
     out
+}
+
+/// `field = 2` of a field whose values are entries of enum `enum_name` (not a bitmask),
+/// as `field = NAME` when 2 is the value of entry `NAME`; otherwise as it is.
+fn entry_named(prog: &Program, enum_name: &str, text: String) -> String {
+    let Some((field, value)) = text.split_once(" = ") else { return text };
+    let Ok(v) = value.parse::<i64>() else { return text };
+    let entry = prog
+        .dialect
+        .and_then(|d| d.enums.iter().find(|e| e.name == enum_name && !e.bitmask))
+        .and_then(|e| e.entries.iter().find(|x| x.value == v));
+    match entry {
+        Some(x) => format!("{field} = {}", x.name),
+        None => text,
+    }
 }
 
 #[cfg(test)]
@@ -195,5 +216,25 @@ mod tests {
             ]
         );
         assert!(super::path_to(g, crate::source::Span::default()).is_none() || g.loc().0 == Default::default());
+    }
+
+    /// An enum-typed field's value is shown as its entry's name (`MAV_MISSION_TYPE_FENCE`,
+    /// not `1`); a value no entry has stays a number.
+    #[test]
+    fn an_enum_field_shows_its_entry_name() {
+        let (p, d) = lower_src(
+            "dialect common;\nsystem S { participant GCS; participant UAV; }\n
+             choreography G = GCS -> UAV: MISSION_REQUEST_LIST(mission_type). end;",
+        );
+        assert!(d.is_empty(), "{d:?}");
+        let g = &p.choreography.as_ref().unwrap().body;
+        let crate::hir::Global::Seq(items, _) = g else { panic!("a sequence: {g:?}") };
+        let steps = super::path_to(g, items[1].loc().0).expect("the end is in the type");
+        let shown = |v: &str| {
+            let values = [crate::diag::Assignment { name: "mission_type".into(), value: v.into() }];
+            super::lines(&p, &steps, &values, &[])
+        };
+        assert_eq!(shown("1"), vec!["GCS -> UAV: MISSION_REQUEST_LIST(mission_type = MAV_MISSION_TYPE_FENCE)"]);
+        assert_eq!(shown("77"), vec!["GCS -> UAV: MISSION_REQUEST_LIST(mission_type = 77)"]);
     }
 }

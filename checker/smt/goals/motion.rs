@@ -122,13 +122,26 @@ impl<'a> Inst<'a> {
     /// a URDF or mesh part has no predicate: unsupported here (the geometric procedure
     /// decides the questions it can; every other one is unknown), never `true`.
     pub(super) fn footprint(&self, enc: &mut Encoder, p: &[Real; 3]) -> Result<Bool, Unsupported> {
+        match &self.prim.footprint {
+            Footprint::Everywhere => return Ok(Bool::from_bool(true)),
+            Footprint::Predicate(_) | Footprint::Shapes { .. } => {}
+            Footprint::Solid { .. } => return Err(no_predicate(self.prim)),
+        }
+        let local = to_local(enc, self.role, p)?;
+        self.footprint_at(enc, &local)
+    }
+
+    /// "The point `local` of the participant's own frame is in the footprint now", as
+    /// [`Inst::footprint`] but with the world point already moved into the frame: two
+    /// footprints of one participant read one local point (each move has its own
+    /// rotation slack, so two moves could place one world point at two local points).
+    pub(super) fn footprint_at(&self, enc: &mut Encoder, local: &[Real; 3]) -> Result<Bool, Unsupported> {
         let fp = match &self.prim.footprint {
             Footprint::Everywhere => return Ok(Bool::from_bool(true)),
             Footprint::Predicate(fp) | Footprint::Shapes { region: fp, .. } => fp,
             Footprint::Solid { .. } => return Err(no_predicate(self.prim)),
         };
-        let local = to_local(enc, self.role, p)?;
-        let frame = Frame { point: Some(local), ..self.frame.clone() };
+        let frame = Frame { point: Some(local.clone()), ..self.frame.clone() };
         self.pred(enc, &fp.pred, &frame)
     }
 

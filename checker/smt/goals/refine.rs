@@ -244,11 +244,13 @@ pub(super) fn refine(
                     Within::Unknown(why) => return Err(Unsupported(why)),
                 }
                 let p = world_point(q);
-                let fc = ci.footprint(&mut q.enc, &p)?;
+                // One participant, one frame: both footprints read the same local point.
+                let local = super::frames::to_local(&mut q.enc, role, &p)?;
+                let fc = ci.footprint_at(&mut q.enc, &local)?;
                 let mut fs = Vec::new();
                 for si in &sis {
                     let si_now = Inst { frame: Frame { own: ci.frame.own.clone(), ..si.frame.clone() }, ..si.clone() };
-                    fs.push(si_now.footprint(&mut q.enc, &p)?);
+                    fs.push(si_now.footprint_at(&mut q.enc, &local)?);
                 }
                 q.assertions.extend([fc, Bool::and(&fs).not()]);
                 q.point = Some(p);
