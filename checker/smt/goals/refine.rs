@@ -432,14 +432,14 @@ mod tests {
     /// the wrong way does not, and the failing part is that item.
     #[test]
     fn each_item_refines_in_the_corrected_direction_and_its_twin_does_not() {
-        let base = "pre: x >= 0.5; guarantee: x >= old(x) - 1; post: x >= 1; \
+        let base = "pre: x >= 0.5; guarantee: x >= old(x) - 0.5; post: x >= 1; \
                     footprint(px, py, pz): px^2 + py^2 + pz^2 <= 4; duration: [1, 3];";
         let cases = [
             (RefineItem::Pre, ("pre: x >= 0.5;", "pre: x >= 0;"), "pre: x >= 2;"),
             (
                 RefineItem::Guarantee,
-                ("guarantee: x >= old(x) - 1;", "guarantee: x >= old(x);"),
-                "guarantee: x >= old(x) - 2;",
+                ("guarantee: x >= old(x) - 0.5;", "guarantee: x >= old(x);"),
+                "guarantee: x >= old(x) - 1;",
             ),
             (
                 RefineItem::Footprint,
