@@ -228,12 +228,14 @@ codes! {
          (`x: real`). Only the fields of a MAVLink message (a program with a `dialect`) take \
          their sorts from the dialect, and only they may be renamed with `FIELD as NAME`.";
     ProtocolOnly = "E0242", "a protocol only: no process typed",
-        "A note, not an error. A program with a `dialect` and no `process` item at all is a \
-         protocol (issue 10: a MAVLink sub-protocol between a ground station and a vehicle): \
-         mochi checks its global type (well-formedness, total choice, recursion parameters, \
-         every refinement and guard on its path) and projects it onto each participant, but \
-         no process is typed against its projection, so `verified` says nothing of an \
-         implementation. `mochi project FILE --role R` prints what a process of R must do. \
+        "A note, not an error. A program with no `process` item at all is a protocol (a \
+         MAVLink sub-protocol between a ground station and a vehicle, or a robot cell checked \
+         before its programs exist): mochi checks its global type (well-formedness, total \
+         choice, recursion parameters, every refinement and guard on its path, and for robots \
+         the initial states, compatibility, collisions, separation and the primitives' \
+         contracts) and projects it onto each participant, but no process is typed against \
+         its projection, so `verified` says nothing of an implementation (a motion's \
+         precondition is checked only against a process's state, and is assumed here). `mochi project FILE --role R` prints what a process of R must do. \
          With one `process`, every participant needs one (E0701).";
     NotAnEntry = "E0243", "a refinement admits no entry of the field's enum",
         "A MAVLink field or command parameter whose dialect definition names an enum \

@@ -128,7 +128,8 @@ fn write_summary(
     write!(out, "verdict: ")?;
     paint(out, colour, word)?;
     write!(out, " ({file_name})")?;
-    // A MAVLink protocol with no process (E0242): the verdict is the global type's only.
+    // A protocol with no process (E0242; MAVLink, or a robot cell before its programs
+    // exist): the verdict is the global type's only.
     if report.diagnostics.iter().any(|d| d.code == crate::diag::Code::ProtocolOnly) {
         write!(out, " -- protocol only: no process typed")?;
     }

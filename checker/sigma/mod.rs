@@ -11,7 +11,8 @@
 //!
 //! 1. facts that mention an older snapshot of a moving participant `r` ([`Var::Snap`]) are
 //!    dropped, so only one snapshot per variable ever exists (contexts stay small and
-//!    canonical, and loops over them converge);
+//!    canonical, and loops over them converge); the bounds by constants they imply for
+//!    the variables that stay are kept first (`interval.rs`);
 //! 2. every fact about `r`'s variables is renamed to speak about the snapshot: `r.x`
 //!    becomes `old(r.x)`, the value when this motion started;
 //! 3. the postcondition is added with the kind's variables as `r.x`, `old(x)` as the
@@ -35,12 +36,14 @@
 //!
 //! The files: this one holds the set of facts and the operations that add, keep and
 //! restrict them; `join.rs` the weakening join of two contexts (the interval join of
-//! bounds by literals); `motion.rs` the strongest postcondition of a motion (steps 1-5
+//! bounds by constants); `interval.rs` those bounds, stated or implied through
+//! `min`/`max`; `motion.rs` the strongest postcondition of a motion (steps 1-5
 //! above); `normal.rs` the canonical form of a fact (orientation, exact literal
 //! arithmetic); `contract.rs` a primitive's predicates, `init` and invariants from a
 //! participant's view.
 
 mod contract;
+mod interval;
 mod join;
 mod motion;
 mod normal;

@@ -31,8 +31,14 @@ impl Sigma {
         let movers: Vec<RoleId> = parts.iter().map(|(r, _, _)| *r).collect();
         // Looked up for every variable of every fact: a set, not the list (a wide `dt`).
         let moving: FxHashSet<RoleId> = movers.iter().copied().collect();
-        // 1. One level of snapshots: forget the previous one.
-        self.forget(&|v| matches!(v, Var::Snap(r, _) if moving.contains(r)));
+        // 1. One level of snapshots: forget the previous one, keeping the bounds by
+        //    constants its facts imply for the variables that stay (`min(c, old(x)) <= x`
+        //    with `d <= old(x)` keeps `min(c, d) <= x`; `interval.rs`): a loop whose rounds
+        //    lower a variable to a bound, which later motions keep, still knows the bound
+        //    two motions on. Each kept bound is implied by the facts dropped.
+        let old = |v: &Var| matches!(v, Var::Snap(r, _) if moving.contains(r));
+        self.bound_before_forgetting(prog, &old);
+        self.forget(&old);
         // 2. What was true of the movers' variables is now true of their snapshots.
         let snap = |e: &Expr| {
             map_vars(e, &mut |v, sort| match v {
@@ -62,6 +68,41 @@ impl Sigma {
         }
         // 5.
         self.simplify();
+    }
+
+    /// Adds the bounds by constants that the facts mentioning a variable `hit` selects imply
+    /// for the other variables ([`super::interval::derive`]), where they are tighter than
+    /// the bounds Σ states: the facts are about to be forgotten.
+    fn bound_before_forgetting(&mut self, prog: &Program, hit: &dyn Fn(&Var) -> bool) {
+        if !self.facts.iter().any(|f| mentions(f, hit)) {
+            return;
+        }
+        let facts = self.facts.clone();
+        let stated = super::interval::direct(prog, &facts);
+        let mut known = stated.clone();
+        super::interval::derive(prog, &facts, &mut known, &|f| mentions(f, hit));
+        let mut adds = Vec::new();
+        for f in &facts {
+            let ExprKind::Binary(_, a, b) = &f.kind else { continue };
+            for t in [&**a, &**b] {
+                if mentions(t, hit) {
+                    continue;
+                }
+                let Some((lo, hi)) = known.get(t) else { continue };
+                let was = stated.get(t);
+                for (lower, new, have) in
+                    [(true, lo, was.and_then(|w| w.0.as_ref())), (false, hi, was.and_then(|w| w.1.as_ref()))]
+                {
+                    let Some(new) = new else { continue };
+                    if have.is_none_or(|have| new.tighter(have, lower) == Some(true)) {
+                        adds.push(new.fact(t, lower));
+                    }
+                }
+            }
+        }
+        for f in adds {
+            self.insert(f);
+        }
     }
 
     /// Eliminates snapshots defined by equalities and simplifies `min`/`max`, until

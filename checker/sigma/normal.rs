@@ -117,11 +117,6 @@ impl Decimal {
         Decimal { num: self.at_scale(scale)?.checked_add(o.at_scale(scale)?)?, scale }.reduced()
     }
 
-    pub(super) fn compare(self, o: Decimal) -> Option<std::cmp::Ordering> {
-        let scale = self.scale.max(o.scale);
-        Some(self.at_scale(scale)?.cmp(&o.at_scale(scale)?))
-    }
-
     pub(super) fn neg(self) -> Option<Decimal> {
         Some(Decimal { num: self.num.checked_neg()?, scale: self.scale })
     }

@@ -109,7 +109,7 @@ fn same_named_values_are_different_facts() {
     assert_ne!(first, second, "equal by name, different by binding site");
     let s = Sigma::from_facts([&first]);
     assert!(!s.contains(&second));
-    assert!(s.join(&Sigma::from_facts([&second])).is_empty());
+    assert!(s.join(&Sigma::from_facts([&second]), &prog).is_empty());
     let mut both = s.clone();
     both.meet(Sigma::from_facts([&second]));
     assert_eq!(both.len(), 2);
@@ -293,7 +293,7 @@ fn meet_join_and_containment() {
     let (prog, g) = setup(&["C: x == 0", "C: v == 0", "C: n > 0"]);
     let ab = Sigma::from_facts(&g[..2]);
     let bc = Sigma::from_facts(&g[1..]);
-    assert_eq!(shown(&prog, &ab.join(&bc)), vec!["C.v == 0"]);
+    assert_eq!(shown(&prog, &ab.join(&bc, &prog)), vec!["C.v == 0"]);
     let mut all = ab.clone();
     all.meet(bc.clone());
     assert_eq!(all, Sigma::from_facts(&g));
@@ -305,16 +305,16 @@ fn join_weakens_bounds_by_literals() {
     let (prog, g) = setup(&["C: x == 0", "C: x == 1.5", "C: 1 <= x", "C: x > 2", "C: v < 1 && x <= n"]);
     let one = |i: usize| Sigma::from_facts(&g[i..=i]);
     // Two positions: the interval between them.
-    assert_eq!(shown(&prog, &one(0).join(&one(1))), vec!["0 <= C.x", "C.x <= 1.5"]);
-    assert_eq!(shown(&prog, &one(1).join(&one(0))), vec!["0 <= C.x", "C.x <= 1.5"]);
+    assert_eq!(shown(&prog, &one(0).join(&one(1), &prog)), vec!["0 <= C.x", "C.x <= 1.5"]);
+    assert_eq!(shown(&prog, &one(1).join(&one(0), &prog)), vec!["0 <= C.x", "C.x <= 1.5"]);
     // The weaker lower bound, strictness included; a bound on one side only goes.
-    assert_eq!(shown(&prog, &one(2).join(&one(3))), vec!["1 <= C.x"]);
-    assert_eq!(shown(&prog, &one(3).join(&one(2))), vec!["1 <= C.x"]);
-    assert_eq!(shown(&prog, &one(3).join(&one(4))), Vec::<String>::new());
+    assert_eq!(shown(&prog, &one(2).join(&one(3), &prog)), vec!["1 <= C.x"]);
+    assert_eq!(shown(&prog, &one(3).join(&one(2), &prog)), vec!["1 <= C.x"]);
+    assert_eq!(shown(&prog, &one(3).join(&one(4), &prog)), Vec::<String>::new());
     // What is common is kept as it is; nothing weaker is added beside it.
     let mut a = one(2);
     a.assume(&g[1]);
-    assert_eq!(shown(&prog, &a.join(&one(2))), vec!["1 <= C.x"]);
+    assert_eq!(shown(&prog, &a.join(&one(2), &prog)), vec!["1 <= C.x"]);
 }
 
 /// The elimination of snapshots as a plain loop (the implementation before the index
@@ -453,4 +453,87 @@ fn a_wide_joint_motion_takes_time_linear_in_its_participants() {
     };
     // The plain loop was x64 at eight times the carts.
     crate::testing::assert_near_linear("carts", 100, 800, time);
+}
+
+/// A loop whose rounds end lower than they start: the arm starts at `cz <= A.ze`, a round
+/// leaves it at `0.1 <= old(A.ze)` with `min(cz, old(A.ze)) <= A.ze` (`work` keeps it at
+/// least where it was, or at cz). The loop head's join keeps the weaker bound `0.1 <= A.ze`,
+/// which the round's facts imply (the smaller of cz = 0.2 and 0.1), rather than nothing.
+#[test]
+fn the_join_keeps_a_bound_the_other_side_implies_through_min() {
+    let (prog, g) = setup(&["A: ze >= 0.1"]);
+    let a = role(&prog, "A");
+    let start = Sigma::initial(&prog, [a]);
+    let mut round = Sigma::from_facts(&g);
+    round.apply_motion(&prog, a, prim(&prog, "work"), &[]);
+    assert!(
+        !shown(&prog, &round).contains(&"0.1 <= A.ze".to_string()),
+        "implied, not stated: {:?}",
+        shown(&prog, &round)
+    );
+    for joined in [start.join(&round, &prog), round.join(&start, &prog)] {
+        assert!(shown(&prog, &joined).contains(&"0.1 <= A.ze".to_string()), "{:?}", shown(&prog, &joined));
+        assert!(!shown(&prog, &joined).contains(&"cz <= A.ze".to_string()), "{:?}", shown(&prog, &joined));
+    }
+    // Without a bound on the snapshot, `min(cz, old(A.ze))` bounds nothing: only the
+    // invariant's `0 <= A.ze` is common.
+    let mut blind = Sigma::new();
+    blind.apply_motion(&prog, a, prim(&prog, "work"), &[]);
+    let joined = start.join(&blind, &prog);
+    assert!(
+        shown(&prog, &joined).iter().all(|f| !f.contains("0.1") && !f.contains("cz")),
+        "{:?}",
+        shown(&prog, &joined)
+    );
+}
+
+/// A motion forgets the snapshot of the one before, but keeps the bounds by constants
+/// its facts imply for the current state: two `work`s after `0.1 <= A.ze` still know
+/// `0.1 <= old(A.ze)` (so a later precondition `0.05 <= A.ze` follows).
+#[test]
+fn a_motion_keeps_the_bounds_the_forgotten_snapshot_implied() {
+    let (prog, g) = setup(&["A: ze >= 0.1"]);
+    let a = role(&prog, "A");
+    let mut s = Sigma::from_facts(&g);
+    s.apply_motion(&prog, a, prim(&prog, "work"), &[]);
+    s.apply_motion(&prog, a, prim(&prog, "work"), &[]);
+    let facts = shown(&prog, &s);
+    assert!(facts.contains(&"0.1 <= old(A.ze)".to_string()), "{facts:?}");
+    // A third round adds nothing new: the bounds come from a finite set of terms.
+    let mut again = s.clone();
+    again.apply_motion(&prog, a, prim(&prog, "work"), &[]);
+    assert_eq!(again, s, "{:?}", shown(&prog, &again));
+}
+
+/// Bounds are compared by the constants' exact values; a `min` of two constants the
+/// values cannot order bounds nothing from below (neither is implied).
+#[test]
+fn bounds_by_constants_compare_by_exact_value_and_never_guess() {
+    let src = SRC.replace(
+        "const cz: real = 0.2;",
+        "const cz: real = 0.2; const pz: real = pi / 16; const qz: real = 0.196349540849362077403915211454;",
+    );
+    let (prog, d) = lower_src(&format!("{src} choreography G = C -> A : [A.ze >= pz] m. end;"));
+    assert!(d.is_empty(), "{d:?}");
+    let a = role(&prog, "A");
+    let pz = constant(&prog, "pz");
+    let qz = constant(&prog, "qz");
+    let ze = var(Var::Role(a, Slot::State(0)), &Sort::Real);
+    let old_ze = var(Var::Snap(a, Slot::State(0)), &Sort::Real);
+    let min = |x: &Expr, y: &Expr| Expr {
+        kind: ExprKind::Call(Builtin::Min, vec![x.clone(), y.clone()]),
+        sort: Sort::Real,
+        loc: Loc::default(),
+    };
+    // pi / 16 = 0.1963495408493620774039152114549... and qz agree to 30 digits: the enclosure
+    // of pi (20 decimals) cannot order them.
+    let s = Sigma::from_facts(&[binary(BinOp::Le, &pz, &old_ze), binary(BinOp::Le, &min(&qz, &old_ze), &ze)]);
+    let start = Sigma::from_facts(&[binary(BinOp::Le, &qz, &ze)]);
+    let joined = start.join(&s, &prog);
+    assert!(joined.is_empty(), "{:?}", shown(&prog, &joined));
+    // With cz (0.2 > pi / 16) the order is decided: the bound is pi / 16.
+    let cz = constant(&prog, "cz");
+    let s = Sigma::from_facts(&[binary(BinOp::Le, &pz, &old_ze), binary(BinOp::Le, &min(&cz, &old_ze), &ze)]);
+    let start = Sigma::from_facts(&[binary(BinOp::Le, &cz, &ze)]);
+    assert_eq!(shown(&prog, &start.join(&s, &prog)), vec!["pz <= A.ze"]);
 }

@@ -64,9 +64,10 @@ pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalArc>)
     for role in prog.role_ids() {
         let name = prog.role_name(role);
         let Some(def) = prog.processes.iter().find(|p| p.role == role) else {
-            // A program with a MAVLink dialect and no process at all is a protocol (issue
-            // 10): its global type and projections are checked, no process is typed (the
-            // report says so). [T-SESS] below is still asked.
+            // A program with no process at all is a protocol (a MAVLink sub-protocol, or a
+            // robot cell checked before its programs exist): its global type and
+            // projections are checked, no process is typed (the report says so). [T-SESS]
+            // below is still asked.
             if protocol_only(prog) {
                 continue;
             }
@@ -94,15 +95,25 @@ pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalArc>)
     }
     if protocol_only(prog) {
         if let Some((sys, span)) = &prog.system {
-            diags.push(
+            let d = if prog.dialect.is_some() {
                 Diagnostic::note_at(
                     Code::ProtocolOnly,
                     *span,
                     format!("protocol only: `{sys}` names a dialect and no process, so no process was typed"),
                 )
                 .with_note("the global type and its projections are checked; `mochi project FILE --role R` prints each participant's local type")
-                .with_help("add a `process` for every participant to have implementations typed against their projections"),
-            );
+            } else {
+                Diagnostic::note_at(
+                    Code::ProtocolOnly,
+                    *span,
+                    format!("protocol only: `{sys}` has no process, so no process was typed"),
+                )
+                .with_note("the choreography is checked (well-formedness, projections, the initial states, compatibility, collisions and separation of every joint motion, the primitives' contracts); no motion's precondition is checked against the state a program reaches, which only typing a process does")
+                .with_note("`mochi project FILE --role R` prints each participant's local type")
+            };
+            diags.push(d.with_help(
+                "add a `process` for every participant to have implementations typed against their projections",
+            ));
         }
     }
     // [T-SESS]: the initial states are collision free.
@@ -126,11 +137,13 @@ pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalArc>)
     (obligations, diags)
 }
 
-/// Whether `prog` is a protocol only: it names a MAVLink dialect and has no `process`
-/// item. Then no process is typed and E0701 is not asked (with one process, every
-/// participant needs one, as without a dialect).
+/// Whether `prog` is a protocol only: it has no `process` item (a MAVLink sub-protocol,
+/// or a robot cell whose choreography is checked before its programs are written). Then
+/// no process is typed and E0701 is not asked. With one process, every participant needs
+/// one: a partial set of processes is most likely an omission, and a cell half typed
+/// would read as typed, so each missing one is E0701.
 pub fn protocol_only(prog: &Program) -> bool {
-    prog.dialect.is_some() && prog.processes.is_empty()
+    prog.processes.is_empty()
 }
 
 /// A loop checked under several contexts may meet the same goal under the same

@@ -443,7 +443,7 @@ impl<'a> Contexts<'a> {
                     if let Some(end) = self.walk(b, s) {
                         out = Some(match out {
                             None => end,
-                            Some(o) => o.join(&end),
+                            Some(o) => o.join(&end, self.prog),
                         });
                     }
                 }
@@ -831,7 +831,7 @@ impl<'a> Contexts<'a> {
                 self.jumps[marks.2..].iter().filter(|(i, _)| *i == depth).map(|(_, s)| s).collect();
             // The next candidate: implied by the current one and by every jump's context.
             let next = if walks <= WEAKEN_WALKS {
-                reached.iter().fold(candidate.clone(), |c, s| c.join(s))
+                reached.iter().fold(candidate.clone(), |c, s| c.join(s, self.prog))
             } else {
                 let mut c = candidate.clone();
                 c.retain(|f| reached.iter().all(|s| s.contains(f)));

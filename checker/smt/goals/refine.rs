@@ -426,4 +426,48 @@ mod tests {
         };
         assert!(matches!(f.which, Some(Part::Refine(RefineItem::Guarantee | RefineItem::Duration))), "{f:?}");
     }
+
+    /// Each item of Def 3.4 in the corrected direction, on its own: a concrete primitive
+    /// that differs from `base` only in that item, the right way, refines it (a weaker
+    /// precondition, a stronger guarantee, a smaller footprint, a stronger postcondition, a
+    /// shorter non-interruptible duration within the abstract one); its twin that differs
+    /// the wrong way does not, and the failing part is that item.
+    #[test]
+    fn each_item_refines_in_the_corrected_direction_and_its_twin_does_not() {
+        let base = "pre: x >= 0.5; guarantee: x >= old(x) - 0.5; post: x >= 1; \
+                    footprint(px, py, pz): px^2 + py^2 + pz^2 <= 4; duration: [1, 3];";
+        let cases = [
+            (RefineItem::Pre, ("pre: x >= 0.5;", "pre: x >= 0;"), "pre: x >= 2;"),
+            (
+                RefineItem::Guarantee,
+                ("guarantee: x >= old(x) - 0.5;", "guarantee: x >= old(x);"),
+                "guarantee: x >= old(x) - 1;",
+            ),
+            (
+                RefineItem::Footprint,
+                ("footprint(px, py, pz): px^2 + py^2 + pz^2 <= 4;", "footprint(px, py, pz): px^2 + py^2 + pz^2 <= 1;"),
+                "footprint(px, py, pz): px^2 + py^2 + pz^2 <= 9;",
+            ),
+            (RefineItem::Post, ("post: x >= 1;", "post: x >= 1.5;"), "post: x >= 0.5;"),
+            (RefineItem::Duration, ("duration: [1, 3];", "duration: [1.5, 2.5];"), "duration: [0.5, 3];"),
+        ];
+        for (item, (old, good), bad) in cases {
+            let prims = format!(
+                "motion R.base {{ interruptible: false; {base} }}
+                 motion R.good {{ interruptible: false; {} }}
+                 motion R.bad {{ interruptible: false; {} }}
+                 motion R.wait {{ interruptible: true; duration: [0, inf]; }}",
+                base.replace(old, good),
+                base.replace(old, bad)
+            );
+            let (prog, ob) = refines(&prims, "good", "base");
+            let d = discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0;
+            assert_eq!(d, Decision::Holds(None), "{item:?}: {good} refines {old}");
+            let (prog, ob) = refines(&prims, "bad", "base");
+            let Decision::Fails(f) = discharge(&prog, &[ob], &[], &SmtConfig::default()).remove(0).0 else {
+                panic!("{item:?}: {bad} does not refine {old}")
+            };
+            assert_eq!(f.which, Some(Part::Refine(item)), "{item:?}: {f:?}");
+        }
+    }
 }
