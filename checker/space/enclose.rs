@@ -699,3 +699,11 @@ mod tests {
         assert!(r.is_err(), "{r:?}");
     }
 }
+
+/// The double `v` as an exact rational term (a quotient of integer literals); `None` for
+/// an infinite or NaN value.
+pub(crate) fn exact_double(v: f64, loc: Loc) -> Option<Expr> {
+    let q = BigRational::from_float(v)?;
+    let e = rational(&q);
+    Some(e.map(&mut |n| Expr { loc, ..n }))
+}
