@@ -261,7 +261,9 @@ fn choose(
             return Some(d);
         }
     }
-    (0..n).filter(|d| hi[*d] > lo[*d]).max_by(|a, b| ((hi[*a] - lo[*a]) / widths[*a]).total_cmp(&((hi[*b] - lo[*b]) / widths[*b])))
+    (0..n)
+        .filter(|d| hi[*d] > lo[*d])
+        .max_by(|a, b| ((hi[*a] - lo[*a]) / widths[*a]).total_cmp(&((hi[*b] - lo[*b]) / widths[*b])))
 }
 
 fn describe(v: &Var) -> String {
@@ -466,11 +468,15 @@ fn lin_inner(prog: &Program, e: &Expr) -> Lin {
                 _ => Lin::atom(bin(BinOp::Div, x.expr(), y.expr())),
             }
         }
-        ExprKind::Binary(BinOp::Pow, a, n) => {
-            Lin::atom(Expr { kind: ExprKind::Binary(BinOp::Pow, Box::new(lin(prog, a).expr()), n.clone()), ..e.clone() })
-        }
+        ExprKind::Binary(BinOp::Pow, a, n) => Lin::atom(Expr {
+            kind: ExprKind::Binary(BinOp::Pow, Box::new(lin(prog, a).expr()), n.clone()),
+            ..e.clone()
+        }),
         ExprKind::Call(f, args) if e.sort.is_numeric() => Lin::atom(Expr {
-            kind: ExprKind::Call(*f, args.iter().map(|a| if a.sort.is_numeric() { lin(prog, a).expr() } else { a.clone() }).collect()),
+            kind: ExprKind::Call(
+                *f,
+                args.iter().map(|a| if a.sort.is_numeric() { lin(prog, a).expr() } else { a.clone() }).collect(),
+            ),
             ..e.clone()
         }),
         _ => Lin::atom(e.clone()),
@@ -554,10 +560,9 @@ impl Tree {
             ExprKind::Binary(BinOp::Or, a, b) => {
                 Tree::Or(Box::new(Tree::new(prog, a, table)), Box::new(Tree::new(prog, b, table)))
             }
-            ExprKind::Binary(BinOp::Implies, a, b) => Tree::Or(
-                Box::new(Tree::Not(Box::new(Tree::new(prog, a, table)))),
-                Box::new(Tree::new(prog, b, table)),
-            ),
+            ExprKind::Binary(BinOp::Implies, a, b) => {
+                Tree::Or(Box::new(Tree::Not(Box::new(Tree::new(prog, a, table)))), Box::new(Tree::new(prog, b, table)))
+            }
             ExprKind::Binary(op @ (BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge | BinOp::Eq | BinOp::Ne), a, b)
                 if a.sort.is_numeric() && b.sort.is_numeric() =>
             {
@@ -622,9 +627,7 @@ impl Tree {
                     BinOp::Le => decide(x.hi <= y.lo, x.lo > y.hi),
                     BinOp::Gt => decide(x.lo > y.hi, x.hi <= y.lo),
                     BinOp::Ge => decide(x.lo >= y.hi, x.hi < y.lo),
-                    BinOp::Eq => {
-                        decide(x.lo == x.hi && y.lo == y.hi && x.lo == y.lo, x.hi < y.lo || y.hi < x.lo)
-                    }
+                    BinOp::Eq => decide(x.lo == x.hi && y.lo == y.hi && x.lo == y.lo, x.hi < y.lo || y.hi < x.lo),
                     _ => decide(x.hi < y.lo || y.hi < x.lo, x.lo == x.hi && y.lo == y.hi && x.lo == y.lo),
                 }
             }

@@ -275,8 +275,13 @@ pub fn add_joint_limits(prog: &mut Program) {
             }) else {
                 continue;
             };
-            let var = crate::hir::Expr { kind: crate::hir::ExprKind::Var(crate::hir::Var::Own(slot)), sort: sort.1.clone(), loc };
-            let (Some(lo), Some(hi)) = (super::enclose::exact_double(lo, loc), super::enclose::exact_double(hi, loc)) else {
+            let var = crate::hir::Expr {
+                kind: crate::hir::ExprKind::Var(crate::hir::Var::Own(slot)),
+                sort: sort.1.clone(),
+                loc,
+            };
+            let (Some(lo), Some(hi)) = (super::enclose::exact_double(lo, loc), super::enclose::exact_double(hi, loc))
+            else {
                 continue;
             };
             let cmp = |a: crate::hir::Expr, b: crate::hir::Expr| crate::hir::Expr {
