@@ -657,6 +657,14 @@ pub fn turns(prog: &Program, prim: PrimId) -> bool {
     fp || body
 }
 
+/// The double `v` as an exact rational term (a quotient of integer literals); `None` for
+/// an infinite or NaN value.
+pub(crate) fn exact_double(v: f64, loc: Loc) -> Option<Expr> {
+    let q = BigRational::from_float(v)?;
+    let e = rational(&q);
+    Some(e.map(&mut |n| Expr { loc, ..n }))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -701,12 +709,4 @@ mod tests {
         let r = search(body, &disc.replace('R', "0.1138"));
         assert!(r.is_err(), "{r:?}");
     }
-}
-
-/// The double `v` as an exact rational term (a quotient of integer literals); `None` for
-/// an infinite or NaN value.
-pub(crate) fn exact_double(v: f64, loc: Loc) -> Option<Expr> {
-    let q = BigRational::from_float(v)?;
-    let e = rational(&q);
-    Some(e.map(&mut |n| Expr { loc, ..n }))
 }
