@@ -258,6 +258,9 @@ fn geometry(prog: &mut crate::hir::Program, db: &mut SourceDb, load: &mut syntax
     if !diags.iter().any(Diagnostic::is_error) {
         let (world, more) = space::world::build(prog, db, load);
         prog.world = Some(std::sync::Arc::new(world));
+        if !more.iter().any(Diagnostic::is_error) {
+            space::world::add_joint_limits(prog);
+        }
         diags.extend(more);
     }
     diags

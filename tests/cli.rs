@@ -986,3 +986,18 @@ fn processes_of_a_mavlink_protocol_are_typed_against_their_projections() {
     let out = stdout(&o) + &stderr(&o);
     assert!(out.contains("verdict: rejected") && out.contains("error[E0709]"), "{out}");
 }
+
+#[test]
+fn a_footprint_turned_with_the_heading_contains_a_round_body_or_is_never_passed() {
+    // E0512 with a footprint written in the cart's heading frame (cos/sin of theta) around
+    // a cylinder body: decided by the interval search of `space::enclose` (Z3 timed out on
+    // it), and its twin 5 mm too small is not verified (the search finds no proof; Z3
+    // rejects it or leaves it open).
+    let o = mochi(&["check", "choreographies/pgcd/underpass.chor", "--format", "json"]);
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
+    assert_eq!(v["verdict"], "verified", "{}", stdout(&o));
+    let o = mochi(&["check", "tests/data/underpass-footprint-too-small.chor", "--timeout", "1", "--format", "json"]);
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
+    assert_ne!(v["verdict"], "verified", "{}", stdout(&o));
+    assert_ne!(o.status.code(), Some(0));
+}

@@ -213,7 +213,12 @@ pub fn hull_solid(data: &MeshData, scale: [f64; 3], pose: Isometry3<f64>, name: 
     // Rounding of the projection itself: a relative 1e-12 of the mesh's extent.
     let extent = pts.iter().map(|p| p.coords.amax()).fold(0.0, f64::max);
     let slack = slack + 1e-12 * extent + data.rounding * scale.iter().fold(0.0, |m: f64, s| m.max(s.abs()));
-    let tri = Arc::new(Triangles { vertices: pts, indices: data.triangles.clone() });
+    // A mirror (an odd number of negative factors) turns the triangles inside out: their
+    // winding is reversed so that each still faces out.
+    let mirrored = scale.iter().filter(|s| **s < 0.0).count() % 2 == 1;
+    let indices =
+        if mirrored { data.triangles.iter().map(|[a, b, c]| [*a, *c, *b]).collect() } else { data.triangles.clone() };
+    let tri = Arc::new(Triangles { vertices: pts, indices });
     Some(Solid::with_slack(hull, pose, name, slack, Some(tri)))
 }
 

@@ -338,11 +338,13 @@ fn load_mesh(
     cache: &mut MeshCache,
 ) -> Result<Solid, (Code, String, String)> {
     let scale = scale.unwrap_or([1.0; 3]);
-    if scale.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+    // A negative factor mirrors the mesh (how URDFs make a left part of a right one); zero
+    // would flatten it into less than it is.
+    if scale.iter().any(|s| !(s.is_finite() && *s != 0.0)) {
         return Err((
             Code::ShapeInvalid,
-            format!("mesh `{filename}` has scale {scale:?}: each factor must be a positive finite number"),
-            "use a positive scale (mirror the mesh in its file instead)".into(),
+            format!("mesh `{filename}` has scale {scale:?}: each factor must be a finite number other than 0"),
+            "use a non-zero scale for each axis (a negative one mirrors the mesh)".into(),
         ));
     }
     let format = mesh::format_of(filename).map_err(|e| {

@@ -6,6 +6,7 @@
 //! (URDF, meshes, rotation by a state variable) are the geometric decision procedure's.
 
 pub mod contain;
+pub mod enclose;
 pub mod region;
 pub mod truth;
 pub mod world;

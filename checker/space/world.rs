@@ -232,3 +232,69 @@ impl Builder<'_, '_> {
         None
     }
 }
+
+/// The position limits of a kind's URDF joints (`<limit lower upper>` of each revolute
+/// and prismatic joint driven by a state variable), added to the kind's invariant as
+/// `lower <= J && J <= upper` (Sec 3.1: every state of the robot satisfies its invariant;
+/// the robot description says the joint stays within these). Each bound is the double the
+/// URDF's decimal was read as, moved one ulp outward, so the range holds the decimal
+/// written. A joint whose limits are not a range (`lower >= upper`: the URDF default of
+/// 0 and 0 when `<limit>` gives no position, or infinite values) is left unbounded. A
+/// contract that drives a joint past its limit then contradicts the invariant: its
+/// motion cannot end (E0408, E0409), or its start is outside it (E0411).
+pub fn add_joint_limits(prog: &mut Program) {
+    let Some(world) = prog.world.clone() else { return };
+    for (k, pieces) in world.kinds.iter().enumerate() {
+        let mut limits: Vec<(Slot, f64, f64)> = Vec::new();
+        for p in pieces {
+            let Some(link) = &p.link else { continue };
+            for (slot, (lo, hi)) in link.joints.iter().zip(link.robot.joint_limits()) {
+                if !(lo.is_finite() && hi.is_finite() && lo < hi) || limits.iter().any(|(s, ..)| s == slot) {
+                    continue;
+                }
+                limits.push((*slot, lo.next_down(), hi.next_up()));
+            }
+        }
+        let Some(kind) = prog.kinds.get_mut(k) else { continue };
+        if limits.is_empty() {
+            continue;
+        }
+        // The facts point at the `urdf("...")` they come from.
+        let urdf = kind.body.as_ref().and_then(|b| {
+            b.parts.iter().find_map(|p| match &p.shape {
+                Shape::Urdf { span, .. } => Some(*span),
+                _ => None,
+            })
+        });
+        let loc = crate::hir::Loc(urdf.unwrap_or(kind.span));
+        let mut facts = Vec::new();
+        for (slot, lo, hi) in limits {
+            let Some(sort) = kind.state.get(match slot {
+                Slot::State(i) => i,
+                _ => continue,
+            }) else {
+                continue;
+            };
+            let var = crate::hir::Expr {
+                kind: crate::hir::ExprKind::Var(crate::hir::Var::Own(slot)),
+                sort: sort.1.clone(),
+                loc,
+            };
+            let (Some(lo), Some(hi)) = (super::enclose::exact_double(lo, loc), super::enclose::exact_double(hi, loc))
+            else {
+                continue;
+            };
+            let cmp = |a: crate::hir::Expr, b: crate::hir::Expr| crate::hir::Expr {
+                kind: crate::hir::ExprKind::Binary(crate::hir::expr::BinOp::Le, Box::new(a), Box::new(b)),
+                sort: crate::hir::Sort::Bool,
+                loc,
+            };
+            facts.push(cmp(lo, var.clone()));
+            facts.push(cmp(var, hi));
+        }
+        let mut all: Vec<crate::hir::Expr> = kind.invariant.take().into_iter().collect();
+        all.extend(facts);
+        let at = all.first().map_or(loc, |e| e.loc);
+        kind.invariant = Some(crate::hir::expr::and_all(all, at));
+    }
+}

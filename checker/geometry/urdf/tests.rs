@@ -206,6 +206,22 @@ fn mesh_names_resolve_like_ros() {
     assert!(r.is_ok());
 }
 
+/// A negative scale mirrors the mesh (URDFs make left parts of right ones so): the hull is
+/// the mirror image of the unit cube's, from -1 to 0 along x; a zero factor is refused.
+#[test]
+fn a_negative_scale_mirrors_the_mesh() {
+    let urdf = arm("m.obj", "revolute").replace("/>\n  </geometry>", " scale=\"-1 1 1\"/>\n  </geometry>");
+    let (_, r) = mem_load(&urdf, &[("/mem/pkg/urdf/m.obj", CUBE)]);
+    let r = r.expect("a mirrored mesh loads");
+    let s = &r.links[1].solids[0];
+    let aabb = s.local_aabb();
+    assert!((aabb.mins.x + 1.0).abs() < 1e-6 && aabb.maxs.x.abs() < 1e-6, "{aabb:?}");
+    assert!(aabb.mins.y.abs() < 1e-6 && (aabb.maxs.y - 1.0).abs() < 1e-6, "{aabb:?}");
+    let urdf = arm("m.obj", "revolute").replace("/>\n  </geometry>", " scale=\"0 1 1\"/>\n  </geometry>");
+    let (code, msg, _) = one_error(&urdf, &[("/mem/pkg/urdf/m.obj", CUBE)]);
+    assert_eq!(code, Code::ShapeInvalid, "{msg}");
+}
+
 #[test]
 fn each_urdf_error_points_into_the_urdf() {
     // Missing mesh: E0502 at the filename (line 6).
