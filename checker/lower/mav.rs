@@ -706,14 +706,13 @@ fn entry_approximation(d: Option<&Dialect>, check: &crate::hir::EnumCheck, x: &E
         let kept = pred.conjuncts().into_iter().filter(|c| !matches!(c.kind, ExprKind::Unary(UnOp::Not, _))).cloned();
         return Some(crate::hir::expr::and_all(kept, loc));
     }
-    if !real {
-        // An integer field: its runs are assumed exactly, as a disjunction of intervals
-        // (MAV_CMD's fifty), so that a counterexample is a value of the field's type.
-        return None;
-    }
     let runs = e.value_runs();
     let (lo, hi) = (runs.first()?.0, runs.last()?.1);
-    let many = runs.iter().map(|(a, b)| i128::from(*b) - i128::from(*a) + 1).sum::<i128>() > ASSUMED_EXACTLY as i128;
+    let many = if real {
+        runs.iter().map(|(a, b)| i128::from(*b) - i128::from(*a) + 1).sum::<i128>() > ASSUMED_EXACTLY as i128
+    } else {
+        runs.len() > ASSUMED_EXACTLY
+    };
     many.then(|| hull(i128::from(lo), i128::from(hi)))
 }
 

@@ -488,17 +488,21 @@ fn the_receiver_assumes_the_enum_and_a_process_must_send_an_entry() {
     assert_eq!(procs("42"), (Verdict::Rejected, vec!["E0709"]));
 }
 
-/// Σ assumes an integer field's entries exactly (MAV_CMD's runs as a disjunction of
-/// intervals: a counterexample is a value of the field's type); only a bitmask's holes and
-/// a float field of many values are assumed by a cheaper, weaker predicate, the field's
-/// refinement (what a sender must establish) keeping the exact one.
+/// Σ assumes a costly entry predicate by a cheaper, weaker one; the field's refinement (what
+/// a sender must establish) keeps the exact one.
 #[test]
-fn the_global_walk_assumes_integer_enums_exactly() {
+fn the_global_walk_assumes_costly_enums_by_their_hull() {
     let (p, d) = lower_mav("UAV -> GCS: COMMAND_ACK(command as c, result as r). end");
     assert!(d.is_empty(), "{d:?}");
     let m = first_msg(&p);
-    assert!(super::approximate_entries(p.dialect, &m).is_none());
+    let cmds = p.dialect.and_then(|d| d.enum_("MAV_CMD")).expect("MAV_CMD").value_runs();
+    let (lo, hi) = (cmds[0].0, cmds[cmds.len() - 1].1);
+    let assumed = super::approximate_entries(p.dialect, &m).expect("MAV_CMD is approximated");
+    let text = crate::hir::print::expr(&p, None, assumed.payload[0].refinement.as_ref().expect("refined"));
+    assert_eq!(text, format!("{lo} <= c && c <= {hi} && (0 <= c && c <= 65535)"));
+    // The exact predicate stays in the field's own refinement; MAV_RESULT (one run) is kept.
     assert!(printed(&p, &m.payload[0]).contains("||"));
+    assert_eq!(assumed.payload[1].refinement, m.payload[1].refinement);
     // A bitmask's holes (div/mod) are dropped from what is assumed.
     let (p, f) = first_refinement("GCS -> UAV: SET_ATTITUDE_TARGET(type_mask as k {k != 3}). end");
     let m = Msg { payload: vec![f], ..first_msg(&p) };
