@@ -169,3 +169,28 @@ fn partial_operators_in_float_payloads_are_undecided_never_verified() {
         assert_eq!(u.len(), 1, "{path}: {r}");
     }
 }
+
+/// Ordinary MAVLink arithmetic is decided: a `uint64_t` clock compared with a loop's
+/// last value (the wire bound 2^64 - 1 is an integer, not a real), float command
+/// parameters against integer fields (an integer payload value between real bounds is
+/// eliminated without a quantifier), and a split of MAV_CMD at a gap of its entries (Σ
+/// assumes the entries as their runs, not their hull). Each was `unknown` after the
+/// default timeout, or rejected with a value that is no entry (`cmd = 96`).
+#[test]
+fn ordinary_mavlink_arithmetic_and_enum_gaps_are_decided() {
+    for f in
+        ["system-time-monotone", "reposition-position-report", "mission-set-current-skip", "command-dispatch-by-range"]
+    {
+        let path = format!("choreographies/mavlink/{f}.chor");
+        let r = report(&path);
+        assert_eq!(r["verdict"], "verified", "{path}: {r}");
+    }
+    // The twins' counterexamples are values of the fields' types: an entry of MAV_CMD
+    // between the ranges, a longitude west of Greenwich, a float number between items.
+    let r = report("choreographies/mavlink/rejected/E0316-command-range-skips-conditions.chor");
+    let d = diagnostics(&r, "E0316");
+    let cmd: i64 = value(d[0], "cmd").expect("cmd").parse().expect("an integer");
+    assert!((112..=115).contains(&cmd) || cmd == 159, "{cmd}");
+    let r = report("choreographies/mavlink/rejected/E0419-clock-past-the-wire-range.chor");
+    assert_eq!(value(diagnostics(&r, "E0419")[0], "last").as_deref(), Some("18446744073709551616"));
+}

@@ -365,6 +365,13 @@ impl<'p> Encoder<'p> {
         self.quantified = true;
     }
 
+    /// Marks the query as one of integer arithmetic though it may declare no integer
+    /// variable (an integer payload value eliminated into `to_int` of reals,
+    /// `goals::progress`): nlsat has no `to_int`.
+    pub fn integer_terms(&mut self) {
+        self.quantified = true;
+    }
+
     pub fn logic(&self) -> Logic {
         if self.quantified || self.vars.values().any(|t| matches!(t, Term::I(_))) {
             Logic::WithIntegers
@@ -569,7 +576,8 @@ impl<'p> Encoder<'p> {
                 }
             }
             Eq | Ne => {
-                let eq = match self.mixed(|enc| Ok::<_, Unsupported>((enc.term(a)?, enc.term(b)?)))? {
+                let pair = self.mixed(|enc| Ok::<_, Unsupported>((enc.term(a)?, enc.term(b)?)))?;
+                let eq = match integral_pair(pair) {
                     (Term::B(x), Term::B(y)) => x.eq(&y),
                     (Term::I(x), Term::I(y)) => x.eq(&y),
                     (Term::V(x), Term::V(y)) => Bool::and(&[x[0].eq(&y[0]), x[1].eq(&y[1]), x[2].eq(&y[2])]),
@@ -579,7 +587,8 @@ impl<'p> Encoder<'p> {
             }
             Lt | Le | Gt | Ge | Add | Sub | Mul | Div => {
                 let (x, y) = (self.term(a)?, self.term(b)?);
-                match (x, y) {
+                let pair = if op == Div { (x, y) } else { integral_pair((x, y)) };
+                match pair {
                     (Term::V(u), Term::V(v)) if matches!(op, Add | Sub) => Term::V(std::array::from_fn(|k| {
                         if op == Add {
                             Real::add(&[u[k].clone(), v[k].clone()])
@@ -908,6 +917,30 @@ pub fn rational(lit: &str) -> Option<Real> {
 /// lie on either side of it: an enclosure's end must not move inward).
 pub fn real_of_f64(v: f64) -> Option<Real> {
     real_of_rational(&BigRational::from_float(v)?)
+}
+
+/// An integer term against a real numeral of integral value (`2^64 - 1`, a `uint64_t`
+/// field's wire bound, is beyond `i64` and so written as a real): the numeral as an
+/// integer, so that the comparison or sum stays in integer arithmetic. Exact (the numeral
+/// is that integer); a `to_real` of an integer variable next to a 20-digit real makes Z3's
+/// quantified integer queries (progress over a `uint64_t` field) time out, where the
+/// integer form is decided at once.
+fn integral_pair(pair: (Term, Term)) -> (Term, Term) {
+    let int_of = |r: &Real| {
+        let q = rational_value(r).filter(|q| q.is_integer())?;
+        q.numer().to_string().parse::<Int>().ok()
+    };
+    match pair {
+        (Term::I(x), Term::R(r)) => match int_of(&r) {
+            Some(y) => (Term::I(x), Term::I(y)),
+            None => (Term::I(x), Term::R(r)),
+        },
+        (Term::R(r), Term::I(y)) => match int_of(&r) {
+            Some(x) => (Term::I(x), Term::I(y)),
+            None => (Term::R(r), Term::I(y)),
+        },
+        other => other,
+    }
 }
 
 /// An exact rational as a Z3 real.

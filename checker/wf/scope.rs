@@ -72,6 +72,7 @@ pub fn check(prog: &Program, g: &Global) -> (Vec<Obligation>, Vec<Diagnostic>) {
         steps: 0,
         choice_firsts: Default::default(),
         enum_of: Default::default(),
+        exact_entry: Default::default(),
     };
     let start = c.initial();
     c.walk(g, start);
@@ -363,6 +364,11 @@ struct Contexts<'a> {
     /// The enum of each enum-typed payload value met so far (E0243's shortcut for `x == y`
     /// with `y` of the same enum).
     enum_of: HashMap<ValueId, (String, crate::dialect::Wire)>,
+    /// The exact entry predicate of each enum-typed payload value that Σ assumes by a
+    /// weaker fact (`lower::approximate_entries`): added to the hypotheses of total choice
+    /// and progress ([`Contexts::exact`]), whose counterexamples must be values of the
+    /// fields' types.
+    exact_entry: HashMap<ValueId, Expr>,
 }
 
 impl<'a> Contexts<'a> {
@@ -388,7 +394,7 @@ impl<'a> Contexts<'a> {
                             rule: Rule::Progress,
                             span: m.loc.0,
                             what: format!("the message {}: some payload satisfies its refinements", e.what),
-                            hyps: sigma.facts().to_vec(),
+                            hyps: self.exact(sigma.facts()),
                             goal: Goal::Progress { branches: vec![e] },
                         });
                     }
@@ -396,6 +402,16 @@ impl<'a> Contexts<'a> {
                 // Σ assumes a costly entry predicate (MAV_CMD's fifty runs) by its hull; the
                 // message's own checks read the exact one (`lower::approximate_entries`).
                 let assumed = crate::lower::approximate_entries(self.prog.dialect, m);
+                if let Some(a) = &assumed {
+                    for (f, g) in m.payload.iter().zip(&a.payload) {
+                        let Some(check) = f.mav.as_ref().and_then(|mav| mav.entry.as_ref()) else { continue };
+                        if f.refinement != g.refinement {
+                            let x = crate::hir::expr::value_expr(f.value, &f.name, &f.sort);
+                            let (entry, _) = crate::lower::entry_predicate(self.prog.dialect, check, &x);
+                            self.exact_entry.insert(f.value, entry);
+                        }
+                    }
+                }
                 let asked = self.enum_fields(m);
                 if !asked.is_empty() {
                     self.enum_entries(m, assumed.as_ref().unwrap_or(m), &asked, &sigma);
@@ -612,6 +628,31 @@ impl<'a> Contexts<'a> {
         sigma.apply_joint_motion(self.prog, &m.parts);
     }
 
+    /// `facts` with the exact entry predicate of every payload value they mention whose
+    /// entry predicate Σ assumes by a weaker fact (MAV_CMD's hull): total choice and
+    /// progress then decide over the field's type (a counterexample is an entry, and a
+    /// split at a gap of the entries is total), while the other checks keep Σ's cheaper
+    /// fact. Sound: the predicate mentions the value alone and holds of every value the
+    /// field carried (it is the field's type), whichever binding a fact is about.
+    fn exact(&self, facts: &[Expr]) -> Vec<Expr> {
+        let mut out = facts.to_vec();
+        if self.exact_entry.is_empty() {
+            return out;
+        }
+        let mut seen = std::collections::BTreeSet::new();
+        for f in facts {
+            f.visit_vars(&mut |v, _| {
+                if let Var::Value(id, _) = v {
+                    if self.exact_entry.contains_key(id) {
+                        seen.insert(*id);
+                    }
+                }
+            });
+        }
+        out.extend(seen.into_iter().filter_map(|id| self.exact_entry.get(&id).cloned()));
+        out
+    }
+
     /// Def 4.4 (1): under Σ, some guard holds.
     fn total_choice(&mut self, branches: &[Global], sigma: &Sigma) {
         let guards: Vec<Option<&Expr>> =
@@ -636,7 +677,7 @@ impl<'a> Contexts<'a> {
                 rule: Rule::TotalChoice,
                 span: m.loc.0,
                 what: format!("the guards of the choice by `{}`", self.prog.role_name(m.from)),
-                hyps: sigma.facts().to_vec(),
+                hyps: self.exact(sigma.facts()),
                 goal: Goal::Valid(goal),
             });
         }
@@ -734,7 +775,7 @@ impl<'a> Contexts<'a> {
             rule: Rule::Progress,
             span: m.loc.0,
             what: format!("the choice by `{}`: some branch can be taken", self.prog.role_name(m.from)),
-            hyps: hyps.facts().to_vec(),
+            hyps: self.exact(hyps.facts()),
             goal: Goal::Progress { branches: each },
         });
     }
