@@ -282,7 +282,14 @@ struct Caches {
 /// One worker: decides obligations from the pool until there are none.
 fn work(lease: &pool::Lease<Caches>) {
     let sh = lease.shared;
-    let w = Worker { prog: &sh.prog, cfg: &sh.cfg, caches: &sh.extra, labels: &sh.labels, watchdog: lease.watchdog };
+    let w = Worker {
+        prog: &sh.prog,
+        cfg: &sh.cfg,
+        caches: &sh.extra,
+        labels: &sh.labels,
+        watchdog: lease.watchdog,
+        timeout: sh.cfg.timeout,
+    };
     while let Some(i) = lease.take() {
         let ob = &sh.obligations[i];
         let t = std::time::Instant::now();
@@ -340,18 +347,59 @@ enum Answer {
     Unknown(Why),
 }
 
+#[derive(Clone, Copy)]
 struct Worker<'a> {
     prog: &'a Program,
     cfg: &'a SmtConfig,
     caches: &'a Caches,
     labels: &'a [String],
     watchdog: &'a Watchdog,
+    /// Per query: the configuration's, or less for a first quick pass
+    /// ([`Worker::contains_turning`]).
+    timeout: Duration,
 }
+
+/// The first pass's limit per query for body containment with a footprint that turns with
+/// the state ([`Worker::contains_turning`]).
+const QUICK: Duration = Duration::from_secs(1);
 
 impl Worker<'_> {
     /// Decides one obligation: every part must hold. A failing part wins over an
     /// unknown one (it is a definite answer).
     fn decide(&self, index: usize, ob: &Obligation) -> (Decision, Stats) {
+        if let Goal::Contains { prim } = ob.goal {
+            if crate::space::enclose::turns(self.prog, prim) && !ob.trivially_holds() {
+                return self.contains_turning(index, ob, prim);
+            }
+        }
+        self.decide_parts(index, ob)
+    }
+
+    /// Body containment (E0512) with a footprint that turns with the state (its `cos`/`sin`,
+    /// or the body's): Z3 first, for at most [`QUICK`] per query (most such questions are
+    /// linear once the heading is fixed, and answered in milliseconds); then the interval
+    /// search of `space::enclose`, which decides what Z3's nonlinear arithmetic leaves open
+    /// (up to its budget of pieces, about a second); then Z3 again with the full limit.
+    /// Every answer is one of the three procedures', each sound on its own.
+    fn contains_turning(&self, index: usize, ob: &Obligation, prim: crate::hir::PrimId) -> (Decision, Stats) {
+        let quick = Worker { timeout: self.timeout.min(QUICK), ..*self };
+        let (d, mut stats) = quick.decide_parts(index, ob);
+        if !matches!(d, Decision::Unknown { .. }) {
+            return (d, stats);
+        }
+        if let Ok(note) = crate::space::enclose::body_in_predicate(self.prog, prim) {
+            stats.geometric += 1;
+            return (Decision::Holds(Some(note)), stats);
+        }
+        if quick.timeout == self.timeout {
+            return (d, stats);
+        }
+        let (d, more) = self.decide_parts(index, ob);
+        stats.add(&more);
+        (d, stats)
+    }
+
+    fn decide_parts(&self, index: usize, ob: &Obligation) -> (Decision, Stats) {
         let mut stats = Stats::default();
         if ob.trivially_holds() {
             stats.folded += 1;
@@ -580,7 +628,7 @@ impl Worker<'_> {
         // another): the geometric procedure, Z3 asked only for witnesses.
         if goals::geo::applies(self.prog, ob, part) {
             stats.geometric += 1;
-            return match goals::geo::decide(self.prog, ob, part, self.cfg.timeout) {
+            return match goals::geo::decide(self.prog, ob, part, self.timeout) {
                 goals::geo::GeoAnswer::Apart => Answer::Unsat,
                 goals::geo::GeoAnswer::Contact { values, overlap } => {
                     Answer::Sat { values, overlap: Some(overlap), bound: Vec::new(), exact: Default::default() }
@@ -663,7 +711,7 @@ impl Worker<'_> {
             return Answer::Sat { values: Vec::new(), overlap: None, bound: Vec::new(), exact: Default::default() };
         }
         let solver = solver.unwrap_or_else(|| solver_of(&q));
-        let seq = self.watchdog.arm(self.cfg.timeout);
+        let seq = self.watchdog.arm(self.timeout);
         #[cfg(test)]
         pool::maybe_hang(&label);
         let mut result = solver.check();
@@ -676,7 +724,7 @@ impl Worker<'_> {
             for pin in q.enc.trig_at_zero() {
                 solver.assert(&pin);
             }
-            let seq = self.watchdog.arm(self.cfg.timeout);
+            let seq = self.watchdog.arm(self.timeout);
             result = match solver.check() {
                 z3::SatResult::Sat => z3::SatResult::Sat,
                 // No witness at 0: the original question stays open.
@@ -705,7 +753,7 @@ impl Worker<'_> {
                 }
                 None => Answer::Sat { values: Vec::new(), overlap: None, bound: Vec::new(), exact: Default::default() },
             },
-            z3::SatResult::Unknown if timed_out => Answer::Unknown(Why::Timeout(self.cfg.timeout)),
+            z3::SatResult::Unknown if timed_out => Answer::Unknown(Why::Timeout(self.timeout)),
             z3::SatResult::Unknown => {
                 Answer::Unknown(Why::Incomplete(solver.get_reason_unknown().unwrap_or_else(|| "unknown".into())))
             }

@@ -166,16 +166,11 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
                 // All space contains every body; `footprint: geometry` is the body itself.
                 crate::hir::Footprint::Everywhere => Plan::Holds(Some("the footprint is all space".into())),
                 f if f.is_own_geometry() => Plan::Holds(Some("the footprint is the robot's own geometry".into())),
-                // A predicate that turns with the state (its `cos`/`sin`, or the body's):
-                // first the interval search of `space::enclose`, which decides what Z3's
-                // nonlinear arithmetic leaves open; Z3 asks what the search does not show.
+                // A predicate that turns with the state (its `cos`/`sin`, or the body's) is
+                // also tried by the interval search of `space::enclose` where Z3 does not
+                // decide these parts quickly (`Worker::contains_turning`).
                 crate::hir::Footprint::Predicate(_) | crate::hir::Footprint::Shapes { .. } => {
-                    match crate::space::enclose::turns(prog, *prim)
-                        .then(|| crate::space::enclose::body_in_predicate(prog, *prim))
-                    {
-                        Some(Ok(note)) => Plan::Holds(Some(note)),
-                        Some(Err(_)) | None => Plan::Parts((0..n).map(Part::Contains).collect()),
-                    }
+                    Plan::Parts((0..n).map(Part::Contains).collect())
                 }
                 // No predicate: decided by the solids when each part of the body lies in a
                 // part of the footprint placed the same way, else unknown.
