@@ -690,7 +690,7 @@ fn failure(prog: &crate::hir::Program, ob: &Obligation, f: smt::Failure) -> Diag
         Code::Stuck => "weaken the refinement or guard that no value satisfies in the counterexample's state, or add a branch for that state",
         Code::ProcessRecArgs => "pass the loop the same values as the local type's recursion (its initial values and the arguments of its jump), computed from what the process sent and received",
         Code::EmptyFootprint => "write a footprint that contains the robot at every state its guarantee allows (a footprint no point satisfies, such as `false`, hides every collision)",
-        Code::VacuousContract => "fix the duration's bounds (lo <= hi, hi >= 0), or make the guarantee and the postcondition agree at the end of the motion",
+        Code::VacuousContract => "fix the duration's bounds (lo <= hi, hi >= 0), or make the guarantee and the postcondition agree at the end of the motion (with every `sqrt` taken of a value >= 0 and every divisor non-zero: an undefined value satisfies nothing)",
         Code::StuckContext => "fix the step named above (an `init` no state satisfies, a refinement or guard that contradicts what holds there): no execution gets past it",
         Code::InitOutsideInvariant => "make `init` and the robot kind's invariant agree on at least one state (fix `init`, or widen the invariant)",
         Code::SubtypePredicate => "in the declared local type, strengthen the send's guard or refinement (weaken the reception's) until it implies the projection's, or drop the `local` item",

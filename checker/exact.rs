@@ -136,7 +136,8 @@ impl Num {
             Tri::Unknown
         }
     }
-    fn le(&self, o: &Num) -> Tri {
+    /// `self <= o` for every pair of values of the two enclosures, for none, or undecided.
+    pub fn le(&self, o: &Num) -> Tri {
         if self.hi <= o.lo {
             Tri::True
         } else if self.lo > o.hi {

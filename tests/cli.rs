@@ -637,6 +637,15 @@ fn an_input_is_its_source_state_when_a_motion_starts() {
     assert_eq!(v["vacuous"], 0, "{v}");
 }
 
+/// The verified twin of `rejected/E0409-postcondition-takes-sqrt-of-a-negative.chor`: a
+/// contract predicate with a partial operator that is defined where the motion ends.
+#[test]
+fn a_postcondition_with_a_defined_square_root_can_end() {
+    let o = mochi(&["check", "tests/data/postcondition-takes-sqrt-of-a-positive.chor", "--format", "json"]);
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
+    assert_eq!(v["verdict"], "verified", "{v}");
+}
+
 // ---- the verdict, the diagnostics and the exit code agree ----------------------------
 
 /// Every `.chor` under `dir`, in every folder, sorted.

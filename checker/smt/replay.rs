@@ -444,13 +444,7 @@ fn duration(prog: &Program, m: &Valuation, (r, app): &(RoleId, PrimApp)) -> Opti
 
 /// `a <= b` of two enclosures.
 fn le(a: &Num, b: &Num) -> Tri {
-    if a.hi <= b.lo {
-        Tri::True
-    } else if a.lo > b.hi {
-        Tri::False
-    } else {
-        Tri::Unknown
-    }
+    a.le(b)
 }
 
 fn eq(a: &Num, b: &Num) -> Tri {

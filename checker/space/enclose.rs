@@ -610,26 +610,7 @@ impl Tree {
             },
             Tree::Cmp(op, a, b) => {
                 let (x, y) = (a.eval(env, work)?, b.eval(env, work)?);
-                if x.lo.is_nan() || x.hi.is_nan() || y.lo.is_nan() || y.hi.is_nan() {
-                    return None;
-                }
-                let decide = |always: bool, never: bool| {
-                    if always {
-                        Some(true)
-                    } else if never {
-                        Some(false)
-                    } else {
-                        None
-                    }
-                };
-                match op {
-                    BinOp::Lt => decide(x.hi < y.lo, x.lo >= y.hi),
-                    BinOp::Le => decide(x.hi <= y.lo, x.lo > y.hi),
-                    BinOp::Gt => decide(x.lo > y.hi, x.hi <= y.lo),
-                    BinOp::Ge => decide(x.lo >= y.hi, x.hi < y.lo),
-                    BinOp::Eq => decide(x.lo == x.hi && y.lo == y.hi && x.lo == y.lo, x.hi < y.lo || y.hi < x.lo),
-                    _ => decide(x.hi < y.lo || y.hi < x.lo, x.lo == x.hi && y.lo == y.hi && x.lo == y.lo),
-                }
+                super::truth::compare(*op, x, y)
             }
         }
     }

@@ -45,19 +45,7 @@ fn truth_inner(prog: &Program, e: &Expr, ranges: &dyn Ranges) -> Option<bool> {
         ExprKind::Binary(op @ (BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge | BinOp::Eq | BinOp::Ne), a, b)
             if a.sort.is_numeric() && b.sort.is_numeric() =>
         {
-            let (x, y) = (bounds::eval(prog, a, ranges)?, bounds::eval(prog, b, ranges)?);
-            if x.lo.is_nan() || x.hi.is_nan() || y.lo.is_nan() || y.hi.is_nan() {
-                return None;
-            }
-            // `a < b` everywhere when x.hi < y.lo; nowhere when x.lo >= y.hi; and so on.
-            match op {
-                BinOp::Lt => decide(x.hi < y.lo, x.lo >= y.hi),
-                BinOp::Le => decide(x.hi <= y.lo, x.lo > y.hi),
-                BinOp::Gt => decide(x.lo > y.hi, x.hi <= y.lo),
-                BinOp::Ge => decide(x.lo >= y.hi, x.hi < y.lo),
-                BinOp::Eq => decide(x.lo == x.hi && y.lo == y.hi && x.lo == y.lo, x.hi < y.lo || y.hi < x.lo),
-                _ => decide(x.hi < y.lo || y.hi < x.lo, x.lo == x.hi && y.lo == y.hi && x.lo == y.lo),
-            }
+            compare(*op, bounds::eval(prog, a, ranges)?, bounds::eval(prog, b, ranges)?)
         }
         ExprKind::If(c, a, b) if e.sort == crate::hir::Sort::Bool => match truth(prog, c, ranges) {
             Some(true) => truth(prog, a, ranges),
@@ -68,6 +56,24 @@ fn truth_inner(prog: &Program, e: &Expr, ranges: &dyn Ranges) -> Option<bool> {
             },
         },
         _ => None,
+    }
+}
+
+/// `x op y` for every pair of values of the two intervals (`Some(true)`), for none
+/// (`Some(false)`), or undecided; NaN ends decide nothing. `op` is a comparison (`Ne` for
+/// any other operator).
+pub fn compare(op: BinOp, x: bounds::Interval, y: bounds::Interval) -> Option<bool> {
+    if x.lo.is_nan() || x.hi.is_nan() || y.lo.is_nan() || y.hi.is_nan() {
+        return None;
+    }
+    // `a < b` everywhere when x.hi < y.lo; nowhere when x.lo >= y.hi; and so on.
+    match op {
+        BinOp::Lt => decide(x.hi < y.lo, x.lo >= y.hi),
+        BinOp::Le => decide(x.hi <= y.lo, x.lo > y.hi),
+        BinOp::Gt => decide(x.lo > y.hi, x.hi <= y.lo),
+        BinOp::Ge => decide(x.lo >= y.hi, x.hi < y.lo),
+        BinOp::Eq => decide(x.lo == x.hi && y.lo == y.hi && x.lo == y.lo, x.hi < y.lo || y.hi < x.lo),
+        _ => decide(x.hi < y.lo || y.hi < x.lo, x.lo == x.hi && y.lo == y.hi && x.lo == y.lo),
     }
 }
 

@@ -69,8 +69,14 @@ impl<'a> Inst<'a> {
         Frame { own: self.start.clone(), ..self.frame.clone() }
     }
 
+    /// A contract predicate under `frame`, with what it means where a partial operator is
+    /// undefined: false (`hir::expr::defined_and`). The encoding alone makes `sqrt` of a
+    /// negative and `x / 0` arbitrary numbers, so a postcondition `x == sqrt(old(x) - 5)`
+    /// from `x == 0` could "end" at some arbitrary `x`, and a motion that can never end
+    /// passed its can-end question.
     pub(super) fn pred(&self, enc: &mut Encoder, e: &Expr, frame: &Frame) -> Result<Bool, Unsupported> {
-        enc.in_frame(frame, |enc| enc.boolean(e))
+        let e = crate::hir::expr::defined_and(e.clone());
+        enc.in_frame(frame, |enc| enc.boolean(&e))
     }
 
     /// `now` equals the start state (for time 0).
