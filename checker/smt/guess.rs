@@ -393,6 +393,7 @@ mod proofs {
     use super::*;
     use crate::smt::key::tests::{program, query};
     use proptest::prelude::*;
+    use proptest::strategy::ValueTree;
     use z3::ast::{Bool, Int, Real};
 
     fn num(n: i64, d: i64) -> Real {
@@ -452,20 +453,25 @@ mod proofs {
         }
     }
 
-    proptest! {
-        #![proptest_config(ProptestConfig { cases: 300, ..ProptestConfig::default() })]
-
-        /// The guess is a model: whenever it shows a conjunction satisfiable, Z3 agrees.
-        #[test]
-        fn a_guessed_point_is_a_model(atoms in prop::collection::vec(atom(), 1..6)) {
+    /// The guess is a model: whenever it shows a conjunction satisfiable, Z3 agrees; and it
+    /// does show some (a property that never met a guessed point would hold vacuously).
+    #[test]
+    fn a_guessed_point_is_a_model() {
+        let mut runner = proptest::test_runner::TestRunner::deterministic();
+        let strategy = prop::collection::vec(atom(), 1..6);
+        let mut guessed_any = 0;
+        for _ in 0..300 {
+            let atoms = strategy.new_tree(&mut runner).expect("a case").current();
             let assertions: Vec<Bool> = atoms.into_iter().map(build).collect();
             if guessed(assertions.clone()) {
+                guessed_any += 1;
                 let solver = z3::Solver::new();
                 for a in &assertions {
                     solver.assert(a);
                 }
-                prop_assert_eq!(solver.check(), z3::SatResult::Sat);
+                assert_eq!(solver.check(), z3::SatResult::Sat, "{assertions:?}");
             }
         }
+        assert!(guessed_any >= 20, "only {guessed_any} of 300 cases were guessed");
     }
 }
