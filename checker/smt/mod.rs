@@ -376,20 +376,35 @@ impl Worker<'_> {
     }
 
     /// Body containment (E0512) with a footprint that turns with the state (its `cos`/`sin`,
-    /// or the body's): Z3 first, for at most [`QUICK`] per query (most such questions are
-    /// linear once the heading is fixed, and answered in milliseconds); then the interval
-    /// search of `space::enclose`, which decides what Z3's nonlinear arithmetic leaves open
-    /// (up to its budget of pieces, about a second); then Z3 again with the full limit.
-    /// Every answer is one of the three procedures', each sound on its own.
+    /// or the body's): first the interval search of `space::enclose` with a small budget
+    /// (a footprint affine in the body's point, such as a square turned with the heading
+    /// around a disc, is decided in a few hundred pieces, milliseconds); then Z3 for at most
+    /// [`QUICK`] per query (most other such questions are linear once the heading is fixed,
+    /// and answered in milliseconds); then, if the first search only ran out of pieces, the
+    /// search with its full budget (about a second); then Z3 again with the full limit.
+    /// Every answer is one of the procedures', each sound on its own.
     fn contains_turning(&self, index: usize, ob: &Obligation, prim: crate::hir::PrimId) -> (Decision, Stats) {
+        use crate::space::enclose::{body_in_predicate, BUDGET, QUICK_BUDGET};
+        let first = body_in_predicate(self.prog, prim, QUICK_BUDGET);
+        let mut stats = Stats::default();
+        let retry = match first {
+            Ok(note) => {
+                stats.geometric += 1;
+                return (Decision::Holds(Some(note)), stats);
+            }
+            Err(u) => u.ran_out,
+        };
         let quick = Worker { timeout: self.timeout.min(QUICK), ..*self };
-        let (d, mut stats) = quick.decide_parts(index, ob);
+        let (d, more) = quick.decide_parts(index, ob);
+        stats.add(&more);
         if !matches!(d, Decision::Unknown { .. }) {
             return (d, stats);
         }
-        if let Ok(note) = crate::space::enclose::body_in_predicate(self.prog, prim) {
-            stats.geometric += 1;
-            return (Decision::Holds(Some(note)), stats);
+        if retry {
+            if let Ok(note) = body_in_predicate(self.prog, prim, BUDGET) {
+                stats.geometric += 1;
+                return (Decision::Holds(Some(note)), stats);
+            }
         }
         if quick.timeout == self.timeout {
             return (d, stats);
