@@ -17,6 +17,15 @@
 //! predicate is true at every point (three-valued interval truth, outward rounded:
 //! [`crate::bounds`]), or no point of the shape or no state the contract allows is in it.
 //!
+//! When every comparison of the rewritten predicate is affine in `q`
+//! (`Σ a_i(s) q_i + b(s) op 0`, as a footprint in the heading frame around a body placed
+//! by the position is: `cos(th) qx + sin(th) qy <= half`), `q` is not split at all: on a
+//! piece of the state, the values of `Σ a_i q_i` over the shape lie within the shape's
+//! support (a box: the sum of the products' enclosures; a disc or ball of radius r:
+//! `[-r|a|, r|a|]`, Cauchy-Schwarz, with `|a|` bounded above), and only the state is
+//! split ([`support_search`]). A disc in a square with 5 mm of slack is decided in a few
+//! hundred pieces, where splitting the disc's box took tens of thousands.
+//!
 //! Sound: the normalisation is an identity of real arithmetic (sums and products by
 //! constants are exact rationals); each piece discarded is either one where the predicate
 //! holds at every point of the piece, enclosures outward, or one the shape's own predicate
