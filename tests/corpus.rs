@@ -466,11 +466,11 @@ fn shown_counterexamples(path: &Path, report: &mochi::driver::Report) -> Vec<(Pr
     let shown: Vec<Diagnostic> = report
         .diagnostics
         .iter()
-        .cloned()
         .filter(|d| d.counterexample.as_deref().is_some_and(|c| !c.values.is_empty() || c.overlap.is_some()))
         // Parry's contacts are not read back here (see the test), and which pair the
         // geometric search meets first depends on its time budget: not matched either.
         .filter(|d| !d.notes.iter().any(|n| n.contains("found by the geometric procedure")))
+        .cloned()
         .collect();
     if shown.is_empty() {
         return Vec::new();
