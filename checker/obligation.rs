@@ -40,7 +40,7 @@ pub enum Rule {
     /// Progress: in every reachable state at a message or choice, some branch has a true
     /// guard and a payload its refinements admit.
     Progress,
-    /// An enum-typed MAVLink field (s7-enum): the refinement the protocol writes for it
+    /// An enum-typed MAVLink field: the refinement the protocol writes for it
     /// (with the guard and what is known there) admits only entries of its enum, or for a
     /// bitmask enum combinations of its flags.
     EnumEntry,

@@ -654,7 +654,7 @@ fn chor_files_under(dir: &Path) -> Vec<PathBuf> {
     let mut entries: Vec<PathBuf> = std::fs::read_dir(dir).expect("a folder").flatten().map(|e| e.path()).collect();
     entries.sort();
     for p in entries {
-        // `choreographies/pending/` takes minutes per file and says unknown (golden.rs).
+        // `choreographies/pending/` takes minutes per file and says unknown (corpus.rs).
         if p.is_dir() && p.file_name().is_some_and(|n| n == "pending") {
             continue;
         }

@@ -138,7 +138,7 @@ fn verified_examples() -> Vec<String> {
         for e in std::fs::read_dir(&d).expect("readable dir") {
             let p = e.expect("entry").path();
             if p.is_dir() {
-                // Not `pending/` either: unknown after minutes (golden.rs).
+                // Not `pending/` either: unknown after minutes (corpus.rs).
                 if p.file_name().is_some_and(|n| n != "rejected" && n != "pending") {
                     stack.push(p);
                 }

@@ -125,7 +125,7 @@ fn read_chor(dirs: &[&str]) -> Vec<(PathBuf, String)> {
         let Ok(entries) = std::fs::read_dir(dir) else { return };
         for e in entries.flatten() {
             let p = e.path();
-            // `choreographies/pending/`: minutes per check (tests/golden.rs).
+            // `choreographies/pending/`: minutes per check (tests/corpus.rs).
             if p.is_dir() && p.file_name().is_some_and(|n| n == "pending") {
                 continue;
             }

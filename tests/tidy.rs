@@ -2,15 +2,17 @@
 //! source, checked here (as rust-analyzer's `tidy` test does):
 //!
 //! - (a) only files under `checker/smt/` name `z3`;
-//! - (b) only the IO edge, `checker/main.rs` and `checker/fsload.rs`, touches the file
-//!   system or the standard streams (`std::fs`, `File::`, `print!`, `println!`,
-//!   `eprint!`, `eprintln!`, `stdout()`, `stderr()`, `stdin()`);
+//! - (b) only the IO edge, `checker/main.rs`, `checker/fsload.rs` and `checker/io.rs`,
+//!   touches the file system or the standard streams (`std::fs`, `File::`, `print!`,
+//!   `println!`, `eprint!`, `eprintln!`, `stdout()`, `stderr()`, `stdin()`);
 //! - (c) every `.rs` file under `checker/` starts with a `//!` module comment;
 //! - (d) only `checker/render.rs` knows output formats and colours: it alone names
 //!   `serde_json`, `termcolor`, `codespan` and `NO_COLOR`;
 //! - (e) only files under `checker/geometry/` name the geometry crates (`parry3d`,
 //!   `nalgebra`, `urdf_rs`, `stl_io`, `tobj`, `roxmltree`); `roxmltree` may also be named
-//!   under `checker/dialect/` (the reader of the MAVLink XML definitions).
+//!   under `checker/dialect/` (the reader of the MAVLink XML definitions);
+//! - (f) the map is true: every path, file, corpus file, module path and link that
+//!   ARCHITECTURE.md and `docs/` name exists.
 //!
 //! The rules are textual on purpose: simple to state, simple to audit. Rules (a), (b), (d)
 //! ignore comments (`//` to the end of a line) and everything from the first line that is
@@ -210,4 +212,281 @@ fn the_rules_read_code_not_comments_or_tests() {
     assert_eq!(hits("x.rs", "let f = std::fs::File::open(p);\n", IO_WORDS).len(), 1);
     assert_eq!(hits("x.rs", "use z3::ast;\n", &["z3"]).len(), 1);
     assert!(Path::new(&root()).join(IO_EDGE[0]).is_file());
+}
+
+// ---- the map is true: ARCHITECTURE.md and docs/ name only what exists -----------------
+
+/// ARCHITECTURE.md and every `docs/*.md`, as (path relative to the root, text), sorted.
+fn map_files() -> Vec<(String, String)> {
+    let mut out = vec![(
+        "ARCHITECTURE.md".to_string(),
+        std::fs::read_to_string(root().join("ARCHITECTURE.md")).expect("read ARCHITECTURE.md"),
+    )];
+    let mut docs: Vec<PathBuf> = std::fs::read_dir(root().join("docs"))
+        .expect("list docs/")
+        .map(|e| e.expect("a directory entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "md"))
+        .collect();
+    docs.sort();
+    for p in docs {
+        let name = format!("docs/{}", p.file_name().expect("a file name").to_string_lossy());
+        out.push((name, std::fs::read_to_string(&p).expect("read a doc")));
+    }
+    assert!(out.len() >= 6, "docs/ has only {} files", out.len() - 1);
+    out
+}
+
+/// Every file and folder of the repository (not `target/`, not `.git/`), relative to the
+/// root with `/` separators; folders end with `/`.
+fn repository_paths() -> Vec<String> {
+    let mut out = Vec::new();
+    let mut stack = vec![root()];
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir).expect("list a folder") {
+            let path = entry.expect("a directory entry").path();
+            let rel = path.strip_prefix(root()).expect("under the root");
+            let rel = rel.components().map(|c| c.as_os_str().to_string_lossy()).collect::<Vec<_>>().join("/");
+            if path.is_dir() {
+                if rel == "target" || rel == ".git" {
+                    continue;
+                }
+                out.push(format!("{rel}/"));
+                stack.push(path);
+            } else {
+                out.push(rel);
+            }
+        }
+    }
+    out
+}
+
+/// The text of `md` outside fenced code blocks.
+fn prose(md: &str) -> String {
+    let mut fenced = false;
+    let mut out = String::new();
+    for line in md.lines() {
+        if line.trim_start().starts_with("```") {
+            fenced = !fenced;
+            continue;
+        }
+        if !fenced {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    out
+}
+
+/// The `code spans` of `md`'s prose, each within one line.
+fn code_spans(md: &str) -> Vec<String> {
+    prose(md).lines().flat_map(|l| l.split('`').skip(1).step_by(2).map(str::to_string).collect::<Vec<_>>()).collect()
+}
+
+/// GitHub's anchor of a heading: lower case, spaces to `-`, punctuation other than `-` and
+/// `_` dropped.
+fn anchor(heading: &str) -> String {
+    heading
+        .trim()
+        .to_lowercase()
+        .chars()
+        .filter_map(|c| match c {
+            ' ' => Some('-'),
+            c if c.is_alphanumeric() || c == '-' || c == '_' => Some(c),
+            _ => None,
+        })
+        .collect()
+}
+
+/// The anchors of `md`'s headings.
+fn anchors(md: &str) -> Vec<String> {
+    prose(md)
+        .lines()
+        .filter_map(|l| {
+            let t = l.trim_start_matches('#');
+            (t.len() < l.len() && t.starts_with(' ')).then(|| anchor(t))
+        })
+        .collect()
+}
+
+const PATH_ENDINGS: &[&str] =
+    &[".rs", ".chor", ".mochi", ".md", ".toml", ".urdf", ".stl", ".obj", ".xml", ".txt", ".snap", "/"];
+
+/// Whether `segment` occurs in `text` as a whole identifier.
+fn names(text: &str, segment: &str) -> bool {
+    let ident = |c: char| c.is_alphanumeric() || c == '_';
+    text.match_indices(segment).any(|(at, _)| {
+        !text[..at].chars().next_back().is_some_and(ident)
+            && !text[at + segment.len()..].chars().next().is_some_and(ident)
+    })
+}
+
+/// The module files a module path resolves to, and the segments left after the last
+/// module (items: functions, types, tests), which must be named in those files. `None`
+/// when the first segment is no module of the library (a type's path, `Expr::map`).
+fn resolve_module(path: &str, modules: &[String]) -> Option<Result<(), String>> {
+    let path = path.strip_prefix("crate::").or_else(|| path.strip_prefix("mochi::")).unwrap_or(path);
+    let path = path.strip_suffix("()").unwrap_or(path);
+    let segments: Vec<&str> = path.split("::").collect();
+    if !modules.iter().any(|m| m == segments[0]) {
+        return None;
+    }
+    let mut dir = root().join("checker");
+    let mut files: Vec<PathBuf> = Vec::new();
+    let mut rest = &segments[..];
+    while let Some((first, tail)) = rest.split_first() {
+        let (file, folder) = (dir.join(format!("{first}.rs")), dir.join(first));
+        if !file.is_file() && !folder.is_dir() {
+            break;
+        }
+        files = if file.is_file() { vec![file] } else { vec![] };
+        if folder.is_dir() {
+            let mut stack = vec![folder.clone()];
+            while let Some(d) = stack.pop() {
+                for e in std::fs::read_dir(&d).expect("list a module folder") {
+                    let p = e.expect("an entry").path();
+                    if p.is_dir() {
+                        stack.push(p);
+                    } else if p.extension().is_some_and(|x| x == "rs") {
+                        files.push(p);
+                    }
+                }
+            }
+        }
+        dir = folder;
+        rest = tail;
+    }
+    let text: String = files.iter().map(|f| std::fs::read_to_string(f).expect("read a module")).collect();
+    match rest.iter().find(|s| !names(&text, s)) {
+        None => Some(Ok(())),
+        Some(s) => Some(Err(format!("`{path}`: no `{s}` in its module"))),
+    }
+}
+
+/// What `md` (named `file`) names that does not exist: backticked paths (from the root,
+/// or the tail of a path, as `smt/goals/geo/` or `rejected/E0406-tiny-pose-offset.chor`),
+/// file names (`scope.rs`), corpus names (`E0316-guards-about-shadowed-value`, `E0408-*`),
+/// module paths (`space::enclose`, `wf::scope::refined_tests`), and links to files and
+/// headings.
+fn stale_names(file: &str, md: &str, repo: &[String], docs: &[(String, String)], modules: &[String]) -> Vec<String> {
+    let mut bad = Vec::new();
+    let exists = |p: &str| repo.iter().any(|r| r == p || r.ends_with(&format!("/{p}")));
+    for span in code_spans(md) {
+        let s = span.trim();
+        let skip = s.is_empty()
+            || s.contains([' ', '{', '<', '[', '$', '~'])
+            || s.contains("...")
+            || s.contains("://")
+            || s.contains("xxx")
+            || s.starts_with(['-', '.', '/']);
+        if skip {
+            continue;
+        }
+        let corpus_name = {
+            let last = s.rsplit('/').next().unwrap_or(s);
+            let b = last.as_bytes();
+            b.len() > 6
+                && (b[0] == b'E' || b[0] == b'U')
+                && b[1..5].iter().all(u8::is_ascii_digit)
+                && b[5] == b'-'
+                && !last.contains('.')
+        };
+        if corpus_name {
+            let ok = match s.strip_suffix('*') {
+                Some(prefix) => repo.iter().any(|r| {
+                    (r.starts_with(prefix) || r.contains(&format!("/{prefix}"))) && r.starts_with("choreographies/")
+                }),
+                None => [".chor", ".mochi"].iter().any(|e| exists(&format!("{s}{e}"))),
+            };
+            if !ok {
+                bad.push(format!("{file}: `{s}` is no file of the corpus"));
+            }
+        } else if s.contains('*') {
+            continue;
+        } else if s.contains('/') && PATH_ENDINGS.iter().any(|e| s.ends_with(e)) {
+            if !exists(s) {
+                bad.push(format!("{file}: `{s}` does not exist"));
+            }
+        } else if !s.contains('/') && [".rs", ".chor", ".mochi"].iter().any(|e| s.ends_with(e)) {
+            if !repo.iter().any(|r| r == s || r.ends_with(&format!("/{s}"))) {
+                bad.push(format!("{file}: no file is named `{s}`"));
+            }
+        } else if s.contains("::")
+            && s.trim_end_matches("()")
+                .split("::")
+                .all(|seg| !seg.is_empty() && seg.chars().all(|c| c.is_alphanumeric() || c == '_'))
+        {
+            if let Some(Err(e)) = resolve_module(s, modules) {
+                bad.push(format!("{file}: {e}"));
+            }
+        }
+    }
+    // Links: `](target)` to a file that exists, and to a heading of it when `#anchor` is given.
+    let text = prose(md);
+    for (at, _) in text.match_indices("](") {
+        let Some(end) = text[at + 2..].find(')') else { continue };
+        let target = &text[at + 2..at + 2 + end];
+        if target.contains("://") || target.starts_with("mailto:") || target.contains(' ') {
+            continue;
+        }
+        let (path, frag) = target.split_once('#').unwrap_or((target, ""));
+        let base = Path::new(file).parent().unwrap_or(Path::new(""));
+        let joined = if path.is_empty() { PathBuf::from(file) } else { base.join(path) };
+        // Normalise `docs/../x` to `x`.
+        let mut norm: Vec<String> = Vec::new();
+        for c in joined.components() {
+            match c {
+                std::path::Component::ParentDir => {
+                    norm.pop();
+                }
+                std::path::Component::CurDir => {}
+                c => norm.push(c.as_os_str().to_string_lossy().to_string()),
+            }
+        }
+        let norm = norm.join("/");
+        if !root().join(&norm).exists() {
+            bad.push(format!("{file}: the link `{target}` points at no file"));
+            continue;
+        }
+        if !frag.is_empty() && norm.ends_with(".md") {
+            let heads = match docs.iter().find(|(f, _)| *f == norm) {
+                _ if path.is_empty() => anchors(md),
+                Some((_, t)) => anchors(t),
+                None => anchors(&std::fs::read_to_string(root().join(&norm)).expect("read a linked file")),
+            };
+            if !heads.iter().any(|h| h == frag) {
+                bad.push(format!("{file}: the link `{target}` names no heading of {norm}"));
+            }
+        }
+    }
+    bad
+}
+
+/// The modules the library declares (`pub mod name;` in `checker/lib.rs`).
+fn library_modules() -> Vec<String> {
+    let lib = std::fs::read_to_string(root().join("checker/lib.rs")).expect("read lib.rs");
+    lib.lines().filter_map(|l| l.trim().strip_prefix("pub mod ")?.strip_suffix(';').map(str::to_string)).collect()
+}
+
+/// Every path, file, corpus file, module and link that ARCHITECTURE.md and `docs/` name
+/// exists, so the map cannot silently drift from the code.
+#[test]
+fn the_map_names_only_what_exists() {
+    let (repo, docs, modules) = (repository_paths(), map_files(), library_modules());
+    let bad: Vec<String> = docs.iter().flat_map(|(f, t)| stale_names(f, t, &repo, &docs, &modules)).collect();
+    assert!(bad.is_empty(), "ARCHITECTURE.md and docs/ name what does not exist; fix the text:\n{}", bad.join("\n"));
+    // Not vacuous: the map names paths and modules, and they are read.
+    let spans: Vec<String> = docs.iter().flat_map(|(_, t)| code_spans(t)).collect();
+    assert!(spans.iter().any(|s| s == "checker/library.rs") && spans.iter().any(|s| s == "space::enclose"));
+}
+
+/// The check itself finds each kind of stale name.
+#[test]
+fn the_map_check_finds_what_does_not_exist() {
+    let (repo, modules) = (repository_paths(), library_modules());
+    let md = "# Title\n\nSee `checker/smt/nowhere.rs`, `smt/goals/nowhere/`, `typeck.rs`, `space::no_such_module`, \
+              `wf::scope::no_such_test`, `E0999-no-such-file`, [a](#no-heading) and [b](docs/none.md).\n\
+              These exist: `checker/smt/key.rs`, `smt/goals/geo/`, `scope.rs`, `space::enclose`, \
+              `E0316-guards-about-shadowed-value`, `E0408-*`, `Expr::map`, [c](#title).\n";
+    let bad = stale_names("ARCHITECTURE.md", md, &repo, &[], &modules);
+    assert_eq!(bad.len(), 8, "{bad:#?}");
 }

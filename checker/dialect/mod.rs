@@ -1,5 +1,5 @@
 //! MAVLink dialects: the message and enum schema a refined session is checked against
-//! (issue 10, seed 000 Sec 3 and seed 004's message families).
+//! (seed 000 Sec 3 and seed 004's message families).
 //!
 //! A dialect is read from the MAVLink XML message definitions (`common.xml`,
 //! `ardupilotmega.xml` and the files they include), bundled into the binary at build
@@ -121,7 +121,7 @@ pub struct Dialect {
     pub messages: Vec<Message>,
     pub enums: Vec<Enum>,
     /// Name and id maps over `messages` and `enums`: a function of them, so it takes no part
-    /// in equality (added to the data model by s6-dialect).
+    /// in equality.
     index: Index,
 }
 

@@ -951,7 +951,7 @@ proptest! {
     }
 }
 
-/// The enum summaries the entry predicate (s7-enum) is built from: runs of consecutive values
+/// The enum summaries the entry predicate of enum-typed fields is built from: runs of consecutive values
 /// and the bits of a bitmask's flags.
 #[test]
 fn enums_summarise_as_runs_and_flag_masks() {

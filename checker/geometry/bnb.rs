@@ -1,4 +1,4 @@
-//! A sound branch and bound over boxes of configurations (issue 9, Deliver 4 and 6):
+//! A sound branch and bound over boxes of configurations:
 //! are two sets of solids, each placed by a configuration `q` (time and state variables)
 //! ranging over a box, apart for every `q` that satisfies the constraints? And what is
 //! their minimum distance? ARCHITECTURE.md, "Geometric decision procedure", has the
@@ -725,7 +725,7 @@ pub fn decide(scene: &dyn Scene, root: &QBox, opts: &Options) -> Decision {
     }
 }
 
-/// The minimum distance over the feasible configurations of a box (Deliver 6).
+/// The minimum distance over the feasible configurations of a box (`--clearance`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Clearance {
     /// Certified: no feasible `q` of the box has distance below it (`+∞`: none is

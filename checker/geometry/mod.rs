@@ -1,5 +1,5 @@
 //! The geometry engine: real shapes, meshes, URDF robots and their kinematics, and exact
-//! distances between placed solids (issue 9). The only module that names parry3d,
+//! distances between placed solids. The only module that names parry3d,
 //! nalgebra, urdf-rs, stl_io, tobj and roxmltree (`tests/tidy.rs` checks it), as `smt/`
 //! is for z3. It reads files only through the byte loader it is given
 //! ([`crate::syntax::ByteLoader`]; the file system's is [`crate::fsload::read_bytes`]).

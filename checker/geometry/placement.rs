@@ -1,5 +1,5 @@
 //! Sound bounds on how far a placed point can move while the configuration `q` ranges
-//! over a box (issue 9, Deliver 4): the motion term of the branch and bound
+//! over a box: the motion term of the branch and bound
 //! (`checker/geometry/bnb.rs`, ARCHITECTURE.md "Geometric decision procedure").
 //!
 //! A frame places its children by `x ↦ R x + t`, a rigid motion. A part's world place is

@@ -21,7 +21,7 @@ pub enum Sort {
     Point,
     Vector,
     Product(Vec<Sort>),
-    /// A string: a MAVLink `char[N]` field or a string literal (issue 10). The only
+    /// A string: a MAVLink `char[N]` field or a string literal. The only
     /// operations are `==` and `!=`. Encoded as an integer: each distinct literal of the
     /// program is one code ([`Program::strings`](super::Program)), so two literals are equal
     /// iff they are the same text, and a variable is any integer (a code of a literal, or
@@ -133,7 +133,7 @@ pub enum Builtin {
     /// no arguments). Being irrational, it is never a rational value anywhere: bounds
     /// enclose it, the solver sees a fresh real inside a rational enclosure.
     Pi,
-    /// `has_flag(x, F)` (issue 10, MAVLink bitmasks): every bit set in the constant
+    /// `has_flag(x, F)` (MAVLink bitmasks): every bit set in the constant
     /// positive integer `F` is set in the integer `x`. Lowering checks that `F` is one
     /// ([`const_int`]); the SMT stage encodes each bit `k` exactly as
     /// `(x div 2^k) mod 2 == 1` (Euclidean division, so a negative `x` reads as its
@@ -230,7 +230,7 @@ impl Expr {
     /// Its sort is [`Sort::Error`] (it fits everywhere, so nothing cascades from it) and
     /// its kind the empty tuple, which no later stage gives a value: the SMT encoding and
     /// exact evaluation refuse tuples, so if one ever got that far it would make a query
-    /// unknown, never hold (it used to be `true`, which holds). It does not get that far:
+    /// unknown, never hold (as `true` would). It does not get that far:
     /// a program lowered with errors is rejected before any later stage runs (the driver
     /// stops after `names`, `mochi simulate` before simulating).
     pub fn error(loc: Loc) -> Expr {

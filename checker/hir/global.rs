@@ -157,7 +157,7 @@ pub struct MavField {
     pub entry: Option<EnumCheck>,
 }
 
-/// A payload field whose values are entries of an enum of the dialect (s7-enum; LANGUAGE.md,
+/// A payload field whose values are entries of an enum of the dialect (LANGUAGE.md,
 /// "Enum-typed fields"). Without a user refinement, lowering conjoins the entry predicate
 /// to the implicit part (the field's type is the enum); with one, the global walk asks the
 /// refinement to imply it (`Rule::EnumEntry`, E0243). `lower::entry_predicate` builds the

@@ -298,7 +298,7 @@ pub struct Program {
     pub obstacles: Vec<body::Obstacle>,
     /// Every body as solids (set by the geometry stage, `space::world`).
     pub world: Option<std::sync::Arc<crate::space::world::World>>,
-    /// The MAVLink dialect named by `dialect NAME;` (issue 10): message labels are its
+    /// The MAVLink dialect named by `dialect NAME;`: message labels are its
     /// messages, its enum entries are `int` constants.
     pub dialect: Option<&'static crate::dialect::Dialect>,
     /// The string literals of the program, each once: a literal of sort `str` is

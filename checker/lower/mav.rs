@@ -1,4 +1,4 @@
-//! MAVLink messages (LANGUAGE.md, MAVLink messages; issue 10): the `dialect NAME;` item,
+//! MAVLink messages (LANGUAGE.md, MAVLink messages): the `dialect NAME;` item,
 //! message labels resolved in the dialect (E0232), payload fields checked against the
 //! message (E0233-E0235), their sorts and wire ranges, commands
 //! `COMMAND_LONG[MAV_CMD_X]` with parameters by label (E0237, E0238), enum entries as
@@ -17,7 +17,7 @@
 //! constant a process sends to that format exactly ([`wire_value`]). String literals are
 //! interned as their on-wire value, up to the first NUL ([`Lowerer::string`]).
 //!
-//! Enum-typed fields (s7-enum): a field or command parameter the dialect gives an enum
+//! Enum-typed fields: a field or command parameter the dialect gives an enum
 //! (`enum="MAV_BOOL"`) takes only the enum's entries, or for a bitmask enum combinations of
 //! its flags ([`entry_predicate`]). Without a user refinement the field's type is the enum:
 //! the predicate is conjoined to the implicit part like the wire range. With one, the user's

@@ -260,7 +260,7 @@ fn robot_names_may_not_hide_entries_either() {
     assert_eq!(codes(&d), ["E0240", "E0240", "E0240"]);
 }
 
-// Enum-typed fields (s7-enum): the entry predicate in the field's type, and E0243.
+// Enum-typed fields: the entry predicate in the field's type, and E0243.
 
 /// The printed refinement of the first field of the first message of `chor`.
 fn first_refinement(chor: &str) -> (Program, Field) {

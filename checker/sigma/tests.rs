@@ -406,7 +406,7 @@ fn indexed_snapshot_elimination_is_the_plain_loop() {
     assert!(changed > 500, "the cases exercise the elimination: {changed}");
 }
 
-/// One joint motion of `n` carts, each in its own lane (issue 8's wide `dt`, as
+/// One joint motion of `n` carts, each in its own lane (the wide `dt`, as
 /// `examples/common/lanes.rs` generates it): the program and the motion's parts.
 fn wide_dt(n: usize) -> (Program, Vec<(RoleId, PrimApp)>) {
     let mut src = String::from(

@@ -22,7 +22,7 @@ pub struct File {
 #[derive(Clone, Debug)]
 pub enum Item {
     Import(Import),
-    /// `dialect NAME;` (issue 10): the MAVLink dialect whose messages are the labels.
+    /// `dialect NAME;`: the MAVLink dialect whose messages are the labels.
     Dialect(DialectDecl),
     Const(ConstDecl),
     Robot(RobotDecl),
@@ -76,7 +76,7 @@ pub enum SortKind {
     Real,
     Point,
     Vector,
-    /// `str`: a MAVLink `char[N]` field's sort (issue 10).
+    /// `str`: a MAVLink `char[N]` field's sort.
     Str,
     Product(Vec<SortAst>),
     /// A name the parser does not know (reported by lowering).
@@ -180,7 +180,7 @@ pub struct SystemDecl {
 pub struct ParticipantDecl {
     pub name: Ident,
     /// `None` for a plain participant (`participant GCS;`): no state, no geometry, no
-    /// motion primitives (issue 10: a ground station, an autopilot).
+    /// motion primitives (a MAVLink ground station, an autopilot).
     pub kind: Option<Ident>,
     pub init: Option<Expr>,
     pub at: Option<Pose>,
@@ -307,7 +307,7 @@ pub enum Global {
     Rec {
         var: Ident,
         params: Vec<RecParam>,
-        /// The termination measure `decreases E` (refined sessions, issue 10).
+        /// The termination measure `decreases E` (refined sessions).
         decreases: Option<Expr>,
         body: Box<Global>,
         span: Span,

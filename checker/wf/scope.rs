@@ -1360,7 +1360,7 @@ mod context_tests {
     }
 }
 
-/// Refined sessions (issue 10): termination, progress and recursion parameters, decided
+/// Refined sessions: termination, progress and recursion parameters, decided
 /// end to end (the global walk's obligations through the SMT stage), on global types with
 /// no processes. The nested-loop cases are those nuscr got wrong (nuscr/nuscr#155: a
 /// recursion variable missing from the progress check's environment; #158: several

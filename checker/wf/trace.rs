@@ -1,4 +1,4 @@
-//! Counterexample traces (issue 10): the path through the global type that reaches the
+//! Counterexample traces: the path through the global type that reaches the
 //! point of a failing obligation, in the user's terms. A global type is a tree, so the
 //! point (the obligation's span: a message, a jump, a choice's first message, a
 //! parameter's initial value) determines its path from the start: the messages and

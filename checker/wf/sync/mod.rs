@@ -10,7 +10,7 @@
 //! reduction. Neither is materialised (`n²` bits at `n` events): the builder keeps a
 //! sparse edge set with the same closure ([`Builder::walk`]) and each check searches it
 //! from one motion, through the messages up to the next motions (near-linear on long
-//! sequences; the former closure-based implementation is the test oracle,
+//! sequences; a closure-based implementation is the test oracle,
 //! `oracle.rs`; the timing checks are in `timing.rs`).
 //!
 //! - **Unique minimal communication** (E0310): the immediate successors of a motion that

@@ -852,7 +852,7 @@ impl<'g> Checker<'_, 'g> {
                     if x.role == y.role || x.ev == y.ev || before(x, y) || before(y, x) {
                         continue;
                     }
-                    // The order of the former all-pairs loop: groups, then positions.
+                    // The order of an all-pairs loop: groups, then positions.
                     let (ga, ka) = slot[a];
                     let (first, second) = if (ga, ka) < (gb, kb) { (a, b) } else { (b, a) };
                     let (g1, k1) = slot[first];
