@@ -167,8 +167,8 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
                 crate::hir::Footprint::Everywhere => Plan::Holds(Some("the footprint is all space".into())),
                 f if f.is_own_geometry() => Plan::Holds(Some("the footprint is the robot's own geometry".into())),
                 // A predicate that turns with the state (its `cos`/`sin`, or the body's) is
-                // also tried by the interval search of `space::enclose` where Z3 does not
-                // decide these parts quickly (`Worker::contains_turning`).
+                // decided first by the interval search of `space::enclose` with a small
+                // budget, then by Z3 (`Worker::contains_turning` orders the engines).
                 crate::hir::Footprint::Predicate(_) | crate::hir::Footprint::Shapes { .. } => {
                     Plan::Parts((0..n).map(Part::Contains).collect())
                 }
