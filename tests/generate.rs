@@ -1627,3 +1627,43 @@ choreography G = dt<A: go({arg})>. end;
     verified(&lone("x == 0", "1"));
     verified(&lone("true", "1 / (x + 1)"));
 }
+
+/// A sat question answered by a point of the encoding's enclosures only: the
+/// postcondition `x == sin(1) && x == 0.8414709848078965` (a decimal 6.7e-17 from sin 1)
+/// or `x == pi && x == 3.141592653589793238465` can never hold, so the motion can never
+/// end, but both decimals lie inside the few-ulp enclosure of sin(1) and the 1e-20 one of
+/// π the solver reads, and the can-end questions (E0408, E0409) found "end states"
+/// there: verified. A witness of a query that encloses is now confirmed with its values
+/// within 1e-40 of the real functions', else it is unknown. The honest postconditions
+/// (`x == sin(1)`, `x == pi`) still verify.
+#[test]
+fn a_can_end_witness_of_the_enclosure_only_is_not_trusted() {
+    let src = |post: &str| {
+        format!(
+            "robot R {{ state x: real; }}
+motion R.go {{
+  interruptible: false;
+  pre: x == 0;
+  guarantee: true;
+  post: {post};
+  footprint(px, py, pz): px == x && py == 0 && pz == 0;
+  duration: [1, 1];
+}}
+system S {{ participant A: R {{ init: x == 0; at: pose(0, 0, 0); }} }}
+choreography G = dt<A: go>. end;
+"
+        )
+    };
+    for post in [
+        "x == sin(1) && x == 0.8414709848078965",
+        "x == pi && x == 3.141592653589793238465",
+        "x == cos(0.5) + sin(0.5) && x == 1.3570081004945758",
+    ] {
+        let r = check(&src(post));
+        assert_ne!(r.verdict, Verdict::Verified, "post: {post}: {:?}", codes(&r));
+    }
+    for post in ["x == sin(1)", "x == pi", "x == cos(0.5) + sin(0.5)", "x == 2 * pi && x > 6.28"] {
+        let r = check(&src(post));
+        assert_eq!(r.verdict, Verdict::Verified, "post: {post}: {:?}", codes(&r));
+    }
+}
