@@ -24,8 +24,15 @@
 //! a name the language refuses must be refused with a syntax or naming error (E01xx,
 //! E02xx), never change a verdict otherwise.
 //!
-//! Budget: `MOCHI_GEN_CASES` scenes (default 12, a debug build on two cores takes about
-//! a minute); `MOCHI_GEN_SEED` picks another sequence. Failures print the scene's source.
+//! Further generators in this file: refined MAVLink protocols (progress and float32 fields
+//! decided by interval arithmetic), relays of a loop parameter (who knows it, E0305), and
+//! scenes with partial operators (`/`, `sqrt`) in every position a predicate or a value is
+//! read, decided by a three-valued exact evaluator of their own (see "Partial operators in
+//! contracts" below).
+//!
+//! Budget: `MOCHI_GEN_CASES` scenes (default 12, ten times as many partial-operator scenes,
+//! a debug build on two cores takes about a minute); `MOCHI_GEN_SEED` picks another
+//! sequence. Failures print the scene's source.
 
 use mochi::driver::{Config, Report, Verdict};
 use mochi::source::SourceDb;
