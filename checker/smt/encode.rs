@@ -511,60 +511,6 @@ impl<'p> Encoder<'p> {
         !self.trig.is_empty() || self.pi.is_some()
     }
 
-    /// The query does not read `pi` (so pinning the trigonometric arguments to 0 leaves
-    /// no enclosure at all).
-    pub fn pi_free(&self) -> bool {
-        self.pi.is_none()
-    }
-
-    /// `pi` within 1e-40 of π (the query's own enclosure is 1e-20 wide), if the query
-    /// reads `pi`. The first pin of a witness's confirmation ([`Encoder::trig_pins`]).
-    pub fn pi_pin(&self) -> Option<Bool> {
-        let pi = self.pi.as_ref()?;
-        // π = 3.14159265358979323846264338327950288419716939937510...
-        let d = num_bigint::BigInt::from(10u8).pow(40);
-        let lo = num_bigint::BigInt::parse_bytes(b"31415926535897932384626433832795028841971", 10)?;
-        let hi = &lo + num_bigint::BigInt::from(1u8);
-        let (lo, hi) =
-            (real_of_rational(&BigRational::new(lo, d.clone()))?, real_of_rational(&BigRational::new(hi, d))?);
-        Some(Bool::and(&[pi.ge(&lo), pi.le(&hi)]))
-    }
-
-    /// Whether the query reads `sin` or `cos`.
-    pub fn has_trig(&self) -> bool {
-        !self.trig.is_empty()
-    }
-
-    /// Pins that make a model's `sin`/`cos` values the real functions' own, to 1e-40: each
-    /// argument fixed at its value in `model` and its sine and cosine within
-    /// [`crate::exact::trig`]'s enclosure there (1e-40 wide for a moderate rational
-    /// argument, about 1e-25 for an algebraic one). A model of the query with these added
-    /// (and `pi` pinned first, [`Encoder::pi_pin`]) is a witness whose enclosed values are
-    /// the real ones up to 1e-40, where the encoding's own enclosures are a few ulps
-    /// (1e-16) wide or wider: a fact that holds only of a value the real function does not
-    /// take (`x == sin(1) && x == 0.8414709848078965`) has none. `None` when a value cannot
-    /// be read or enclosed within 1e-20 (the witness then stays unconfirmed).
-    pub fn trig_pins(&self, model: &z3::Model) -> Option<Vec<Bool>> {
-        use crate::exact::{Num, Value};
-        let limit = BigRational::new(1.into(), num_bigint::BigInt::from(10u8).pow(20));
-        let within = |r: &Real, n: &Num| -> Option<Bool> {
-            if n.hi.clone() - n.lo.clone() > limit {
-                return None;
-            }
-            Some(Bool::and(&[r.ge(&real_of_rational(&n.lo)?), r.le(&real_of_rational(&n.hi)?)]))
-        };
-        let mut pins = Vec::new();
-        for t in &self.trig {
-            let Some(Value::Num(a)) = super::goals::witness::value_of(model, &Term::R(t.arg.clone())) else {
-                return None;
-            };
-            pins.push(within(&t.arg, &a)?);
-            pins.push(within(&t.sin, &crate::exact::trig(Builtin::Sin, &a))?);
-            pins.push(within(&t.cos, &crate::exact::trig(Builtin::Cos, &a))?);
-        }
-        Some(pins)
-    }
-
     pub fn trig_at_zero(&self) -> Vec<Bool> {
         let zero = Int::from_i64(0).to_real();
         self.trig.iter().map(|t| t.arg.eq(&zero)).collect()

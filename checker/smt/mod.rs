@@ -716,64 +716,21 @@ impl Worker<'_> {
         pool::maybe_hang(&label);
         let mut result = solver.check();
         let mut timed_out = self.watchdog.disarm(seq);
-        // A sat question needs a genuine witness, and a model of a query that encloses
-        // `sin`, `cos` or `pi` may give them values the real ones do not take (a few ulps
-        // off, or anything in a wide enclosure): a postcondition `x == sin(1) && x ==
-        // 0.8414709848078965` has such a model and no real end state. So the witness is
-        // confirmed: first with its arguments fixed and the values within 1e-40 of the
-        // real ones ([`encode::Encoder::tight_pins`]), then with every trigonometric
-        // argument 0, where the enclosure is exact. Neither: the question stays open.
-        // (Counterexamples are replayed in exact arithmetic instead.)
-        let mut unconfirmed = false;
-        if !model && matches!(result, z3::SatResult::Sat) && q.enc.encloses() {
-            let mut check = |solver: &z3::Solver| {
-                let seq = self.watchdog.arm(self.timeout);
-                let r = solver.check();
-                timed_out |= self.watchdog.disarm(seq);
-                matches!(r, z3::SatResult::Sat)
+        // A sat question needs a genuine witness: when the model's sin/cos values are
+        // only the enclosure's, look for one with every trigonometric argument 0, where
+        // the enclosure is exact. (Counterexamples keep the stricter "unknown".)
+        if !model && matches!(result, z3::SatResult::Sat) && solver.get_model().is_some_and(|m| q.enc.spurious_trig(&m))
+        {
+            for pin in q.enc.trig_at_zero() {
+                solver.assert(&pin);
+            }
+            let seq = self.watchdog.arm(self.timeout);
+            result = match solver.check() {
+                z3::SatResult::Sat => z3::SatResult::Sat,
+                // No witness at 0: the original question stays open.
+                _ => z3::SatResult::Unknown,
             };
-            // π first (a trigonometric argument may read it), then each argument where
-            // that model puts it.
-            let mut confirmed = false;
-            // (The model is read before `push`, which discards it.)
-            let mut witness = solver.get_model();
-            solver.push();
-            let mut ok = match q.enc.pi_pin() {
-                Some(pin) => {
-                    solver.assert(&pin);
-                    let sat = check(&solver);
-                    witness = solver.get_model();
-                    sat
-                }
-                None => true,
-            };
-            if ok && q.enc.has_trig() {
-                match witness.and_then(|m| q.enc.trig_pins(&m)) {
-                    Some(pins) => {
-                        for pin in &pins {
-                            solver.assert(pin);
-                        }
-                        ok = check(&solver);
-                    }
-                    None => ok = false,
-                }
-            }
-            if ok {
-                confirmed = true;
-            } else {
-                solver.pop(1);
-                if q.enc.pi_free() {
-                    solver.push();
-                    for pin in q.enc.trig_at_zero() {
-                        solver.assert(&pin);
-                    }
-                    confirmed = check(&solver);
-                }
-            }
-            if !confirmed {
-                unconfirmed = true;
-                result = z3::SatResult::Unknown;
-            }
+            timed_out = self.watchdog.disarm(seq);
         }
         let answer = match result {
             z3::SatResult::Unsat => Answer::Unsat,
@@ -797,9 +754,6 @@ impl Worker<'_> {
                 None => Answer::Sat { values: Vec::new(), overlap: None, bound: Vec::new(), exact: Default::default() },
             },
             z3::SatResult::Unknown if timed_out => Answer::Unknown(Why::Timeout(self.timeout)),
-            z3::SatResult::Unknown if unconfirmed => Answer::Unknown(Why::Incomplete(
-                "its witness is one only for the encoding's enclosure of `sin`, `cos` or `pi`: no witness was found whose values are the real functions' to 1e-40".into(),
-            )),
             z3::SatResult::Unknown => {
                 Answer::Unknown(Why::Incomplete(solver.get_reason_unknown().unwrap_or_else(|| "unknown".into())))
             }
