@@ -11,6 +11,10 @@
 //!
 //! The heavy geometric files (tests/metamorphic/common.rs, `HEAVY`) run only in the long
 //! mode (`MOCHI_META_CASES=N`, any N).
+//!
+//! Both comparisons run over mutants of the corpus too (the operators of
+//! tests/mutation/ops.rs): a fixed sample of 24, all three modes each;
+//! `MOCHI_DIFF_MUTANTS=N` runs N.
 
 #[path = "metamorphic/common.rs"]
 mod common;
@@ -41,4 +45,73 @@ fn the_number_of_workers_changes_no_verdict() {
     let files = corpus();
     let diff = differences(&files, &config(1, false), &config(4, false));
     assert!(diff.is_empty(), "-j 1 vs -j 4 differ on {} file(s):\n{}", diff.len(), diff.join("\n"));
+}
+
+// ---------------------------------------------------------------------------------------
+// The same two comparisons over mutants of the corpus: wrong programs take the paths of
+// rejections, counterexamples, replays and unknowns that the corpus, mostly correct, takes
+// rarely, and a cache key or a worker order that merges two questions shows there too.
+
+#[path = "mutation/ops.rs"]
+#[allow(dead_code)]
+mod ops;
+
+/// A stable hash (FNV-1a) of a mutant's id, for a sample that is the same every run.
+fn fnv(s: &str) -> u64 {
+    s.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3))
+}
+
+/// How many mutants the comparison runs: `MOCHI_DIFF_MUTANTS` (the long mode), else 24.
+fn mutant_budget() -> usize {
+    std::env::var("MOCHI_DIFF_MUTANTS").ok().and_then(|s| s.parse().ok()).unwrap_or(24)
+}
+
+/// A fixed sample of mutants of the corpus's root files (the operators of
+/// tests/mutation/ops.rs, MAVLink ones for files with a `dialect`): the `n` ids of least
+/// hash, so the sample is the same every run and grows by adding, never by reshuffling.
+fn mutant_sample(n: usize) -> Vec<(String, Program)> {
+    let mut all: Vec<(u64, String, PathBuf, String)> = Vec::new();
+    for p in corpus() {
+        let Ok(text) = std::fs::read_to_string(&p) else { continue };
+        let (consts, states) = ops::declared_names(&text);
+        let dialect = text
+            .lines()
+            .find_map(|l| l.trim().strip_prefix("dialect "))
+            .and_then(|d| mochi::dialect::builtin(d.trim().trim_end_matches(';').trim()));
+        for m in ops::mutants(&text, &states, &consts, dialect) {
+            let id = format!("{}:{}", p.display(), m.id);
+            all.push((fnv(&id), id, p.clone(), m.apply(&text)));
+        }
+    }
+    all.sort_by(|a, b| (a.0, &a.1).cmp(&(b.0, &b.1)));
+    all.truncate(n);
+    all.into_iter()
+        .map(|(_, id, root, text)| {
+            let mut texts = std::collections::HashMap::new();
+            texts.insert(root.display().to_string(), text);
+            (id, Program { root, texts })
+        })
+        .collect()
+}
+
+#[test]
+fn mutants_get_the_same_verdict_with_and_without_the_cache_and_with_more_workers() {
+    let sample = mutant_sample(mutant_budget());
+    assert!(sample.len() >= mutant_budget().min(20), "the sample was drawn ({} mutants)", sample.len());
+    let (one, uncached, four) = (config(1, false), config(1, true), config(4, false));
+    let rows = par_map(&sample, 2, |(id, prog)| {
+        let a = timed(&format!("{id} (cache, -j 1)"), || check(prog, &one));
+        let b = timed(&format!("{id} (no cache)"), || check(prog, &uncached));
+        let c = timed(&format!("{id} (-j 4)"), || check(prog, &four));
+        (id.clone(), a, b, c)
+    });
+    let kinds: std::collections::BTreeSet<String> = rows.iter().map(|r| format!("{:?}", r.1.verdict)).collect();
+    let diff: Vec<String> = rows
+        .iter()
+        .filter(|(_, a, b, c)| a != b || a != c)
+        .map(|(id, a, b, c)| format!("{id}: {a} (cache, -j 1) vs {b} (no cache) vs {c} (-j 4)"))
+        .collect();
+    assert!(diff.is_empty(), "the modes differ on {} mutant(s):\n{}", diff.len(), diff.join("\n"));
+    // Not vacuous: the sample holds mutants with different verdicts.
+    assert!(kinds.len() >= 2, "every sampled mutant had one verdict: {kinds:?}");
 }

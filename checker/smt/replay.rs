@@ -171,7 +171,11 @@ pub fn replay(prog: &Program, ob: &Obligation, part: &Part, m: &Valuation) -> Re
                 let args = args_of(app);
                 let prim = prog.prim(app.prim);
                 let env = frame(prog, *r, m, Tags::START, &args, None);
-                v.fails(&prim.pre, &env, || format!("the precondition of `{}` fails", prim.name));
+                // An argument that cannot be evaluated is the violation by itself.
+                let undefined = |a: &Expr| exact::holds(prog, &crate::hir::expr::definedness(a), &shared) == Tri::False;
+                if !app.args.iter().any(undefined) {
+                    v.fails(&prim.pre, &env, || format!("the precondition of `{}` fails", prim.name));
+                }
             }
             None => v.need(Tri::False, || "the part exists".into()),
         },

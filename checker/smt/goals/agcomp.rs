@@ -25,12 +25,16 @@ pub(super) fn plan(prog: &Program, hyps: &[Expr], parts: &[(RoleId, PrimApp)]) -
     // The ranges Σ gives the variables at the `dt` (they hold of every state it allows).
     let facts: Vec<&Expr> = hyps.iter().collect();
     let shared = bounds::ranges_from(prog, &facts, &bounds::closed);
-    // A lone primitive's precondition is [T-MOTION]'s to check, in its process. One that
-    // the ranges alone decide needs no query.
-    let lone = parts.len() == 1;
+    // A lone primitive's precondition is [T-MOTION]'s to check, in its process; in a
+    // protocol without processes nobody else checks it, so it is asked here. One that the
+    // ranges alone decide needs no query.
+    let lone = parts.len() == 1 && !prog.processes.is_empty();
     for (i, (role, app)) in parts.iter().enumerate() {
         let p = prog.prim(app.prim);
-        if !p.pre.is_true() && !lone && !pre_by_intervals(prog, *role, app, &shared) {
+        // An argument with a partial operator must be defined (`hir::expr::definedness`),
+        // whatever the precondition: asked by the same part.
+        let partial = app.args.iter().any(|a| !crate::hir::expr::definedness(a).is_true());
+        if partial || (!p.pre.is_true() && !lone && !pre_by_intervals(prog, *role, app, &shared)) {
             out.push(Part::Pre(i));
         }
         if !p.assume.is_true() {
@@ -147,7 +151,7 @@ pub(super) fn compat(q: &mut Query, hs: &[Expr], parts: &[(RoleId, PrimApp)], pa
                 q.assertions.push(b);
             }
             let pre = inst.pred(&mut q.enc, &inst.prim.pre, &inst.start_frame())?;
-            q.assertions.push(pre.not());
+            q.assertions.push(Bool::and(&[inst.args_defined.clone(), pre]).not());
         }
         Part::Assume(i) => {
             let i = at(*i)?;

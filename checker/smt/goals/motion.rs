@@ -24,6 +24,10 @@ pub(super) struct Inst<'a> {
     pub(super) frame: Frame,
     /// The state at the start (`role.x`), for the frame of durations and `Pre`.
     pub(super) start: std::collections::BTreeMap<Slot, Term>,
+    /// The arguments can be evaluated (`hir::expr::definedness` of each, read where the
+    /// motion is called): a motion called with `sqrt` of a negative or a quotient by zero
+    /// never starts, whatever its precondition says.
+    pub(super) args_defined: Bool,
 }
 
 impl<'a> Inst<'a> {
@@ -60,9 +64,11 @@ impl<'a> Inst<'a> {
             start.insert(slot, s);
         }
         frame.params = app.args.iter().map(|a| enc.any(a)).collect::<Result<_, _>>()?;
+        let defined = crate::hir::expr::and_all(app.args.iter().map(crate::hir::expr::definedness), app.loc);
+        let args_defined = enc.boolean(&defined)?;
         frame.args = app.args.clone();
         frame.clock = Some(clock);
-        Ok(Inst { role, prim, frame, start })
+        Ok(Inst { role, prim, frame, start, args_defined })
     }
 
     pub(super) fn start_frame(&self) -> Frame {
@@ -86,8 +92,10 @@ impl<'a> Inst<'a> {
         Bool::and(&eqs)
     }
 
-    /// The motion started: its precondition and the invariant held at the start.
+    /// The motion started: its arguments could be evaluated, and its precondition and the
+    /// invariant held at the start.
     pub(super) fn started(&self, q: &mut Query) -> Result<(), Unsupported> {
+        q.assertions.push(self.args_defined.clone());
         let sf = self.start_frame();
         let pre = self.pred(&mut q.enc, &self.prim.pre, &sf)?;
         q.assertions.push(pre);
