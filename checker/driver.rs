@@ -234,7 +234,8 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut sy
         types = declared;
     }
     if projected {
-        let (obs, diags) = run.stage(|| typeck::check_processes(&prog, &types));
+        let (obs, diags, hints) = run.stage(|| typeck::check_processes_hinted(&prog, &types));
+        run.hints = hints;
         if run.record("typing", diags) {
             obligations.extend(obs);
         }
@@ -305,6 +306,8 @@ struct Pipeline {
     last_millis: f64,
     vacuous: usize,
     planned: Option<Planned>,
+    /// Advice more precise than a code's help for some obligations (`typeck::Hints`).
+    hints: typeck::Hints,
 }
 
 impl Pipeline {
@@ -441,7 +444,7 @@ impl Pipeline {
                     Decision::Fails(f) => {
                         failed += 1;
                         if !explained(ob, &f) {
-                            self.diagnostics.push(failure(prog, ob, f));
+                            self.diagnostics.push(failure(prog, ob, f, self.hints.get(&(ob.rule, ob.span))));
                         }
                     }
                     Decision::Unknown { part, why } => {
@@ -634,7 +637,7 @@ fn trace_note(lines: &[String], values: bool) -> Option<String> {
     (!lines.is_empty()).then(|| format!("trace to this point ({how}):\n  {}", lines.join("\n  ")))
 }
 
-fn failure(prog: &crate::hir::Program, ob: &Obligation, f: smt::Failure) -> Diagnostic {
+fn failure(prog: &crate::hir::Program, ob: &Obligation, f: smt::Failure, hint: Option<&String>) -> Diagnostic {
     let steps = trace(prog, ob, &f);
     let code = match (ob.rule, &f.which) {
         (Rule::TotalChoice, _) => Code::ChoiceNotTotal,
@@ -696,6 +699,9 @@ fn failure(prog: &crate::hir::Program, ob: &Obligation, f: smt::Failure) -> Diag
         Code::SubtypePredicate => "in the declared local type, strengthen the send's guard or refinement (weaken the reception's) until it implies the projection's, or drop the `local` item",
         _ => "make the process's predicate imply the type's",
     };
+    // A fix more precise than the code's, found where the obligation was made
+    // (`typeck::Hints`): e.g. the type's refinement a process loop parameter lacks.
+    let help = hint.cloned().unwrap_or_else(|| help.to_string());
     let mut d = Diagnostic::error(code, ob.span, format!("{} ({})", code.title(), ob.what))
         .with_note(format!("required: {}", f.part))
         .with_note(format!("rule: {}", ob.rule.name()));

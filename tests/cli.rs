@@ -1010,3 +1010,29 @@ fn a_footprint_turned_with_the_heading_contains_a_round_body_or_is_never_passed(
     assert_ne!(v["verdict"], "verified", "{}", stdout(&o));
     assert_ne!(o.status.code(), Some(0));
 }
+
+#[test]
+fn a_process_loop_parameter_without_the_types_refinement_is_advised_to_add_it() {
+    // The process's `k` stands for the type's `n {n >= 0}` but is declared without it: the
+    // failed send's fix is the refinement on the loop parameter, in the process's names.
+    let o = mochi(&[
+        "check",
+        "choreographies/rejected/E0709-loop-parameter-without-the-types-refinement.chor",
+        "--format",
+        "json",
+    ]);
+    let v: Value = serde_json::from_str(&stdout(&o)).expect("json");
+    assert_eq!(v["verdict"], "rejected");
+    let helps: Vec<&str> = v["diagnostics"]
+        .as_array()
+        .expect("diagnostics")
+        .iter()
+        .filter(|d| d["code"] == "E0709")
+        .filter_map(|d| d["help"].as_str())
+        .collect();
+    assert!(!helps.is_empty(), "{v}");
+    for h in helps {
+        assert!(h.starts_with("add `{k >= 0}` to the process's loop parameter `k`"), "{h}");
+        assert!(!h.contains("establish the guard"), "{h}");
+    }
+}
