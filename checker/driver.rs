@@ -458,7 +458,7 @@ impl Pipeline {
             for (ob, part, why) in undecided.iter().take(SHOWN) {
                 let why_text = match why {
                     // The limit was the time left before the run's deadline, not --timeout.
-                    smt::Why::Timeout(d) if config.cut_by_deadline => format!(
+                    smt::Why::Timeout(d, _) if config.cut_by_deadline => format!(
                         "Z3 ran out of time after {} ms: the run's --deadline was reached (the query had only {:.1} s left)",
                         d.as_millis(),
                         d.as_secs_f64()
@@ -467,13 +467,7 @@ impl Pipeline {
                 };
                 let mut d = Diagnostic::note_at(Code::Undecided, ob.span, format!("could not decide {}", ob.what))
                     .with_note(format!("{}: {why_text}", if part.is_empty() { ob.rule.name() } else { part }))
-                    .with_help(match why {
-                        smt::Why::Timeout(_) if config.cut_by_deadline => "give the run a later `--deadline` (or none), or check this file on its own; the verdict stays `unknown`, never `verified`",
-                        smt::Why::Timeout(_) => "raise the per-query limit with `--timeout SECONDS`, or simplify the predicates (keep them polynomial and local); the verdict stays `unknown`, never `verified`",
-                        smt::Why::Unsupported(_) => "rewrite the predicate with the supported constructs (LANGUAGE.md, \"Expressions\"); the verdict stays `unknown`, never `verified`",
-                        smt::Why::Abandoned(_) | smt::Why::NotRun(_) => "simplify the predicates (keep them polynomial and local; Z3 ignored the interrupt on this one, so a higher `--timeout` may not help); the verdict stays `unknown`, never `verified`",
-                        smt::Why::Incomplete(_) => "simplify the predicate (nonlinear and trigonometric facts are decided only partially); the verdict stays `unknown`, never `verified`",
-                    });
+                    .with_help(undecided_help(why, config.cut_by_deadline));
                 if ob.rule == Rule::AgComp || ob.rule == Rule::FullSeparation {
                     d = d.with_note(format!("rule: {}", ob.rule.name()));
                 }
@@ -717,6 +711,46 @@ fn failure(prog: &crate::hir::Program, ob: &Obligation, f: smt::Failure, hint: O
         d = d.with_note(text);
     }
     d.with_help(help).with_counterexample(cx)
+}
+
+/// The help of an undecided obligation (U0001): what to change, matched to why it was
+/// not decided: the hard construct the query holds (`smt::hard`), the engine that
+/// stopped and how, or the limit that was reached.
+fn undecided_help(why: &smt::Why, cut_by_deadline: bool) -> String {
+    const STAYS: &str = "the verdict stays `unknown`, never `verified`";
+    match why {
+        smt::Why::Timeout(..) if cut_by_deadline => format!(
+            "give the run a later `--deadline` (or none), or check this file on its own; {STAYS}"
+        ),
+        smt::Why::Timeout(_, hard) => match hard.advice() {
+            Some(a) => format!("{a}; or raise the per-query limit with `--timeout SECONDS`; {STAYS}"),
+            None => format!(
+                "raise the per-query limit with `--timeout SECONDS`, or simplify the predicates (keep them polynomial and local); {STAYS}"
+            ),
+        },
+        smt::Why::Unsupported(_) => {
+            format!("rewrite the predicate with the supported constructs (LANGUAGE.md, \"Expressions\"); {STAYS}")
+        }
+        smt::Why::Abandoned(_) | smt::Why::NotRun(_) => format!(
+            "simplify the predicates (keep them polynomial and local; Z3 ignored the interrupt on this one, so a higher `--timeout` may not help); {STAYS}"
+        ),
+        smt::Why::Incomplete(_, hard) => match hard.advice() {
+            Some(a) => format!("{a}; {STAYS}"),
+            None => format!(
+                "simplify the predicate (nonlinear and trigonometric facts are decided only partially); {STAYS}"
+            ),
+        },
+        // The geometric search: what to change depends on how it stopped.
+        smt::Why::Search(s) if s.contains("time limit") || s.contains("boxes searched") => format!(
+            "give the geometric search more time with `--timeout SECONDS`, or narrow what it must cover (tighter bounds on the motion's variables in its precondition or guarantee); {STAYS}"
+        ),
+        smt::Why::Search(s) if s.contains("resolution") => format!(
+            "leave more clearance between the parts (the search cannot separate surfaces closer than its resolution), or tighten the motion's bounds near the contact shown; {STAYS}"
+        ),
+        smt::Why::Search(_) => format!(
+            "simplify the motion's geometry or bounds (primitive shapes instead of meshes, tighter bounds on its variables), or write a footprint predicate for Z3 to decide; {STAYS}"
+        ),
+    }
 }
 
 /// The SMT stage's dump sink failed on a query of `ob` (E0430): a warning, the verdict

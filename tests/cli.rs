@@ -1036,3 +1036,25 @@ fn a_process_loop_parameter_without_the_types_refinement_is_advised_to_add_it() 
         assert!(!h.contains("establish the guard"), "{h}");
     }
 }
+
+#[test]
+fn a_timeout_names_the_construct_that_made_the_query_hard_and_its_simplification() {
+    // Fermat's cubes: the query Z3 times out on holds the product `n * n * n`; the report
+    // names it (from the query's terms) and advises making it linear.
+    let o = mochi(&["check", "tests/data/hard-integer-guard.chor", "--timeout", "0.3", "--format", "json"]);
+    assert_eq!(o.status.code(), Some(3), "{}", stdout(&o));
+    let v: Value = serde_json::from_str(&stdout(&o)).expect("json");
+    let notes = undecided_notes(&v);
+    assert!(!notes.is_empty(), "{v}");
+    for n in &notes {
+        assert!(n.contains("what makes it hard: the nonlinear product `A."), "{n}");
+    }
+    let helps: Vec<&str> = v["diagnostics"]
+        .as_array()
+        .expect("diagnostics")
+        .iter()
+        .filter(|d| d["code"] == "U0001")
+        .filter_map(|d| d["help"].as_str())
+        .collect();
+    assert!(!helps.is_empty() && helps.iter().all(|h| h.starts_with("make the product linear")), "{helps:?}");
+}

@@ -28,6 +28,7 @@
 mod encode;
 pub mod goals;
 mod guess;
+pub mod hard;
 mod key;
 pub mod pool;
 pub mod replay;
@@ -113,9 +114,14 @@ impl Default for SmtConfig {
 /// Why an obligation was not decided.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Why {
-    Timeout(Duration),
-    /// Z3 answered unknown, or its model relies on an over-approximation.
-    Incomplete(String),
+    /// Z3 reached the time limit; what in the query makes it hard ([`hard`]).
+    Timeout(Duration, Hard),
+    /// Z3 answered unknown, or its model relies on an over-approximation; what in the
+    /// query makes it hard, where that was read.
+    Incomplete(String, Hard),
+    /// The geometric procedure (parry's distances and contacts under interval branch
+    /// and bound, [`goals::geo`]) stopped without deciding: why.
+    Search(String),
     /// A construct the encoding does not support.
     Unsupported(String),
     /// Z3 did not stop when interrupted at the limit: its worker was abandoned after this
@@ -128,8 +134,11 @@ pub enum Why {
 impl std::fmt::Display for Why {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Why::Timeout(d) => write!(f, "Z3 timed out after {} ms (raise it with --timeout)", d.as_millis()),
-            Why::Incomplete(s) => write!(f, "Z3 could not decide it: {s}"),
+            Why::Timeout(d, hard) => {
+                write!(f, "Z3 timed out after {} ms (raise it with --timeout){}", d.as_millis(), hard.suffix())
+            }
+            Why::Incomplete(s, hard) => write!(f, "Z3 could not decide it: {s}{}", hard.suffix()),
+            Why::Search(s) => write!(f, "the geometric search (parry's distances under interval branch and bound) stopped: {s}"),
             Why::Unsupported(s) => write!(f, "the SMT encoding does not support {s}"),
             Why::Abandoned(d) => write!(
                 f,
@@ -142,6 +151,7 @@ impl std::fmt::Display for Why {
 }
 
 pub use crate::diag::{Assignment, Overlap};
+pub use hard::Hard;
 
 /// A failed part: what failed and the counterexample.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -543,7 +553,7 @@ impl Worker<'_> {
                         replay::Replay::Undecided(why) => Some(format!("its model is not confirmed as a counterexample in exact arithmetic ({why}): the encoding's enclosures (of a pose's rotation, `sin`, `cos`, `sqrt`) may admit it where the real functions do not")),
                     };
                     if let Some(why) = why {
-                        unknown.get_or_insert((describe(self.prog, ob, part), Why::Incomplete(why)));
+                        unknown.get_or_insert((describe(self.prog, ob, part), Why::Incomplete(why, Hard::default())));
                         continue;
                     }
                     let which = Some(part.clone());
@@ -589,7 +599,7 @@ impl Worker<'_> {
                 }
                 None => {
                     let a = self.ask(ob, index, parts.len(), &Part::Context, &mut stats);
-                    if !self.cfg.no_cache && !matches!(a, Answer::Unknown(Why::Timeout(_))) {
+                    if !self.cfg.no_cache && !matches!(a, Answer::Unknown(Why::Timeout(..))) {
                         if let Ok(mut c) = self.caches.contexts.lock() {
                             c.insert(context, a.clone());
                         }
@@ -633,7 +643,7 @@ impl Worker<'_> {
                 goals::geo::GeoAnswer::Contact { values, overlap } => {
                     Answer::Sat { values, overlap: Some(overlap), bound: Vec::new(), exact: Default::default() }
                 }
-                goals::geo::GeoAnswer::Unknown(why) => Answer::Unknown(Why::Incomplete(why)),
+                goals::geo::GeoAnswer::Unknown(why) => Answer::Unknown(Why::Search(why)),
             };
         }
         // A payload float chosen by the progress check: first with integer witnesses
@@ -738,6 +748,7 @@ impl Worker<'_> {
                 Some(m) if q.enc.spurious_trig(&m) => Answer::Unknown(Why::Incomplete(
                     "its counterexample gives sin/cos values the real functions do not take (the encoding encloses them)"
                         .into(),
+                    Hard::of(&q),
                 )),
                 Some(m) => {
                     let overlap = q.point.as_ref().map(|p| Overlap {
@@ -753,13 +764,14 @@ impl Worker<'_> {
                 }
                 None => Answer::Sat { values: Vec::new(), overlap: None, bound: Vec::new(), exact: Default::default() },
             },
-            z3::SatResult::Unknown if timed_out => Answer::Unknown(Why::Timeout(self.timeout)),
-            z3::SatResult::Unknown => {
-                Answer::Unknown(Why::Incomplete(solver.get_reason_unknown().unwrap_or_else(|| "unknown".into())))
-            }
+            z3::SatResult::Unknown if timed_out => Answer::Unknown(Why::Timeout(self.timeout, Hard::of(&q))),
+            z3::SatResult::Unknown => Answer::Unknown(Why::Incomplete(
+                solver.get_reason_unknown().unwrap_or_else(|| "unknown".into()),
+                Hard::of(&q),
+            )),
         };
         // A timeout depends on the machine's load: do not cache it.
-        if let Some(keys) = keys.filter(|_| !matches!(answer, Answer::Unknown(Why::Timeout(_)))) {
+        if let Some(keys) = keys.filter(|_| !matches!(answer, Answer::Unknown(Why::Timeout(..)))) {
             if let Ok(mut c) = self.caches.cache.lock() {
                 if let Some(canonical) = keys.canonical {
                     c.insert(canonical, answer.clone());
