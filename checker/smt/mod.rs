@@ -540,15 +540,32 @@ impl Worker<'_> {
             }
             match answer {
                 Answer::Unsat => {}
-                Answer::Sat { values, overlap, bound, exact } => {
+                Answer::Sat { mut values, mut overlap, mut bound, exact } => {
                     // A counterexample is shown only if, evaluated exactly, it falsifies
                     // the part's own goal; one that does not is unknown, never a failure
                     // (the geometric procedure's contact is parry's, replayed there).
                     let geometric = goals::geo::applies(self.prog, ob, part);
-                    let replayed =
+                    let mut replayed =
                         if geometric { replay::Replay::Falsifies } else { replay::replay(self.prog, ob, part, &exact) };
+                    // A hypothesis `float32(v)` is weakened to `true` in the encoding, so a
+                    // model may give a MAVLink float a value no float has: ask again with
+                    // each float value pinned to its value rounded to the field's format,
+                    // and keep that model if it replays.
+                    if !geometric && !matches!(replayed, replay::Replay::Falsifies) {
+                        if let Some(Answer::Sat { values: v, overlap: o, bound: b, exact: e }) =
+                            self.float_witness(ob, part, &exact, &mut stats)
+                        {
+                            if matches!(replay::replay(self.prog, ob, part, &e), replay::Replay::Falsifies) {
+                                (values, overlap, bound, replayed) = (v, o, b, replay::Replay::Falsifies);
+                            }
+                        }
+                    }
                     let why = match replayed {
                         replay::Replay::Falsifies => None,
+                        // A float hypothesis (weakened to `true` in the encoding) the
+                        // model breaks, and no model with the floats rounded to their
+                        // format completes a counterexample (`float_witness`).
+                        replay::Replay::Refuted(why) if why.contains("`float32(") || why.contains("`float64(") => Some(format!("its model gives a MAVLink float a value its format does not hold ({why}), and no model with the floats rounded to their format falsifies the goal: the encoding weakens `float32(v)` in hypotheses, so the question stays open")),
                         replay::Replay::Refuted(why) => Some(format!("its model does not falsify the goal in exact arithmetic ({why}); the encoding's enclosure of a pose turned by an angle that is not an exact multiple of `pi / 2` admits such models, otherwise please report this as a bug in mochi")),
                         replay::Replay::Undecided(why) => Some(format!("its model is not confirmed as a counterexample in exact arithmetic ({why}): the encoding's enclosures (of a pose's rotation, `sin`, `cos`, `sqrt`) may admit it where the real functions do not")),
                     };
@@ -618,6 +635,53 @@ impl Worker<'_> {
             stats.vacuous += 1;
         }
         (Decision::Holds(None), stats)
+    }
+
+    /// The query of `part` again, with every MAVLink float value the model `exact` gives
+    /// a value pinned to that value rounded to its field's format (`lower::round_to_float`,
+    /// to nearest): a model of it is a counterexample whose floats are floats, for
+    /// [`replay`] to confirm. `None` when no float value was pinned or no model came.
+    fn float_witness(&self, ob: &Obligation, part: &Part, exact: &replay::Valuation, stats: &mut Stats) -> Option<Answer> {
+        let q = goals::build(self.prog, ob, part).ok()?;
+        let mut pins = Vec::new();
+        for (id, symbol) in q.enc.value_symbols() {
+            let Some(format) = self.prog.wire_floats.get(id).and_then(|f| crate::lower::float_format(*f)) else {
+                continue;
+            };
+            let Some(crate::exact::Value::Num(n)) = exact.get(symbol) else { continue };
+            let Some(v) = n.value() else { continue };
+            let Some(r) = crate::lower::round_to_float(v, format) else { continue };
+            let Some((_, encode::Term::R(t))) = q.enc.terms().find(|(name, _)| *name == symbol) else { continue };
+            pins.push(t.eq(encode::real_of_rational(&r)?));
+        }
+        if pins.is_empty() {
+            return None;
+        }
+        stats.queries += 1;
+        let solver = solver_for(&q);
+        for a in q.assertions.iter().chain(q.enc.side_conditions()).chain(&pins) {
+            solver.assert(a);
+        }
+        let seq = self.watchdog.arm(self.timeout);
+        let result = solver.check();
+        self.watchdog.disarm(seq);
+        let m = match result {
+            z3::SatResult::Sat => solver.get_model()?,
+            _ => return None,
+        };
+        if q.enc.spurious_trig(&m) {
+            return None;
+        }
+        let overlap = q.point.as_ref().map(|p| Overlap {
+            point: [0, 1, 2].map(|i| encode::Encoder::value_of(&m, &p[i]).unwrap_or(f64::NAN)),
+            times: q.times.iter().map(|t| encode::Encoder::value_of(&m, t).unwrap_or(f64::NAN)).collect(),
+        });
+        Some(Answer::Sat {
+            values: q.enc.assignments(&m),
+            overlap,
+            bound: q.enc.shared_names(),
+            exact: replay::valuation(&q.enc, &m),
+        })
     }
 
     /// Builds and solves one part's query.
