@@ -707,7 +707,8 @@ fn failure(prog: &crate::hir::Program, ob: &Obligation, f: smt::Failure, hint: O
         d = d.with_note(text);
     }
     let cx = Counterexample { values: f.values, overlap: f.overlap, trace: steps };
-    if let Some(text) = counterexample_text(&cx, code) {
+    let since = matches!(code, Code::FootprintsOverlap | Code::ObstacleHit).then(|| since_start(prog, ob));
+    if let Some(text) = counterexample_text(&cx, code, since.as_ref()) {
         d = d.with_note(text);
     }
     d.with_help(help).with_counterexample(cx)
@@ -868,14 +869,95 @@ fn used_primitives(obligations: &[Obligation]) -> HashSet<crate::hir::PrimId> {
 
 /// `counterexample: at time 2.1 s, the point (1.02, 0.2, 0.05) is in both footprints;
 /// Cart.x = 0, tr = 2`.
-fn counterexample_text(cx: &Counterexample, code: Code) -> Option<String> {
+/// How the time of a contact in a joint motion relates to the choreography's start,
+/// read off the path to the motion (`wf::trace`): messages take no time (README, "model
+/// of time"), so with no motion, choice or loop before it on the path the motion starts
+/// when the choreography does; otherwise the counterexample does not fix the time.
+enum Since {
+    /// The motion starts when the choreography does.
+    Start,
+    /// Not determined by the counterexample: why.
+    Open(String),
+}
+
+fn since_start(prog: &crate::hir::Program, ob: &Obligation) -> Since {
+    use crate::wf::trace::Step;
+    let Some(chor) = &prog.choreography else { return Since::Open("the motion is not in the choreography".into()) };
+    let Some(steps) = crate::wf::trace::path_to(&chor.body, ob.span) else {
+        return Since::Open("the path to the motion is not known".into());
+    };
+    let motions = steps.iter().filter(|s| matches!(s, Step::Motion(_))).count();
+    let choices = steps.iter().filter(|s| matches!(s, Step::Choice)).count();
+    let looped = steps.iter().any(|s| matches!(s, Step::Loop { .. }));
+    if motions == 0 && choices == 0 && !looped {
+        return Since::Start;
+    }
+    let mut why = Vec::new();
+    if motions > 0 {
+        why.push(format!(
+            "{motions} joint motion(s) precede it on this path, whose durations the counterexample does not fix"
+        ));
+    }
+    if choices > 0 {
+        why.push(format!("{choices} choice(s) before it may run motions"));
+    }
+    if looped {
+        why.push("it is in a loop, and the counterexample does not say which iteration".to_string());
+    }
+    Since::Open(why.join("; "))
+}
+
+/// The participants' states in a collision's counterexample, one participant at a time:
+/// `Cart: x = 0.8, v = 0.5` from the values `Cart.x(t)`, `Cart.v(t)` (at the contact)
+/// or `Cart.x`, `Cart.v` (at the motion's start, `at_start`).
+fn states(values: &[crate::diag::Assignment], at_start: bool) -> Vec<String> {
+    let mut by_role: Vec<(String, Vec<String>)> = Vec::new();
+    for a in values {
+        let name = if at_start {
+            if a.name.ends_with("(t)") || a.name.contains('(') {
+                continue;
+            }
+            a.name.as_str()
+        } else {
+            match a.name.strip_suffix("(t)") {
+                Some(n) if !n.contains('(') => n,
+                _ => continue,
+            }
+        };
+        let Some((role, var)) = name.split_once('.') else { continue };
+        if role == "point" {
+            continue;
+        }
+        let entry = format!("{var} = {}", a.value);
+        match by_role.iter_mut().find(|(r, _)| r == role) {
+            Some((_, vs)) => vs.push(entry),
+            None => by_role.push((role.to_string(), vec![entry])),
+        }
+    }
+    by_role.into_iter().map(|(r, vs)| format!("{r}: {}", vs.join(", "))).collect()
+}
+
+fn counterexample_text(cx: &Counterexample, code: Code, since: Option<&Since>) -> Option<String> {
     let mut parts = Vec::new();
+    // A collision: the contact's time within the motion and since the choreography's
+    // start, and every participant's state there. A contact is not claimed the earliest:
+    // the solver's model is one contact, not the first.
+    let collision = since.is_some() && cx.overlap.as_ref().is_some_and(|o| o.times.len() == 1);
     if let Some(o) = &cx.overlap {
         let p = o.point.map(short);
-        let at = match o.times.as_slice() {
-            [] => String::new(),
-            [t] => format!("at time {} s, ", short(*t)),
-            ts => format!("at times {} s, ", ts.iter().map(|t| short(*t)).collect::<Vec<_>>().join(" and ")),
+        let at = match (o.times.as_slice(), since) {
+            ([], _) => String::new(),
+            ([t], Some(Since::Start)) => format!(
+                "the footprints meet at {} s into this joint motion, which is {} s after the choreography starts (no motion precedes it on this path, and messages take no time): ",
+                short(*t),
+                short(*t)
+            ),
+            ([t], Some(Since::Open(why))) => format!(
+                "the footprints meet at {} s into this joint motion (the time since the choreography started is not determined: {why}): ",
+                short(*t)
+            ),
+            ([t], None) => format!("at time {} s, ", short(*t)),
+            (ts, _) => format!("at times {} s, ", ts.iter().map(|t| short(*t)).collect::<Vec<_>>().join(" and ")),
         };
         let (frame, where_) = match code {
             Code::FootprintMissesBody => ("in the robot's own frame ", "is a point of the body outside the footprint"),
@@ -884,6 +966,33 @@ fn counterexample_text(cx: &Counterexample, code: Code) -> Option<String> {
             _ => ("", "is in both footprints"),
         };
         parts.push(format!("{at}the point (x, y, z) = ({}, {}, {}) m {frame}{where_}", p[0], p[1], p[2]));
+    }
+    if collision {
+        let now = states(&cx.values, false);
+        let start = states(&cx.values, true);
+        if now.is_empty() {
+            parts.push("the participants' states at that time are not part of this counterexample".to_string());
+        } else {
+            parts.push(format!("the participants' states at that time: {}", now.join("; ")));
+        }
+        if !start.is_empty() {
+            parts.push(format!("at the start of the joint motion: {}", start.join("; ")));
+        }
+        // The rest (payload values, inputs): what the states above do not show.
+        let shown = |n: &str| {
+            n.starts_with("point.") || n.starts_with("time") || n.split_once('.').is_some_and(|(r, _)| r != "point")
+        };
+        let rest: Vec<String> = cx
+            .values
+            .iter()
+            .filter(|a| !shown(&a.name))
+            .take(16)
+            .map(|a| format!("{} = {}", a.name, a.value))
+            .collect();
+        if !rest.is_empty() {
+            parts.push(format!("with {}", rest.join(", ")));
+        }
+        return Some(format!("counterexample: {}", parts.join("; ")));
     }
     // The point and the time are shown above when there is an overlap.
     let hidden = |n: &str| cx.overlap.is_some() && (n.starts_with("point.") || n.starts_with("time"));

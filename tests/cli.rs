@@ -1058,3 +1058,20 @@ fn a_timeout_names_the_construct_that_made_the_query_hard_and_its_simplification
         .collect();
     assert!(!helps.is_empty() && helps.iter().all(|h| h.starts_with("make the product linear")), "{helps:?}");
 }
+
+#[test]
+fn a_collision_counterexample_gives_every_participants_state_and_the_time_since_the_start() {
+    // The cart's swept box reaches the arm's base column in the first joint motion: the
+    // report gives both participants' states when the footprints meet, and the time since
+    // the choreography started (the same: only a message precedes the motion).
+    let o = mochi(&["check", "choreographies/rejected/E0404-target-too-close.chor", "--color", "never"]);
+    let out = format!("{}{}", stdout(&o), String::from_utf8_lossy(&o.stderr));
+    let line = out.lines().find(|l| l.contains("counterexample:")).unwrap_or_else(|| panic!("{out}"));
+    assert!(
+        line.contains("the footprints meet at 4 s into this joint motion, which is 4 s after the choreography starts"),
+        "{line}"
+    );
+    assert!(line.contains("states at that time: Cart: v = 0.5, x = 0.8; GRobot: ze = 0.5"), "{line}");
+    assert!(line.contains("at the start of the joint motion: Cart: v = 0, x = 0; GRobot: ze = 0.5"), "{line}");
+    assert!(!line.contains("earliest"), "{line}");
+}

@@ -250,9 +250,7 @@ fn closed(c: Z3_context, a: Z3_ast, depth: usize) -> bool {
             let Some(app) = (unsafe { z3_sys::Z3_to_app(c, a) }) else { return false };
             let n = unsafe { z3_sys::Z3_get_app_num_args(c, app) };
             n > 0
-                && (0..n).all(|i| {
-                    unsafe { z3_sys::Z3_get_app_arg(c, app, i) }.is_some_and(|x| closed(c, x, depth + 1))
-                })
+                && (0..n).all(|i| unsafe { z3_sys::Z3_get_app_arg(c, app, i) }.is_some_and(|x| closed(c, x, depth + 1)))
         }
         _ => false,
     }
@@ -303,7 +301,8 @@ mod tests {
     #[test]
     fn products_and_divisions_by_constants_are_linear() {
         let r = Real::new_const("p.r");
-        let h = hard(vec![(&r * Real::from_rational_str("1", "2").expect("a rational")).le(&r / Real::from_rational_str("3", "1").expect("a rational"))]);
+        let h = hard(vec![(&r * Real::from_rational_str("1", "2").expect("a rational"))
+            .le(&r / Real::from_rational_str("3", "1").expect("a rational"))]);
         assert!(h.is_empty(), "{h:?}");
     }
 }

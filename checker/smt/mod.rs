@@ -138,7 +138,9 @@ impl std::fmt::Display for Why {
                 write!(f, "Z3 timed out after {} ms (raise it with --timeout){}", d.as_millis(), hard.suffix())
             }
             Why::Incomplete(s, hard) => write!(f, "Z3 could not decide it: {s}{}", hard.suffix()),
-            Why::Search(s) => write!(f, "the geometric search (parry's distances under interval branch and bound) stopped: {s}"),
+            Why::Search(s) => {
+                write!(f, "the geometric search (parry's distances under interval branch and bound) stopped: {s}")
+            }
             Why::Unsupported(s) => write!(f, "the SMT encoding does not support {s}"),
             Why::Abandoned(d) => write!(
                 f,
@@ -641,7 +643,13 @@ impl Worker<'_> {
     /// a value pinned to that value rounded to its field's format (`lower::round_to_float`,
     /// to nearest): a model of it is a counterexample whose floats are floats, for
     /// [`replay`] to confirm. `None` when no float value was pinned or no model came.
-    fn float_witness(&self, ob: &Obligation, part: &Part, exact: &replay::Valuation, stats: &mut Stats) -> Option<Answer> {
+    fn float_witness(
+        &self,
+        ob: &Obligation,
+        part: &Part,
+        exact: &replay::Valuation,
+        stats: &mut Stats,
+    ) -> Option<Answer> {
         let q = goals::build(self.prog, ob, part).ok()?;
         let mut pins = Vec::new();
         for (id, symbol) in q.enc.value_symbols() {

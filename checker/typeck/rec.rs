@@ -6,11 +6,11 @@
 
 use super::{hash_of, Checker, State, WIDEN_AFTER};
 use crate::hir::expr::{mentions, subst_values, value_expr};
-use std::collections::HashMap;
 use crate::hir::node::NodeRef;
 use crate::hir::*;
 use crate::obligation::{Goal, Obligation, Rule};
 use crate::sigma::{self, Sigma};
+use std::collections::HashMap;
 
 impl<'a> Checker<'a> {
     /// The process's loop parameters get `values` (process terms, evaluated now), at
