@@ -730,6 +730,11 @@ pub struct Overlap {
     pub point: [f64; 3],
     /// One time for a joint motion; one per motion for the sides of `*`.
     pub times: Vec<f64>,
+    /// For a joint motion: a time at or before which the footprints are proved not to
+    /// meet (the solver found no such meeting), so they first meet after it and at the
+    /// latest at `times[0]`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub not_before: Option<f64>,
 }
 
 /// What Z3 found when a predicate check fails, in the user's terms.

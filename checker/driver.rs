@@ -947,6 +947,20 @@ fn counterexample_text(cx: &Counterexample, code: Code, since: Option<&Since>) -
         let p = o.point.map(short);
         let at = match (o.times.as_slice(), since) {
             ([], _) => String::new(),
+            ([t], Some(since)) if o.not_before.is_some() || *t == 0.0 => {
+                let meet = if code == Code::ObstacleHit { "the footprint meets the obstacle" } else { "the footprints meet" };
+                let when = match o.not_before {
+                    Some(lo) => format!(
+                        "{meet} at {} s into this joint motion, and no meeting is possible at or before {} s (proved), so the first is between {} and {} s",
+                        short(*t), short(lo), short(lo), short(*t)
+                    ),
+                    None => format!("{meet} at 0 s, the joint motion's start (the earliest)"),
+                };
+                match since {
+                    Since::Start => format!("{when}; the joint motion starts when the choreography does (no motion precedes it on this path, and messages take no time): "),
+                    Since::Open(why) => format!("{when} (the time since the choreography started is not determined: {why}): "),
+                }
+            }
             ([t], Some(Since::Start)) => format!(
                 "the footprints meet at {} s into this joint motion, which is {} s after the choreography starts (no motion precedes it on this path, and messages take no time): ",
                 short(*t),

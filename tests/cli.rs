@@ -1067,11 +1067,13 @@ fn a_collision_counterexample_gives_every_participants_state_and_the_time_since_
     let o = mochi(&["check", "choreographies/rejected/E0404-target-too-close.chor", "--color", "never"]);
     let out = format!("{}{}", stdout(&o), String::from_utf8_lossy(&o.stderr));
     let line = out.lines().find(|l| l.contains("counterexample:")).unwrap_or_else(|| panic!("{out}"));
-    assert!(
-        line.contains("the footprints meet at 4 s into this joint motion, which is 4 s after the choreography starts"),
-        "{line}"
-    );
-    assert!(line.contains("states at that time: Cart: v = 0.5, x = 0.8; GRobot: ze = 0.5"), "{line}");
-    assert!(line.contains("at the start of the joint motion: Cart: v = 0, x = 0; GRobot: ze = 0.5"), "{line}");
-    assert!(!line.contains("earliest"), "{line}");
+    // The time is bisected: a meeting that replays, and a time at or before which no
+    // meeting is possible (proved by the solver; the values are the model's, so only the
+    // shape of the text is fixed here).
+    assert!(line.contains("the footprints meet at "), "{line}");
+    assert!(line.contains("s into this joint motion, and no meeting is possible at or before "), "{line}");
+    assert!(line.contains("the joint motion starts when the choreography does"), "{line}");
+    assert!(line.contains("states at that time: Cart: v = "), "{line}");
+    assert!(line.contains("; GRobot: ze = "), "{line}");
+    assert!(line.contains("at the start of the joint motion: Cart: v = "), "{line}");
 }

@@ -575,6 +575,19 @@ impl Worker<'_> {
                         unknown.get_or_insert((describe(self.prog, ob, part), Why::Incomplete(why, Hard::default())));
                         continue;
                     }
+                    // A joint motion's footprints: look for an earlier meeting, and
+                    // prove a time before which they do not meet.
+                    if !geometric && matches!(ob.goal, Goal::Compatible { .. }) {
+                        if let Some(found) = overlap.as_ref().and_then(|o| o.times.first().copied()) {
+                            let (not_before, better) = self.earliest(ob, part, found, &mut stats);
+                            if let Some(Answer::Sat { values: v, overlap: o, bound: b, .. }) = better {
+                                (values, overlap, bound) = (v, o, b);
+                            }
+                            if let Some(o) = overlap.as_mut() {
+                                o.not_before = not_before;
+                            }
+                        }
+                    }
                     let which = Some(part.clone());
                     // Say which engine found it: Z3's model, or the geometric procedure's
                     // contact (parry, at a configuration a Z3 model of the contracts gave).
@@ -683,6 +696,7 @@ impl Worker<'_> {
         let overlap = q.point.as_ref().map(|p| Overlap {
             point: [0, 1, 2].map(|i| encode::Encoder::value_of(&m, &p[i]).unwrap_or(f64::NAN)),
             times: q.times.iter().map(|t| encode::Encoder::value_of(&m, t).unwrap_or(f64::NAN)).collect(),
+            not_before: None,
         });
         Some(Answer::Sat {
             values: q.enc.assignments(&m),
@@ -690,6 +704,67 @@ impl Worker<'_> {
             bound: q.enc.shared_names(),
             exact: replay::valuation(&q.enc, &m),
         })
+    }
+
+    /// Bisects the time of a joint motion's footprint meeting found at `found` s: each
+    /// step asks the part's query with `time <= mid`. Unsat proves the footprints do not
+    /// meet at or before `mid` (the encoding encloses, so its unsat is sound); a model
+    /// that replays exactly is an earlier meeting and replaces the counterexample. Returns
+    /// the proved bound (if any) and the earliest replayed model found (if any). A few
+    /// steps only, each with the query's limit; an undecided step ends the search.
+    fn earliest(&self, ob: &Obligation, part: &Part, found: f64, stats: &mut Stats) -> (Option<f64>, Option<Answer>) {
+        const STEPS: usize = 6;
+        let Ok(q) = goals::build(self.prog, ob, part) else { return (None, None) };
+        let Some(time) = q.times.first().cloned() else { return (None, None) };
+        let solver = solver_for(&q);
+        for a in q.assertions.iter().chain(q.enc.side_conditions()) {
+            solver.assert(a);
+        }
+        let (mut lo, mut hi) = (None::<f64>, found);
+        let mut best = None;
+        for step in 0..STEPS {
+            // First whether they meet at the motion's start, then halves.
+            let mid = if step == 0 { 0.0 } else { (lo.unwrap_or(0.0) + hi) / 2.0 };
+            if !(mid < hi) || !mid.is_finite() {
+                break;
+            }
+            let Some(bound) = encode::real_of_f64(mid) else { break };
+            solver.push();
+            solver.assert(time.le(&bound));
+            stats.queries += 1;
+            let seq = self.watchdog.arm(self.timeout);
+            let result = solver.check();
+            let timed_out = self.watchdog.disarm(seq);
+            let model = if matches!(result, z3::SatResult::Sat) { solver.get_model() } else { None };
+            solver.pop(1);
+            match (result, model) {
+                (z3::SatResult::Unsat, _) if !timed_out => lo = Some(mid),
+                (z3::SatResult::Sat, Some(m)) if !q.enc.spurious_trig(&m) => {
+                    let exact = replay::valuation(&q.enc, &m);
+                    if !matches!(replay::replay(self.prog, ob, part, &exact), replay::Replay::Falsifies) {
+                        break;
+                    }
+                    let at = encode::Encoder::value_of(&m, &time).unwrap_or(f64::NAN);
+                    if !(at <= mid) {
+                        break;
+                    }
+                    hi = at;
+                    let overlap = q.point.as_ref().map(|p| Overlap {
+                        point: [0, 1, 2].map(|i| encode::Encoder::value_of(&m, &p[i]).unwrap_or(f64::NAN)),
+                        times: q.times.iter().map(|t| encode::Encoder::value_of(&m, t).unwrap_or(f64::NAN)).collect(),
+                        not_before: None,
+                    });
+                    best = Some(Answer::Sat {
+                        values: q.enc.assignments(&m),
+                        overlap,
+                        bound: q.enc.shared_names(),
+                        exact,
+                    });
+                }
+                _ => break,
+            }
+        }
+        (lo, best)
     }
 
     /// Builds and solves one part's query.
@@ -826,6 +901,7 @@ impl Worker<'_> {
                     let overlap = q.point.as_ref().map(|p| Overlap {
                         point: [0, 1, 2].map(|i| encode::Encoder::value_of(&m, &p[i]).unwrap_or(f64::NAN)),
                         times: q.times.iter().map(|t| encode::Encoder::value_of(&m, t).unwrap_or(f64::NAN)).collect(),
+                        not_before: None,
                     });
                     Answer::Sat {
                         values: q.enc.assignments(&m),
