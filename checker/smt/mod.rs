@@ -725,7 +725,7 @@ impl Worker<'_> {
         for step in 0..STEPS {
             // First whether they meet at the motion's start, then halves.
             let mid = if step == 0 { 0.0 } else { (lo.unwrap_or(0.0) + hi) / 2.0 };
-            if !(mid < hi) || !mid.is_finite() {
+            if !mid.is_finite() || mid >= hi {
                 break;
             }
             let Some(bound) = encode::real_of_f64(mid) else { break };
@@ -745,7 +745,7 @@ impl Worker<'_> {
                         break;
                     }
                     let at = encode::Encoder::value_of(&m, &time).unwrap_or(f64::NAN);
-                    if !(at <= mid) {
+                    if at.is_nan() || at > mid {
                         break;
                     }
                     hi = at;
