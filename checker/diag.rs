@@ -433,7 +433,11 @@ codes! {
         "[AGCOMP] (Sec 3.4): the footprints of the primitives of a joint motion must be disjoint at \
          every time of the motion, given their guarantees. The counterexample is a point of the world \
          (x, y, z, in metres) and a time (seconds since the motion started) at which both footprints \
-         contain the point, with the states that put them there. A footprint may cover space swept over \
+         contain the point, with every participant's state at that time and at the motion's start. The \
+         time is also given since the choreography started when nothing before the motion on the path \
+         takes time (messages take none), and said to be undetermined otherwise. mochi bisects the \
+         time: it names a time at or before which the footprints are proved not to meet, so the first \
+         meeting lies between the two; it never calls a meeting the earliest without that proof. A footprint may cover space swept over \
          the whole motion (Sec 3.5's cart box grows with time), so the point need not be where the robot's \
          body is at that instant, only where its footprint allows it to be. Move a participant (its pose or the \
          target of its motion), shrink a footprint, or strengthen a guarantee (for example, make an \
@@ -730,6 +734,11 @@ pub struct Overlap {
     pub point: [f64; 3],
     /// One time for a joint motion; one per motion for the sides of `*`.
     pub times: Vec<f64>,
+    /// For a joint motion: a time at or before which the footprints are proved not to
+    /// meet (the solver found no such meeting), so they first meet after it and at the
+    /// latest at `times[0]`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub not_before: Option<f64>,
 }
 
 /// What Z3 found when a predicate check fails, in the user's terms.

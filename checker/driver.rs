@@ -234,7 +234,8 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut sy
         types = declared;
     }
     if projected {
-        let (obs, diags) = run.stage(|| typeck::check_processes(&prog, &types));
+        let (obs, diags, hints) = run.stage(|| typeck::check_processes_hinted(&prog, &types));
+        run.hints = hints;
         if run.record("typing", diags) {
             obligations.extend(obs);
         }
@@ -305,6 +306,8 @@ struct Pipeline {
     last_millis: f64,
     vacuous: usize,
     planned: Option<Planned>,
+    /// Advice more precise than a code's help for some obligations (`typeck::Hints`).
+    hints: typeck::Hints,
 }
 
 impl Pipeline {
@@ -441,7 +444,7 @@ impl Pipeline {
                     Decision::Fails(f) => {
                         failed += 1;
                         if !explained(ob, &f) {
-                            self.diagnostics.push(failure(prog, ob, f));
+                            self.diagnostics.push(failure(prog, ob, f, self.hints.get(&(ob.rule, ob.span))));
                         }
                     }
                     Decision::Unknown { part, why } => {
@@ -455,7 +458,7 @@ impl Pipeline {
             for (ob, part, why) in undecided.iter().take(SHOWN) {
                 let why_text = match why {
                     // The limit was the time left before the run's deadline, not --timeout.
-                    smt::Why::Timeout(d) if config.cut_by_deadline => format!(
+                    smt::Why::Timeout(d, _) if config.cut_by_deadline => format!(
                         "Z3 ran out of time after {} ms: the run's --deadline was reached (the query had only {:.1} s left)",
                         d.as_millis(),
                         d.as_secs_f64()
@@ -464,13 +467,7 @@ impl Pipeline {
                 };
                 let mut d = Diagnostic::note_at(Code::Undecided, ob.span, format!("could not decide {}", ob.what))
                     .with_note(format!("{}: {why_text}", if part.is_empty() { ob.rule.name() } else { part }))
-                    .with_help(match why {
-                        smt::Why::Timeout(_) if config.cut_by_deadline => "give the run a later `--deadline` (or none), or check this file on its own; the verdict stays `unknown`, never `verified`",
-                        smt::Why::Timeout(_) => "raise the per-query limit with `--timeout SECONDS`, or simplify the predicates (keep them polynomial and local); the verdict stays `unknown`, never `verified`",
-                        smt::Why::Unsupported(_) => "rewrite the predicate with the supported constructs (LANGUAGE.md, \"Expressions\"); the verdict stays `unknown`, never `verified`",
-                        smt::Why::Abandoned(_) | smt::Why::NotRun(_) => "simplify the predicates (keep them polynomial and local; Z3 ignored the interrupt on this one, so a higher `--timeout` may not help); the verdict stays `unknown`, never `verified`",
-                        smt::Why::Incomplete(_) => "simplify the predicate (nonlinear and trigonometric facts are decided only partially); the verdict stays `unknown`, never `verified`",
-                    });
+                    .with_help(undecided_help(why, config.cut_by_deadline));
                 if ob.rule == Rule::AgComp || ob.rule == Rule::FullSeparation {
                     d = d.with_note(format!("rule: {}", ob.rule.name()));
                 }
@@ -634,7 +631,7 @@ fn trace_note(lines: &[String], values: bool) -> Option<String> {
     (!lines.is_empty()).then(|| format!("trace to this point ({how}):\n  {}", lines.join("\n  ")))
 }
 
-fn failure(prog: &crate::hir::Program, ob: &Obligation, f: smt::Failure) -> Diagnostic {
+fn failure(prog: &crate::hir::Program, ob: &Obligation, f: smt::Failure, hint: Option<&String>) -> Diagnostic {
     let steps = trace(prog, ob, &f);
     let code = match (ob.rule, &f.which) {
         (Rule::TotalChoice, _) => Code::ChoiceNotTotal,
@@ -696,6 +693,9 @@ fn failure(prog: &crate::hir::Program, ob: &Obligation, f: smt::Failure) -> Diag
         Code::SubtypePredicate => "in the declared local type, strengthen the send's guard or refinement (weaken the reception's) until it implies the projection's, or drop the `local` item",
         _ => "make the process's predicate imply the type's",
     };
+    // A fix more precise than the code's, found where the obligation was made
+    // (`typeck::Hints`): e.g. the type's refinement a process loop parameter lacks.
+    let help = hint.cloned().unwrap_or_else(|| help.to_string());
     let mut d = Diagnostic::error(code, ob.span, format!("{} ({})", code.title(), ob.what))
         .with_note(format!("required: {}", f.part))
         .with_note(format!("rule: {}", ob.rule.name()));
@@ -707,10 +707,51 @@ fn failure(prog: &crate::hir::Program, ob: &Obligation, f: smt::Failure) -> Diag
         d = d.with_note(text);
     }
     let cx = Counterexample { values: f.values, overlap: f.overlap, trace: steps };
-    if let Some(text) = counterexample_text(&cx, code) {
+    let since = matches!(code, Code::FootprintsOverlap | Code::ObstacleHit).then(|| since_start(prog, ob));
+    if let Some(text) = counterexample_text(&cx, code, since.as_ref()) {
         d = d.with_note(text);
     }
     d.with_help(help).with_counterexample(cx)
+}
+
+/// The help of an undecided obligation (U0001): what to change, matched to why it was
+/// not decided: the hard construct the query holds (`smt::hard`), the engine that
+/// stopped and how, or the limit that was reached.
+fn undecided_help(why: &smt::Why, cut_by_deadline: bool) -> String {
+    const STAYS: &str = "the verdict stays `unknown`, never `verified`";
+    match why {
+        smt::Why::Timeout(..) if cut_by_deadline => format!(
+            "give the run a later `--deadline` (or none), or check this file on its own; {STAYS}"
+        ),
+        smt::Why::Timeout(_, hard) => match hard.advice() {
+            Some(a) => format!("{a}; or raise the per-query limit with `--timeout SECONDS`; {STAYS}"),
+            None => format!(
+                "raise the per-query limit with `--timeout SECONDS`, or simplify the predicates (keep them polynomial and local); {STAYS}"
+            ),
+        },
+        smt::Why::Unsupported(_) => {
+            format!("rewrite the predicate with the supported constructs (LANGUAGE.md, \"Expressions\"); {STAYS}")
+        }
+        smt::Why::Abandoned(_) | smt::Why::NotRun(_) => format!(
+            "simplify the predicates (keep them polynomial and local; Z3 ignored the interrupt on this one, so a higher `--timeout` may not help); {STAYS}"
+        ),
+        smt::Why::Incomplete(_, hard) => match hard.advice() {
+            Some(a) => format!("{a}; {STAYS}"),
+            None => format!(
+                "simplify the predicate (nonlinear and trigonometric facts are decided only partially); {STAYS}"
+            ),
+        },
+        // The geometric search: what to change depends on how it stopped.
+        smt::Why::Search(s) if s.contains("time limit") || s.contains("boxes searched") => format!(
+            "give the geometric search more time with `--timeout SECONDS`, or narrow what it must cover (tighter bounds on the motion's variables in its precondition or guarantee); {STAYS}"
+        ),
+        smt::Why::Search(s) if s.contains("resolution") => format!(
+            "leave more clearance between the parts (the search cannot separate surfaces closer than its resolution), or tighten the motion's bounds near the contact shown; {STAYS}"
+        ),
+        smt::Why::Search(_) => format!(
+            "simplify the motion's geometry or bounds (primitive shapes instead of meshes, tighter bounds on its variables), or write a footprint predicate for Z3 to decide; {STAYS}"
+        ),
+    }
 }
 
 /// The SMT stage's dump sink failed on a query of `ob` (E0430): a warning, the verdict
@@ -828,14 +869,109 @@ fn used_primitives(obligations: &[Obligation]) -> HashSet<crate::hir::PrimId> {
 
 /// `counterexample: at time 2.1 s, the point (1.02, 0.2, 0.05) is in both footprints;
 /// Cart.x = 0, tr = 2`.
-fn counterexample_text(cx: &Counterexample, code: Code) -> Option<String> {
+/// How the time of a contact in a joint motion relates to the choreography's start,
+/// read off the path to the motion (`wf::trace`): messages take no time (README, "model
+/// of time"), so with no motion, choice or loop before it on the path the motion starts
+/// when the choreography does; otherwise the counterexample does not fix the time.
+enum Since {
+    /// The motion starts when the choreography does.
+    Start,
+    /// Not determined by the counterexample: why.
+    Open(String),
+}
+
+fn since_start(prog: &crate::hir::Program, ob: &Obligation) -> Since {
+    use crate::wf::trace::Step;
+    let Some(chor) = &prog.choreography else { return Since::Open("the motion is not in the choreography".into()) };
+    let Some(steps) = crate::wf::trace::path_to(&chor.body, ob.span) else {
+        return Since::Open("the path to the motion is not known".into());
+    };
+    let motions = steps.iter().filter(|s| matches!(s, Step::Motion(_))).count();
+    let choices = steps.iter().filter(|s| matches!(s, Step::Choice)).count();
+    let looped = steps.iter().any(|s| matches!(s, Step::Loop { .. }));
+    if motions == 0 && choices == 0 && !looped {
+        return Since::Start;
+    }
+    let mut why = Vec::new();
+    if motions > 0 {
+        why.push(format!(
+            "{motions} joint motion(s) precede it on this path, whose durations the counterexample does not fix"
+        ));
+    }
+    if choices > 0 {
+        why.push(format!("{choices} choice(s) before it may run motions"));
+    }
+    if looped {
+        why.push("it is in a loop, and the counterexample does not say which iteration".to_string());
+    }
+    Since::Open(why.join("; "))
+}
+
+/// The participants' states in a collision's counterexample, one participant at a time:
+/// `Cart: x = 0.8, v = 0.5` from the values `Cart.x(t)`, `Cart.v(t)` (at the contact)
+/// or `Cart.x`, `Cart.v` (at the motion's start, `at_start`).
+fn states(values: &[crate::diag::Assignment], at_start: bool) -> Vec<String> {
+    let mut by_role: Vec<(String, Vec<String>)> = Vec::new();
+    for a in values {
+        let name = if at_start {
+            if a.name.ends_with("(t)") || a.name.contains('(') {
+                continue;
+            }
+            a.name.as_str()
+        } else {
+            match a.name.strip_suffix("(t)") {
+                Some(n) if !n.contains('(') => n,
+                _ => continue,
+            }
+        };
+        let Some((role, var)) = name.split_once('.') else { continue };
+        if role == "point" {
+            continue;
+        }
+        let entry = format!("{var} = {}", a.value);
+        match by_role.iter_mut().find(|(r, _)| r == role) {
+            Some((_, vs)) => vs.push(entry),
+            None => by_role.push((role.to_string(), vec![entry])),
+        }
+    }
+    by_role.into_iter().map(|(r, vs)| format!("{r}: {}", vs.join(", "))).collect()
+}
+
+fn counterexample_text(cx: &Counterexample, code: Code, since: Option<&Since>) -> Option<String> {
     let mut parts = Vec::new();
+    // A collision: the contact's time within the motion and since the choreography's
+    // start, and every participant's state there. A contact is not claimed the earliest:
+    // the solver's model is one contact, not the first.
+    let collision = since.is_some() && cx.overlap.as_ref().is_some_and(|o| o.times.len() == 1);
     if let Some(o) = &cx.overlap {
         let p = o.point.map(short);
-        let at = match o.times.as_slice() {
-            [] => String::new(),
-            [t] => format!("at time {} s, ", short(*t)),
-            ts => format!("at times {} s, ", ts.iter().map(|t| short(*t)).collect::<Vec<_>>().join(" and ")),
+        let at = match (o.times.as_slice(), since) {
+            ([], _) => String::new(),
+            ([t], Some(since)) if o.not_before.is_some() || *t == 0.0 => {
+                let meet = if code == Code::ObstacleHit { "the footprint meets the obstacle" } else { "the footprints meet" };
+                let when = match o.not_before {
+                    Some(lo) => format!(
+                        "{meet} at {} s into this joint motion, and no meeting is possible at or before {} s (proved), so the first is between {} and {} s",
+                        short(*t), short(lo), short(lo), short(*t)
+                    ),
+                    None => format!("{meet} at 0 s, the joint motion's start (the earliest)"),
+                };
+                match since {
+                    Since::Start => format!("{when}; the joint motion starts when the choreography does (no motion precedes it on this path, and messages take no time): "),
+                    Since::Open(why) => format!("{when} (the time since the choreography started is not determined: {why}): "),
+                }
+            }
+            ([t], Some(Since::Start)) => format!(
+                "the footprints meet at {} s into this joint motion, which is {} s after the choreography starts (no motion precedes it on this path, and messages take no time): ",
+                short(*t),
+                short(*t)
+            ),
+            ([t], Some(Since::Open(why))) => format!(
+                "the footprints meet at {} s into this joint motion (the time since the choreography started is not determined: {why}): ",
+                short(*t)
+            ),
+            ([t], None) => format!("at time {} s, ", short(*t)),
+            (ts, _) => format!("at times {} s, ", ts.iter().map(|t| short(*t)).collect::<Vec<_>>().join(" and ")),
         };
         let (frame, where_) = match code {
             Code::FootprintMissesBody => ("in the robot's own frame ", "is a point of the body outside the footprint"),
@@ -844,6 +980,33 @@ fn counterexample_text(cx: &Counterexample, code: Code) -> Option<String> {
             _ => ("", "is in both footprints"),
         };
         parts.push(format!("{at}the point (x, y, z) = ({}, {}, {}) m {frame}{where_}", p[0], p[1], p[2]));
+    }
+    if collision {
+        let now = states(&cx.values, false);
+        let start = states(&cx.values, true);
+        if now.is_empty() {
+            parts.push("the participants' states at that time are not part of this counterexample".to_string());
+        } else {
+            parts.push(format!("the participants' states at that time: {}", now.join("; ")));
+        }
+        if !start.is_empty() {
+            parts.push(format!("at the start of the joint motion: {}", start.join("; ")));
+        }
+        // The rest (payload values, inputs): what the states above do not show.
+        let shown = |n: &str| {
+            n.starts_with("point.") || n.starts_with("time") || n.split_once('.').is_some_and(|(r, _)| r != "point")
+        };
+        let rest: Vec<String> = cx
+            .values
+            .iter()
+            .filter(|a| !shown(&a.name))
+            .take(16)
+            .map(|a| format!("{} = {}", a.name, a.value))
+            .collect();
+        if !rest.is_empty() {
+            parts.push(format!("with {}", rest.join(", ")));
+        }
+        return Some(format!("counterexample: {}", parts.join("; ")));
     }
     // The point and the time are shown above when there is an overlap.
     let hidden = |n: &str| cx.overlap.is_some() && (n.starts_with("point.") || n.starts_with("time"));

@@ -1010,3 +1010,70 @@ fn a_footprint_turned_with_the_heading_contains_a_round_body_or_is_never_passed(
     assert_ne!(v["verdict"], "verified", "{}", stdout(&o));
     assert_ne!(o.status.code(), Some(0));
 }
+
+#[test]
+fn a_process_loop_parameter_without_the_types_refinement_is_advised_to_add_it() {
+    // The process's `k` stands for the type's `n {n >= 0}` but is declared without it: the
+    // failed send's fix is the refinement on the loop parameter, in the process's names.
+    let o = mochi(&[
+        "check",
+        "choreographies/rejected/E0709-loop-parameter-without-the-types-refinement.chor",
+        "--format",
+        "json",
+    ]);
+    let v: Value = serde_json::from_str(&stdout(&o)).expect("json");
+    assert_eq!(v["verdict"], "rejected");
+    let helps: Vec<&str> = v["diagnostics"]
+        .as_array()
+        .expect("diagnostics")
+        .iter()
+        .filter(|d| d["code"] == "E0709")
+        .filter_map(|d| d["help"].as_str())
+        .collect();
+    assert!(!helps.is_empty(), "{v}");
+    for h in helps {
+        assert!(h.starts_with("add `{k >= 0}` to the process's loop parameter `k`"), "{h}");
+        assert!(!h.contains("establish the guard"), "{h}");
+    }
+}
+
+#[test]
+fn a_timeout_names_the_construct_that_made_the_query_hard_and_its_simplification() {
+    // Fermat's cubes: the query Z3 times out on holds the product `n * n * n`; the report
+    // names it (from the query's terms) and advises making it linear.
+    let o = mochi(&["check", "tests/data/hard-integer-guard.chor", "--timeout", "0.3", "--format", "json"]);
+    assert_eq!(o.status.code(), Some(3), "{}", stdout(&o));
+    let v: Value = serde_json::from_str(&stdout(&o)).expect("json");
+    let notes = undecided_notes(&v);
+    assert!(!notes.is_empty(), "{v}");
+    for n in &notes {
+        assert!(n.contains("what makes it hard: the nonlinear product `A."), "{n}");
+    }
+    let helps: Vec<&str> = v["diagnostics"]
+        .as_array()
+        .expect("diagnostics")
+        .iter()
+        .filter(|d| d["code"] == "U0001")
+        .filter_map(|d| d["help"].as_str())
+        .collect();
+    assert!(!helps.is_empty() && helps.iter().all(|h| h.starts_with("make the product linear")), "{helps:?}");
+}
+
+#[test]
+fn a_collision_counterexample_gives_every_participants_state_and_the_time_since_the_start() {
+    // The cart's swept box reaches the arm's base column in the first joint motion: the
+    // report gives both participants' states when the footprints meet, and the time since
+    // the choreography started (the same: only a message precedes the motion).
+    let o = mochi(&["check", "choreographies/rejected/E0404-target-too-close.chor", "--color", "never"]);
+    let out = format!("{}{}", stdout(&o), String::from_utf8_lossy(&o.stderr));
+    let line = out.lines().find(|l| l.contains("counterexample:")).unwrap_or_else(|| panic!("{out}"));
+    // The time is bisected: a meeting that replays, and a time at or before which no
+    // meeting is possible (proved by the solver; the values are the model's, so only the
+    // shape of the text is fixed here).
+    assert!(line.contains("the footprints meet at "), "{line}");
+    assert!(line.contains("s into this joint motion, and no meeting is possible at or before "), "{line}");
+    assert!(line.contains("the joint motion starts when the choreography does"), "{line}");
+    assert!(line.contains("states at that time: Cart: v = "), "{line}");
+    assert!(line.contains("; GRobot: ze = "), "{line}");
+    assert!(line.contains("at the start of the joint motion: Cart: v = "), "{line}");
+}

@@ -28,6 +28,7 @@
 mod encode;
 pub mod goals;
 mod guess;
+pub mod hard;
 mod key;
 pub mod pool;
 pub mod replay;
@@ -113,9 +114,14 @@ impl Default for SmtConfig {
 /// Why an obligation was not decided.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Why {
-    Timeout(Duration),
-    /// Z3 answered unknown, or its model relies on an over-approximation.
-    Incomplete(String),
+    /// Z3 reached the time limit; what in the query makes it hard ([`hard`]).
+    Timeout(Duration, Hard),
+    /// Z3 answered unknown, or its model relies on an over-approximation; what in the
+    /// query makes it hard, where that was read.
+    Incomplete(String, Hard),
+    /// The geometric procedure (parry's distances and contacts under interval branch
+    /// and bound, [`goals::geo`]) stopped without deciding: why.
+    Search(String),
     /// A construct the encoding does not support.
     Unsupported(String),
     /// Z3 did not stop when interrupted at the limit: its worker was abandoned after this
@@ -128,8 +134,13 @@ pub enum Why {
 impl std::fmt::Display for Why {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Why::Timeout(d) => write!(f, "Z3 timed out after {} ms (raise it with --timeout)", d.as_millis()),
-            Why::Incomplete(s) => write!(f, "Z3 could not decide it: {s}"),
+            Why::Timeout(d, hard) => {
+                write!(f, "Z3 timed out after {} ms (raise it with --timeout){}", d.as_millis(), hard.suffix())
+            }
+            Why::Incomplete(s, hard) => write!(f, "Z3 could not decide it: {s}{}", hard.suffix()),
+            Why::Search(s) => {
+                write!(f, "the geometric search (parry's distances under interval branch and bound) stopped: {s}")
+            }
             Why::Unsupported(s) => write!(f, "the SMT encoding does not support {s}"),
             Why::Abandoned(d) => write!(
                 f,
@@ -142,6 +153,7 @@ impl std::fmt::Display for Why {
 }
 
 pub use crate::diag::{Assignment, Overlap};
+pub use hard::Hard;
 
 /// A failed part: what failed and the counterexample.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -545,21 +557,51 @@ impl Worker<'_> {
             }
             match answer {
                 Answer::Unsat => {}
-                Answer::Sat { values, overlap, bound, exact } => {
+                Answer::Sat { mut values, mut overlap, mut bound, exact } => {
                     // A counterexample is shown only if, evaluated exactly, it falsifies
                     // the part's own goal; one that does not is unknown, never a failure
                     // (the geometric procedure's contact is parry's, replayed there).
                     let geometric = goals::geo::applies(self.prog, ob, part);
-                    let replayed =
+                    let mut replayed =
                         if geometric { replay::Replay::Falsifies } else { replay::replay(self.prog, ob, part, &exact) };
+                    // A hypothesis `float32(v)` is weakened to `true` in the encoding, so a
+                    // model may give a MAVLink float a value no float has: ask again with
+                    // each float value pinned to its value rounded to the field's format,
+                    // and keep that model if it replays.
+                    if !geometric && !matches!(replayed, replay::Replay::Falsifies) {
+                        if let Some(Answer::Sat { values: v, overlap: o, bound: b, exact: e }) =
+                            self.float_witness(ob, part, &exact, &mut stats)
+                        {
+                            if matches!(replay::replay(self.prog, ob, part, &e), replay::Replay::Falsifies) {
+                                (values, overlap, bound, replayed) = (v, o, b, replay::Replay::Falsifies);
+                            }
+                        }
+                    }
                     let why = match replayed {
                         replay::Replay::Falsifies => None,
+                        // A float hypothesis (weakened to `true` in the encoding) the
+                        // model breaks, and no model with the floats rounded to their
+                        // format completes a counterexample (`float_witness`).
+                        replay::Replay::Refuted(why) if why.contains("`float32(") || why.contains("`float64(") => Some(format!("its model gives a MAVLink float a value its format does not hold ({why}), and no model with the floats rounded to their format falsifies the goal: the encoding weakens `float32(v)` in hypotheses, so the question stays open")),
                         replay::Replay::Refuted(why) => Some(format!("its model does not falsify the goal in exact arithmetic ({why}); the encoding's enclosure of a pose turned by an angle that is not an exact multiple of `pi / 2` admits such models, otherwise please report this as a bug in mochi")),
                         replay::Replay::Undecided(why) => Some(format!("its model is not confirmed as a counterexample in exact arithmetic ({why}): the encoding's enclosures (of a pose's rotation, `sin`, `cos`, `sqrt`) may admit it where the real functions do not")),
                     };
                     if let Some(why) = why {
-                        unknown.get_or_insert((describe(self.prog, ob, part), Why::Incomplete(why)));
+                        unknown.get_or_insert((describe(self.prog, ob, part), Why::Incomplete(why, Hard::default())));
                         continue;
+                    }
+                    // A joint motion's footprints: look for an earlier meeting, and
+                    // prove a time before which they do not meet.
+                    if !geometric && matches!(ob.goal, Goal::Compatible { .. }) {
+                        if let Some(found) = overlap.as_ref().and_then(|o| o.times.first().copied()) {
+                            let (not_before, better) = self.earliest(ob, part, found, &mut stats);
+                            if let Some(Answer::Sat { values: v, overlap: o, bound: b, .. }) = better {
+                                (values, overlap, bound) = (v, o, b);
+                            }
+                            if let Some(o) = overlap.as_mut() {
+                                o.not_before = not_before;
+                            }
+                        }
                     }
                     let which = Some(part.clone());
                     // Say which engine found it: Z3's model, or the geometric procedure's
@@ -604,7 +646,7 @@ impl Worker<'_> {
                 }
                 None => {
                     let a = self.ask(ob, index, parts.len(), &Part::Context, &mut stats);
-                    if !self.cfg.no_cache && !matches!(a, Answer::Unknown(Why::Timeout(_))) {
+                    if !self.cfg.no_cache && !matches!(a, Answer::Unknown(Why::Timeout(..))) {
                         if let Ok(mut c) = self.caches.contexts.lock() {
                             c.insert(context, a.clone());
                         }
@@ -623,6 +665,121 @@ impl Worker<'_> {
             stats.vacuous += 1;
         }
         (Decision::Holds(None), stats)
+    }
+
+    /// The query of `part` again, with every MAVLink float value the model `exact` gives
+    /// a value pinned to that value rounded to its field's format (`lower::round_to_float`,
+    /// to nearest): a model of it is a counterexample whose floats are floats, for
+    /// [`replay`] to confirm. `None` when no float value was pinned or no model came.
+    fn float_witness(
+        &self,
+        ob: &Obligation,
+        part: &Part,
+        exact: &replay::Valuation,
+        stats: &mut Stats,
+    ) -> Option<Answer> {
+        let q = goals::build(self.prog, ob, part).ok()?;
+        let mut pins = Vec::new();
+        for (id, symbol) in q.enc.value_symbols() {
+            let Some(format) = self.prog.wire_floats.get(id).and_then(|f| crate::lower::float_format(*f)) else {
+                continue;
+            };
+            let Some(crate::exact::Value::Num(n)) = exact.get(symbol) else { continue };
+            let Some(v) = n.value() else { continue };
+            let Some(r) = crate::lower::round_to_float(v, format) else { continue };
+            let Some((_, encode::Term::R(t))) = q.enc.terms().find(|(name, _)| *name == symbol) else { continue };
+            pins.push(t.eq(encode::real_of_rational(&r)?));
+        }
+        if pins.is_empty() {
+            return None;
+        }
+        stats.queries += 1;
+        let solver = solver_for(&q);
+        for a in q.assertions.iter().chain(q.enc.side_conditions()).chain(&pins) {
+            solver.assert(a);
+        }
+        let seq = self.watchdog.arm(self.timeout);
+        let result = solver.check();
+        self.watchdog.disarm(seq);
+        let m = match result {
+            z3::SatResult::Sat => solver.get_model()?,
+            _ => return None,
+        };
+        if q.enc.spurious_trig(&m) {
+            return None;
+        }
+        let overlap = q.point.as_ref().map(|p| Overlap {
+            point: [0, 1, 2].map(|i| encode::Encoder::value_of(&m, &p[i]).unwrap_or(f64::NAN)),
+            times: q.times.iter().map(|t| encode::Encoder::value_of(&m, t).unwrap_or(f64::NAN)).collect(),
+            not_before: None,
+        });
+        Some(Answer::Sat {
+            values: q.enc.assignments(&m),
+            overlap,
+            bound: q.enc.shared_names(),
+            exact: replay::valuation(&q.enc, &m),
+        })
+    }
+
+    /// Bisects the time of a joint motion's footprint meeting found at `found` s: each
+    /// step asks the part's query with `time <= mid`. Unsat proves the footprints do not
+    /// meet at or before `mid` (the encoding encloses, so its unsat is sound); a model
+    /// that replays exactly is an earlier meeting and replaces the counterexample. Returns
+    /// the proved bound (if any) and the earliest replayed model found (if any). A few
+    /// steps only, each with the query's limit; an undecided step ends the search.
+    fn earliest(&self, ob: &Obligation, part: &Part, found: f64, stats: &mut Stats) -> (Option<f64>, Option<Answer>) {
+        const STEPS: usize = 6;
+        let Ok(q) = goals::build(self.prog, ob, part) else { return (None, None) };
+        let Some(time) = q.times.first().cloned() else { return (None, None) };
+        let solver = solver_for(&q);
+        for a in q.assertions.iter().chain(q.enc.side_conditions()) {
+            solver.assert(a);
+        }
+        let (mut lo, mut hi) = (None::<f64>, found);
+        let mut best = None;
+        for step in 0..STEPS {
+            // First whether they meet at the motion's start, then halves.
+            let mid = if step == 0 { 0.0 } else { (lo.unwrap_or(0.0) + hi) / 2.0 };
+            if !mid.is_finite() || mid >= hi {
+                break;
+            }
+            let Some(bound) = encode::real_of_f64(mid) else { break };
+            solver.push();
+            solver.assert(time.le(&bound));
+            stats.queries += 1;
+            let seq = self.watchdog.arm(self.timeout);
+            let result = solver.check();
+            let timed_out = self.watchdog.disarm(seq);
+            let model = if matches!(result, z3::SatResult::Sat) { solver.get_model() } else { None };
+            solver.pop(1);
+            match (result, model) {
+                (z3::SatResult::Unsat, _) if !timed_out => lo = Some(mid),
+                (z3::SatResult::Sat, Some(m)) if !q.enc.spurious_trig(&m) => {
+                    let exact = replay::valuation(&q.enc, &m);
+                    if !matches!(replay::replay(self.prog, ob, part, &exact), replay::Replay::Falsifies) {
+                        break;
+                    }
+                    let at = encode::Encoder::value_of(&m, &time).unwrap_or(f64::NAN);
+                    if at.is_nan() || at > mid {
+                        break;
+                    }
+                    hi = at;
+                    let overlap = q.point.as_ref().map(|p| Overlap {
+                        point: [0, 1, 2].map(|i| encode::Encoder::value_of(&m, &p[i]).unwrap_or(f64::NAN)),
+                        times: q.times.iter().map(|t| encode::Encoder::value_of(&m, t).unwrap_or(f64::NAN)).collect(),
+                        not_before: None,
+                    });
+                    best = Some(Answer::Sat {
+                        values: q.enc.assignments(&m),
+                        overlap,
+                        bound: q.enc.shared_names(),
+                        exact,
+                    });
+                }
+                _ => break,
+            }
+        }
+        (lo, best)
     }
 
     /// Builds and solves one part's query.
@@ -648,7 +805,7 @@ impl Worker<'_> {
                 goals::geo::GeoAnswer::Contact { values, overlap } => {
                     Answer::Sat { values, overlap: Some(overlap), bound: Vec::new(), exact: Default::default() }
                 }
-                goals::geo::GeoAnswer::Unknown(why) => Answer::Unknown(Why::Incomplete(why)),
+                goals::geo::GeoAnswer::Unknown(why) => Answer::Unknown(Why::Search(why)),
             };
         }
         // A payload float chosen by the progress check: first with integer witnesses
@@ -753,11 +910,13 @@ impl Worker<'_> {
                 Some(m) if q.enc.spurious_trig(&m) => Answer::Unknown(Why::Incomplete(
                     "its counterexample gives sin/cos values the real functions do not take (the encoding encloses them)"
                         .into(),
+                    Hard::of(&q),
                 )),
                 Some(m) => {
                     let overlap = q.point.as_ref().map(|p| Overlap {
                         point: [0, 1, 2].map(|i| encode::Encoder::value_of(&m, &p[i]).unwrap_or(f64::NAN)),
                         times: q.times.iter().map(|t| encode::Encoder::value_of(&m, t).unwrap_or(f64::NAN)).collect(),
+                        not_before: None,
                     });
                     Answer::Sat {
                         values: q.enc.assignments(&m),
@@ -768,13 +927,14 @@ impl Worker<'_> {
                 }
                 None => Answer::Sat { values: Vec::new(), overlap: None, bound: Vec::new(), exact: Default::default() },
             },
-            z3::SatResult::Unknown if timed_out => Answer::Unknown(Why::Timeout(self.timeout)),
-            z3::SatResult::Unknown => {
-                Answer::Unknown(Why::Incomplete(solver.get_reason_unknown().unwrap_or_else(|| "unknown".into())))
-            }
+            z3::SatResult::Unknown if timed_out => Answer::Unknown(Why::Timeout(self.timeout, Hard::of(&q))),
+            z3::SatResult::Unknown => Answer::Unknown(Why::Incomplete(
+                solver.get_reason_unknown().unwrap_or_else(|| "unknown".into()),
+                Hard::of(&q),
+            )),
         };
         // A timeout depends on the machine's load: do not cache it.
-        if let Some(keys) = keys.filter(|_| !matches!(answer, Answer::Unknown(Why::Timeout(_)))) {
+        if let Some(keys) = keys.filter(|_| !matches!(answer, Answer::Unknown(Why::Timeout(..)))) {
             if let Ok(mut c) = self.caches.cache.lock() {
                 if let Some(canonical) = keys.canonical {
                     c.insert(canonical, answer.clone());

@@ -275,7 +275,10 @@ pub fn run<W: Send + Sync + 'static>(
             let Some(i) = st.slots[k].current.filter(|_| dead) else { continue };
             st.slots[k].current = None;
             if st.results[i].is_none() {
-                let why = Why::Incomplete("its worker thread stopped (please report this as a bug in mochi)".into());
+                let why = Why::Incomplete(
+                    "its worker thread stopped (please report this as a bug in mochi)".into(),
+                    Default::default(),
+                );
                 st.results[i] = Some((Decision::Unknown { part: String::new(), why }, Stats::default()));
                 st.decided += 1;
             }
@@ -363,7 +366,10 @@ pub fn run<W: Send + Sync + 'static>(
         .into_iter()
         .map(|r| {
             r.unwrap_or((
-                Decision::Unknown { part: String::new(), why: Why::Incomplete("a worker thread stopped".into()) },
+                Decision::Unknown {
+                    part: String::new(),
+                    why: Why::Incomplete("a worker thread stopped".into(), Default::default()),
+                },
                 Stats::default(),
             ))
         })

@@ -59,6 +59,17 @@ use std::collections::{BTreeMap, HashMap, HashSet};
 /// Checks every participant's process against its projection. Participants whose
 /// projection failed are skipped (the projection error is reported already).
 pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalArc>) -> (Vec<Obligation>, Vec<Diagnostic>) {
+    let (obligations, diags, _) = check_processes_hinted(prog, projections);
+    (obligations, diags)
+}
+
+/// [`check_processes`], with advice for obligations whose failure has a more precise fix
+/// than their code's help ([`Hints`]).
+pub fn check_processes_hinted(
+    prog: &Program,
+    projections: &BTreeMap<RoleId, LocalArc>,
+) -> (Vec<Obligation>, Vec<Diagnostic>, Hints) {
+    let mut hints = Hints::new();
     let mut diags = Vec::new();
     let mut obligations = Vec::new();
     for role in prog.role_ids() {
@@ -92,6 +103,7 @@ pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalArc>)
         c.check(&def.body, ty.clone(), st);
         diags.extend(c.diags);
         obligations.extend(c.obligations);
+        hints.extend(c.hints);
     }
     if protocol_only(prog) {
         if let Some((sys, span)) = &prog.system {
@@ -134,7 +146,7 @@ pub fn check_processes(prog: &Program, projections: &BTreeMap<RoleId, LocalArc>)
     let mut seen = HashSet::new();
     diags.retain(|d| seen.insert((d.code, d.span, d.message.clone())));
     dedupe(&mut obligations);
-    (obligations, diags)
+    (obligations, diags, hints)
 }
 
 /// Whether `prog` is a protocol only: it has no `process` item (a MAVLink sub-protocol,
@@ -242,7 +254,17 @@ struct Checker<'a> {
     assumed: HashSet<LoopKey<'a>>,
     /// How many contexts each (loop body, type node) pair has been checked under.
     contexts: HashMap<(NodeRef<&'a Process>, NodeRef<LocalArc>), usize>,
+    /// Process loop parameters that stand for a refined parameter of the local type's
+    /// loop (process parameter, type parameter): where an obligation reading one fails
+    /// and the process's loop does not keep the type's refinement, the advice is to add it.
+    stands_for: HashMap<ValueId, (RecParam, RecParam)>,
+    /// Advice for an obligation, by its rule and span, more precise than its code's.
+    hints: Hints,
 }
+
+/// Advice for obligations (by rule and span) that applies better than their code's
+/// generic help: e.g. a loop parameter that lacks its type's refinement.
+pub type Hints = HashMap<(Rule, crate::source::Span), String>;
 
 /// What the checker knows at a point of the process.
 #[derive(Clone)]
@@ -289,6 +311,8 @@ impl<'a> Checker<'a> {
             obligations: Vec::new(),
             assumed: HashSet::new(),
             contexts: HashMap::new(),
+            stands_for: HashMap::new(),
+            hints: HashMap::new(),
         }
     }
 

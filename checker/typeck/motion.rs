@@ -41,6 +41,10 @@ impl Checker<'_> {
         }
         conjuncts(&crate::hir::expr::defined_and(instantiate(&prim.pre, self.role, &args)), &mut pre);
         if !pre.is_empty() {
+            let goal = and_all(pre, loc);
+            if let Some(hint) = self.loop_hint(&goal) {
+                self.hints.insert((Rule::TMotion, loc.0), hint);
+            }
             self.obligations.push(Obligation {
                 rule: Rule::TMotion,
                 span: loc.0,
@@ -50,7 +54,7 @@ impl Checker<'_> {
                     self.name()
                 ),
                 hyps: st.sigma.facts().to_vec(),
-                goal: Goal::Valid(and_all(pre, loc)),
+                goal: Goal::Valid(goal),
             });
         }
         // Σ := the strongest postcondition; the others moved meanwhile.

@@ -80,13 +80,17 @@ impl Checker<'_> {
             }
         }
         if !goal.is_empty() {
+            let goal = crate::hir::expr::defined_and(and_all(goal, loc));
+            if let Some(hint) = self.loop_hint(&goal) {
+                self.hints.insert((Rule::TOut, loc.0), hint);
+            }
             self.obligations.push(Obligation {
                 rule: Rule::TOut,
                 span: loc.0,
                 what: format!("`{}` may send `{to}!{}`: the guard and payload refinement hold", self.name(), b.label),
                 hyps: st.sigma.facts().to_vec(),
                 // The guard and refinements hold of the values sent, and can be evaluated.
-                goal: Goal::Valid(crate::hir::expr::defined_and(and_all(goal, loc))),
+                goal: Goal::Valid(goal),
             });
         }
         st.vals = vals;

@@ -5,11 +5,12 @@
 //! type's parameters (E0714).
 
 use super::{hash_of, Checker, State, WIDEN_AFTER};
-use crate::hir::expr::value_expr;
+use crate::hir::expr::{mentions, subst_values, value_expr};
 use crate::hir::node::NodeRef;
 use crate::hir::*;
 use crate::obligation::{Goal, Obligation, Rule};
 use crate::sigma::{self, Sigma};
+use std::collections::HashMap;
 
 impl<'a> Checker<'a> {
     /// The process's loop parameters get `values` (process terms, evaluated now), at
@@ -80,8 +81,44 @@ impl<'a> Checker<'a> {
         if let Some(tp) = ty {
             for (p, t) in params.iter().zip(tp) {
                 st.vals.insert(t.value, value_expr(p.value, &p.name, &p.sort));
+                if t.refinement.is_some() {
+                    self.stands_for.insert(p.value, (p.clone(), t.clone()));
+                }
             }
         }
+    }
+
+    /// Advice for a failed obligation `goal` of this process: where it reads a loop
+    /// parameter that stands for a refined parameter of the type's loop and the
+    /// process's loop does not keep that refinement (conjunct by conjunct), the fix is to
+    /// add the type's refinement, in the process's names, to the process's parameter
+    /// (the body then assumes it, and E0712/E0713 check it at entry and at each jump).
+    pub(super) fn loop_hint(&self, goal: &Expr) -> Option<String> {
+        let mut missing = Vec::new();
+        let mut ids: Vec<&ValueId> = self.stands_for.keys().collect();
+        ids.sort();
+        for id in ids {
+            let (p, t) = &self.stands_for[id];
+            if !mentions(goal, &|v| matches!(v, Var::Value(x, _) if x == id)) {
+                continue;
+            }
+            let Some(r) = &t.refinement else { continue };
+            let map = HashMap::from([(t.value, value_expr(p.value, &p.name, &p.sort))]);
+            let want = subst_values(r, &map);
+            let kept: Vec<&Expr> = p.refinement.iter().flat_map(|e| e.conjuncts()).collect();
+            if want.conjuncts().iter().all(|c| kept.contains(c)) {
+                continue;
+            }
+            missing.push(format!(
+                "add `{{{}}}` to the process's loop parameter `{}` (it stands for the local type's `{}`, \
+                 whose loop keeps that refinement; the process's loop then assumes it, and it is \
+                 checked at entry and at each jump)",
+                print::expr(self.prog, None, &want),
+                p.name,
+                t.name
+            ));
+        }
+        (!missing.is_empty()).then(|| missing.join("; "))
     }
 
     /// Coinduction for process loops: whether `body` still needs checking against `t`

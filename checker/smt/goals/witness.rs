@@ -97,16 +97,21 @@ impl Session<'_> {
         match r {
             z3::SatResult::Unsat => Ok(None),
             z3::SatResult::Sat => {
-                let m = solver.get_model().ok_or_else(|| Why::Incomplete("Z3 gave no model".into()))?;
+                let m =
+                    solver.get_model().ok_or_else(|| Why::Incomplete("Z3 gave no model".into(), Default::default()))?;
                 if q.enc.spurious_trig(&m) {
-                    return Err(Why::Incomplete("the witness relies on the sin/cos enclosure".into()));
+                    return Err(Why::Incomplete(
+                        "the witness relies on the sin/cos enclosure".into(),
+                        crate::smt::Hard::of(q),
+                    ));
                 }
                 Ok(Some(m))
             }
-            z3::SatResult::Unknown if timed_out => Err(Why::Timeout(self.timeout)),
-            z3::SatResult::Unknown => {
-                Err(Why::Incomplete(solver.get_reason_unknown().unwrap_or_else(|| "unknown".into())))
-            }
+            z3::SatResult::Unknown if timed_out => Err(Why::Timeout(self.timeout, crate::smt::Hard::of(q))),
+            z3::SatResult::Unknown => Err(Why::Incomplete(
+                solver.get_reason_unknown().unwrap_or_else(|| "unknown".into()),
+                crate::smt::Hard::of(q),
+            )),
         }
     }
 
@@ -363,7 +368,7 @@ fn unsupported(u: super::Unsupported) -> Why {
 }
 
 fn unreadable() -> Why {
-    Why::Incomplete("a value the simulator cannot read back".into())
+    Why::Incomplete("a value the simulator cannot read back".into(), Default::default())
 }
 
 fn zero() -> Real {

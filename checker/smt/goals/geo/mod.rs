@@ -756,7 +756,11 @@ impl<'a> Geo<'a> {
                 let values = self.assignments(&c.q).unwrap_or_default();
                 GeoAnswer::Contact {
                     values,
-                    overlap: Overlap { point: c.point, times: if self.initial { Vec::new() } else { times } },
+                    overlap: Overlap {
+                        point: c.point,
+                        times: if self.initial { Vec::new() } else { times },
+                        not_before: None,
+                    },
                 }
             }
             bnb::Outcome::Unknown { why, qbox, unresolved } => {
