@@ -156,7 +156,45 @@ fn binary_size_matches(bytes: &[u8]) -> bool {
     84 + 50 * count == bytes.len() as u64
 }
 
+/// `bytes` with the colours of vertex lines dropped, when some line carries them: `None`
+/// when no `v` line has more than four numbers (nothing to drop). Some exporters (MeshLab,
+/// ROS packages' meshes) write `v x y z r g b` on some lines and `v x y z` on others; tobj
+/// then has colours for some vertices only and refuses the file, although collision
+/// geometry never reads a colour. A `v` line of six or more numbers keeps its first three
+/// (the position; the colour extension has no `w`); a line of four keeps them all (`w`, a
+/// weight tobj divides by). Other lines are copied unchanged.
+fn without_vertex_colours(bytes: &[u8]) -> Option<Vec<u8>> {
+    let is_vertex = |line: &[u8]| {
+        let t = line.trim_ascii_start();
+        t.len() > 1 && t[0] == b'v' && t[1].is_ascii_whitespace()
+    };
+    let words = |line: &[u8]| line.split(|b| b.is_ascii_whitespace()).filter(|w| !w.is_empty()).count();
+    if !bytes.split(|&b| b == b'\n').any(|l| is_vertex(l) && words(l) >= 7) {
+        return None;
+    }
+    let mut out = Vec::with_capacity(bytes.len());
+    for (k, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        if k > 0 {
+            out.push(b'\n');
+        }
+        if is_vertex(line) && words(line) >= 7 {
+            let mut ws = line.split(|b| b.is_ascii_whitespace()).filter(|w| !w.is_empty());
+            for (i, w) in ws.by_ref().take(4).enumerate() {
+                if i > 0 {
+                    out.push(b' ');
+                }
+                out.extend_from_slice(w);
+            }
+        } else {
+            out.extend_from_slice(line);
+        }
+    }
+    Some(out)
+}
+
 fn parse_obj(bytes: &[u8]) -> Result<MeshData, MeshError> {
+    let stripped = without_vertex_colours(bytes);
+    let bytes = stripped.as_deref().unwrap_or(bytes);
     let opts = tobj::LoadOptions { triangulate: true, single_index: true, ignore_points: true, ignore_lines: true };
     let mut reader = std::io::BufReader::new(bytes);
     let loaded = std::panic::catch_unwind(move || {
@@ -406,6 +444,24 @@ mod tests {
         let point = MeshData { vertices: vec![Point3::new(3.0, 0.0, 0.0)], triangles: vec![], rounding: 0.0 };
         let s = hull_solid(&point, [1.0; 3], Isometry3::identity(), "pt".into()).unwrap();
         assert!(s.shape.contains_point(&s.pose, &Point3::new(3.0, 0.0, 0.0)));
+    }
+
+    /// An OBJ with colours on some vertex lines only (`v x y z r g b` and `v x y z` mixed, as
+    /// some exporters write): read, with the positions alone; a `w` weight still divides.
+    #[test]
+    fn obj_with_colours_on_some_vertices() {
+        let text = "v 0 0 0 1 0 0\nv 1 0 0\nv\t0 1 0 0.5 0.5 0.5\nv 0 0 2 2\r\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n";
+        let d = parse(text.as_bytes(), Format::Obj).unwrap();
+        assert_eq!(d.vertices.len(), 4);
+        assert_eq!(d.triangles.len(), 4);
+        let mut pts: Vec<[f64; 3]> = d.vertices.iter().map(|p| [p.x, p.y, p.z]).collect();
+        pts.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        assert_eq!(pts, vec![[0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]]);
+        // Every vertex coloured: read as before.
+        let all = "v 0 0 0 1 0 0\nv 1 0 0 1 0 0\nv 0 1 0 1 0 0\nv 0 0 1 1 0 0\nf 1 2 3\nf 1 2 4\n";
+        assert_eq!(parse(all.as_bytes(), Format::Obj).unwrap().vertices.len(), 4);
+        // A file with no coloured line is passed through untouched.
+        assert!(without_vertex_colours(CUBE_OBJ.as_bytes()).is_none());
     }
 
     proptest! {
