@@ -53,6 +53,9 @@ pub struct Joint {
     pub axis: Unit<Vector3<f64>>,
     /// `(lower, upper)` for revolute and prismatic joints; continuous and fixed: `None`.
     pub limits: Option<(f64, f64)>,
+    /// `<limit velocity>` of a movable joint (rad/s or m/s) when it is a positive finite
+    /// number; `None` otherwise (fixed joints, a missing or zero velocity).
+    pub velocity: Option<f64>,
     pub mimic: Option<Mimic>,
 }
 
@@ -244,6 +247,11 @@ impl Robot {
         self.vars.iter().map(|&j| self.joints[j].limits.unwrap_or((f64::NEG_INFINITY, f64::INFINITY))).collect()
     }
 
+    /// Per variable: its `<limit velocity>` (see [`Joint::velocity`]).
+    pub fn joint_velocities(&self) -> Vec<Option<f64>> {
+        self.vars.iter().map(|&j| self.joints[j].velocity).collect()
+    }
+
     fn value(&self, j: usize, q: &[f64]) -> f64 {
         match self.drive[j] {
             Some((v, m, o)) => m * q[v] + o,
@@ -426,6 +434,7 @@ mod tests {
             origin: Isometry3::translation(x, 0.0, 0.0),
             axis: Vector3::z_axis(),
             limits: Some((-3.0, 3.0)),
+            velocity: None,
             mimic: None,
         };
         Robot::new(
@@ -481,6 +490,7 @@ mod tests {
             origin: Isometry3::identity(),
             axis: if kind == JointKind::Prismatic { Vector3::x_axis() } else { Vector3::z_axis() },
             limits: Some((-1.0, 1.0)),
+            velocity: None,
             mimic: None,
         };
         let r = Robot::new(
@@ -509,6 +519,7 @@ mod tests {
             origin: Isometry3::identity(),
             axis: Vector3::x_axis(),
             limits: None,
+            velocity: None,
             mimic: None,
         };
         let e = Robot::new("r".into(), vec![], vec![]).unwrap_err();

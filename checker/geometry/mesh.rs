@@ -156,7 +156,45 @@ fn binary_size_matches(bytes: &[u8]) -> bool {
     84 + 50 * count == bytes.len() as u64
 }
 
+/// `bytes` with the colours of vertex lines dropped, when some line carries them: `None`
+/// when no `v` line has more than four numbers (nothing to drop). Some exporters (MeshLab,
+/// ROS packages' meshes) write `v x y z r g b` on some lines and `v x y z` on others; tobj
+/// then has colours for some vertices only and refuses the file, although collision
+/// geometry never reads a colour. A `v` line of six or more numbers keeps its first three
+/// (the position; the colour extension has no `w`); a line of four keeps them all (`w`, a
+/// weight tobj divides by). Other lines are copied unchanged.
+fn without_vertex_colours(bytes: &[u8]) -> Option<Vec<u8>> {
+    let is_vertex = |line: &[u8]| {
+        let t = line.trim_ascii_start();
+        t.len() > 1 && t[0] == b'v' && t[1].is_ascii_whitespace()
+    };
+    let words = |line: &[u8]| line.split(|b| b.is_ascii_whitespace()).filter(|w| !w.is_empty()).count();
+    if !bytes.split(|&b| b == b'\n').any(|l| is_vertex(l) && words(l) >= 7) {
+        return None;
+    }
+    let mut out = Vec::with_capacity(bytes.len());
+    for (k, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        if k > 0 {
+            out.push(b'\n');
+        }
+        if is_vertex(line) && words(line) >= 7 {
+            let mut ws = line.split(|b| b.is_ascii_whitespace()).filter(|w| !w.is_empty());
+            for (i, w) in ws.by_ref().take(4).enumerate() {
+                if i > 0 {
+                    out.push(b' ');
+                }
+                out.extend_from_slice(w);
+            }
+        } else {
+            out.extend_from_slice(line);
+        }
+    }
+    Some(out)
+}
+
 fn parse_obj(bytes: &[u8]) -> Result<MeshData, MeshError> {
+    let stripped = without_vertex_colours(bytes);
+    let bytes = stripped.as_deref().unwrap_or(bytes);
     let opts = tobj::LoadOptions { triangulate: true, single_index: true, ignore_points: true, ignore_lines: true };
     let mut reader = std::io::BufReader::new(bytes);
     let loaded = std::panic::catch_unwind(move || {
@@ -187,15 +225,48 @@ fn parse_obj(bytes: &[u8]) -> Result<MeshData, MeshError> {
 pub fn hull_solid(data: &MeshData, scale: [f64; 3], pose: Isometry3<f64>, name: String) -> Option<Solid> {
     let pts: Vec<Point3<f64>> =
         data.vertices.iter().map(|p| Point3::new(p.x * scale[0], p.y * scale[1], p.z * scale[2])).collect();
-    let hull = SharedShape::convex_hull(&pts).filter(|h| h.as_convex_polyhedron().is_some_and(volume_ok));
-    let hull = match hull {
-        Some(h) => h,
+    let hull = hull_of(&pts)?;
+    // The slack: how far a vertex lies outside the hull parry built.
+    let poly = hull.as_convex_polyhedron()?;
+    let slack = slack_of(poly, &pts);
+    // Rounding of the projection itself: a relative 1e-12 of the mesh's extent.
+    let extent = pts.iter().map(|p| p.coords.amax()).fold(0.0, f64::max);
+    let rounding = 1e-12 * extent + data.rounding * scale.iter().fold(0.0, |m: f64, s| m.max(s.abs()));
+    let slack = slack + rounding;
+    // A mirror (an odd number of negative factors) turns the triangles inside out: their
+    // winding is reversed so that each still faces out.
+    let mirrored = scale.iter().filter(|s| **s < 0.0).count() % 2 == 1;
+    let indices: Vec<[u32; 3]> =
+        if mirrored { data.triangles.iter().map(|[a, b, c]| [*a, *c, *b]).collect() } else { data.triangles.clone() };
+    let tri = Arc::new(Triangles { vertices: pts, indices });
+    Some(Solid::with_slack(hull, pose, name, slack, Some(tri)))
+}
+
+/// The convex pieces of a markedly concave closed mesh ([`decompose`]) as parry shapes,
+/// with their slack: the largest distance of a piece's point outside the hull parry built
+/// for it, plus a relative 1e-12 of the mesh's size for the rounding of the clipped points.
+/// `None` when the mesh is not decomposed or a piece has no hull.
+pub fn pieces_of(t: &Triangles) -> Option<(Vec<SharedShape>, f64)> {
+    let extent = t.vertices.iter().map(|p| p.coords.amax()).fold(0.0, f64::max);
+    let mut slack: f64 = 0.0;
+    let mut out = Vec::new();
+    for piece in decompose(&t.vertices, &t.indices)? {
+        let shape = hull_of(&piece)?;
+        slack = slack.max(slack_of(shape.as_convex_polyhedron()?, &piece));
+        out.push(shape);
+    }
+    Some((out, slack + 1e-12 * extent))
+}
+
+/// The convex hull of `pts` with volume, or of the points thickened by
+/// [`FLAT_THICKNESS`] when they are flat (see the module doc).
+fn hull_of(pts: &[Point3<f64>]) -> Option<SharedShape> {
+    let hull = SharedShape::convex_hull(pts).filter(|h| h.as_convex_polyhedron().is_some_and(volume_ok));
+    match hull {
+        Some(h) => Some(h),
         None => {
-            let (lo, hi) = pts
-                .iter()
-                .fold((Point3::from([f64::INFINITY; 3]), Point3::from([f64::NEG_INFINITY; 3])), |(lo, hi), p| {
-                    (lo.inf(p), hi.sup(p))
-                });
+            let first = *pts.first()?;
+            let (lo, hi) = pts.iter().fold((first, first), |(lo, hi), p| (lo.inf(p), hi.sup(p)));
             let e = FLAT_THICKNESS * (hi - lo).norm().max(0.01);
             let thick: Vec<Point3<f64>> = pts
                 .iter()
@@ -204,22 +275,229 @@ pub fn hull_solid(data: &MeshData, scale: [f64; 3], pose: Isometry3<f64>, name: 
                         .map(|d| Point3::new(p.x + d[0], p.y + d[1], p.z + d[2]))
                 })
                 .collect();
-            SharedShape::convex_hull(&thick).filter(|h| h.as_convex_polyhedron().is_some_and(volume_ok))?
+            SharedShape::convex_hull(&thick).filter(|h| h.as_convex_polyhedron().is_some_and(volume_ok))
         }
+    }
+}
+
+/// Meshes of more triangles than this stay their convex hulls: the decomposition evaluates
+/// a winding number over every triangle at each corner and face it tests.
+pub const DECOMPOSE_MAX_TRIANGLES: usize = 2_000;
+/// How many times a cell of the decomposition may be halved (at most 2^this pieces).
+const DECOMPOSE_DEPTH: usize = 6;
+
+/// Convex pieces whose union contains the solid a closed mesh bounds, for a mesh markedly
+/// concave (its volume at most [`CONCAVE_RATIO`] of its hull's); `None` for a mesh that is
+/// not closed and consistently oriented (every directed edge once, and its reverse once,
+/// after welding equal vertices), nearly convex, or larger than
+/// [`DECOMPOSE_MAX_TRIANGLES`]: its hull stands for it alone.
+///
+/// **Why the union contains the solid** `S` (bounded by the mesh `M`). The mesh's box is
+/// cut into cells (boxes); every point of `S` lies in some cell `K`, so in `S ∩ K`. For a
+/// compact set, its hull is the hull of its boundary, and `∂(S ∩ K) ⊆ (M ∩ K) ∪ (S ∩ ∂K)`;
+/// on a face `F` of `K` the same argument gives `(M ∩ F) ∪ (S ∩ ∂F)`, and on an edge `e`
+/// the set `S ∩ e` is intervals whose ends are points of `M` or corners of `K`. So
+/// `hull(S ∩ K) ⊆ hull((M ∩ K) ∪ (corners of K in S))`, and `M ∩ K` is the triangles
+/// clipped to `K`, convex polygons whose vertices the clipping computes. The piece of `K`
+/// is the hull of those vertices and of the corners of `K` whose winding number says
+/// inside, or is not clearly outside (`|w| > 1/4`: a corner exactly on the surface is a
+/// point of `M ∩ K` already). The winding number (the solid angles of the triangles,
+/// summed, over 4π) is 1 inside a closed oriented mesh and 0 outside, whatever the
+/// orientation's sign; its rounding is far below the 1/4 threshold except within a few
+/// ulps of the surface. Each piece's hull slack (quickhull's tolerance) and a relative
+/// 1e-12 of the mesh's size for the rounding of the clipped points are added to the
+/// solid's slack by the caller.
+///
+/// A cell is halved (along its longest side) while its piece is not tight: the centroid
+/// of a face of the piece's hull lies outside `S` (winding number below 1/4). That only
+/// decides how fine the cells are, never what a piece holds.
+pub fn decompose(pts: &[Point3<f64>], tris: &[[u32; 3]]) -> Option<Vec<Vec<Point3<f64>>>> {
+    if tris.is_empty() || tris.len() > DECOMPOSE_MAX_TRIANGLES {
+        return None;
+    }
+    // Weld equal vertices; drop triangles that repeat one.
+    let mut canon: std::collections::HashMap<[u64; 3], u32> = std::collections::HashMap::new();
+    let mut verts: Vec<Point3<f64>> = Vec::new();
+    let mut index = Vec::with_capacity(pts.len());
+    for p in pts {
+        let key = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+        let k = *canon.entry(key).or_insert_with(|| {
+            verts.push(*p);
+            (verts.len() - 1) as u32
+        });
+        index.push(k);
+    }
+    let mut faces: Vec<[u32; 3]> = Vec::with_capacity(tris.len());
+    for t in tris {
+        let f = [*index.get(t[0] as usize)?, *index.get(t[1] as usize)?, *index.get(t[2] as usize)?];
+        if f[0] != f[1] && f[1] != f[2] && f[0] != f[2] {
+            faces.push(f);
+        }
+    }
+    // Closed and consistently oriented: each directed edge once, its reverse once.
+    let mut edges: std::collections::HashMap<(u32, u32), u32> = std::collections::HashMap::new();
+    for f in &faces {
+        for (a, b) in [(f[0], f[1]), (f[1], f[2]), (f[2], f[0])] {
+            *edges.entry((a, b)).or_insert(0) += 1;
+        }
+    }
+    if faces.is_empty() || edges.iter().any(|(&(a, b), &n)| n != 1 || edges.get(&(b, a)) != Some(&1)) {
+        return None;
+    }
+    let tri: Vec<[Point3<f64>; 3]> =
+        faces.iter().map(|f| [verts[f[0] as usize], verts[f[1] as usize], verts[f[2] as usize]]).collect();
+    // Markedly concave only: the mesh's volume against its hull's.
+    let volume = tri.iter().map(|[a, b, c]| a.coords.dot(&b.coords.cross(&c.coords))).sum::<f64>().abs() / 6.0;
+    let hull = SharedShape::convex_hull(&verts)?;
+    let hull_volume = hull.as_convex_polyhedron().map(poly_volume)?;
+    if !(volume > 0.0 && volume <= CONCAVE_RATIO * hull_volume) {
+        return None;
+    }
+    let (lo, hi) = verts.iter().fold((verts[0], verts[0]), |(lo, hi), p| (lo.inf(p), hi.sup(p)));
+    let all: Vec<usize> = (0..tri.len()).collect();
+    let mut pieces = Vec::new();
+    cells(&tri, &all, lo, hi, 0, &mut pieces);
+    (!pieces.is_empty()).then_some(pieces)
+}
+
+/// A mesh whose volume is at most this fraction of its hull's is decomposed.
+pub const CONCAVE_RATIO: f64 = 0.9;
+
+fn poly_volume(c: &parry3d::shape::ConvexPolyhedron) -> f64 {
+    let (v, i) = c.to_trimesh();
+    i.iter()
+        .map(|t| {
+            let (a, b, c) = (v[t[0] as usize], v[t[1] as usize], v[t[2] as usize]);
+            a.coords.dot(&b.coords.cross(&c.coords))
+        })
+        .sum::<f64>()
+        .abs()
+        / 6.0
+}
+
+/// The generalised winding number of the triangles about `p`: 1 (or −1) inside a closed
+/// oriented mesh, 0 outside (Van Oosterom and Strackee's solid angle per triangle).
+fn winding(tri: &[[Point3<f64>; 3]], p: &Point3<f64>) -> f64 {
+    let mut sum = 0.0;
+    for [a, b, c] in tri {
+        let (a, b, c) = (a - p, b - p, c - p);
+        let (la, lb, lc) = (a.norm(), b.norm(), c.norm());
+        let num = a.dot(&b.cross(&c));
+        let den = la * lb * lc + a.dot(&b) * lc + a.dot(&c) * lb + b.dot(&c) * la;
+        sum += 2.0 * num.atan2(den);
+    }
+    sum / (4.0 * std::f64::consts::PI)
+}
+
+/// The triangle `t` clipped to the box `[lo, hi]`: the vertices of the convex polygon
+/// `t ∩ box` (empty when they do not meet).
+fn clip(t: &[Point3<f64>; 3], lo: &Point3<f64>, hi: &Point3<f64>) -> Vec<Point3<f64>> {
+    let mut poly: Vec<Point3<f64>> = t.to_vec();
+    for k in 0..3 {
+        for (bound, keep_above) in [(lo[k], true), (hi[k], false)] {
+            if poly.is_empty() {
+                return poly;
+            }
+            let inside = |p: &Point3<f64>| if keep_above { p[k] >= bound } else { p[k] <= bound };
+            let mut out = Vec::with_capacity(poly.len() + 1);
+            for i in 0..poly.len() {
+                let (p, q) = (poly[i], poly[(i + 1) % poly.len()]);
+                match (inside(&p), inside(&q)) {
+                    (true, true) => out.push(q),
+                    (true, false) | (false, true) => {
+                        let s = (bound - p[k]) / (q[k] - p[k]);
+                        let mut x = p + (q - p) * s;
+                        x[k] = bound;
+                        out.push(x);
+                        if inside(&q) {
+                            out.push(q);
+                        }
+                    }
+                    (false, false) => {}
+                }
+            }
+            poly = out;
+        }
+    }
+    poly
+}
+
+/// The pieces of the cell `[lo, hi]` (see [`decompose`]): its piece, or its halves'.
+fn cells(
+    tri: &[[Point3<f64>; 3]],
+    near: &[usize],
+    lo: Point3<f64>,
+    hi: Point3<f64>,
+    depth: usize,
+    out: &mut Vec<Vec<Point3<f64>>>,
+) {
+    // The triangles whose boxes meet the cell, and their parts inside it.
+    let near: Vec<usize> = near
+        .iter()
+        .copied()
+        .filter(|&i| {
+            let [a, b, c] = &tri[i];
+            (0..3).all(|k| a[k].min(b[k]).min(c[k]) <= hi[k] && a[k].max(b[k]).max(c[k]) >= lo[k])
+        })
+        .collect();
+    let mut pts: Vec<Point3<f64>> = near.iter().flat_map(|&i| clip(&tri[i], &lo, &hi)).collect();
+    let mut inside = 0;
+    for i in 0..8 {
+        let corner = Point3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        );
+        if winding(tri, &corner).abs() > 0.25 {
+            pts.push(corner);
+            inside += 1;
+        }
+    }
+    if pts.is_empty() {
+        return; // no point of the solid in this cell
+    }
+    if depth >= DECOMPOSE_DEPTH || (near.is_empty() && inside == 8) {
+        out.push(pts);
+        return;
+    }
+    // Tight: every face centroid of the piece's hull inside the solid (or on it).
+    let tight = match SharedShape::convex_hull(&pts) {
+        Some(h) => match h.as_convex_polyhedron() {
+            Some(poly) => {
+                let (v, idx) = poly.to_trimesh();
+                idx.iter().all(|t| {
+                    let c = Point3::from(
+                        (v[t[0] as usize].coords + v[t[1] as usize].coords + v[t[2] as usize].coords) / 3.0,
+                    );
+                    winding(tri, &c).abs() > 0.25
+                })
+            }
+            None => false,
+        },
+        None => false,
     };
-    // The slack: how far a vertex lies outside the hull parry built.
-    let poly = hull.as_convex_polyhedron()?;
-    let slack = slack_of(poly, &pts);
-    // Rounding of the projection itself: a relative 1e-12 of the mesh's extent.
-    let extent = pts.iter().map(|p| p.coords.amax()).fold(0.0, f64::max);
-    let slack = slack + 1e-12 * extent + data.rounding * scale.iter().fold(0.0, |m: f64, s| m.max(s.abs()));
-    // A mirror (an odd number of negative factors) turns the triangles inside out: their
-    // winding is reversed so that each still faces out.
-    let mirrored = scale.iter().filter(|s| **s < 0.0).count() % 2 == 1;
-    let indices =
-        if mirrored { data.triangles.iter().map(|[a, b, c]| [*a, *c, *b]).collect() } else { data.triangles.clone() };
-    let tri = Arc::new(Triangles { vertices: pts, indices });
-    Some(Solid::with_slack(hull, pose, name, slack, Some(tri)))
+    if tight {
+        out.push(pts);
+        return;
+    }
+    let ext = hi - lo;
+    let k = if ext.x >= ext.y && ext.x >= ext.z {
+        0
+    } else if ext.y >= ext.z {
+        1
+    } else {
+        2
+    };
+    let mid = lo[k] + 0.5 * (hi[k] - lo[k]);
+    if !(mid > lo[k] && mid < hi[k]) {
+        out.push(pts);
+        return;
+    }
+    let (mut hi1, mut lo2) = (hi, lo);
+    hi1[k] = mid;
+    lo2[k] = mid;
+    cells(tri, &near, lo, hi1, depth + 1, out);
+    cells(tri, &near, lo2, hi, depth + 1, out);
 }
 
 /// The largest distance of a point of `pts` outside `poly` (0 if all are inside). A point
@@ -406,6 +684,73 @@ mod tests {
         let point = MeshData { vertices: vec![Point3::new(3.0, 0.0, 0.0)], triangles: vec![], rounding: 0.0 };
         let s = hull_solid(&point, [1.0; 3], Isometry3::identity(), "pt".into()).unwrap();
         assert!(s.shape.contains_point(&s.pose, &Point3::new(3.0, 0.0, 0.0)));
+    }
+
+    /// An OBJ with colours on some vertex lines only (`v x y z r g b` and `v x y z` mixed, as
+    /// some exporters write): read, with the positions alone; a `w` weight still divides.
+    #[test]
+    fn obj_with_colours_on_some_vertices() {
+        let text = "v 0 0 0 1 0 0\nv 1 0 0\nv\t0 1 0 0.5 0.5 0.5\nv 0 0 2 2\r\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n";
+        let d = parse(text.as_bytes(), Format::Obj).unwrap();
+        assert_eq!(d.vertices.len(), 4);
+        assert_eq!(d.triangles.len(), 4);
+        let mut pts: Vec<[f64; 3]> = d.vertices.iter().map(|p| [p.x, p.y, p.z]).collect();
+        pts.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        assert_eq!(pts, vec![[0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]]);
+        // Every vertex coloured: read as before.
+        let all = "v 0 0 0 1 0 0\nv 1 0 0 1 0 0\nv 0 1 0 1 0 0\nv 0 0 1 1 0 0\nf 1 2 3\nf 1 2 4\n";
+        assert_eq!(parse(all.as_bytes(), Format::Obj).unwrap().vertices.len(), 4);
+        // A file with no coloured line is passed through untouched.
+        assert!(without_vertex_colours(CUBE_OBJ.as_bytes()).is_none());
+    }
+
+    /// The cradle (a U-shaped closed mesh): decomposed into pieces whose union holds every
+    /// point of the solid (sampled on a grid, each tested by the winding number), and a box
+    /// in its slot, 1 cm from the walls and the floor, is proved apart by the pieces although it
+    /// lies inside the hull.
+    #[test]
+    fn a_concave_mesh_is_decomposed_into_pieces_that_hold_it() {
+        let text = std::fs::read_to_string("robots/meshes/cradle.obj").unwrap();
+        let d = parse(text.as_bytes(), Format::Obj).unwrap();
+        let s = hull_solid(&d, [1.0; 3], Isometry3::identity(), "cradle".into()).unwrap();
+        let (pieces, extra) = s.pieces().expect("the cradle is decomposed");
+        assert!(pieces.len() >= 2 && extra >= 0.0, "{} pieces", pieces.len());
+        let t = s.triangles.as_ref().unwrap();
+        let tri: Vec<[Point3<f64>; 3]> = t
+            .indices
+            .iter()
+            .map(|f| [t.vertices[f[0] as usize], t.vertices[f[1] as usize], t.vertices[f[2] as usize]])
+            .collect();
+        let mut inside = 0;
+        for i in 0..=30 {
+            for j in 0..=10 {
+                for k in 0..=20 {
+                    let p = Point3::new(-0.15 + 0.01 * i as f64, -0.1 + 0.02 * j as f64, 0.005 * k as f64);
+                    if winding(&tri, &p).abs() < 0.5 {
+                        continue;
+                    }
+                    inside += 1;
+                    let held =
+                        pieces.iter().any(|q| q.shape.distance_to_point(&Isometry3::identity(), &p, true) <= 1e-12);
+                    assert!(held, "{p:?} of the solid is in no piece");
+                }
+            }
+        }
+        assert!(inside > 1000, "{inside}");
+        // A box in the slot: the hulls overlap, the pieces are 1 cm apart from it.
+        let part = Solid::mochi_box(0.08, 0.1, 0.05, Isometry3::translation(0.0, 0.0, 0.04), "part").unwrap();
+        let (_, hull_lower, _) = super::super::bnb::parry_closest(&s.shape, &s.pose, &part.shape, &part.pose);
+        assert!(hull_lower < 0.0, "{hull_lower}");
+        let (_, lower, _) = super::super::solid_closest(&s, &s.pose, &part, &part.pose);
+        assert!(lower > 0.0 && lower <= 0.01 + 1e-9, "{lower}");
+        // Wider than the slot: no lower bound above 0.
+        let wide = Solid::mochi_box(0.12, 0.1, 0.05, Isometry3::translation(0.0, 0.0, 0.04), "wide").unwrap();
+        let (_, lower, _) = super::super::solid_closest(&s, &s.pose, &wide, &wide.pose);
+        assert!(lower <= 0.0, "{lower}");
+        // An open mesh (the cube less one face) is not decomposed.
+        let open = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nf 1 2 3 4\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+        let d = parse(open.as_bytes(), Format::Obj).unwrap();
+        assert!(decompose(&d.vertices, &d.triangles).is_none());
     }
 
     proptest! {

@@ -168,6 +168,69 @@ pub fn contains(a: &[(Pose3, &Solid)], p: [f64; 3], tol: f64) -> bool {
     a.iter().any(|(owner, s)| s.shape.distance_to_point(&(owner * s.pose), &pt, true) <= tol)
 }
 
+/// [`bnb::parry_closest`] of two solids placed at `pa` and `pb` (the world poses of their
+/// shapes: owner pose times [`Solid::pose`]): parry's distance, a certified lower bound and
+/// the closest points. When a side is a decomposed concave mesh ([`Solid::pieces`]) and the
+/// shapes' lower bound is not positive (the hulls touch), the lower bound is raised to the least over pairs of pieces (a side without pieces counts
+/// as one piece, its shape): the pieces' union holds each solid, so two solids' distance is
+/// at least the least distance of their pieces. The estimate is raised likewise (it is then
+/// the pieces', not the hulls'). The caller subtracts the solids' slacks, as before; the
+/// pieces' slack beyond those is subtracted here.
+pub fn solid_closest(sa: &Solid, pa: &Isometry3<f64>, sb: &Solid, pb: &Isometry3<f64>) -> (f64, f64, [[f64; 3]; 2]) {
+    let (d, lower, points) = bnb::parry_closest(&sa.shape, pa, &sb.shape, pb);
+    // Only where the hulls touch: a box whose hulls are apart at its centre needs no more,
+    // and a proof that never met touching hulls costs what it did before.
+    if !(lower <= 0.0) || !(sa.is_hull || sb.is_hull) {
+        return (d, lower, points);
+    }
+    let (pa_, pb_) = (sa.pieces(), sb.pieces());
+    if pa_.is_none() && pb_.is_none() {
+        return (d, lower, points);
+    }
+    let whole = |s: &Solid| {
+        let b = s.shape.compute_local_bounding_sphere();
+        vec![shape::Piece { shape: s.shape.clone(), centre: *b.center(), radius: b.radius() * (1.0 + 1e-9) + 1e-12 }]
+    };
+    let (wa, wb) = (whole(sa), whole(sb));
+    let (ka, ea): (&[shape::Piece], f64) = pa_.unwrap_or((&wa, 0.0));
+    let (kb, eb): (&[shape::Piece], f64) = pb_.unwrap_or((&wb, 0.0));
+    let extra = ea + eb;
+    let mut best = (f64::INFINITY, f64::INFINITY, points);
+    let mut pairs = Vec::with_capacity(ka.len() * kb.len());
+    for (i, x) in ka.iter().enumerate() {
+        let cx = pa * x.centre;
+        for (j, y) in kb.iter().enumerate() {
+            let gap = (cx - pb * y.centre).norm() - x.radius - y.radius;
+            pairs.push((gap, i, j));
+        }
+    }
+    pairs.sort_by(|x, y| x.0.total_cmp(&y.0));
+    for (gap, i, j) in pairs {
+        // Spheres hold the pieces: a pair whose spheres are farther apart than the least
+        // bound so far cannot lower it. (Shrunk by a relative 1e-9 against rounding.)
+        if gap - 1e-9 * gap.abs() > best.1 {
+            break;
+        }
+        let (dd, low, pts) = bnb::parry_closest(&ka[i].shape, pa, &kb[j].shape, pb);
+        if low.is_nan() || dd.is_nan() {
+            return (d, lower, points);
+        }
+        if low < best.1 {
+            best.1 = low;
+        }
+        if dd < best.0 {
+            best.0 = dd;
+            best.2 = pts;
+        }
+    }
+    let low = best.1 - extra;
+    if low > lower {
+        (d.max(best.0), low, best.2)
+    } else {
+        (d, lower, points)
+    }
+}
+
 fn pair(pa: &Isometry3<f64>, sa: &Solid, pb: &Isometry3<f64>, sb: &Solid) -> Closest {
     use parry3d::query::{self, ClosestPoints};
     let (wa, wb) = (pa * sa.pose, pb * sb.pose);
@@ -181,6 +244,15 @@ fn pair(pa: &Isometry3<f64>, sa: &Solid, pb: &Isometry3<f64>, sb: &Solid) -> Clo
         relation,
         slack: sa.slack + sb.slack,
     };
+    if sa.is_hull || sb.is_hull {
+        // The pieces of a concave mesh may part what the hulls do not: apart when their
+        // certified lower bound (less the slacks and the margin) is positive.
+        let (d, lower, p) = solid_closest(sa, &wa, sb, &wb);
+        if lower - sa.slack - sb.slack - DISTANCE_MARGIN > 0.0 {
+            let pt = |x: [f64; 3]| Point3::new(x[0], x[1], x[2]);
+            return mk(d, pt(p[0]), pt(p[1]), Relation::Apart);
+        }
+    }
     match query::closest_points(&wa, sa.shape.as_ref(), &wb, sb.shape.as_ref(), f64::MAX) {
         Ok(ClosestPoints::WithinMargin(p1, p2)) => {
             let d = (p2 - p1).norm();

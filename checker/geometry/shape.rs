@@ -47,6 +47,15 @@ pub struct Triangles {
     pub indices: Vec<[u32; 3]>,
 }
 
+/// A convex piece of a decomposed mesh, with a sphere (centre in the solid's own frame,
+/// radius) that holds it.
+#[derive(Clone)]
+pub struct Piece {
+    pub shape: SharedShape,
+    pub centre: Point3<f64>,
+    pub radius: f64,
+}
+
 /// One convex solid placed in its owner's frame.
 #[derive(Clone)]
 pub struct Solid {
@@ -66,6 +75,12 @@ pub struct Solid {
     /// Whether `shape` is a convex hull standing for a (possibly non-convex) mesh: a
     /// contact of hulls is then reported as "convex hulls touch", not as a contact.
     pub is_hull: bool,
+    /// For a markedly concave closed mesh: convex pieces, in the solid's own frame, whose
+    /// union holds the mesh's solid (`mesh::decompose`), each within `shape`, with how far
+    /// their slack exceeds [`Solid::slack`]. Built on first use ([`Solid::pieces`]): only
+    /// where hulls touch ([`super::solid_closest`]), so a mesh whose hull is never reached
+    /// costs nothing.
+    pieces: Arc<std::sync::OnceLock<Option<(Vec<Piece>, f64)>>>,
     radius: f64,
     aabb: Aabb,
     /// [`Solid::trimesh`], built on first use by [`Solid::mesh`] (a BVH build per call
@@ -105,13 +120,53 @@ impl Solid {
         let aabb = shape.compute_aabb(&pose).loosened(slack);
         let radius = far_radius(&shape, &pose) + slack;
         let is_hull = triangles.is_some();
-        Solid { shape, pose, name, slack, triangles, is_hull, radius, aabb, mesh: Arc::default() }
+        Solid {
+            shape,
+            pose,
+            name,
+            slack,
+            triangles,
+            is_hull,
+            pieces: Arc::default(),
+            radius,
+            aabb,
+            mesh: Arc::default(),
+        }
+    }
+
+    /// The convex pieces of a markedly concave closed mesh, with how far their slack exceeds
+    /// [`Solid::slack`] (a bound over the pieces subtracts it too); `None` for a primitive
+    /// or a mesh its hull stands for alone (`mesh::decompose`). Built once, on first use.
+    pub fn pieces(&self) -> Option<(&[Piece], f64)> {
+        let made = self.pieces.get_or_init(|| {
+            if !self.is_hull {
+                return None;
+            }
+            let (shapes, slack) = super::mesh::pieces_of(self.triangles.as_ref()?)?;
+            let pieces = shapes
+                .into_iter()
+                .map(|shape| {
+                    let s = shape.compute_local_bounding_sphere();
+                    Piece { centre: *s.center(), radius: s.radius() * (1.0 + 1e-9) + 1e-12, shape }
+                })
+                .collect();
+            Some((pieces, (slack - self.slack).max(0.0)))
+        });
+        made.as_ref().map(|(p, e)| (p.as_slice(), *e))
     }
 
     /// The same solid placed by `place ∘ pose` in a new owner frame (`place` maps the old
     /// owner frame into the new one).
     pub fn placed(&self, place: &Isometry3<f64>) -> Solid {
-        Solid::with_slack(self.shape.clone(), place * self.pose, self.name.clone(), self.slack, self.triangles.clone())
+        let mut s = Solid::with_slack(
+            self.shape.clone(),
+            place * self.pose,
+            self.name.clone(),
+            self.slack,
+            self.triangles.clone(),
+        );
+        s.pieces = self.pieces.clone();
+        s
     }
 
     /// mochi's `box(lx, ly, lz)`: centred in x and y, standing on z = 0 of `place`.

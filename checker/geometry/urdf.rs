@@ -236,6 +236,10 @@ pub fn load_robot(
             JointKind::Revolute | JointKind::Prismatic => Some((j.limit.lower, j.limit.upper)),
             _ => None,
         };
+        let velocity = match kind {
+            JointKind::Fixed => None,
+            _ => Some(j.limit.velocity).filter(|v| v.is_finite() && *v > 0.0),
+        };
         let mimic = match &j.mimic {
             None => None,
             Some(m) => match joint_index.get(&m.joint) {
@@ -255,7 +259,17 @@ pub fn load_robot(
                 }
             },
         };
-        joints.push(Joint { name: j.name.clone(), kind, parent, child, origin: pose(&j.origin), axis, limits, mimic });
+        joints.push(Joint {
+            name: j.name.clone(),
+            kind,
+            parent,
+            child,
+            origin: pose(&j.origin),
+            axis,
+            limits,
+            velocity,
+            mimic,
+        });
     }
     if !diags.is_empty() {
         return Err(diags);
@@ -490,6 +504,7 @@ const NUMERIC: &[(&str, &str, usize)] = &[
     ("mesh", "scale", 3),
     ("limit", "lower", 1),
     ("limit", "upper", 1),
+    ("limit", "velocity", 1),
     ("mimic", "multiplier", 1),
     ("mimic", "offset", 1),
 ];

@@ -91,6 +91,12 @@ pub struct RobotKind {
     /// Frames other participants can be mounted on (`on: Carrier.mount`).
     pub mounts: Vec<body::Mount>,
     pub invariant: Option<Expr>,
+    /// What every motion of the robot satisfies at every time, from its URDF's velocity
+    /// limits: `J - old(J) <= v * clock && old(J) - J <= v * clock` for each joint `J` with
+    /// `<limit velocity="v">` (checker/space/world.rs, `add_joint_limits`). Used where a
+    /// motion must be able to end (E0408, E0409): a contract whose postcondition needs a
+    /// joint to move faster than that cannot end. `None`: no such limit.
+    pub speed: Option<Expr>,
     pub span: Span,
 }
 

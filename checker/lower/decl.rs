@@ -157,6 +157,7 @@ impl Lowerer {
             body: None,
             mounts: Vec::new(),
             invariant: None,
+            speed: None,
             span: r.span,
         });
     }
@@ -188,6 +189,7 @@ impl Lowerer {
             body: None,
             mounts: Vec::new(),
             invariant: None,
+            speed: None,
             span: Span::default(),
         });
         self.plain_kind = Some(id);

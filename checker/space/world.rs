@@ -242,13 +242,27 @@ impl Builder<'_, '_> {
 /// 0 and 0 when `<limit>` gives no position, or infinite values) is left unbounded. A
 /// contract that drives a joint past its limit then contradicts the invariant: its
 /// motion cannot end (E0408, E0409), or its start is outside it (E0411).
+///
+/// The velocity limits (`<limit velocity>` of each movable joint driven by a state
+/// variable, positive and finite) become the kind's [`crate::hir::RobotKind::speed`]: no
+/// motion moves the joint farther from where it started than `velocity * clock` (the
+/// bound one ulp outward). A contract whose postcondition needs more than that within its
+/// duration cannot end (E0408 where it runs, E0409 at the declaration).
 pub fn add_joint_limits(prog: &mut Program) {
     let Some(world) = prog.world.clone() else { return };
     for (k, pieces) in world.kinds.iter().enumerate() {
         let mut limits: Vec<(Slot, f64, f64)> = Vec::new();
+        let mut speeds: Vec<(Slot, f64)> = Vec::new();
         for p in pieces {
             let Some(link) = &p.link else { continue };
-            for (slot, (lo, hi)) in link.joints.iter().zip(link.robot.joint_limits()) {
+            for ((slot, (lo, hi)), v) in
+                link.joints.iter().zip(link.robot.joint_limits()).zip(link.robot.joint_velocities())
+            {
+                if let Some(v) = v {
+                    if !speeds.iter().any(|(s, _)| s == slot) {
+                        speeds.push((*slot, v.next_up()));
+                    }
+                }
                 if !(lo.is_finite() && hi.is_finite() && lo < hi) || limits.iter().any(|(s, ..)| s == slot) {
                     continue;
                 }
@@ -256,7 +270,7 @@ pub fn add_joint_limits(prog: &mut Program) {
             }
         }
         let Some(kind) = prog.kinds.get_mut(k) else { continue };
-        if limits.is_empty() {
+        if limits.is_empty() && speeds.is_empty() {
             continue;
         }
         // The facts point at the `urdf("...")` they come from.
@@ -267,6 +281,14 @@ pub fn add_joint_limits(prog: &mut Program) {
             })
         });
         let loc = crate::hir::Loc(urdf.unwrap_or(kind.span));
+        use crate::hir::expr::BinOp;
+        use crate::hir::{Expr, ExprKind, Sort, Var};
+        let bin = |op: BinOp, a: Expr, b: Expr, sort: Sort| Expr {
+            kind: ExprKind::Binary(op, Box::new(a), Box::new(b)),
+            sort,
+            loc,
+        };
+        let cmp = |a: Expr, b: Expr| bin(BinOp::Le, a, b, Sort::Bool);
         let mut facts = Vec::new();
         for (slot, lo, hi) in limits {
             let Some(sort) = kind.state.get(match slot {
@@ -275,26 +297,38 @@ pub fn add_joint_limits(prog: &mut Program) {
             }) else {
                 continue;
             };
-            let var = crate::hir::Expr {
-                kind: crate::hir::ExprKind::Var(crate::hir::Var::Own(slot)),
-                sort: sort.1.clone(),
-                loc,
-            };
+            let var = Expr { kind: ExprKind::Var(Var::Own(slot)), sort: sort.1.clone(), loc };
             let (Some(lo), Some(hi)) = (super::enclose::exact_double(lo, loc), super::enclose::exact_double(hi, loc))
             else {
                 continue;
             };
-            let cmp = |a: crate::hir::Expr, b: crate::hir::Expr| crate::hir::Expr {
-                kind: crate::hir::ExprKind::Binary(crate::hir::expr::BinOp::Le, Box::new(a), Box::new(b)),
-                sort: crate::hir::Sort::Bool,
-                loc,
-            };
             facts.push(cmp(lo, var.clone()));
             facts.push(cmp(var, hi));
         }
-        let mut all: Vec<crate::hir::Expr> = kind.invariant.take().into_iter().collect();
-        all.extend(facts);
-        let at = all.first().map_or(loc, |e| e.loc);
-        kind.invariant = Some(crate::hir::expr::and_all(all, at));
+        if !facts.is_empty() {
+            let mut all: Vec<Expr> = kind.invariant.take().into_iter().collect();
+            all.extend(facts);
+            let at = all.first().map_or(loc, |e| e.loc);
+            kind.invariant = Some(crate::hir::expr::and_all(all, at));
+        }
+        // |J - old(J)| <= v * clock, as two linear facts.
+        let mut speed = Vec::new();
+        for (slot, v) in speeds {
+            let Slot::State(i) = slot else { continue };
+            let Some((_, sort)) = kind.state.get(i) else { continue };
+            if !sort.is_numeric() {
+                continue;
+            }
+            let Some(v) = super::enclose::exact_double(v, loc) else { continue };
+            let var = Expr { kind: ExprKind::Var(Var::Own(slot)), sort: sort.clone(), loc };
+            let old = Expr { kind: ExprKind::Var(Var::Old(i)), sort: sort.clone(), loc };
+            let clock = Expr { kind: ExprKind::Var(Var::Clock), sort: Sort::Real, loc };
+            let reach = bin(BinOp::Mul, v, clock, Sort::Real);
+            speed.push(cmp(bin(BinOp::Sub, var.clone(), old.clone(), sort.clone()), reach.clone()));
+            speed.push(cmp(bin(BinOp::Sub, old, var, sort.clone()), reach));
+        }
+        if !speed.is_empty() {
+            kind.speed = Some(crate::hir::expr::and_all(speed, loc));
+        }
     }
 }

@@ -204,6 +204,12 @@ pub(super) fn ends(q: &mut Query, insts: &[Inst], t: &Real) -> Result<(), Unsupp
             let b = inst.pred(&mut q.enc, &inv, &inst.frame)?;
             q.assertions.push(b);
         }
+        // The robot's joints move no faster than its URDF's velocity limits: the end state
+        // lies within `velocity * t` of the start, per joint.
+        if let Some(speed) = q.enc.prog().kind(inst.prim.kind).speed.clone() {
+            let b = inst.pred(&mut q.enc, &speed, &inst.frame)?;
+            q.assertions.push(b);
+        }
     }
     Ok(())
 }

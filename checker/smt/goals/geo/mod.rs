@@ -1026,7 +1026,7 @@ impl Scene for Geo<'_> {
             }
             let (Some(pa), Some(pb)) = (&a[i], &b[j]) else { continue };
             let (sa, sb) = (&self.sides[0][i].piece.solid, &self.sides[1][j].piece.solid);
-            let (mut d, lower, mut points) = bnb::parry_closest(&sa.shape, pa, &sb.shape, pb);
+            let (mut d, lower, mut points) = geometry::solid_closest(sa, pa, sb, pb);
             if sa.is_hull || sb.is_hull {
                 // The estimate (a contact when <= 0) is the meshes' own, not their hulls':
                 // hulls that touch are not a contact (`bnb::mesh_distance`). The certified
@@ -1093,7 +1093,7 @@ impl Scene for Geo<'_> {
             }
             let (x, y) = (&a[i], &b[j]);
             let (sa, sb) = (&self.sides[0][i].piece.solid, &self.sides[1][j].piece.solid);
-            let (d, lower, points) = bnb::parry_closest(&sa.shape, &x.pose, &sb.shape, &y.pose);
+            let (d, lower, points) = geometry::solid_closest(sa, &x.pose, sb, &y.pose);
             let lower = lower - sa.slack - sb.slack - geometry::DISTANCE_MARGIN;
             let lower = if lower.is_nan() { f64::NEG_INFINITY } else { lower };
             let mut best = (lower.max(gap) - m, m, [false, false]);
