@@ -646,6 +646,16 @@ fn a_postcondition_with_a_defined_square_root_can_end() {
     assert_eq!(v["verdict"], "verified", "{v}");
 }
 
+/// The verified twin of `rejected/E0709-receiver-relates-two-rounds.chor`: a receiver
+/// assumes a refinement over a value only others hold, and uses only what that tells it of
+/// the current round.
+#[test]
+fn a_receiver_echoing_the_current_round_is_typed() {
+    let o = mochi(&["check", "tests/data/receiver-echoes-the-current-round.chor", "--format", "json"]);
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
+    assert_eq!(v["verdict"], "verified", "{v}");
+}
+
 // ---- the verdict, the diagnostics and the exit code agree ----------------------------
 
 /// Every `.chor` under `dir`, in every folder, sorted.

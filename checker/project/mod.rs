@@ -25,15 +25,18 @@
 //!
 //! The files: `rules.rs` holds the rules of Def 4.8, `merge.rs` the merge of Def 4.7,
 //! `equal.rs` the equality of local types up to renaming that the merge and E0602 use,
-//! `occurs.rs` who occurs in which node of the global type. The printing helpers for
+//! `occurs.rs` who occurs in which node of the global type, `knows.rs` what a receiver
+//! learns from a refinement that reads values only others hold. The printing helpers for
 //! local types in diagnostics are in `hir/print.rs`.
 
 mod equal;
+mod knows;
 mod merge;
 mod occurs;
 mod rules;
 
 pub use equal::{alpha_equal, equal, first_difference};
+pub use knows::unheld_reads;
 
 use crate::diag::{Code, Diagnostic};
 use crate::hir::print::print_bounded;

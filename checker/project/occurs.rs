@@ -12,11 +12,14 @@ use std::collections::HashMap;
 pub(super) struct Occurs<'g> {
     pt: HashMap<NodeRef<&'g Global>, FixedBitSet>,
     sides: HashMap<NodeRef<&'g Global>, HashMap<RoleId, Vec<usize>>>,
+    /// Every payload field of the type by its value: what a receiver may learn of a value
+    /// it never holds (`knows.rs`).
+    fields: HashMap<ValueId, &'g Field>,
 }
 
 impl<'g> Occurs<'g> {
     pub(super) fn new(prog: &Program, g: &'g Global) -> Occurs<'g> {
-        let mut o = Occurs { pt: HashMap::new(), sides: HashMap::new() };
+        let mut o = Occurs { pt: HashMap::new(), sides: HashMap::new(), fields: HashMap::new() };
         o.fill(g, prog.roles.len());
         o
     }
@@ -27,6 +30,7 @@ impl<'g> Occurs<'g> {
             Global::Msg(m) => {
                 set.insert(m.from.idx());
                 set.insert(m.to.idx());
+                self.fields.extend(m.payload.iter().map(|f| (f.value, f)));
             }
             Global::Motion(m) => m.parts.iter().for_each(|(r, _)| set.insert(r.idx())),
             Global::Seq(gs, _) | Global::Choice(gs, _) => gs.iter().for_each(|c| set.union_with(&self.fill(c, n))),
@@ -58,6 +62,11 @@ impl<'g> Occurs<'g> {
                 pt.contains(&r)
             }
         }
+    }
+
+    /// The payload field that binds `v`, if `v` is one.
+    pub(super) fn field(&self, v: ValueId) -> Option<&'g Field> {
+        self.fields.get(&v).copied()
     }
 
     /// For a `*` node of the type, the sides each participant occurs on.

@@ -112,7 +112,7 @@ impl Projector<'_> {
                 out.push(RecvBranch {
                     from: m.from,
                     label: m.label.clone(),
-                    payload: m.payload.clone(),
+                    payload: self.receiver_payload(&m.payload),
                     cont: self.seq(rest, tail.clone())?,
                     loc: m.loc,
                 });

@@ -217,15 +217,15 @@ fn merged_continuations_refer_to_the_merged_binder() {
 }
 
 /// Two projections that print the same but speak of different values are not
-/// equal: in the second branch `v` is A's new `l2` field, not the `v` A received
-/// before the choice. Merged by name (as before), `C` would have assumed in both
-/// branches that `w` is the first `v`.
+/// equal: in the first branch `v` is the `v` C received before the choice, in the second
+/// the field of `nv` that C received since. Merged by name, `C` would have assumed in
+/// both branches that `w` is the first `v`.
 #[test]
 fn same_text_about_different_values_does_not_merge() {
     let src = format!(
-        "{ABC} choreography G = B -> A : pre(v: real).
-            ( A -> B : l1. A -> C : go(w: real {{w == v}}). end
-            + A -> B : l2(v: real). A -> C : go(w: real {{w == v}}). end );"
+        "{ABC} choreography G = A -> C : pre(v: real).
+            ( A -> B : l1. A -> C : nv(u: real). A -> C : go(w: real {{w == v}}). end
+            + A -> B : l2. A -> C : nv(v: real). A -> C : go(w: real {{w == v}}). end );"
     );
     let (prog, map, diags) = projections(&src);
     assert_eq!(diags.iter().map(|d| d.code).collect::<Vec<_>>(), vec![Code::Unmergeable], "{diags:?}");
@@ -333,4 +333,89 @@ fn deep_sequences_and_choices_do_not_overflow() {
     let Some(chor) = &prog.choreography else { panic!() };
     let again = project(&prog, &chor.body, RoleId(1), Arc::new(Local::End(Loc::default()))).expect("projects");
     assert!(!Arc::ptr_eq(&b, &again) && equal(&b, &again));
+}
+
+/// The programs of every `.chor` under `dir` that lower (rejected ones included: their
+/// choreographies still project).
+fn corpus_programs(dir: &std::path::Path, out: &mut Vec<(std::path::PathBuf, Program)>) {
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    let mut paths: Vec<std::path::PathBuf> = entries.flatten().map(|e| e.path()).collect();
+    paths.sort();
+    for p in paths {
+        if p.is_dir() {
+            corpus_programs(&p, out);
+        } else if p.extension().is_some_and(|e| e == "chor") {
+            let mut db = crate::source::SourceDb::new();
+            let Ok(root) = crate::fsload::load_root(&mut db, &p) else { continue };
+            if let Ok(prog) = crate::driver::program(&mut db, root, &mut crate::fsload::read_bytes) {
+                out.push((p, prog));
+            }
+        }
+    }
+}
+
+/// A receiver's refinement that reads values only others hold: the projection eliminates
+/// what a definition `x == e` determines (with `x`'s own refinement) and drops the rest.
+#[test]
+fn a_receiver_learns_what_a_relay_can_tell_it() {
+    let src = "
+        system Relay { participant V; participant C; participant G; }
+        choreography R =
+          V -> C: battery(level: real {0 <= level && level <= 100}, minutes: real {minutes >= 0}, k: real).
+          C -> G: summary(pct: real {pct == level && pct > 3}, spare: real {spare <= minutes && spare >= 0},
+                          half: real {2 * half == k}, q: real {q < k + level}).
+          end;";
+    let (prog, map, d) = projections(src);
+    assert!(d.is_empty(), "{d:?}");
+    assert_eq!(
+        printed(&prog, &map, "G"),
+        "C?summary(pct: real { pct > 3 && 0 <= pct && pct <= 100 }, spare: real { spare >= 0 }, half: real, q: real).end"
+    );
+    // The relay and the sender keep every conjunct: they hold every value read.
+    assert!(printed(&prog, &map, "C").contains("pct == level && pct > 3"));
+    for (r, t) in &map {
+        assert_eq!(unheld_reads(&prog, *r, t), Vec::<String>::new(), "{}", prog.role_name(*r));
+    }
+}
+
+/// No local type of any corpus file reads a value its participant never holds, so every
+/// printed projection has its names bound. The relay file guarantees the property is
+/// exercised: before projection, its ground station's message reads such values.
+#[test]
+fn no_projection_of_the_corpus_reads_a_value_its_role_never_holds() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut progs = Vec::new();
+    corpus_programs(&root.join("choreographies"), &mut progs);
+    corpus_programs(&root.join("tests/data"), &mut progs);
+    assert!(progs.len() > 100, "only {} programs lowered", progs.len());
+    let mut exercised = 0;
+    for (path, prog) in &progs {
+        let Some(chor) = &prog.choreography else { continue };
+        if crate::wf::side::check(prog, &chor.body).iter().any(|d| d.code == Code::GuardNotLocal) {
+            continue; // a knowledge leak (E0305): the program is rejected before projection matters
+        }
+        let (map, _) = project_all(prog);
+        for (r, t) in &map {
+            let unheld = unheld_reads(prog, *r, t);
+            assert!(unheld.is_empty(), "{}: `{}` reads {unheld:?}", path.display(), prog.role_name(*r));
+        }
+        exercised += usize::from(reads_an_unheld_value_on_receipt(prog, &chor.body));
+    }
+    assert!(exercised >= 1, "no corpus file has a receiver refinement over a value the receiver never holds");
+}
+
+fn reads_an_unheld_value_on_receipt(prog: &Program, g: &Global) -> bool {
+    match g {
+        Global::Msg(m) => m.payload.iter().filter_map(|f| f.refinement.as_ref()).any(|r| {
+            crate::hir::expr::mentions(r, &|v| {
+                matches!(v, Var::Value(id, _) if matches!(prog.value(*id).origin,
+                    ValueOrigin::Message { from, to } if from != m.to && to != m.to))
+            })
+        }),
+        Global::Seq(gs, _) | Global::Choice(gs, _) | Global::Par(gs, _) => {
+            gs.iter().any(|c| reads_an_unheld_value_on_receipt(prog, c))
+        }
+        Global::Rec { body, .. } => reads_an_unheld_value_on_receipt(prog, body),
+        Global::Motion(_) | Global::Var(_) | Global::End(_) => false,
+    }
 }

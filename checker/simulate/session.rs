@@ -12,6 +12,16 @@
 //! - no admissible payload, every guard false, or no participant able to send while some
 //!   have not ended: **stuck**;
 //! - a recursion parameter whose value breaks its refinement: a **violation**.
+//!
+//! A participant with a `process` runs it in lockstep with its projection, as process
+//! typing (Table 1) relates them: the process decides which label is sent and with which
+//! values (its arguments evaluated exactly with what it knows), `if` conditions are
+//! evaluated exactly, and a receive binds the process's variables to the payload. The
+//! projection says what must hold of it: a send whose guard is false or whose values
+//! break the type's refinement ([T-OUT]), a label the type does not offer or a receive the
+//! process lacks (E0702-E0704), and a process that goes on after its type ended (or
+//! stops before) are **violations**. So a process typed `verified` that sends what its
+//! protocol forbids is found here, independently of the typing rules.
 
 use super::report::Kind;
 use super::run::Runner;
@@ -19,7 +29,7 @@ use super::var_expr;
 use crate::exact::{self, Tri, Value};
 use crate::hir::expr::map_vars;
 use crate::hir::local::{Local, LocalArc, RecvBranch, SendBranch};
-use crate::hir::{Expr, Global, Loc, Program, RecParam, RoleId, Slot, ValueId, ValueOrigin, Var};
+use crate::hir::{Expr, Global, Loc, Process, Program, RecParam, RoleId, Slot, ValueId, ValueOrigin, Var};
 use std::collections::HashMap;
 
 /// Whether the global type has no motion and no `*`: it runs as projections.
@@ -35,14 +45,22 @@ pub(super) fn applies(g: &Global) -> bool {
     motion_free(g)
 }
 
-/// One participant running its local type.
-struct Role {
+/// One participant running its local type (and its process, if it has one).
+struct Role<'p> {
     id: RoleId,
     at: LocalArc,
-    /// The values it has: payloads sent and received, its recursion parameters.
+    /// The values it has: payloads sent and received, its recursion parameters, and its
+    /// process's variables (other binding sites, so one map holds both).
     known: HashMap<ValueId, Value>,
     /// Its loops by name: parameters and body.
     loops: HashMap<String, (Vec<RecParam>, LocalArc)>,
+    proc: Option<Proc<'p>>,
+}
+
+/// Where a participant's process is, and the process loops around it.
+struct Proc<'p> {
+    at: &'p Process,
+    loops: HashMap<&'p str, (&'p [RecParam], &'p Process)>,
 }
 
 /// Unfoldings of `mu`/jumps in a row without a message before a participant counts as
@@ -209,6 +227,98 @@ impl Runner<'_, '_> {
         false
     }
 
+    /// Runs `role`'s process up to its next message (or its end): `mu` and jumps bind the
+    /// process's parameters, `if` takes the branch its condition selects, evaluated
+    /// exactly. False when the run must stop.
+    fn settle_process(&mut self, role: &mut Role<'_>) -> bool {
+        let name = self.prog.role_name(role.id);
+        for _ in 0..UNFOLD_LIMIT {
+            let Some(proc) = role.proc.as_ref() else { return true };
+            let at = proc.at;
+            match at {
+                Process::Rec { var, params, body, .. } => {
+                    let inits: Vec<&Expr> = params.iter().map(|p| &p.init).collect();
+                    let what = format!("the initial values of the process loop `{var}`");
+                    let Some(args) = self.values_as(role, &inits, &what) else { return false };
+                    if !self.bind(role, params, args) {
+                        return false;
+                    }
+                    if let Some(proc) = role.proc.as_mut() {
+                        proc.loops.insert(var.as_str(), (params.as_slice(), &**body));
+                        proc.at = body;
+                    }
+                }
+                Process::Var { var, args, .. } => {
+                    let Some((params, body)) = role.proc.as_ref().and_then(|p| p.loops.get(var.as_str()).copied())
+                    else {
+                        let now = self.now();
+                        self.report(Kind::Undecided, &now, format!("`{name}`: `{var}` is not a loop of its process"));
+                        return false;
+                    };
+                    let exprs: Vec<&Expr> = args.iter().collect();
+                    let what = format!("the arguments of the process jump `{var}`");
+                    let Some(vals) = self.values_as(role, &exprs, &what) else { return false };
+                    if !self.bind(role, params, vals) {
+                        return false;
+                    }
+                    if let Some(proc) = role.proc.as_mut() {
+                        proc.at = body;
+                    }
+                }
+                Process::If { cond, then, els, .. } => {
+                    if self.leak(role, cond, &[], "an `if` condition of its process") {
+                        return false;
+                    }
+                    let next: &Process = match self.holds_as(role, cond) {
+                        Tri::True => then,
+                        Tri::False => els,
+                        Tri::Unknown => {
+                            let now = self.now();
+                            let msg = format!("`{name}`: an `if` condition of its process cannot be evaluated exactly");
+                            self.report(Kind::Undecided, &now, msg);
+                            return false;
+                        }
+                    };
+                    if let Some(proc) = role.proc.as_mut() {
+                        proc.at = next;
+                    }
+                }
+                Process::Motion { .. } => {
+                    let now = self.now();
+                    self.report(Kind::Undecided, &now, format!("`{name}`: a motion in a process run as a session"));
+                    return false;
+                }
+                Process::Send { .. } | Process::Choose { .. } | Process::Recv { .. } | Process::End(_) => return true,
+            }
+        }
+        let now = self.now();
+        self.report(Kind::Stuck, &now, format!("the process of `{name}` loops without a message"));
+        false
+    }
+
+    /// The sends `role`'s process may take now: (receiver, label, arguments, continuation).
+    fn offers<'p>(role: &Role<'p>) -> Vec<(RoleId, &'p str, &'p [Expr], &'p Process)> {
+        fn collect<'p>(p: &'p Process, out: &mut Vec<(RoleId, &'p str, &'p [Expr], &'p Process)>) {
+            match p {
+                Process::Send { to, label, args, cont, .. } => out.push((*to, label, args, cont)),
+                Process::Choose { branches, .. } => branches.iter().for_each(|b| collect(b, out)),
+                _ => {}
+            }
+        }
+        let mut out = Vec::new();
+        if let Some(p) = &role.proc {
+            collect(p.at, &mut out);
+        }
+        out
+    }
+
+    /// A finding: `role`'s process does not do what its local type says here.
+    fn off_type(&mut self, role: &Role<'_>, what: String) {
+        let now = self.now();
+        let msg = format!("the process of `{}` {what}", self.prog.role_name(role.id));
+        self.report(Kind::Violation, &now, msg);
+    }
+
     /// The branches of a send of `role` whose guards hold (evaluated with its knowledge).
     /// `None` when the run must stop.
     fn enabled(&mut self, role: &Role, branches: &[SendBranch]) -> Option<Vec<usize>> {
@@ -292,15 +402,27 @@ impl Runner<'_, '_> {
         }
         let mut roles: Vec<Role> = locals
             .iter()
-            .map(|(r, t)| Role { id: *r, at: t.clone(), known: HashMap::new(), loops: HashMap::new() })
+            .map(|(r, t)| Role {
+                id: *r,
+                at: t.clone(),
+                known: HashMap::new(),
+                loops: HashMap::new(),
+                proc: prog.processes.iter().find(|d| d.role == *r).map(|d| Proc { at: &d.body, loops: HashMap::new() }),
+            })
             .collect();
         loop {
             for role in &mut roles {
-                if !self.settle(role) {
+                if !self.settle(role) || !self.settle_process(role) {
                     return;
                 }
             }
             if roles.iter().all(|r| matches!(&*r.at, Local::End(_))) {
+                for role in &roles {
+                    if role.proc.as_ref().is_some_and(|p| !matches!(p.at, Process::End(_))) {
+                        self.off_type(role, "goes on after its local type has ended".into());
+                        return;
+                    }
+                }
                 return;
             }
             if self.steps >= self.cfg.steps {
@@ -311,7 +433,35 @@ impl Runner<'_, '_> {
             let mut blocked = Vec::new();
             for (s, role) in roles.iter().enumerate() {
                 let Local::Send { branches, .. } = &*role.at else { continue };
-                let Some(enabled) = self.enabled(role, branches) else { return };
+                let Some(mut enabled) = self.enabled(role, branches) else { return };
+                if role.proc.is_some() {
+                    // The process decides: each send it may take must be one the type
+                    // offers here, with its guard true ([T-OUT], internal choice).
+                    let offers = Self::offers(role);
+                    if offers.is_empty() {
+                        let at = crate::hir::print::describe(prog, &role.at);
+                        self.off_type(role, format!("does not send where its local type is at {at}"));
+                        return;
+                    }
+                    for (to, label, _, _) in &offers {
+                        let Some(k) = branches.iter().position(|b| b.to == *to && b.label == *label) else {
+                            let msg = format!(
+                                "sends `{}!{label}`, which its local type does not offer here",
+                                prog.role_name(*to)
+                            );
+                            self.off_type(role, msg);
+                            return;
+                        };
+                        if !enabled.contains(&k) {
+                            let msg = format!("may send `{}!{label}` although its guard is false", prog.role_name(*to));
+                            self.off_type(role, msg);
+                            return;
+                        }
+                    }
+                    enabled.retain(|k| {
+                        offers.iter().any(|(to, label, _, _)| branches[*k].to == *to && branches[*k].label == *label)
+                    });
+                }
                 if enabled.is_empty() {
                     let now = self.now();
                     let msg = format!("`{}`: every guard of its choice is false", prog.role_name(role.id));
@@ -356,7 +506,28 @@ impl Runner<'_, '_> {
             let b = &branches[k];
             let who = format!("{} -> {} : {}", prog.role_name(roles[s].id), prog.role_name(b.to), b.label);
             self.steps += 1;
-            let Some(vals) = self.payload(&roles[s], b, &who) else { return };
+            let sent = Self::offers(&roles[s]).into_iter().find(|(to, label, _, _)| *to == b.to && *label == b.label);
+            let vals = match sent {
+                Some((_, _, args, _)) if args.len() != b.payload.len() => {
+                    let msg =
+                        format!("sends {} value(s) in `{who}`, whose type carries {}", args.len(), b.payload.len());
+                    self.off_type(&roles[s], msg);
+                    return;
+                }
+                // The process's values, as it evaluates its arguments.
+                Some((_, _, args, _)) => {
+                    let exprs: Vec<&Expr> = args.iter().collect();
+                    let what = format!("the values its process sends in `{who}`");
+                    match self.values_as(&roles[s], &exprs, &what) {
+                        Some(vs) => vs,
+                        None => return,
+                    }
+                }
+                None => match self.payload(&roles[s], b, &who) {
+                    Some(vs) => vs,
+                    None => return,
+                },
+            };
             let mut shown = Vec::new();
             let mut rounded = false;
             let vals: Vec<Value> = b
@@ -376,13 +547,29 @@ impl Runner<'_, '_> {
             // Replayed exactly, with what the sender knows.
             for f in &b.payload {
                 if let Some(r) = &f.refinement {
-                    if self.holds_as(&roles[s], r) == Tri::False && rounded {
+                    let holds = self.holds_as(&roles[s], r);
+                    if holds == Tri::False && rounded && sent.is_none() {
                         let now = self.now();
                         let msg = format!("`{who}`'s payload: Z3's value rounded to the wire's float leaves the refinement of `{}` (the simulator draws real payloads)", f.name);
                         self.report(Kind::Undecided, &now, msg);
                         return;
                     }
-                    if self.holds_as(&roles[s], r) == Tri::False {
+                    if holds != Tri::True && sent.is_some() {
+                        // A process's values: the type's refinement must hold of them, and
+                        // be decided ([T-OUT]).
+                        let shown = shown.join(", ");
+                        if holds == Tri::False {
+                            let msg = format!("sends `{who}({shown})`, which breaks the refinement of `{}`", f.name);
+                            self.off_type(&roles[s], msg);
+                        } else {
+                            let now = self.now();
+                            let msg =
+                                format!("`{who}({shown})`: the refinement of `{}` cannot be evaluated exactly", f.name);
+                            self.report(Kind::Undecided, &now, msg);
+                        }
+                        return;
+                    }
+                    if holds == Tri::False {
                         let now = self.now();
                         let msg =
                             format!("`{who}`: Z3's payload does not satisfy the refinement of `{}` exactly", f.name);
@@ -394,6 +581,35 @@ impl Runner<'_, '_> {
             let Local::Recv { branches: rbs, .. } = &*roles[q].at.clone() else { return };
             let Some(rb) = rbs.iter().find(|rb| rb.from == roles[s].id && rb.label == b.label) else { return };
             receive(&mut roles[q], rb, &vals);
+            if let Some((_, _, _, cont)) = sent {
+                if let Some(p) = roles[s].proc.as_mut() {
+                    p.at = cont;
+                }
+            }
+            if let Some(p) = roles[q].proc.as_ref() {
+                let arm = match p.at {
+                    Process::Recv { from, branches, .. } if *from == roles[s].id => {
+                        branches.iter().find(|a| a.label == b.label)
+                    }
+                    _ => None,
+                };
+                let Some(arm) = arm else {
+                    let msg = format!("does not receive `{who}`, which its local type receives here");
+                    self.off_type(&roles[q], msg);
+                    return;
+                };
+                if arm.binders.len() != vals.len() {
+                    let msg = format!("binds {} value(s) of `{who}`, which carries {}", arm.binders.len(), vals.len());
+                    self.off_type(&roles[q], msg);
+                    return;
+                }
+                for (id, v) in arm.binders.iter().zip(&vals) {
+                    roles[q].known.insert(*id, v.clone());
+                }
+                if let Some(p) = roles[q].proc.as_mut() {
+                    p.at = &arm.cont;
+                }
+            }
             roles[s].at = b.cont.clone();
             let now = self.now();
             self.trace.push(format!("t = {}: {who}({})", exact::decimal(&now), shown.join(", ")));
@@ -442,6 +658,7 @@ mod tests {
             at: std::sync::Arc::new(Local::End(Loc::default())),
             known: known.iter().map(|id| (*id, Value::Num(exact::Num::int(1)))).collect(),
             loops: HashMap::new(),
+            proc: None,
         };
         let read = var_expr(Var::Value(n, "n".into()), crate::hir::Sort::Int);
         // C never received `n`: a leak; B did.
@@ -452,5 +669,39 @@ mod tests {
         assert!(unknown_read(&prog, r1.id, &|id| r1.known.contains_key(&id), &read, &[]).is_none());
         // A field being sent is the sender's own.
         assert!(unknown_read(&prog, r2.id, &|id| r2.known.contains_key(&id), &read, &[n]).is_none());
+    }
+
+    /// Processes run in lockstep with their projections: one that echoes a stale value
+    /// is a violation, one that echoes the current value runs clean, and a loop whose
+    /// `if` picks the branch exactly follows the type's guards.
+    #[test]
+    fn processes_run_against_their_projections() {
+        let g = "choreography P = mu t. A -> B: batt(b: int). B -> C: now(n: int {n == b}).
+                   C -> A: echo(e: int {e == n}). t;";
+        let run = |procs: &str| {
+            let (prog, _) = chor(&format!("{g} {procs}"));
+            let cfg = crate::simulate::SimConfig { runs: 2, steps: 12, ..Default::default() };
+            crate::simulate::simulate(&prog, &cfg)
+        };
+        let a = "process A = mu t(k: int = 0). B!batt(k). C?echo(e). t(k + 1);";
+        let b = "process B = mu t. A?batt(b). C!now(b). t;";
+        let good = run(&format!("{a} {b} process C = B?now(n). A!echo(n). mu t. B?now(m). A!echo(m). t;"));
+        assert!(good.findings.is_empty(), "{:?}", good.findings);
+        assert!(good.steps >= 20, "{}", good.steps);
+        let stale = run(&format!("{a} {b} process C = B?now(n). A!echo(n). mu t. B?now(m). A!echo(n). t;"));
+        assert!(
+            stale
+                .findings
+                .iter()
+                .any(|f| f.kind == Kind::Violation && f.message.contains("breaks the refinement of `e`")),
+            "{:?}",
+            stale.findings
+        );
+        let wrong_label = run(&format!("{a} {b} process C = B?now(n). A!other(n). end;"));
+        assert!(
+            wrong_label.findings.iter().any(|f| f.message.contains("does not offer")),
+            "{:?}",
+            wrong_label.findings
+        );
     }
 }

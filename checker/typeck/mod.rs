@@ -299,6 +299,24 @@ impl State<'_> {
         self.sigma.forget_values(ids);
         self.vals.retain(|k, e| !ids.contains(k) && !mentions(e, &hit));
     }
+
+    /// Forgets every fact about values `role` never holds: payload fields of messages
+    /// between two other participants. A received refinement may mention one (`B -> C:
+    /// now(n {n == b})` with `b` sent by `A` to `B`), and the receiver assumes it with
+    /// that value unknown, i.e. existentially. The value gets a new binding each time
+    /// the global type passes its message again, which the receiver cannot see: once its
+    /// local type steps through a loop, facts from two rounds would otherwise speak of one
+    /// `b` and relate payloads of different rounds (`n == b` and `m == b` give `n == m`).
+    fn forget_foreign(&mut self, prog: &Program, role: RoleId) {
+        let foreign = |v: &Var| match v {
+            Var::Value(id, _) => {
+                matches!(prog.value(*id).origin, ValueOrigin::Message { from, to } if from != role && to != role)
+            }
+            _ => false,
+        };
+        self.sigma.forget(&foreign);
+        self.vals.retain(|_, e| !mentions(e, &foreign));
+    }
 }
 
 impl<'a> Checker<'a> {

@@ -30,6 +30,9 @@ impl<'a> Checker<'a> {
                 }
                 Err(d) => return self.diags.push(d),
             };
+            if looped.is_some() {
+                st.forget_foreign(self.prog, self.role);
+            }
             // The type's parameters are ghost values the process follows in `vals`.
             let mut last = None;
             for (jump, params, values) in steps {
