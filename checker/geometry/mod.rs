@@ -180,7 +180,9 @@ pub fn solid_closest(sa: &Solid, pa: &Isometry3<f64>, sb: &Solid, pb: &Isometry3
     let (d, lower, points) = bnb::parry_closest(&sa.shape, pa, &sb.shape, pb);
     // Only where the hulls touch: a box whose hulls are apart at its centre needs no more,
     // and a proof that never met touching hulls costs what it did before.
-    if !(lower <= 0.0) || !(sa.is_hull || sb.is_hull) {
+    // (`lower <= 0` fails for NaN too: then the hulls' answer stands.)
+    let hulls_touch = matches!(lower.partial_cmp(&0.0), Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal));
+    if !hulls_touch || !(sa.is_hull || sb.is_hull) {
         return (d, lower, points);
     }
     let (pa_, pb_) = (sa.pieces(), sb.pieces());

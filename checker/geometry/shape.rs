@@ -56,6 +56,10 @@ pub struct Piece {
     pub radius: f64,
 }
 
+/// The convex pieces of a concave mesh and their slack, built on first use (`None`: the
+/// mesh is not cut).
+type LazyPieces = Arc<std::sync::OnceLock<Option<(Vec<Piece>, f64)>>>;
+
 /// One convex solid placed in its owner's frame.
 #[derive(Clone)]
 pub struct Solid {
@@ -80,7 +84,7 @@ pub struct Solid {
     /// their slack exceeds [`Solid::slack`]. Built on first use ([`Solid::pieces`]): only
     /// where hulls touch ([`super::solid_closest`]), so a mesh whose hull is never reached
     /// costs nothing.
-    pieces: Arc<std::sync::OnceLock<Option<(Vec<Piece>, f64)>>>,
+    pieces: LazyPieces,
     radius: f64,
     aabb: Aabb,
     /// [`Solid::trimesh`], built on first use by [`Solid::mesh`] (a BVH build per call
