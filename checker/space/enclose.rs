@@ -71,6 +71,31 @@ fn undecided(why: impl Into<String>) -> Undecided {
     Undecided { why: why.into(), ran_out: false }
 }
 
+/// Splits the piece `lo..hi` in half along variable `d` and pushes both halves (the lower
+/// one searched first). Undecided when the midpoint is no longer strictly inside: the
+/// search has reached the resolution of floating point on that variable.
+fn bisect(
+    stack: &mut Vec<(Vec<f64>, Vec<f64>)>,
+    lo: Vec<f64>,
+    hi: Vec<f64>,
+    d: usize,
+    split_vars: &[Var],
+) -> Result<(), Undecided> {
+    let mid = lo[d] + (hi[d] - lo[d]) / 2.0;
+    if !(mid > lo[d] && mid < hi[d]) {
+        return Err(undecided(format!(
+            "the search reached the resolution of {} without deciding",
+            describe(&split_vars[d])
+        )));
+    }
+    let (mut lo2, mut hi1) = (lo.clone(), hi.clone());
+    hi1[d] = mid;
+    lo2[d] = mid;
+    stack.push((lo2, hi));
+    stack.push((lo, hi1));
+    Ok(())
+}
+
 /// Whether the body of `prim`'s kind lies within its footprint at every time and state its
 /// contract allows, by the search above, examining at most `budget` pieces per part:
 /// `Ok(note)` when shown, `Err(why)` when not.
@@ -233,18 +258,7 @@ fn part_within(prog: &Program, part: &Part, fp: &Expr, facts: &Facts, budget: us
         let Some(d) = choose(&goal, &mut env, &lo, &hi, &widths, &mut work) else {
             return Err(undecided("the footprint does not hold of the body, by its enclosures"));
         };
-        let mid = lo[d] + (hi[d] - lo[d]) / 2.0;
-        if !(mid > lo[d] && mid < hi[d]) {
-            return Err(undecided(format!(
-                "the search reached the resolution of {} without deciding",
-                describe(&split_vars[d])
-            )));
-        }
-        let (mut lo2, mut hi1) = (lo.clone(), hi.clone());
-        hi1[d] = mid;
-        lo2[d] = mid;
-        stack.push((lo2, hi));
-        stack.push((lo, hi1));
+        bisect(&mut stack, lo, hi, d, &split_vars)?;
     }
     Ok(pieces)
 }
@@ -315,18 +329,7 @@ fn support_search(
         else {
             return Err(undecided("the footprint does not hold of the body, by its enclosures"));
         };
-        let mid = lo[d] + (hi[d] - lo[d]) / 2.0;
-        if !(mid > lo[d] && mid < hi[d]) {
-            return Err(undecided(format!(
-                "the search reached the resolution of {} without deciding",
-                describe(&split_vars[d])
-            )));
-        }
-        let (mut lo2, mut hi1) = (lo.clone(), hi.clone());
-        hi1[d] = mid;
-        lo2[d] = mid;
-        stack.push((lo2, hi));
-        stack.push((lo, hi1));
+        bisect(&mut stack, lo, hi, d, &split_vars)?;
     }
     Ok(pieces)
 }
