@@ -3,7 +3,7 @@
 //!
 //! Codes are grouped by stage: E01 syntax, E02 names and sorts, E03 well-formedness of
 //! the choreography (Def 4.1, Sec 4.1, Def 4.4), E04 motion contracts ([AGCOMP]), E05 the
-//! geometry stage (URDF files, meshes, kinematics; `checker/geometry/`),
+//! geometry stage (URDF files, meshes, kinematics; `checker/verify/src/geometry/`),
 //! E06 projection (Defs 4.7-4.8), E07 process typing (Fig 5, Table 1) and U00 for
 //! checks that could not be decided. A code never changes meaning once released.
 
@@ -173,7 +173,7 @@ codes! {
     UnknownDialect = "E0230", "unknown mavlink dialect",
         "`dialect NAME;` names the MAVLink dialect whose messages a protocol exchanges. mochi \
          bundles the dialects of the MAVLink XML definitions (`common`, `ardupilotmega`, \
-         `standard`, `minimal` and the others shipped under `checker/dialect/definitions/`); the \
+         `standard`, `minimal` and the others shipped under `checker/core/src/dialect/definitions/`); the \
          message lists them and the closest names. Dialects are read at build time: a user XML \
          file cannot be named yet.";
     DialectConflict = "E0231", "two different dialects",

@@ -1,7 +1,7 @@
 //! Exact evaluation of [`Expr`] over rationals, independent of Z3.
 //!
 //! Used to replay the SMT stage's counterexamples before they are shown and by the
-//! simulator ([`crate::simulate`]) to run a choreography on concrete states.
+//! simulator (`mochi_verify::simulate`) to run a choreography on concrete states.
 //!
 //! - Numbers are closed rational intervals `[lo, hi]` (`num-rational` over `num-bigint`);
 //!   every `+ - * / ^`, `min`, `max`, `abs` of exact values is exact (`lo == hi`).

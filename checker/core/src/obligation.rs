@@ -1,6 +1,6 @@
 //! Proof obligations: the predicate side conditions that the structural checks meet
 //! and cannot decide themselves. Each names the rule that produced it and the source
-//! span it comes from. The SMT stage ([`crate::smt::discharge`]) decides them, after
+//! span it comes from. The SMT stage (`mochi_verify::smt::discharge`) decides them, after
 //! [`Obligation::trivially_holds`] has settled the syntactically trivial ones; what it
 //! cannot decide is reported as undecided (`unknown`), never as passed.
 

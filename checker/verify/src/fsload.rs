@@ -174,7 +174,7 @@ mod tests {
     /// same text checked with the file-system loader cannot find it (E0105).
     #[test]
     fn the_pipeline_reads_imports_only_through_its_loader() {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let dir = crate::testing::repo("");
         let chor = read_source(&dir.join("choreographies/example-4-2-4.chor")).expect("example");
         let lib = read_source(&dir.join("motion-primitives/bot.mochi")).expect("library");
         let chor = chor.replace("\"../motion-primitives/bot.mochi\"", "\"nowhere/in-memory.mochi\"");

@@ -227,7 +227,8 @@ impl Interval {
         Interval { lo, hi }
     }
 
-    pub(crate) fn pow(self, n: i64) -> Interval {
+    /// `self` to the integer power `n`, rounded outward.
+    pub fn pow(self, n: i64) -> Interval {
         if n == 0 {
             return Interval::point(1.0);
         }
@@ -251,7 +252,8 @@ impl Interval {
         Interval { lo: odd(self.lo, false), hi: odd(self.hi, true) }
     }
 
-    pub(crate) fn sqrt(self) -> Option<Interval> {
+    /// The square root, rounded outward; `None` when the interval reaches below 0.
+    pub fn sqrt(self) -> Option<Interval> {
         if self.lo < 0.0 {
             return None;
         }

@@ -1,5 +1,5 @@
 //! The dialects bundled with mochi: the MAVLink XML definitions under
-//! `checker/dialect/definitions/` (origin, commit and licence in its `SOURCES.md`),
+//! `checker/core/src/dialect/definitions/` (origin, commit and licence in its `SOURCES.md`),
 //! embedded in the binary at build time, each parsed once on first use.
 
 use super::{parse, Dialect};

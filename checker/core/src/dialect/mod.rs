@@ -3,7 +3,7 @@
 //!
 //! A dialect is read from the MAVLink XML message definitions (`common.xml`,
 //! `ardupilotmega.xml` and the files they include), bundled into the binary at build
-//! time under `checker/dialect/definitions/` (origin and licence in its `SOURCES.md`).
+//! time under `checker/core/src/dialect/definitions/` (origin and licence in its `SOURCES.md`).
 //! This module is the only one that knows the XML; the rest of mochi sees the data model
 //! below: messages with typed fields, enums with entries, and the named parameters of
 //! each `MAV_CMD`.

@@ -93,7 +93,7 @@ pub struct RobotKind {
     pub invariant: Option<Expr>,
     /// What every motion of the robot satisfies at every time, from its URDF's velocity
     /// limits: `J - old(J) <= v * clock && old(J) - J <= v * clock` for each joint `J` with
-    /// `<limit velocity="v">` (checker/space/world.rs, `add_joint_limits`). Used where a
+    /// `<limit velocity="v">` (checker/verify/src/space/world.rs, `add_joint_limits`). Used where a
     /// motion must be able to end (E0408, E0409): a contract whose postcondition needs a
     /// joint to move faster than that cannot end. `None`: no such limit.
     pub speed: Option<Expr>,
@@ -302,8 +302,10 @@ pub struct Program {
     pub partitions: Vec<Partition>,
     /// The system's static obstacles.
     pub obstacles: Vec<body::Obstacle>,
-    /// Every body as solids (set by the geometry stage, `space::world`).
-    pub world: Option<std::sync::Arc<crate::space::world::World>>,
+    /// Every body as solids, set by the verifier's geometry stage (`space::world::World`
+    /// in `mochi-verify`, read back with `space::world::of`). The core does not depend on
+    /// the geometry engine, so it holds the solids without knowing their type.
+    pub world: Option<std::sync::Arc<dyn std::any::Any + Send + Sync>>,
     /// The MAVLink dialect named by `dialect NAME;`: message labels are its
     /// messages, its enum entries are `int` constants.
     pub dialect: Option<&'static crate::dialect::Dialect>,

@@ -628,4 +628,4 @@ pub fn motion_text(prog: &Program, prims: &[PrimApp]) -> String {
 }
 
 /// How many nodes a local type printed in a note may have.
-pub(crate) const NOTE_NODES: usize = 400;
+pub const NOTE_NODES: usize = 400;

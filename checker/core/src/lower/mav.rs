@@ -574,7 +574,7 @@ pub(super) const MAX_REAL_VALUES: usize = 1024;
 /// by one (`x == v`), at most [`MAX_REAL_VALUES`]. The disjunctions are balanced trees.
 /// Without the dialect or the enum (no bundled file refers to a missing enum), or above the
 /// limit, the predicate is `false`: the check fails and the description says why.
-pub(crate) fn entry_predicate(d: Option<&Dialect>, check: &crate::hir::EnumCheck, x: &Expr) -> (Expr, String) {
+pub fn entry_predicate(d: Option<&Dialect>, check: &crate::hir::EnumCheck, x: &Expr) -> (Expr, String) {
     let loc = x.loc;
     let name = &check.enum_name;
     let Some(e) = d.and_then(|d| d.enum_(name)) else {
@@ -650,7 +650,7 @@ pub(crate) fn entry_predicate(d: Option<&Dialect>, check: &crate::hir::EnumCheck
 /// protocol says of the value besides the enum (the wire range, the user's refinement).
 /// `None` when nothing is left. Lowering puts the predicate last among the implicit
 /// conjuncts, so it is the whole implicit part or its right operand.
-pub(crate) fn refinement_without_entry(d: Option<&Dialect>, f: &Field) -> Option<Expr> {
+pub fn refinement_without_entry(d: Option<&Dialect>, f: &Field) -> Option<Expr> {
     let (Some(mav), Some(r)) = (&f.mav, &f.refinement) else { return f.refinement.clone() };
     let Some(check) = &mav.entry else { return f.refinement.clone() };
     let x = Expr { kind: ExprKind::Var(Var::Value(f.value, f.name.clone())), sort: f.sort.clone(), loc: check.at };
@@ -721,7 +721,7 @@ fn entry_approximation(d: Option<&Dialect>, check: &crate::hir::EnumCheck, x: &E
 /// (Σ). Sound, as a weaker fact: the exact predicate stays in the field's refinement, which
 /// every check that must *establish* it reads (a process's [T-OUT], the progress check's
 /// payload, E0243). `None` when no field changes.
-pub(crate) fn approximate_entries(d: Option<&Dialect>, m: &Msg) -> Option<Msg> {
+pub fn approximate_entries(d: Option<&Dialect>, m: &Msg) -> Option<Msg> {
     let mut out: Option<Msg> = None;
     for (i, f) in m.payload.iter().enumerate() {
         let Some(check) = f.mav.as_ref().and_then(|mav| mav.entry.as_ref()) else { continue };
@@ -739,7 +739,7 @@ pub(crate) fn approximate_entries(d: Option<&Dialect>, m: &Msg) -> Option<Msg> {
 
 /// Whether the enum of `check` allows the integer `v` (an entry's value, or for a bitmask
 /// enum a combination of its flags): [`entry_predicate`] on a constant, without a solver.
-pub(crate) fn entry_allows(d: Option<&Dialect>, check: &crate::hir::EnumCheck, v: i64) -> bool {
+pub fn entry_allows(d: Option<&Dialect>, check: &crate::hir::EnumCheck, v: i64) -> bool {
     let Some(e) = d.and_then(|d| d.enum_(&check.enum_name)) else { return false };
     let real = check.wire.is_float();
     if e.bitmask {
@@ -927,7 +927,7 @@ pub fn exact_constant(prog: &Program, e: &Expr) -> Option<num_rational::BigRatio
 /// [`Builtin::Float32`] conjunct then reads `e` and must stay decided: `e` a constant
 /// (decided exactly) or a value of a field of that format or a narrower one (a float by
 /// the model). Otherwise the field stays an existential whose format is encoded exactly.
-pub(crate) fn float_definition_decided(prog: &Program, id: ValueId, e: &Expr) -> bool {
+pub fn float_definition_decided(prog: &Program, id: ValueId, e: &Expr) -> bool {
     let Some(f) = prog.wire_floats.get(&id) else { return true };
     if exact_constant(prog, e).is_some() {
         return true;

@@ -24,9 +24,7 @@ mod contract;
 mod decl;
 mod expr;
 mod mav;
-pub(crate) use mav::{
-    approximate_entries, entry_allows, entry_predicate, float_definition_decided, refinement_without_entry,
-};
+pub use mav::{approximate_entries, entry_allows, entry_predicate, float_definition_decided, refinement_without_entry};
 pub use mav::{
     dyadic_decimal, exact_constant, float_format, is_float, pow2, round_to_float, wire_value, FloatFormat, BINARY32,
     BINARY64,

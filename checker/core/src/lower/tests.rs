@@ -1,44 +1,9 @@
 //! Unit tests of lowering: names resolved, sorts checked, values bound by site (LANGUAGE.md "Names and scopes", "Sorts").
 
 use super::*;
-use crate::source::{FileId, SourceDb};
+use crate::source::SourceDb;
 
-/// Parses and lowers one source text; for tests of later stages too.
-/// Lowers `src` (which must be clean) and returns the guard of the choreography's first
-/// message, which must be a sequence starting with a guarded message.
-pub(crate) fn first_guard(src: &str) -> (Program, crate::hir::Expr) {
-    let (prog, d) = lower_src(src);
-    assert!(d.is_empty(), "{d:?}");
-    let Some(crate::hir::Global::Seq(items, _)) = prog.choreography.as_ref().map(|c| c.body.clone()) else {
-        panic!("a sequence")
-    };
-    let crate::hir::Global::Msg(m) = &items[0] else { panic!("a message") };
-    let g = m.guard.clone().expect("guard");
-    (prog, g)
-}
-
-pub(crate) fn lower_src(src: &str) -> (Program, Vec<Diagnostic>) {
-    let mut db = SourceDb::new();
-    let id = db.add("test.chor", src);
-    let (f, mut d) = crate::syntax::parser::parse(id, src);
-    assert!(d.is_empty(), "parse errors: {d:?}");
-    let (p, d2) = lower(&Parsed { files: vec![(FileId(id.0), f)] });
-    d.extend(d2);
-    (p, d)
-}
-
-pub(crate) const HEADER: &str = "
-    const amax = 0.5;
-    robot Cart { state x: real, v: real; invariant: v >= 0; }
-    robot Arm { state h: real; input x: real; }
-    motion Cart.move(xf: real) { interruptible: false; pre: xf > x && v == 0; post: x == xf; duration: [2 * sqrt(xf / amax), inf]; }
-    motion Cart.idle { interruptible: true; guarantee: x == old(x); }
-    motion Arm.work { interruptible: true; assume: x <= 1.0; footprint(px, py, pz): pz >= 0 && clock >= 0; }
-    system S {
-      participant C: Cart { init: x == 0 && v == 0; at: pose(0, 0, 0); }
-      participant A: Arm { at: pose(2, 1, 0); }
-    }
-";
+pub(crate) use crate::testing::{first_guard, lower_src, HEADER};
 
 fn codes(d: &[Diagnostic]) -> Vec<Code> {
     d.iter().map(|d| d.code).collect()
@@ -186,20 +151,4 @@ fn a_binder_is_not_a_failed_expression() {
     let Process::If { cond, .. } = &branches[0].cont else { panic!("a conditional") };
     let ExprKind::Binary(BinOp::Gt, a, _) = &cond.kind else { panic!("{cond:?}") };
     assert!(matches!(a.kind, ExprKind::Component(_, 0)), "{a:?}");
-}
-
-/// The same through the whole pipeline: a process that branches on `j.x` for a number `j`
-/// it received used to be verified (`j.x` was `true`, a fine condition); a component is a
-/// real, not a condition, so it is rejected (E0208).
-#[test]
-fn a_component_of_a_received_value_is_no_condition() {
-    let src = std::fs::read_to_string("choreographies/countdown.chor").expect("countdown");
-    let before = "mu loop. (p?more(j).(p!half.dt<hold>.loop + p!full.dt<hold>.loop)";
-    assert!(src.contains(before));
-    let src = src.replace(before, "mu loop. (p?more(j).(if j.x then p!half.dt<hold>.loop else p!full.dt<hold>.loop)");
-    let mut db = SourceDb::new();
-    let cfg = crate::driver::Config::default();
-    let report = crate::fsload::check_source(&mut db, "choreographies/binder-component.chor", &src, &cfg);
-    assert_eq!(report.verdict, crate::driver::Verdict::Rejected);
-    assert_eq!(codes(&report.diagnostics), vec![Code::SortMismatch], "{:?}", report.diagnostics);
 }

@@ -6,29 +6,7 @@ use crate::diag::Code;
 use crate::hir::print::{print_bounded, NOTE_NODES};
 use crate::lower::tests::lower_src;
 
-/// The cart-and-arms example (Fig 2 as corrected in wf-rules.md): the cart tells
-/// both arms which one it serves, moves there, and comes back.
-pub(crate) const CART_ARMS: &str = "
-    robot Cart { state x: real; }
-    robot Arm { state h: real; }
-    motion Cart.m_move(p: real) { interruptible: false; post: x == p; }
-    motion Cart.m_idle { interruptible: true; }
-    motion Arm.work { interruptible: true; }
-    motion Arm.pick { interruptible: false; }
-    system CartAndArms {
-      participant Cart: Cart { init: x == 0; }
-      participant G: Arm;
-      participant R: Arm;
-    }
-    choreography Fig2 = mu t. (
-        Cart -> G : arrive. Cart -> R : free.
-        ((dt<Cart: m_move(1.0), G: work>. Cart -> G : ready. dt<Cart: m_idle, G: pick>. G -> Cart : ok.
-          (dt<Cart: m_move(0.0)> * dt<G: work>)) * dt<R: work>). t
-      + Cart -> G : free. Cart -> R : arrive.
-        ((dt<Cart: m_move(2.0), R: work>. Cart -> R : ready. dt<Cart: m_idle, R: pick>. R -> Cart : ok.
-          (dt<Cart: m_move(0.0)> * dt<R: work>)) * dt<G: work>). t
-    );
-";
+pub(crate) use crate::testing::CART_ARMS;
 
 fn projections(src: &str) -> (Program, BTreeMap<RoleId, LocalArc>, Vec<Diagnostic>) {
     let (prog, d) = lower_src(src);
@@ -335,25 +313,6 @@ fn deep_sequences_and_choices_do_not_overflow() {
     assert!(!Arc::ptr_eq(&b, &again) && equal(&b, &again));
 }
 
-/// The programs of every `.chor` under `dir` that lower (rejected ones included: their
-/// choreographies still project).
-fn corpus_programs(dir: &std::path::Path, out: &mut Vec<(std::path::PathBuf, Program)>) {
-    let Ok(entries) = std::fs::read_dir(dir) else { return };
-    let mut paths: Vec<std::path::PathBuf> = entries.flatten().map(|e| e.path()).collect();
-    paths.sort();
-    for p in paths {
-        if p.is_dir() {
-            corpus_programs(&p, out);
-        } else if p.extension().is_some_and(|e| e == "chor") {
-            let mut db = crate::source::SourceDb::new();
-            let Ok(root) = crate::fsload::load_root(&mut db, &p) else { continue };
-            if let Ok(prog) = crate::driver::program(&mut db, root, &mut crate::fsload::read_bytes) {
-                out.push((p, prog));
-            }
-        }
-    }
-}
-
 /// A receiver's refinement that reads values only others hold: the projection eliminates
 /// what a definition `x == e` determines (with `x`'s own refinement) and drops the rest.
 #[test]
@@ -375,47 +334,5 @@ fn a_receiver_learns_what_a_relay_can_tell_it() {
     assert!(printed(&prog, &map, "C").contains("pct == level && pct > 3"));
     for (r, t) in &map {
         assert_eq!(unheld_reads(&prog, *r, t), Vec::<String>::new(), "{}", prog.role_name(*r));
-    }
-}
-
-/// No local type of any corpus file reads a value its participant never holds, so every
-/// printed projection has its names bound. The relay file guarantees the property is
-/// exercised: before projection, its ground station's message reads such values.
-#[test]
-fn no_projection_of_the_corpus_reads_a_value_its_role_never_holds() {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut progs = Vec::new();
-    corpus_programs(&root.join("choreographies"), &mut progs);
-    corpus_programs(&root.join("tests/data"), &mut progs);
-    assert!(progs.len() > 100, "only {} programs lowered", progs.len());
-    let mut exercised = 0;
-    for (path, prog) in &progs {
-        let Some(chor) = &prog.choreography else { continue };
-        if crate::wf::side::check(prog, &chor.body).iter().any(|d| d.code == Code::GuardNotLocal) {
-            continue; // a knowledge leak (E0305): the program is rejected before projection matters
-        }
-        let (map, _) = project_all(prog);
-        for (r, t) in &map {
-            let unheld = unheld_reads(prog, *r, t);
-            assert!(unheld.is_empty(), "{}: `{}` reads {unheld:?}", path.display(), prog.role_name(*r));
-        }
-        exercised += usize::from(reads_an_unheld_value_on_receipt(prog, &chor.body));
-    }
-    assert!(exercised >= 1, "no corpus file has a receiver refinement over a value the receiver never holds");
-}
-
-fn reads_an_unheld_value_on_receipt(prog: &Program, g: &Global) -> bool {
-    match g {
-        Global::Msg(m) => m.payload.iter().filter_map(|f| f.refinement.as_ref()).any(|r| {
-            crate::hir::expr::mentions(r, &|v| {
-                matches!(v, Var::Value(id, _) if matches!(prog.value(*id).origin,
-                    ValueOrigin::Message { from, to } if from != m.to && to != m.to))
-            })
-        }),
-        Global::Seq(gs, _) | Global::Choice(gs, _) | Global::Par(gs, _) => {
-            gs.iter().any(|c| reads_an_unheld_value_on_receipt(prog, c))
-        }
-        Global::Rec { body, .. } => reads_an_unheld_value_on_receipt(prog, body),
-        Global::Motion(_) | Global::Var(_) | Global::End(_) => false,
     }
 }

@@ -74,7 +74,7 @@ impl PartialEq for Sigma {
 /// A hash of a fact for ordering and sets, as equality sees it (without locations).
 /// FxHash (`rustc-hash`): much faster than the default SipHash on the many small terms a
 /// context hashes, and contexts need no protection against adversarial collisions.
-pub(crate) fn fact_hash(e: &Expr) -> u64 {
+pub fn fact_hash(e: &Expr) -> u64 {
     let mut h = FxHasher::default();
     e.hash(&mut h);
     h.finish()
@@ -234,7 +234,5 @@ impl Sigma {
     }
 }
 
-#[cfg(test)]
-mod probe;
 #[cfg(test)]
 mod tests;

@@ -1,6 +1,6 @@
 //! Syntax: lexing and parsing of mochi's language (LANGUAGE.md), and following a file's
 //! imports into a [`SourceDb`] through a [`Loader`] the caller passes in (the file system's
-//! is [`crate::fsload::read_source`]). This module does no IO and knows nothing of name
+//! is `mochi_verify::fsload::read_source`). This module does no IO and knows nothing of name
 //! resolution.
 
 pub mod ast;
@@ -14,13 +14,13 @@ use std::path::{Path, PathBuf};
 /// Where imports come from: the text of the file at a path (already joined to the
 /// importer's directory and normalised), or why it cannot be had. A [`SourceError`] inside
 /// the `io::Error` ([`source_error`]) becomes E0106 or E0107 at the import; any other
-/// error E0105. The file system's loader is [`crate::fsload::read_source`]; tests and
+/// error E0105. The file system's loader is `mochi_verify::fsload::read_source`; tests and
 /// library users pass closures over memory.
 pub type Loader<'a> = dyn FnMut(&Path) -> std::io::Result<String> + 'a;
 
 /// Where the bytes of files that are not mochi source come from (URDF files and the meshes
 /// they name, read by `crate::geometry`): the file system at the edge
-/// ([`crate::fsload::read_bytes`], same limits as a [`Loader`]: regular files of at most
+/// (`mochi_verify::fsload::read_bytes`, same limits as a [`Loader`]: regular files of at most
 /// [`MAX_FILE_SIZE`] bytes), memory in tests. A [`Loader`] is this plus [`decode`].
 pub type ByteLoader<'a> = dyn FnMut(&Path) -> std::io::Result<Vec<u8>> + 'a;
 
@@ -35,7 +35,7 @@ pub const MAX_FILE_SIZE: u64 = 64 << 20;
 
 /// Why a file could not be taken as source text. Carried inside an [`std::io::Error`]
 /// (kind `InvalidData` or `InvalidInput`) by a [`Loader`] such as
-/// [`crate::fsload::read_source`], so loaders stay `io::Result<String>`; [`source_error`]
+/// `mochi_verify::fsload::read_source`, so loaders stay `io::Result<String>`; [`source_error`]
 /// gets it back.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum SourceError {
@@ -87,7 +87,7 @@ pub const STDIN_NAME: &str = "<stdin>";
 /// Parses `root` (already in `db`) and, transitively, the files it imports. Imported
 /// paths are relative to the importing file; each file is parsed once, so cycles are
 /// harmless. `read` is where the imported files come from: the file system at the edge
-/// ([`crate::fsload::read_source`]), memory in tests and for the library API. Whatever
+/// (`mochi_verify::fsload::read_source`), memory in tests and for the library API. Whatever
 /// the loader, an import must name a `.mochi` or `.chor` file (E0106): that is the
 /// language's rule, checked here before the loader is asked.
 pub fn parse_with_imports(db: &mut SourceDb, root: FileId, read: &mut Loader<'_>) -> (Parsed, Vec<Diagnostic>) {

@@ -710,7 +710,7 @@ mod tests {
     /// lies inside the hull.
     #[test]
     fn a_concave_mesh_is_decomposed_into_pieces_that_hold_it() {
-        let text = std::fs::read_to_string("robots/meshes/cradle.obj").unwrap();
+        let text = std::fs::read_to_string(crate::testing::repo("robots/meshes/cradle.obj")).unwrap();
         let d = parse(text.as_bytes(), Format::Obj).unwrap();
         let s = hull_solid(&d, [1.0; 3], Isometry3::identity(), "cradle".into()).unwrap();
         let (pieces, extra) = s.pieces().expect("the cradle is decomposed");

@@ -2,7 +2,7 @@
 //! kind's body, an obstacle), with a human name for diagnostics.
 //!
 //! Two conventions build them (both in metres):
-//! - mochi's (`checker/hir/body.rs`, LANGUAGE.md): `box(lx, ly, lz)` centred in x and y and
+//! - mochi's (`checker/core/src/hir/body.rs`, LANGUAGE.md): `box(lx, ly, lz)` centred in x and y and
 //!   standing on z = 0; `sphere(r)` centred; `cylinder(r, h)` and `capsule(r, h)` with their
 //!   axis on z from z = 0 to z = h (a capsule's segment from z = r to z = h - r);
 //! - URDF's: `<box size>` centred; `<cylinder radius length>` and `<capsule>` centred on

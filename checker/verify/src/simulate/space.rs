@@ -38,7 +38,7 @@ pub(super) enum Fp<'p> {
 /// of it (built by the geometry stage for every geometric footprint).
 pub(super) fn footprint(prog: &Program, prim: PrimId) -> Fp<'_> {
     let p = prog.prim(prim);
-    let solids = prog.world.as_deref().and_then(|w| w.prims.get(prim.idx())).and_then(|s| s.as_deref());
+    let solids = crate::space::world::of(prog).and_then(|w| w.prims.get(prim.idx())).and_then(|s| s.as_deref());
     match &p.footprint {
         Footprint::Predicate(fp) | Footprint::Shapes { region: fp, .. } => Fp::Pred(fp, solids),
         Footprint::Solid { .. } => solids.map_or(Fp::Unplaced, Fp::Solids),
@@ -318,7 +318,7 @@ impl Runner<'_, '_> {
     /// contact of solids. False when the run must stop.
     pub(super) fn clear_of_obstacles(&mut self, o: &Occupant, t: &Rat, context: &str, moving: &[&Occupant]) -> bool {
         let prog = self.prog;
-        let Some(world) = prog.world.clone() else { return true };
+        let Some(world) = crate::space::world::shared(prog) else { return true };
         for (k, obstacle) in prog.obstacles.iter().enumerate() {
             let f = footprint(prog, o.app.prim);
             if let Fp::All = f {
@@ -420,7 +420,7 @@ impl Runner<'_, '_> {
     /// point definitely outside is a violation. False when the run must stop.
     pub(super) fn body_in_footprint(&mut self, o: &Occupant, t: &Rat, context: &str, moving: &[&Occupant]) -> bool {
         let prog = self.prog;
-        let Some(world) = prog.world.clone() else { return true };
+        let Some(world) = crate::space::world::shared(prog) else { return true };
         let body = match world.kinds.get(prog.role(o.role).kind.idx()) {
             Some(b) if !b.is_empty() => b,
             _ => return true,

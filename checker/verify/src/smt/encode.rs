@@ -1138,13 +1138,14 @@ mod constant_arg_tests {
 
     fn check(name: &str, text: &str) -> (Verdict, Vec<Code>) {
         let mut db = crate::source::SourceDb::new();
-        let r = check_source(&mut db, name, text, &Config::default());
+        let name = crate::testing::repo(name).display().to_string();
+        let r = check_source(&mut db, &name, text, &Config::default());
         let codes = r.diagnostics.iter().filter(|d| d.severity == Severity::Error).map(|d| d.code).collect();
         (r.verdict, codes)
     }
 
     fn diagonal(edit: &dyn Fn(String) -> String) -> (Verdict, Vec<Code>) {
-        let text = std::fs::read_to_string(FILE).expect("the example exists");
+        let text = std::fs::read_to_string(crate::testing::repo(FILE)).expect("the example exists");
         check(FILE, &edit(text))
     }
 
@@ -1191,7 +1192,7 @@ mod constant_arg_tests {
         // (They also share a point at time 0: [T-SESS] reports it too.)
         // Not a quarter turn: the footprints meet (cos(t) is 1.9e-17 > 0), but Z3's model
         // may be a point of a neighbouring cosine the enclosure admits, which is no
-        // counterexample (checker/smt/replay.rs): rejected or unknown, never verified.
+        // counterexample (checker/verify/src/smt/replay.rs): rejected or unknown, never verified.
         let (verdict, codes) = check(name, &src("1.5707963267948966"));
         assert_ne!(verdict, Verdict::Verified);
         assert!(verdict == Verdict::Unknown || codes.contains(&Code::FootprintsOverlap), "{codes:?}");

@@ -776,6 +776,7 @@ mod by_part {
     /// The failed parts of a file's obligations (`text`, or the file at `path` when
     /// `None`), with their obligations.
     fn failures(path: &str, text: Option<&str>) -> (Program, Vec<(Obligation, Part)>) {
+        let path = &crate::testing::repo(path).display().to_string();
         let mut db = crate::source::SourceDb::new();
         let report = match text {
             Some(t) => crate::fsload::check_source(&mut db, path, t, &Config::patient()),
@@ -956,8 +957,10 @@ mod by_part {
     /// exact quarter turn): both footprints read one local point, so it refines.
     #[test]
     fn a_turned_footprint_refines_its_copy() {
-        let text =
-            std::fs::read_to_string("choreographies/rejected/E0407-turned-footprint-refines.chor").expect("readable");
+        let text = std::fs::read_to_string(crate::testing::repo(
+            "choreographies/rejected/E0407-turned-footprint-refines.chor",
+        ))
+        .expect("readable");
         let same = text.replace("-0.5 <= px <= 0.51", "-0.5 <= px <= 0.5");
         assert_ne!(text, same);
         let (_, failed) = failures("choreographies/rejected/same.chor", Some(&same));
@@ -996,7 +999,7 @@ mod by_part {
     #[test]
     fn footprints_that_meet_only_at_irrational_points_are_unknown() {
         let mut db = crate::source::SourceDb::new();
-        let path = std::path::Path::new("tests/data/rotation-far-from-origin.chor");
+        let path = &crate::testing::repo("tests/data/rotation-far-from-origin.chor");
         let report = crate::fsload::check_file(&mut db, path, &Config::patient()).expect("readable");
         assert_eq!(report.verdict, crate::driver::Verdict::Unknown, "{:?}", report.diagnostics);
         assert!(

@@ -39,7 +39,7 @@ pub enum Contained {
 /// Whether the body of `prim`'s kind lies within `prim`'s footprint at every state.
 pub fn body_within_footprint(prog: &Program, prim: PrimId) -> Contained {
     let p = prog.prim(prim);
-    let Some(world) = prog.world.as_deref() else { return Contained::Unknown("no solids were built".into()) };
+    let Some(world) = crate::space::world::of(prog) else { return Contained::Unknown("no solids were built".into()) };
     let Footprint::Solid { .. } = &p.footprint else {
         return Contained::Unknown("not a footprint with a URDF or mesh part".into());
     };

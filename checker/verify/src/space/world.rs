@@ -69,6 +69,16 @@ impl World {
     }
 }
 
+/// The solids of `prog`, when the geometry stage has built them (`Program::world`).
+pub fn of(prog: &Program) -> Option<&World> {
+    prog.world.as_deref().and_then(|w| w.downcast_ref::<World>())
+}
+
+/// [`of`], shared.
+pub fn shared(prog: &Program) -> Option<Arc<World>> {
+    prog.world.clone().and_then(|w| w.downcast::<World>().ok())
+}
+
 /// Builds the world of `prog`, reading URDF and mesh files through `read` (URDF texts
 /// are added to `db`, so diagnostics can point into them).
 pub fn build(prog: &Program, db: &mut SourceDb, read: &mut ByteLoader<'_>) -> (World, Vec<Diagnostic>) {
@@ -249,7 +259,7 @@ impl Builder<'_, '_> {
 /// bound one ulp outward). A contract whose postcondition needs more than that within its
 /// duration cannot end (E0408 where it runs, E0409 at the declaration).
 pub fn add_joint_limits(prog: &mut Program) {
-    let Some(world) = prog.world.clone() else { return };
+    let Some(world) = shared(prog) else { return };
     for (k, pieces) in world.kinds.iter().enumerate() {
         let mut limits: Vec<(Slot, f64, f64)> = Vec::new();
         let mut speeds: Vec<(Slot, f64)> = Vec::new();

@@ -5,7 +5,7 @@ use super::*;
 use crate::fsload::read_bytes;
 
 fn robots_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/robots")
+    crate::testing::repo("../shared/data/robots")
 }
 
 fn load(rel: &str) -> (SourceDb, Result<Robot, Vec<Diagnostic>>) {

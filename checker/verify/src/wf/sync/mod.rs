@@ -1135,7 +1135,7 @@ mod tests {
     fn same_as_the_oracle_on_the_examples_and_the_rejected_corpus() {
         // (The whole-file comparisons: every `.chor` under choreographies/.)
         let mut files = Vec::new();
-        let mut dirs = vec![std::path::PathBuf::from("choreographies")];
+        let mut dirs = vec![crate::testing::repo("choreographies")];
         while let Some(d) = dirs.pop() {
             for e in std::fs::read_dir(&d).expect("choreographies/").flatten() {
                 let p = e.path();

@@ -59,7 +59,7 @@ pub(crate) enum GeoAnswer {
 /// Whether `part` of `ob` is the geometric procedure's: some body in it has no predicate
 /// (a URDF or a mesh), or a participant in it rides on another.
 pub(crate) fn applies(prog: &Program, ob: &Obligation, part: &Part) -> bool {
-    let Some(world) = prog.world.as_deref() else { return false };
+    let Some(world) = crate::space::world::of(prog) else { return false };
     // A geometric footprint turned by a variable (a heading): its predicate has the
     // cosine and sine of a state variable, which Z3 decides only partially.
     let turns = |pieces: &[Piece]| {
@@ -96,7 +96,7 @@ pub(crate) fn applies(prog: &Program, ob: &Obligation, part: &Part) -> bool {
 
 /// Decides `part` of `ob` geometrically, within `limit`.
 pub(crate) fn decide(prog: &Program, ob: &Obligation, part: &Part, limit: Duration) -> GeoAnswer {
-    let Some(world) = prog.world.as_deref() else { return GeoAnswer::Unknown("no geometry was built".into()) };
+    let Some(world) = crate::space::world::of(prog) else { return GeoAnswer::Unknown("no geometry was built".into()) };
     let built = match (&ob.goal, part) {
         (Goal::Compatible { parts }, Part::Disjoint(i, j)) => {
             let (a, b) = (parts[*i].0, parts[*j].0);
@@ -496,10 +496,7 @@ impl<'a> Geo<'a> {
             let clocky = |e: &Expr| crate::hir::expr::mentions(e, &|v| matches!(v, Var::Clock));
             reads |= clocky(&prim.guarantee)
                 || self.prog.kind(prim.kind).invariant.as_ref().is_some_and(clocky)
-                || self
-                    .prog
-                    .world
-                    .as_deref()
+                || crate::space::world::of(self.prog)
                     .and_then(|w| w.prims.get(r.app.prim.idx()).cloned().flatten())
                     .is_some_and(|ps| {
                         ps.iter().any(|p| p.place.as_ref().is_some_and(|pose| pose.args.iter().any(clocky)))
@@ -1273,7 +1270,7 @@ pub struct PairClearance {
 /// every such motion, at every time and state the contracts allow: a certified lower
 /// bound and a configuration attaining an upper bound within `tolerance` (m).
 pub fn clearances(prog: &Program, obligations: &[Obligation], tolerance: f64, limit: Duration) -> Vec<PairClearance> {
-    let Some(world) = prog.world.as_deref() else { return Vec::new() };
+    let Some(world) = crate::space::world::of(prog) else { return Vec::new() };
     let _consts = bounds::ConstCache::new();
     let mut best: Vec<PairClearance> = Vec::new();
     for ob in obligations {
@@ -1372,7 +1369,7 @@ mod tests {
         let mut db = crate::source::SourceDb::new();
         let r = crate::fsload::check_source(
             &mut db,
-            concat!(env!("CARGO_MANIFEST_DIR"), "/choreographies/geo-test.chor"),
+            &crate::testing::repo("choreographies/geo-test.chor").display().to_string(),
             &src,
             &Config::default(),
         );
@@ -1408,7 +1405,7 @@ mod tests {
         let mut db = crate::source::SourceDb::new();
         let r = crate::fsload::check_source(
             &mut db,
-            concat!(env!("CARGO_MANIFEST_DIR"), "/choreographies/geo-test.chor"),
+            &crate::testing::repo("choreographies/geo-test.chor").display().to_string(),
             &src,
             &Config::patient(),
         );

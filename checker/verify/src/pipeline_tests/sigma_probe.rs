@@ -6,12 +6,11 @@ use crate::hir::{print, Program};
 use crate::obligation::{Goal, Obligation};
 use crate::smt::{check_valid, SmtConfig, Validity};
 use crate::source::SourceDb;
-use std::path::Path;
 
 /// The obligations of well-formedness and typing for a bundled example.
 fn example_obligations(path: &str) -> (Program, Vec<Obligation>) {
     let mut db = SourceDb::new();
-    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join(path);
+    let file = crate::testing::repo(path);
     let root = crate::fsload::load_root(&mut db, &file).expect("example readable");
     let (parsed, d) = crate::syntax::parse_with_imports(&mut db, root, &mut |p| std::fs::read_to_string(p));
     assert!(d.is_empty(), "{d:?}");
