@@ -262,6 +262,8 @@ fn check(args: &CheckArgs, color: ColorChoice) -> Outcome {
         config.smt.jobs = j;
     }
     config.smt.no_cache = args.no_cache;
+    // Certified to within a millimetre.
+    config.clearance = args.clearance.then_some(1e-3);
     if let Some(dir) = &args.dump_smt {
         if let Err(e) = writable_dir(dir) {
             eprintln_safe(&format!("error: --dump-smt {}: cannot write there: {e}", dir.display()));
@@ -320,10 +322,6 @@ fn check(args: &CheckArgs, color: ColorChoice) -> Outcome {
                 continue;
             }
         };
-        let clearances = match (&report.planned, args.clearance) {
-            (Some(p), true) => mochi::smt::goals::geo::clearances(&p.program, &p.obligations, 1e-3, cfg.smt.timeout),
-            _ => Vec::new(),
-        };
         match args.format {
             Format::Text => {
                 // Diagnostics on stderr, the table and verdict on stdout (rustc's split).
@@ -331,13 +329,13 @@ fn check(args: &CheckArgs, color: ColorChoice) -> Outcome {
                 let sep = if i > 0 { "\n" } else { "" };
                 print_safe(&format!("{sep}{}", render::summary_text(&db, &name, &report, out_color, args.verbose)));
                 if args.clearance {
-                    print_safe(&render::clearance_text(&db, &clearances));
+                    print_safe(&render::clearance_text(&db, &report.clearances));
                 }
             }
             Format::Json => {
                 let mut json = render::report_json(&db, &name, &report);
                 if args.clearance {
-                    json["clearance"] = render::clearance_json(&db, &clearances);
+                    json["clearance"] = render::clearance_json(&db, &report.clearances);
                 }
                 if !print_json(&json, json_lines) {
                     worst = worst.max(Outcome::Crashed);
@@ -444,6 +442,7 @@ fn past_deadline(seconds: f64) -> Report {
         separations: Vec::new(),
         vacuous: 0,
         planned: None,
+        clearances: Vec::new(),
     }
 }
 

@@ -137,51 +137,6 @@ fn write_summary(
     Ok(())
 }
 
-/// A check's detail as the table shows it: `11 obligation(s), 18 queries (5 cached), 2
-/// without Z3`, `1 error(s)`; empty for [`Detail::None`].
-impl std::fmt::Display for Detail {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match *self {
-            Detail::None => Ok(()),
-            Detail::Errors(n) => write!(f, "{n} error(s)"),
-            Detail::NotDecided(n) => write!(f, "{n} not decided (structural checks only)"),
-            Detail::PastDeadline { seconds } => write!(f, "not checked: the --deadline of {seconds} s had passed"),
-            Detail::Obligations { total, queries, cached, folded, geometric, failed, undecided, vacuous } => {
-                write!(f, "{total} obligation(s), {queries} quer{}", if queries == 1 { "y" } else { "ies" })?;
-                if cached > 0 {
-                    write!(f, " ({cached} cached)")?;
-                }
-                if folded > 0 {
-                    write!(f, ", {folded} without Z3")?;
-                }
-                if geometric > 0 {
-                    write!(f, ", {geometric} by the geometric procedure")?;
-                }
-                if failed > 0 {
-                    write!(f, ", {failed} failed")?;
-                }
-                if undecided > 0 {
-                    write!(f, ", {undecided} undecided")?;
-                }
-                if vacuous > 0 {
-                    write!(f, ", {vacuous} held vacuously")?;
-                }
-                Ok(())
-            }
-            Detail::Vacuity { vacuous, proved, unsure } => {
-                write!(
-                    f,
-                    "{vacuous} of {proved} proved obligation(s) held only because their context is unsatisfiable"
-                )?;
-                if unsure > 0 {
-                    write!(f, ", {unsure} context(s) undecided")?;
-                }
-                Ok(())
-            }
-        }
-    }
-}
-
 /// The report as one JSON object. The schema is part of mochi's interface:
 ///
 /// ```text
@@ -764,6 +719,7 @@ mod tests {
             separations: Vec::new(),
             vacuous: 0,
             planned: None,
+            clearances: Vec::new(),
         }
     }
 

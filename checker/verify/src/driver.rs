@@ -9,6 +9,7 @@
 use crate::diag::{self, Code, Counterexample, Diagnostic};
 use crate::hir::print;
 use crate::obligation::{Goal, Obligation, Rule};
+use crate::smt::goals::geo::PairClearance;
 use crate::smt::{self, goals::Part, Decision, SmtConfig};
 use crate::source::{FileId, SourceDb};
 use crate::{library, lower, project, space, subtype, syntax, typeck, wf};
@@ -27,6 +28,9 @@ pub struct Config {
     /// The per-query timeout (`smt.timeout`) was cut to the time left before the run's
     /// `--deadline`: a query that runs out then says so, rather than "raise --timeout".
     pub cut_by_deadline: bool,
+    /// `--clearance`: after the verdict, the least distance between the bodies of each pair
+    /// that moves together, certified to within this tolerance (m) ([`Report::clearances`]).
+    pub clearance: Option<f64>,
 }
 
 impl Config {
@@ -106,6 +110,51 @@ pub enum Detail {
     PastDeadline { seconds: f64 },
 }
 
+/// A check's detail as the table shows it: `11 obligation(s), 18 queries (5 cached), 2
+/// without Z3`, `1 error(s)`; empty for [`Detail::None`].
+impl std::fmt::Display for Detail {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Detail::None => Ok(()),
+            Detail::Errors(n) => write!(f, "{n} error(s)"),
+            Detail::NotDecided(n) => write!(f, "{n} not decided (structural checks only)"),
+            Detail::PastDeadline { seconds } => write!(f, "not checked: the --deadline of {seconds} s had passed"),
+            Detail::Obligations { total, queries, cached, folded, geometric, failed, undecided, vacuous } => {
+                write!(f, "{total} obligation(s), {queries} quer{}", if queries == 1 { "y" } else { "ies" })?;
+                if cached > 0 {
+                    write!(f, " ({cached} cached)")?;
+                }
+                if folded > 0 {
+                    write!(f, ", {folded} without Z3")?;
+                }
+                if geometric > 0 {
+                    write!(f, ", {geometric} by the geometric procedure")?;
+                }
+                if failed > 0 {
+                    write!(f, ", {failed} failed")?;
+                }
+                if undecided > 0 {
+                    write!(f, ", {undecided} undecided")?;
+                }
+                if vacuous > 0 {
+                    write!(f, ", {vacuous} held vacuously")?;
+                }
+                Ok(())
+            }
+            Detail::Vacuity { vacuous, proved, unsure } => {
+                write!(
+                    f,
+                    "{vacuous} of {proved} proved obligation(s) held only because their context is unsatisfiable"
+                )?;
+                if unsure > 0 {
+                    write!(f, ", {unsure} context(s) undecided")?;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
 /// Everything `mochi check` learns about one file.
 #[derive(Debug)]
 pub struct Report {
@@ -126,6 +175,9 @@ pub struct Report {
     /// structural check stopped the run first), for tests and tools that look behind a
     /// verdict (the golden test re-evaluates each counterexample against its goal).
     pub planned: Option<Planned>,
+    /// With [`Config::clearance`], per pair of bodies that move together, their least
+    /// distance (computed on the planned obligations, after the verdict).
+    pub clearances: Vec<PairClearance>,
 }
 
 /// What the structural stages handed to the SMT stage.
@@ -174,29 +226,66 @@ pub fn unreadable_root(d: Diagnostic) -> Report {
 /// `load` (the file system's loader is [`crate::fsload::read_bytes`]; source files are
 /// decoded as UTF-8 by [`syntax::decode`]). The pipeline does no IO of its own.
 pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut syntax::ByteLoader<'_>) -> Report {
-    let mut run = Pipeline::default();
+    let mut report = checks(db, root, cfg, load);
+    if let (Some(tolerance), Some(p)) = (cfg.clearance, &report.planned) {
+        report.clearances = smt::goals::geo::clearances(&p.program, &p.obligations, tolerance, cfg.smt.timeout);
+    }
+    report
+}
+
+/// The stages every command shares, in order: [`prepare`] runs them up to the one asked for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Stage {
+    /// Parsed with its imports and lowered: names resolved, sorts checked (`parse`, `names`).
+    Names,
+    /// Then the geometry stage: footprints as predicates where Z3 can decide them, every
+    /// body as solids (`geometry`).
+    Geometry,
+}
+
+/// The front of every pipeline, recorded in `run`: parse, names and, from [`Stage::Geometry`],
+/// the geometry stage. `Some((program, library))` when none of them has an error; `library`
+/// says the root is a `.mochi` library on its own (its missing system and choreography are
+/// then no error, E0210) when `libraries` accepts one.
+fn front(
+    run: &mut Pipeline,
+    db: &mut SourceDb,
+    root: FileId,
+    load: &mut syntax::ByteLoader<'_>,
+    upto: Stage,
+    libraries: bool,
+) -> Option<(crate::hir::Program, bool)> {
     let mut text = |p: &std::path::Path| {
         load(p).and_then(|b| syntax::decode(b).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e)))
     };
     let (parsed, diags) = run.stage(|| syntax::parse_with_imports(db, root, &mut text));
     if !run.record("parse", diags) {
-        return run.finish();
+        return None;
     }
     let (mut prog, mut diags) = run.stage(|| lower::lower(&parsed));
     // A `.mochi` library on its own: no E0210, its kinds and primitives are checked.
-    let library = library::is_library(db, root, &prog);
+    let library = libraries && library::is_library(db, root, &prog);
     if library {
         diags.retain(|d| d.code != Code::MissingItem);
     }
     if !run.record("names", diags) {
-        return run.finish();
+        return None;
     }
-    // Bodies: sizes, and geometric footprints as predicates where Z3 can decide them;
-    // then every body as solids (URDFs and meshes read here) for the geometric procedure.
-    let diags = run.stage(|| geometry(&mut prog, db, load));
-    if !run.record("geometry", diags) {
-        return run.finish();
+    if upto >= Stage::Geometry {
+        // Bodies: sizes, and geometric footprints as predicates where Z3 can decide them;
+        // then every body as solids (URDFs and meshes read here) for the geometric procedure.
+        let diags = run.stage(|| geometry(&mut prog, db, load));
+        if !run.record("geometry", diags) {
+            return None;
+        }
     }
+    Some((prog, library))
+}
+
+/// Every check of `mochi check` on the file `root`, up to the verdict.
+fn checks(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut syntax::ByteLoader<'_>) -> Report {
+    let mut run = Pipeline::default();
+    let Some((mut prog, library)) = front(&mut run, db, root, load, Stage::Geometry, true) else { return run.finish() };
     if library {
         library::synthetic_participants(&mut prog);
         let (obligations, notes) = run.stage(|| library::plan(&prog, root));
@@ -245,7 +334,7 @@ pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut sy
         // as the rest (a second pool would cost a Z3 context per worker, ~15 ms): a contract
         // that some use has already shown able to end needs no question of its own.
         let used = used_primitives(&obligations);
-        obligations.extend(contracts(&prog, &used));
+        obligations.extend(library::contracts(&prog, &used));
     }
     run.decide(db, prog, obligations, cfg);
     run.finish()
@@ -267,32 +356,21 @@ fn geometry(prog: &mut crate::hir::Program, db: &mut SourceDb, load: &mut syntax
     diags
 }
 
-/// The program of the file `root` as the checks see it: parsed with its imports, lowered,
-/// and through the geometry stage (footprint predicates and solids), with no check run
-/// (for `mochi simulate`). `Err` holds the diagnostics when one of these stages has an
-/// error (the warnings of a good run are dropped: `mochi check` reports them).
-pub fn program(
+/// The program of the file `root` as the checks see it, prepared up to `upto` with no check
+/// run (for `mochi simulate`, which asks for [`Stage::Geometry`]: footprint predicates and
+/// solids, as the checks have them). `Err` holds the diagnostics when one of these stages
+/// has an error (the warnings of a good run are dropped: `mochi check` reports them).
+pub fn prepare(
     db: &mut SourceDb,
     root: FileId,
     load: &mut syntax::ByteLoader<'_>,
+    upto: Stage,
 ) -> Result<crate::hir::Program, Vec<Diagnostic>> {
-    let mut text = |p: &std::path::Path| {
-        load(p).and_then(|b| syntax::decode(b).map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e)))
-    };
-    let (parsed, mut diags) = syntax::parse_with_imports(db, root, &mut text);
-    if diags.iter().any(Diagnostic::is_error) {
-        return Err(diags);
+    let mut run = Pipeline::default();
+    match front(&mut run, db, root, load, upto, false) {
+        Some((prog, _)) => Ok(prog),
+        None => Err(run.diagnostics),
     }
-    let (mut prog, more) = lower::lower(&parsed);
-    diags.extend(more);
-    if diags.iter().any(Diagnostic::is_error) {
-        return Err(diags);
-    }
-    diags.extend(geometry(&mut prog, db, load));
-    if diags.iter().any(Diagnostic::is_error) {
-        return Err(diags);
-    }
-    Ok(prog)
 }
 
 /// Accumulates diagnostics and check results while the stages run.
@@ -559,6 +637,7 @@ impl Pipeline {
             separations: self.separations,
             vacuous: self.vacuous,
             planned: self.planned,
+            clearances: Vec::new(),
         }
     }
 }
@@ -779,75 +858,6 @@ fn dead_branch(prog: &crate::hir::Program, ob: &Obligation, f: smt::Failure) -> 
         d = d.with_note(text);
     }
     d.with_help("remove the branch, or fix its guard or its payload's refinements")
-}
-
-/// One obligation per primitive the protocol runs (`used`): its contract admits a run
-/// that ends (Fig 3 [NON-INTERRUPT], [INTERRUPT]). A primitive nothing runs cannot make
-/// this protocol deadlock; a library checked on its own asks it of every primitive
-/// (`library::plan`).
-pub(crate) fn contracts(prog: &crate::hir::Program, used: &HashSet<crate::hir::PrimId>) -> Vec<Obligation> {
-    let used: Vec<crate::hir::PrimId> =
-        (0..prog.prims.len()).map(|i| crate::hir::PrimId(i as u32)).filter(|p| used.contains(p)).collect();
-    // Its footprint holds some point (E0412): asked of every primitive of a kind with a
-    // body whose footprint is a predicate, witnessed or not. A geometric footprint holds a
-    // point by construction (shapes of positive sizes, E0511; a mesh or URDF that loaded),
-    // and all space every point. A kind is bodiless (an environment, a sensor) when it
-    // declares no `geometry:` and every footprint of it is literally `false`: it occupies
-    // no space.
-    use crate::hir::Footprint;
-    let is_false = |p: crate::hir::PrimId| match &prog.prim(p).footprint {
-        Footprint::Predicate(f) => matches!(f.pred.kind, crate::hir::ExprKind::Bool(false)),
-        Footprint::Everywhere | Footprint::Shapes { .. } | Footprint::Solid { .. } => false,
-    };
-    let has_body = |k: crate::hir::KindId| {
-        prog.kind(k).body.is_some()
-            || (0..prog.prims.len())
-                .map(|i| crate::hir::PrimId(i as u32))
-                .any(|p| prog.prim(p).kind == k && prog.prim(p).footprint.is_declared() && !is_false(p))
-    };
-    let asks_a_point = |p: &crate::hir::PrimId| match &prog.prim(*p).footprint {
-        Footprint::Predicate(_) => has_body(prog.prim(*p).kind),
-        Footprint::Everywhere | Footprint::Shapes { .. } | Footprint::Solid { .. } => false,
-    };
-    let occupies = used.iter().filter(|p| asks_a_point(p));
-    let occupies = occupies.map(|&p| Obligation {
-        rule: Rule::Occupies,
-        span: prog.prim(p).footprint.span().unwrap_or(prog.prim(p).span),
-        what: format!("the footprint of `{}`", prog.prim(p).name),
-        hyps: Vec::new(),
-        goal: Goal::CanEnd { prim: p },
-    });
-    let contracts = used.iter().map(|&p| Obligation {
-        rule: Rule::Contract,
-        span: prog.prim(p).span,
-        what: format!("the contract of `{}`", prog.prim(p).name),
-        hyps: Vec::new(),
-        goal: Goal::CanEnd { prim: p },
-    });
-    // Its footprint contains the body (E0512), for every kind with a `geometry:` and every
-    // declared footprint: a written predicate, shapes placed by the state (which must
-    // cover the body too), a mesh or URDF (unknown unless it is the body). All space
-    // holds it at once, and so does `footprint: geometry`, which is the body
-    // (`goals::plan` says so without a query).
-    let contains = used
-        .iter()
-        .filter(|p| {
-            let prim = prog.prim(**p);
-            let asked = match &prim.footprint {
-                Footprint::Everywhere => false,
-                f @ (Footprint::Shapes { .. } | Footprint::Solid { .. }) => !f.is_own_geometry(),
-                Footprint::Predicate(_) => true,
-            };
-            asked && prog.kind(prim.kind).body.is_some()
-        })
-        .map(|&p| Obligation {
-            rule: Rule::Contains,
-            span: prog.prim(p).footprint.span().unwrap_or(prog.prim(p).span),
-            what: format!("footprint of `{}`", prog.prim(p).name),
-            hyps: Vec::new(),
-            goal: Goal::Contains { prim: p },
-        });
-    occupies.chain(contains).chain(contracts).collect()
 }
 
 /// The primitives the protocol runs: every part of a `dt` and both sides of every

@@ -12,7 +12,7 @@
 //! - each footprint of a kind with a body holds a point (E0412, Sec 3.1).
 //!
 //! These are the checks the protocol pipeline makes of the primitives a protocol runs
-//! (`driver::contracts`), made of every primitive. The SMT stage reads a primitive in
+//! ([`contracts`]), made of every primitive. The SMT stage reads a primitive in
 //! the frame of a participant of its kind, so [`synthetic_participants`] adds one per
 //! kind, named after it, with no `init` (only the kind's invariant holds of it), no pose
 //! and unconnected inputs (free: the questions are satisfiability questions, so a free
@@ -72,7 +72,7 @@ pub fn plan(prog: &Program, root: FileId) -> (Vec<Obligation>, Vec<Diagnostic>) 
         });
     }
     let all: HashSet<PrimId> = (0..prog.prims.len()).map(|i| PrimId(i as u32)).collect();
-    obligations.extend(crate::driver::contracts(prog, &all));
+    obligations.extend(contracts(prog, &all));
     if prog.kinds.is_empty() && prog.prims.is_empty() {
         let span = crate::source::Span::new(root, 0, 0);
         notes.push(
@@ -85,6 +85,74 @@ pub fn plan(prog: &Program, root: FileId) -> (Vec<Obligation>, Vec<Diagnostic>) 
         );
     }
     (obligations, notes)
+}
+
+/// One obligation per primitive the protocol runs (`used`): its contract admits a run
+/// that ends (Fig 3 [NON-INTERRUPT], [INTERRUPT]). A primitive nothing runs cannot make
+/// this protocol deadlock; a library checked on its own asks it of every primitive
+/// ([`plan`]). The driver asks it of the primitives a protocol runs.
+pub fn contracts(prog: &crate::hir::Program, used: &HashSet<PrimId>) -> Vec<Obligation> {
+    let used: Vec<PrimId> = (0..prog.prims.len()).map(|i| PrimId(i as u32)).filter(|p| used.contains(p)).collect();
+    // Its footprint holds some point (E0412): asked of every primitive of a kind with a
+    // body whose footprint is a predicate, witnessed or not. A geometric footprint holds a
+    // point by construction (shapes of positive sizes, E0511; a mesh or URDF that loaded),
+    // and all space every point. A kind is bodiless (an environment, a sensor) when it
+    // declares no `geometry:` and every footprint of it is literally `false`: it occupies
+    // no space.
+    use crate::hir::Footprint;
+    let is_false = |p: PrimId| match &prog.prim(p).footprint {
+        Footprint::Predicate(f) => matches!(f.pred.kind, crate::hir::ExprKind::Bool(false)),
+        Footprint::Everywhere | Footprint::Shapes { .. } | Footprint::Solid { .. } => false,
+    };
+    let has_body = |k: KindId| {
+        prog.kind(k).body.is_some()
+            || (0..prog.prims.len())
+                .map(|i| PrimId(i as u32))
+                .any(|p| prog.prim(p).kind == k && prog.prim(p).footprint.is_declared() && !is_false(p))
+    };
+    let asks_a_point = |p: &PrimId| match &prog.prim(*p).footprint {
+        Footprint::Predicate(_) => has_body(prog.prim(*p).kind),
+        Footprint::Everywhere | Footprint::Shapes { .. } | Footprint::Solid { .. } => false,
+    };
+    let occupies = used.iter().filter(|p| asks_a_point(p));
+    let occupies = occupies.map(|&p| Obligation {
+        rule: Rule::Occupies,
+        span: prog.prim(p).footprint.span().unwrap_or(prog.prim(p).span),
+        what: format!("the footprint of `{}`", prog.prim(p).name),
+        hyps: Vec::new(),
+        goal: Goal::CanEnd { prim: p },
+    });
+    let contracts = used.iter().map(|&p| Obligation {
+        rule: Rule::Contract,
+        span: prog.prim(p).span,
+        what: format!("the contract of `{}`", prog.prim(p).name),
+        hyps: Vec::new(),
+        goal: Goal::CanEnd { prim: p },
+    });
+    // Its footprint contains the body (E0512), for every kind with a `geometry:` and every
+    // declared footprint: a written predicate, shapes placed by the state (which must
+    // cover the body too), a mesh or URDF (unknown unless it is the body). All space
+    // holds it at once, and so does `footprint: geometry`, which is the body
+    // (`goals::plan` says so without a query).
+    let contains = used
+        .iter()
+        .filter(|p| {
+            let prim = prog.prim(**p);
+            let asked = match &prim.footprint {
+                Footprint::Everywhere => false,
+                f @ (Footprint::Shapes { .. } | Footprint::Solid { .. }) => !f.is_own_geometry(),
+                Footprint::Predicate(_) => true,
+            };
+            asked && prog.kind(prim.kind).body.is_some()
+        })
+        .map(|&p| Obligation {
+            rule: Rule::Contains,
+            span: prog.prim(p).footprint.span().unwrap_or(prog.prim(p).span),
+            what: format!("footprint of `{}`", prog.prim(p).name),
+            hyps: Vec::new(),
+            goal: Goal::Contains { prim: p },
+        });
+    occupies.chain(contains).chain(contracts).collect()
 }
 
 #[cfg(test)]
@@ -101,7 +169,7 @@ mod tests {
     }
 
     fn libraries(dir: &str) -> Vec<std::path::PathBuf> {
-        let mut files: Vec<_> = std::fs::read_dir(dir)
+        let mut files: Vec<_> = std::fs::read_dir(crate::testing::repo(dir))
             .expect("the directory exists")
             .filter_map(|e| e.ok().map(|e| e.path()))
             .filter(|p| p.extension().is_some_and(|e| e == "mochi"))
@@ -121,7 +189,7 @@ mod tests {
             assert_eq!(r.verdict, Verdict::Verified, "{}: {:?}", path.display(), r.diagnostics);
             assert!(r.diagnostics.iter().all(|d| d.severity != Severity::Error), "{}", path.display());
         }
-        let r = check(Path::new("motion-primitives/bot.mochi"));
+        let r = check(&crate::testing::repo("motion-primitives/bot.mochi"));
         let contracts = r.checks.iter().find(|c| c.name == "contracts").expect("a contracts line");
         // bot.mochi's five primitives: each can end, each footprint holds a point and
         // contains the bot's ball.

@@ -1,6 +1,6 @@
 //! `mochi simulate`: an independent check of verdicts by running the choreography.
 //!
-//! The simulator takes the program as the checks see it ([`crate::driver::program`]:
+//! The simulator takes the program as the checks see it ([`crate::driver::prepare`]:
 //! parsed, lowered, through the geometry stage) and runs it on concrete states (exact
 //! rationals, [`crate::exact`]; enclosures where a value is irrational, such as `pi / 2`):
 //!
@@ -70,7 +70,7 @@ impl Default for SimConfig {
 }
 
 /// Simulates `prog`'s choreography `cfg.runs` times. `prog` is the program after the
-/// geometry stage ([`crate::driver::program`]); without it, bodies that are solids are
+/// geometry stage ([`crate::driver::prepare`]); without it, bodies that are solids are
 /// not known and a comparison that needs them is undecided.
 pub fn simulate(prog: &Program, cfg: &SimConfig) -> SimReport {
     let mut report = SimReport { runs: cfg.runs, ..SimReport::default() };
@@ -102,7 +102,7 @@ pub fn simulate_loaded(
     cfg: &SimConfig,
     load: &mut crate::syntax::ByteLoader<'_>,
 ) -> Result<SimReport, Vec<crate::diag::Diagnostic>> {
-    let prog = crate::driver::program(db, root, load)?;
+    let prog = crate::driver::prepare(db, root, load, crate::driver::Stage::Geometry)?;
     Ok(simulate(&prog, cfg))
 }
 

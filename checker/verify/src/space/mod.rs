@@ -137,7 +137,7 @@ mod tests {
             span: Default::default(),
         });
         let used = std::iter::once(crate::hir::PrimId(0)).collect();
-        let obs: Vec<_> = crate::driver::contracts(&prog, &used)
+        let obs: Vec<_> = crate::library::contracts(&prog, &used)
             .into_iter()
             .filter(|o| o.rule == crate::obligation::Rule::Contains)
             .collect();

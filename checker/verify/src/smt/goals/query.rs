@@ -181,7 +181,7 @@ fn build_with<'p>(enc: Encoder<'p>, ob: &Obligation, part: &Part) -> Result<Quer
             let Some(role) = role else { return Err(Unsupported("a primitive of a kind no participant has".into())) };
             let fp = match &p.footprint {
                 Footprint::Predicate(fp) => fp.clone(),
-                // Planned for predicates only (driver::contracts): a body of shapes of
+                // Planned for predicates only (library::contracts): a body of shapes of
                 // positive sizes (E0511) or a mesh or URDF holds a point by construction,
                 // and all space holds every point. Asked anyway: the empty question.
                 Footprint::Everywhere | Footprint::Shapes { .. } | Footprint::Solid { .. } => {
