@@ -1,28 +1,34 @@
 //! Tidy: the architecture invariants of ARCHITECTURE.md that can be checked by reading the
 //! source, checked here (as rust-analyzer's `tidy` test does):
 //!
-//! - (a) only files under `checker/smt/` name `z3`;
-//! - (b) only the IO edge, `checker/main.rs`, `checker/fsload.rs` and `checker/io.rs`,
-//!   touches the file system or the standard streams (`std::fs`, `File::`, `print!`,
-//!   `println!`, `eprint!`, `eprintln!`, `stdout()`, `stderr()`, `stdin()`);
+//! - (a) only files under `checker/verify/src/smt/` name `z3`;
+//! - (b) only the IO edge, `checker/cli/main.rs`, `checker/verify/src/fsload.rs` and
+//!   `checker/cli/io.rs`, touches the file system or the standard streams (`std::fs`,
+//!   `File::`, `print!`, `println!`, `eprint!`, `eprintln!`, `stdout()`, `stderr()`,
+//!   `stdin()`);
 //! - (c) every `.rs` file under `checker/` starts with a `//!` module comment;
-//! - (d) only `checker/render.rs` knows output formats and colours: it alone names
+//! - (d) only `checker/cli/render.rs` knows output formats and colours: it alone names
 //!   `serde_json`, `termcolor`, `codespan` and `NO_COLOR`;
-//! - (e) only files under `checker/geometry/` name the geometry crates (`parry3d`,
-//!   `nalgebra`, `urdf_rs`, `stl_io`, `tobj`, `roxmltree`); `roxmltree` may also be named
-//!   under `checker/dialect/` (the reader of the MAVLink XML definitions);
+//! - (e) only files under `checker/verify/src/geometry/` name the geometry crates
+//!   (`parry3d`, `nalgebra`, `urdf_rs`, `stl_io`, `tobj`, `roxmltree`); `roxmltree` may
+//!   also be named under `checker/core/src/dialect/` (the reader of the MAVLink XML
+//!   definitions);
 //! - (f) the map is true: every path, file, corpus file, module path and link that
-//!   ARCHITECTURE.md and `docs/` name exists.
+//!   ARCHITECTURE.md and `docs/` name exists;
+//! - (g) the core is pure: `checker/core/Cargo.toml` depends on no solver, no geometry
+//!   crate and no other crate of mochi (Cargo then keeps its code from naming them), and
+//!   no file under `checker/core/`, its tests included, touches the file system or names
+//!   a crate of the verifier or the command line.
 //!
 //! The rules are textual on purpose: simple to state, simple to audit. Rules (a), (b), (d)
 //! ignore comments (`//` to the end of a line) and everything from the first line that is
 //! `#[cfg(test)]` on its own (the attribute that opens a file's unit-test module, which
-//! mochi's files put last): tests may read fixtures and print.
+//! mochi's files put last): tests may read fixtures and print (outside the core, rule (g)).
 
 use std::path::{Path, PathBuf};
 
 /// The IO edge: the only files that may touch the file system and the standard streams.
-const IO_EDGE: &[&str] = &["checker/main.rs", "checker/fsload.rs", "checker/io.rs"];
+const IO_EDGE: &[&str] = &["checker/cli/main.rs", "checker/verify/src/fsload.rs", "checker/cli/io.rs"];
 
 /// Files that still do IO outside the edge, each with the reason and who removes it. The
 /// lead removes an entry when the branch that fixes it is merged; the test fails if an
@@ -64,7 +70,7 @@ fn code_sources() -> Vec<(String, String)> {
     let mut out = sources();
     let test_only = test_only_files(&out);
     for (f, t) in &mut out {
-        if test_only.contains(f) {
+        if test_only.iter().any(|o| o == f || (o.ends_with('/') && f.starts_with(o.as_str()))) {
             *t = "#[cfg(test)]\n".to_string() + t;
         }
     }
@@ -72,12 +78,17 @@ fn code_sources() -> Vec<(String, String)> {
 }
 
 /// The files declared by `#[cfg(test)]` on the line before `mod name;` in their parent
-/// (`dir/mod.rs` or `dir.rs` declares `dir/name.rs`).
+/// (`dir/mod.rs`, `dir.rs` or the crate root `dir/lib.rs` declares `dir/name.rs`, or the
+/// folder `dir/name/`, given as `dir/name/`, whose files are all test code).
 fn test_only_files(files: &[(String, String)]) -> Vec<String> {
     let mut out = Vec::new();
     for (f, t) in files {
-        let dir =
-            f.strip_suffix("/mod.rs").map(str::to_string).unwrap_or_else(|| f.trim_end_matches(".rs").to_string());
+        // A crate root (`lib.rs`, `main.rs`) and `mod.rs` declare their siblings.
+        let dir = ["/mod.rs", "/lib.rs", "/main.rs"]
+            .iter()
+            .find_map(|end| f.strip_suffix(end))
+            .map(str::to_string)
+            .unwrap_or_else(|| f.trim_end_matches(".rs").to_string());
         let lines: Vec<&str> = t.lines().map(str::trim).collect();
         for w in lines.windows(2) {
             if w[0] != "#[cfg(test)]" {
@@ -86,6 +97,7 @@ fn test_only_files(files: &[(String, String)]) -> Vec<String> {
             let name = w[1].strip_prefix("pub(crate) ").unwrap_or(w[1]);
             if let Some(name) = name.strip_prefix("mod ").and_then(|n| n.strip_suffix(';')) {
                 out.push(format!("{dir}/{name}.rs"));
+                out.push(format!("{dir}/{name}/"));
             }
         }
     }
@@ -119,10 +131,10 @@ fn hits(file: &str, text: &str, words: &[&str]) -> Vec<String> {
 fn only_smt_names_z3() {
     let bad: Vec<String> = code_sources()
         .iter()
-        .filter(|(f, _)| !f.starts_with("checker/smt/"))
+        .filter(|(f, _)| !f.starts_with("checker/verify/src/smt/"))
         .flat_map(|(f, t)| hits(f, t, &["z3"]))
         .collect();
-    assert!(bad.is_empty(), "only checker/smt/ may name z3 (ARCHITECTURE.md):\n{}", bad.join("\n"));
+    assert!(bad.is_empty(), "only checker/verify/src/smt/ may name z3 (ARCHITECTURE.md):\n{}", bad.join("\n"));
 }
 
 #[test]
@@ -149,16 +161,19 @@ fn only_the_io_edge_does_io() {
 /// The crates only the geometry engine may name (rule (e)).
 const GEOMETRY_CRATES: &[&str] = &["parry3d", "nalgebra", "urdf_rs", "stl_io", "tobj", "roxmltree"];
 
+/// The geometry engine's folder.
+const GEOMETRY: &str = "checker/verify/src/geometry/";
+
 /// Crates of [`GEOMETRY_CRATES`] that one more folder may name: the MAVLink dialect reader
 /// reads XML with roxmltree too.
-const ALSO_ALLOWED: &[(&str, &str)] = &[("roxmltree", "checker/dialect/")];
+const ALSO_ALLOWED: &[(&str, &str)] = &[("roxmltree", "checker/core/src/dialect/")];
 
 #[test]
 fn only_geometry_names_the_geometry_crates() {
     let files = code_sources();
     let bad: Vec<String> = files
         .iter()
-        .filter(|(f, _)| !f.starts_with("checker/geometry/"))
+        .filter(|(f, _)| !f.starts_with(GEOMETRY))
         .flat_map(|(f, t)| {
             let words: Vec<&str> = GEOMETRY_CRATES
                 .iter()
@@ -170,15 +185,15 @@ fn only_geometry_names_the_geometry_crates() {
         .collect();
     assert!(
         bad.is_empty(),
-        "only checker/geometry/ may name parry3d, nalgebra, urdf_rs, stl_io, tobj, roxmltree \
-         (and checker/dialect/ roxmltree) (ARCHITECTURE.md); use the engine's own types and functions:\n{}",
+        "only {GEOMETRY} may name parry3d, nalgebra, urdf_rs, stl_io, tobj, roxmltree \
+         (and checker/core/src/dialect/ roxmltree) (ARCHITECTURE.md); use the engine's own types and functions:\n{}",
         bad.join("\n")
     );
     // The rule is not vacuous: the engine does name each of them.
     for w in GEOMETRY_CRATES {
         assert!(
-            files.iter().any(|(f, t)| f.starts_with("checker/geometry/") && !hits(f, t, &[w]).is_empty()),
-            "checker/geometry/ names no `{w}`: is the rule's word list stale?"
+            files.iter().any(|(f, t)| f.starts_with(GEOMETRY) && !hits(f, t, &[w]).is_empty()),
+            "{GEOMETRY} names no `{w}`: is the rule's word list stale?"
         );
     }
 }
@@ -186,12 +201,67 @@ fn only_geometry_names_the_geometry_crates() {
 #[test]
 fn only_render_knows_formats_and_colours() {
     let words = ["serde_json", "termcolor", "codespan", "NO_COLOR"];
-    let bad: Vec<String> =
-        code_sources().iter().filter(|(f, _)| f != "checker/render.rs").flat_map(|(f, t)| hits(f, t, &words)).collect();
+    let bad: Vec<String> = code_sources()
+        .iter()
+        .filter(|(f, _)| f != "checker/cli/render.rs")
+        .flat_map(|(f, t)| hits(f, t, &words))
+        .collect();
     assert!(
         bad.is_empty(),
-        "only checker/render.rs builds JSON and decides colour (ARCHITECTURE.md); return data and let it \
+        "only checker/cli/render.rs builds JSON and decides colour (ARCHITECTURE.md); return data and let it \
          render:\n{}",
+        bad.join("\n")
+    );
+}
+
+/// The crates no manifest of the core may name (rule (g)): the solver, the geometry engine
+/// and its readers, and the other crates of mochi.
+const NOT_IN_THE_CORE: &[&str] =
+    &["z3", "z3-sys", "parry3d", "parry3d-f64", "nalgebra", "urdf-rs", "stl_io", "tobj", "mochi-verify", "mochi"];
+
+/// What the core's code may not name, its tests included (rule (g)): the file system and
+/// the crates of the verifier and the command line.
+const NOT_IN_THE_CORE_CODE: &[&str] = &["std::fs", "File::", "mochi_verify", "mochi::"];
+
+#[test]
+fn the_core_depends_on_no_solver_no_geometry_and_no_file_system() {
+    let manifest = std::fs::read_to_string(root().join("checker/core/Cargo.toml")).expect("read the core's manifest");
+    // The dependency tables' keys: `name = ...` or `name.workspace = true` under a
+    // `[...dependencies]` header.
+    let mut deps = Vec::new();
+    let mut in_deps = false;
+    for line in manifest.lines().map(str::trim) {
+        if line.starts_with('[') {
+            in_deps = line.trim_matches(['[', ']']).ends_with("dependencies");
+            continue;
+        }
+        let key = line.split(['=', '.', ' ']).next().unwrap_or("");
+        if in_deps && !key.is_empty() && !key.starts_with('#') {
+            deps.push(key.to_string());
+        }
+    }
+    assert!(deps.iter().any(|d| d == "num-rational"), "the core's dependencies were not read: {deps:?}");
+    let bad: Vec<&String> = deps.iter().filter(|d| NOT_IN_THE_CORE.contains(&d.as_str())).collect();
+    assert!(
+        bad.is_empty(),
+        "mochi-core may not depend on {bad:?} (ARCHITECTURE.md, the core has no solver and no geometry engine)"
+    );
+    let files: Vec<(String, String)> = sources().into_iter().filter(|(f, _)| f.starts_with("checker/core/")).collect();
+    assert!(files.len() > 20, "found only {} files of the core", files.len());
+    let bad: Vec<String> = files
+        .iter()
+        .flat_map(|(f, t)| {
+            t.lines()
+                .enumerate()
+                .map(|(i, l)| (i + 1, l.find("//").map_or(l, |at| &l[..at])))
+                .filter(|(_, l)| NOT_IN_THE_CORE_CODE.iter().any(|w| mentions(l, w)))
+                .map(move |(n, l)| format!("{f}:{n}: {}", l.trim()))
+        })
+        .collect();
+    assert!(
+        bad.is_empty(),
+        "the core reads no file and names no verifier (ARCHITECTURE.md): take text or bytes from \
+         the caller, and put tests that need the pipeline in checker/verify/src/pipeline_tests/:\n{}",
         bad.join("\n")
     );
 }
@@ -323,14 +393,14 @@ fn names(text: &str, segment: &str) -> bool {
 /// The module files a module path resolves to, and the segments left after the last
 /// module (items: functions, types, tests), which must be named in those files. `None`
 /// when the first segment is no module of the library (a type's path, `Expr::map`).
-fn resolve_module(path: &str, modules: &[String]) -> Option<Result<(), String>> {
-    let path = path.strip_prefix("crate::").or_else(|| path.strip_prefix("mochi::")).unwrap_or(path);
+fn resolve_module(path: &str, modules: &[(String, PathBuf)]) -> Option<Result<(), String>> {
+    let path = ["crate::", "mochi::", "mochi_core::", "mochi_verify::"]
+        .iter()
+        .find_map(|p| path.strip_prefix(p))
+        .unwrap_or(path);
     let path = path.strip_suffix("()").unwrap_or(path);
     let segments: Vec<&str> = path.split("::").collect();
-    if !modules.iter().any(|m| m == segments[0]) {
-        return None;
-    }
-    let mut dir = root().join("checker");
+    let (_, mut dir) = modules.iter().find(|(m, _)| m == segments[0])?.clone();
     let mut files: Vec<PathBuf> = Vec::new();
     let mut rest = &segments[..];
     while let Some((first, tail)) = rest.split_first() {
@@ -367,7 +437,13 @@ fn resolve_module(path: &str, modules: &[String]) -> Option<Result<(), String>> 
 /// file names (`scope.rs`), corpus names (`E0316-guards-about-shadowed-value`, `E0408-*`),
 /// module paths (`space::enclose`, `wf::scope::refined_tests`), and links to files and
 /// headings.
-fn stale_names(file: &str, md: &str, repo: &[String], docs: &[(String, String)], modules: &[String]) -> Vec<String> {
+fn stale_names(
+    file: &str,
+    md: &str,
+    repo: &[String],
+    docs: &[(String, String)],
+    modules: &[(String, PathBuf)],
+) -> Vec<String> {
     let mut bad = Vec::new();
     let exists = |p: &str| repo.iter().any(|r| r == p || r.ends_with(&format!("/{p}")));
     for span in code_spans(md) {
@@ -461,10 +537,20 @@ fn stale_names(file: &str, md: &str, repo: &[String], docs: &[(String, String)],
     bad
 }
 
-/// The modules the library declares (`pub mod name;` in `checker/lib.rs`).
-fn library_modules() -> Vec<String> {
-    let lib = std::fs::read_to_string(root().join("checker/lib.rs")).expect("read lib.rs");
-    lib.lines().filter_map(|l| l.trim().strip_prefix("pub mod ")?.strip_suffix(';').map(str::to_string)).collect()
+/// The modules of mochi's crates (`pub mod name;` in each crate root), each with the folder
+/// of the crate's sources: `mochi::x` names the same module as `mochi_core::x` or
+/// `mochi_verify::x`, whichever declares it.
+fn library_modules() -> Vec<(String, PathBuf)> {
+    let mut out = Vec::new();
+    for dir in ["checker/core/src", "checker/verify/src", "checker/cli"] {
+        let lib = std::fs::read_to_string(root().join(dir).join("lib.rs")).expect("read lib.rs");
+        out.extend(
+            lib.lines()
+                .filter_map(|l| l.trim().strip_prefix("pub mod ")?.strip_suffix(';'))
+                .map(|m| (m.to_string(), root().join(dir))),
+        );
+    }
+    out
 }
 
 /// Every path, file, corpus file, module and link that ARCHITECTURE.md and `docs/` name
@@ -476,16 +562,16 @@ fn the_map_names_only_what_exists() {
     assert!(bad.is_empty(), "ARCHITECTURE.md and docs/ name what does not exist; fix the text:\n{}", bad.join("\n"));
     // Not vacuous: the map names paths and modules, and they are read.
     let spans: Vec<String> = docs.iter().flat_map(|(_, t)| code_spans(t)).collect();
-    assert!(spans.iter().any(|s| s == "checker/library.rs") && spans.iter().any(|s| s == "space::enclose"));
+    assert!(spans.iter().any(|s| s == "checker/verify/src/library.rs") && spans.iter().any(|s| s == "space::enclose"));
 }
 
 /// The check itself finds each kind of stale name.
 #[test]
 fn the_map_check_finds_what_does_not_exist() {
     let (repo, modules) = (repository_paths(), library_modules());
-    let md = "# Title\n\nSee `checker/smt/nowhere.rs`, `smt/goals/nowhere/`, `typeck.rs`, `space::no_such_module`, \
+    let md = "# Title\n\nSee `checker/verify/src/smt/nowhere.rs`, `smt/goals/nowhere/`, `typeck.rs`, `space::no_such_module`, \
               `wf::scope::no_such_test`, `E0999-no-such-file`, [a](#no-heading) and [b](docs/none.md).\n\
-              These exist: `checker/smt/key.rs`, `smt/goals/geo/`, `scope.rs`, `space::enclose`, \
+              These exist: `checker/verify/src/smt/key.rs`, `smt/goals/geo/`, `scope.rs`, `space::enclose`, \
               `E0316-guards-about-shadowed-value`, `E0408-*`, `Expr::map`, [c](#title).\n";
     let bad = stale_names("ARCHITECTURE.md", md, &repo, &[], &modules);
     assert_eq!(bad.len(), 8, "{bad:#?}");
