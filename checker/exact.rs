@@ -473,7 +473,7 @@ fn from_f64(v: f64) -> Option<Rat> {
 
 /// `sqrt` of an interval of non-negative numbers: exact for perfect squares, otherwise
 /// a rational enclosure whose bounds are checked by squaring.
-fn sqrt(x: &Num) -> Result<Num, String> {
+pub fn sqrt(x: &Num) -> Result<Num, String> {
     if x.lo.is_negative() {
         return Err("the square root of a number that may be negative".into());
     }
@@ -513,6 +513,18 @@ fn root_bound(v: &Rat, upper: bool) -> Result<Rat, String> {
 pub fn pi() -> Num {
     let d = BigInt::from(10u8).pow(20);
     let lo = BigInt::parse_bytes(b"314159265358979323846", 10).expect("literal");
+    let hi = &lo + BigInt::one();
+    Num::range(Rat::new(lo, d.clone()), Rat::new(hi, d))
+}
+
+/// π as an interval 1e-50 wide (π = 3.14159265358979323846264338327950288419716939937510
+/// 58209...), for confirming a witness (`smt/confirm.rs`): narrow enough that
+/// a comparison with π (or with `sin`/`cos` of a multiple of it, enclosed to 1e-40) is
+/// decided when the two sides differ by more than the enclosure, and left undecided
+/// otherwise: never a point.
+pub fn pi_tight() -> Num {
+    let d = BigInt::from(10u8).pow(50);
+    let lo = BigInt::parse_bytes(b"314159265358979323846264338327950288419716939937510", 10).expect("literal");
     let hi = &lo + BigInt::one();
     Num::range(Rat::new(lo, d.clone()), Rat::new(hi, d))
 }
