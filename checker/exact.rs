@@ -473,7 +473,7 @@ fn from_f64(v: f64) -> Option<Rat> {
 
 /// `sqrt` of an interval of non-negative numbers: exact for perfect squares, otherwise
 /// a rational enclosure whose bounds are checked by squaring.
-pub fn sqrt(x: &Num) -> Result<Num, String> {
+fn sqrt(x: &Num) -> Result<Num, String> {
     if x.lo.is_negative() {
         return Err("the square root of a number that may be negative".into());
     }
@@ -486,6 +486,24 @@ pub fn sqrt(x: &Num) -> Result<Num, String> {
     let lo = root_bound(&x.lo, false)?;
     let hi = root_bound(&x.hi, true)?;
     Ok(Num { lo, hi })
+}
+
+/// `sqrt` of an interval of non-negative numbers to 1e-40 or better, from integer square
+/// roots: `sqrt(n / d) = sqrt(n d) / d`, scaled by 10^40 and rounded outward. For
+/// confirming a witness (`smt/confirm.rs`), where [`sqrt`]'s enclosure (as wide as 1e-12)
+/// leaves close comparisons undecided.
+pub fn sqrt_tight(x: &Num) -> Result<Num, String> {
+    if x.lo.is_negative() {
+        return Err("the square root of a number that may be negative".into());
+    }
+    let scale = BigInt::from(10u8).pow(40);
+    let root = |v: &Rat, up: bool| -> Rat {
+        let m = v.numer() * v.denom() * &scale * &scale;
+        let r = m.sqrt();
+        let r = if up && &r * &r != m { r + BigInt::one() } else { r };
+        Rat::new(r, v.denom() * &scale)
+    };
+    Ok(Num { lo: root(&x.lo, false), hi: root(&x.hi, true) })
 }
 
 /// A rational `s >= 0` with `s^2 <= v` (`upper = false`) or `s^2 >= v` (`upper`).

@@ -1685,3 +1685,49 @@ choreography G = dt<A: go>. end;
         assert_eq!(r.verdict, Verdict::Verified, "post: {post}: {:?}", codes(&r));
     }
 }
+
+/// The confirmation of sat witnesses, over many constants: for each irrational constant
+/// `e` (sin, cos, sqrt, pi and products of them at rational arguments), `d` the nearest
+/// double to it printed with 17 digits (never `e` itself), a postcondition `x == e && x
+/// == d` has no real solution and must not verify, while `x == e` and `x == e` within
+/// 1e-12 of `d` must (the first would be vacuous, the others are honest).
+#[test]
+fn every_irrational_constant_is_told_apart_from_its_double() {
+    let src = |post: &str| {
+        format!(
+            "robot R {{ state x: real; }}
+motion R.go {{
+  interruptible: false;
+  pre: x == 0;
+  guarantee: true;
+  post: {post};
+  footprint(px, py, pz): px == x && py == 0 && pz == 0;
+  duration: [1, 1];
+}}
+system S {{ participant A: R {{ init: x == 0; at: pose(0, 0, 0); }} }}
+choreography G = dt<A: go>. end;
+"
+        )
+    };
+    let constants: [(&str, f64); 10] = [
+        ("sin(0.3)", 0.3f64.sin()),
+        ("cos(2)", 2f64.cos()),
+        ("sin(-1.5)", (-1.5f64).sin()),
+        ("cos(0.25) * sin(0.25)", 0.25f64.cos() * 0.25f64.sin()),
+        ("pi / 3", std::f64::consts::PI / 3.0),
+        ("sqrt(3)", 3f64.sqrt()),
+        ("sqrt(2) + pi", 2f64.sqrt() + std::f64::consts::PI),
+        ("sin(pi / 5)", (std::f64::consts::PI / 5.0).sin()),
+        ("2 * cos(0.1) - 1", 2.0 * 0.1f64.cos() - 1.0),
+        ("sin(7)", 7f64.sin()),
+    ];
+    for (e, d) in constants {
+        let d = format!("{d:.17e}");
+        let r = check(&src(&format!("x == {e} && x == {d}")));
+        assert_ne!(r.verdict, Verdict::Verified, "x == {e} && x == {d}: {:?}", codes(&r));
+        for post in [format!("x == {e}"), format!("x == {e} && {d} - 1e-12 <= x && x <= {d} + 1e-12")] {
+            let r = check(&src(&post));
+            assert_eq!(r.verdict, Verdict::Verified, "post: {post}: {:?}", codes(&r));
+        }
+    }
+}

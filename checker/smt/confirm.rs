@@ -13,7 +13,7 @@
 //! 1. **Atoms.** `pi`, each `sin e`/`cos e` and each `sqrt e` (where `e` is not negative)
 //!    stand for their real values, which are irrational in general. Each is an *atom* with
 //!    an exact enclosure ([`crate::exact::pi_tight`], 1e-50 wide; [`crate::exact::trig`] at
-//!    the argument's value, 1e-40 wide for moderate arguments; [`crate::exact::sqrt`]) and
+//!    the argument's value, 1e-40 wide for moderate arguments; [`crate::exact::sqrt_tight`]) and
 //!    the identities it satisfies: `sin e² = 1 - cos e²`, `sqrt e² = e`.
 //! 2. **Definitions.** A top-level equation `x == t` of a variable `x` whose right side
 //!    reads an atom (directly or through another definition, without a cycle) *defines*
@@ -319,9 +319,10 @@ impl Eval<'_> {
         let mut out = Poly::constant(Rat::zero());
         let mut work: Vec<(Mono, Rat)> = p.0.into_iter().collect();
         while let Some((m, c)) = work.pop() {
-            let Some(i) = m.iter().position(|&(a, e)| {
-                e >= 2 && matches!(self.atoms[a].kind, AtomKind::Sin(_) | AtomKind::Sqrt(_))
-            }) else {
+            let Some(i) = m
+                .iter()
+                .position(|&(a, e)| e >= 2 && matches!(self.atoms[a].kind, AtomKind::Sin(_) | AtomKind::Sqrt(_)))
+            else {
                 out = out.add(&Poly(BTreeMap::from([(m, c)])));
                 continue;
             };
@@ -407,7 +408,9 @@ impl Eval<'_> {
 
     fn equal(&self, a: &Val, b: &Val) -> Result<Tri, String> {
         match (a, b) {
-            (Val::B(x), Val::B(y)) => Ok(if *x == Tri::Unknown || *y == Tri::Unknown { Tri::Unknown } else { Tri::of(x == y) }),
+            (Val::B(x), Val::B(y)) => {
+                Ok(if *x == Tri::Unknown || *y == Tri::Unknown { Tri::Unknown } else { Tri::of(x == y) })
+            }
             (Val::B(_), _) | (_, Val::B(_)) => Err("`=` between a truth value and a number".into()),
             _ => Ok(self.compare(a, b, false)?.and(self.compare(b, a, false)?)),
         }
@@ -415,9 +418,7 @@ impl Eval<'_> {
 
     fn compute(&mut self, t: &Dynamic) -> Result<Val, String> {
         match key::view(t) {
-            Node::Numeral(s) => {
-                Ok(Val::P(Poly::constant(numeral(&s).ok_or_else(|| format!("the numeral `{s}`"))?)))
-            }
+            Node::Numeral(s) => Ok(Val::P(Poly::constant(numeral(&s).ok_or_else(|| format!("the numeral `{s}`"))?))),
             Node::Const => self.constant(t),
             Node::Other(s) => Err(format!("the term `{s}`")),
             Node::App(op, args) => self.app(&op, &args),
@@ -456,15 +457,15 @@ impl Eval<'_> {
                     if let Val::P(p) = &v {
                         if let Some(c) = p.as_constant() {
                             // A perfect square stays exact.
-                            let r = exact::sqrt(&Num::exact(c))?;
+                            let r = exact::sqrt_tight(&Num::exact(c))?;
                             if let Some(r) = r.value() {
                                 return Ok(Val::P(Poly::constant(r.clone())));
                             }
                         }
-                        let value = exact::sqrt(&a)?;
+                        let value = exact::sqrt_tight(&a)?;
                         return Ok(self.new_atom(t, AtomKind::Sqrt(p.clone()), value));
                     }
-                    Ok(Val::N(exact::sqrt(&a)?))
+                    Ok(Val::N(exact::sqrt_tight(&a)?))
                 } else if a.hi.is_negative() {
                     self.model_value(t)
                 } else {

@@ -25,11 +25,11 @@
 //! - **No IO.** Dumps and progress go through callbacks in [`SmtConfig`] ([`DumpSink`],
 //!   [`ProgressSink`]); the IO edge provides them (`crate::io`).
 
+mod confirm;
 mod encode;
 pub mod goals;
 mod guess;
 pub mod hard;
-mod confirm;
 mod key;
 pub mod pool;
 pub mod replay;
