@@ -23,8 +23,8 @@
 //! 3. **Evaluation.** Every assertion and every side condition that is not an enclosure
 //!    must evaluate to *true*. Numbers are polynomials with rational coefficients in the
 //!    atoms, reduced by the identities, so that a witness that rests on `cos² + sin² = 1`
-//!    (an end state `x = x0 + d cos t`, `y = y0 + d sin t` checked against `(x - x0) cos t
-//!    + (y - y0) sin t <= d`) is decided exactly; a comparison whose difference does not
+//!    (an end state `x = x0 + d cos t`, `y = y0 + d sin t` checked against
+//!    `(x - x0) cos t + (y - y0) sin t <= d`) is decided exactly; a comparison whose difference does not
 //!    reduce to a constant is decided by the atoms' enclosures, and otherwise undecided.
 //!    An operation outside polynomials (a division by a non-constant, `if` on an
 //!    undecided condition) falls back to an interval of the value.
