@@ -488,6 +488,24 @@ fn sqrt(x: &Num) -> Result<Num, String> {
     Ok(Num { lo, hi })
 }
 
+/// `sqrt` of an interval of non-negative numbers to 1e-40 or better, from integer square
+/// roots: `sqrt(n / d) = sqrt(n d) / d`, scaled by 10^40 and rounded outward. For
+/// confirming a witness (`smt/confirm.rs`), where [`sqrt`]'s enclosure (as wide as 1e-12)
+/// leaves close comparisons undecided.
+pub fn sqrt_tight(x: &Num) -> Result<Num, String> {
+    if x.lo.is_negative() {
+        return Err("the square root of a number that may be negative".into());
+    }
+    let scale = BigInt::from(10u8).pow(40);
+    let root = |v: &Rat, up: bool| -> Rat {
+        let m = v.numer() * v.denom() * &scale * &scale;
+        let r = m.sqrt();
+        let r = if up && &r * &r != m { r + BigInt::one() } else { r };
+        Rat::new(r, v.denom() * &scale)
+    };
+    Ok(Num { lo: root(&x.lo, false), hi: root(&x.hi, true) })
+}
+
 /// A rational `s >= 0` with `s^2 <= v` (`upper = false`) or `s^2 >= v` (`upper`).
 fn root_bound(v: &Rat, upper: bool) -> Result<Rat, String> {
     if v.is_zero() {
@@ -513,6 +531,18 @@ fn root_bound(v: &Rat, upper: bool) -> Result<Rat, String> {
 pub fn pi() -> Num {
     let d = BigInt::from(10u8).pow(20);
     let lo = BigInt::parse_bytes(b"314159265358979323846", 10).expect("literal");
+    let hi = &lo + BigInt::one();
+    Num::range(Rat::new(lo, d.clone()), Rat::new(hi, d))
+}
+
+/// π as an interval 1e-50 wide (π = 3.14159265358979323846264338327950288419716939937510
+/// 58209...), for confirming a witness (`smt/confirm.rs`): narrow enough that
+/// a comparison with π (or with `sin`/`cos` of a multiple of it, enclosed to 1e-40) is
+/// decided when the two sides differ by more than the enclosure, and left undecided
+/// otherwise: never a point.
+pub fn pi_tight() -> Num {
+    let d = BigInt::from(10u8).pow(50);
+    let lo = BigInt::parse_bytes(b"314159265358979323846264338327950288419716939937510", 10).expect("literal");
     let hi = &lo + BigInt::one();
     Num::range(Rat::new(lo, d.clone()), Rat::new(hi, d))
 }

@@ -120,6 +120,13 @@ pub struct Encoder<'p> {
     /// Free variables by their user-facing name, for the counterexample.
     vars: BTreeMap<String, Term>,
     side: Vec<Bool>,
+    /// How many of `side`'s conditions are enclosures of `sin`, `cos` or `pi`, by their
+    /// positions in `side` ([`Encoder::enclosing`]): true of the real functions, but a
+    /// model of them need not be the functions' values.
+    enclosing: Vec<usize>,
+    /// Each `sqrt`'s fresh real, its argument and the position of its definition in
+    /// `side`.
+    roots: Vec<(Real, Real, usize)>,
     frame: Option<Frame>,
     trig: Vec<TrigPair>,
     trig_by_arg: HashMap<String, usize>,
@@ -167,6 +174,8 @@ impl<'p> Encoder<'p> {
             prog,
             vars: BTreeMap::new(),
             side: Vec::new(),
+            enclosing: Vec::new(),
+            roots: Vec::new(),
             frame: None,
             trig: Vec::new(),
             trig_by_arg: HashMap::new(),
@@ -291,6 +300,44 @@ impl<'p> Encoder<'p> {
     /// the query.
     pub fn side_conditions(&self) -> impl Iterator<Item = &Bool> {
         self.side.iter()
+    }
+
+    /// A side condition that encloses `sin`, `cos` or `pi` (see `enclosing`).
+    fn enclose(&mut self, b: Bool) {
+        self.enclosing.push(self.side.len());
+        self.side.push(b);
+    }
+
+    /// The side conditions that are neither enclosures nor `sqrt`'s definitions
+    /// ([`Encoder::root_terms`]): facts of the query (requirements such as `t >= 0`),
+    /// which a witness must satisfy like its assertions.
+    pub fn exact_side_conditions(&self) -> impl Iterator<Item = &Bool> {
+        self.side
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| !self.enclosing.contains(i) && !self.roots.iter().any(|r| r.2 == *i))
+            .map(|(_, b)| b)
+    }
+
+    /// Each `sqrt e` of the query, as its fresh real and `e`: defined by `e >= 0 => (s >=
+    /// 0 && s * s == e)`.
+    pub fn root_terms(&self) -> impl Iterator<Item = (&Real, &Real)> {
+        self.roots.iter().map(|(s, a, _)| (s, a))
+    }
+
+    /// The query's `pi`, if it reads it.
+    pub fn pi_term(&self) -> Option<&Real> {
+        self.pi.as_ref()
+    }
+
+    /// The query's `(argument, sin, cos)` triples, one per trigonometric argument.
+    pub fn trig_terms(&self) -> impl Iterator<Item = (&Real, &Real, &Real)> {
+        self.trig.iter().map(|t| (&t.arg, &t.sin, &t.cos))
+    }
+
+    /// Whether the query reads `sin` or `cos`.
+    pub fn has_trig(&self) -> bool {
+        !self.trig.is_empty()
     }
 
     /// Adds a constraint that every model must satisfy (for example `t >= 0`).
@@ -667,6 +714,7 @@ impl<'p> Encoder<'p> {
                 let a = as_real(arg(self, 0)?)?;
                 let s = Real::fresh_const("sqrt");
                 let def = Bool::and(&[s.ge(zero()), Real::mul(&[s.clone(), s.clone()]).eq(&a)]);
+                self.roots.push((s.clone(), a.clone(), self.side.len()));
                 self.side.push(a.ge(zero()).implies(&def));
                 Term::R(s)
             }
@@ -725,7 +773,7 @@ impl<'p> Encoder<'p> {
         let p = Real::fresh_const("pi");
         let lo = Real::from_rational_str(PI_LO.0, PI_LO.1).expect("literal");
         let hi = Real::from_rational_str(PI_HI.0, PI_HI.1).expect("literal");
-        self.side.push(Bool::and(&[p.ge(&lo), p.le(&hi)]));
+        self.enclose(Bool::and(&[p.ge(&lo), p.le(&hi)]));
         self.pi = Some(p.clone());
         p
     }
@@ -765,7 +813,7 @@ impl<'p> Encoder<'p> {
         }
         let (s, c) = (Real::fresh_const("sin"), Real::fresh_const("cos"));
         let unit = Real::add(&[Real::mul(&[s.clone(), s.clone()]), Real::mul(&[c.clone(), c.clone()])]).eq(one());
-        self.side.push(unit);
+        self.enclose(unit);
         // A constant argument, written as one or bound to a parameter (the encoding of
         // `go(0.7853981633974483)`'s parameter simplifies to that rational): enclose its
         // value. The rational is read exactly, whatever its size.
@@ -780,7 +828,7 @@ impl<'p> Encoder<'p> {
             for (f, t) in [(Builtin::Sin, &s), (Builtin::Cos, &c)] {
                 let b = bounds::trig(f, Some(iv));
                 if let (Some(lo), Some(hi)) = (real_of_f64(b.lo), real_of_f64(b.hi)) {
-                    self.side.push(if b.lo == b.hi { t.eq(&lo) } else { Bool::and(&[t.ge(&lo), t.le(&hi)]) });
+                    self.enclose(if b.lo == b.hi { t.eq(&lo) } else { Bool::and(&[t.ge(&lo), t.le(&hi)]) });
                 }
             }
         } else {
@@ -796,7 +844,7 @@ impl<'p> Encoder<'p> {
             let s_cubic = Real::sub(&[a.clone(), Real::mul(&[sixth, a3])]);
             let zero = Int::from_i64(0).to_real();
             let m1 = Int::from_i64(-1).to_real();
-            self.side.push(Bool::and(&[
+            self.enclose(Bool::and(&[
                 c.ge(&c_lo),
                 c.le(&c_hi),
                 a.ge(&zero).implies(Bool::and(&[s.ge(&s_cubic), s.le(&a)])),

@@ -22,7 +22,8 @@
 //! (47% of the instructions of the 100-lane benchmark, the printing another 21%), and
 //! nothing in the `z3` crate reads a term's structure without wrapping every node. This
 //! module is the one place mochi calls Z3's C API directly (`z3-sys`, the crate `z3` is
-//! built on), read-only.
+//! built on), read-only; [`view`] gives the same access, node by node, to
+//! [`super::confirm`].
 
 use super::encode::Logic;
 use super::goals::Query;
@@ -258,6 +259,57 @@ pub(super) unsafe fn decl_name(c: Z3_context, d: Z3_func_decl) -> String {
 /// `d` is a live declaration of `c`.
 unsafe fn decl_text(c: Z3_context, d: Z3_func_decl) -> String {
     unsafe { string(z3_sys::Z3_func_decl_to_string(c, d)) }
+}
+
+/// One node of a term, read through Z3's C API for [`super::confirm`] (this module is the
+/// one place that reads terms' structure).
+pub(super) enum Node {
+    /// A numeral: its exact value as Z3 writes it (`3`, `-7/2`).
+    Numeral(String),
+    /// A free constant (a variable of the query).
+    Const,
+    /// An interpreted operator (`+`, `<=`, `and`, `ite`, ...) by its name, and its
+    /// arguments.
+    App(String, Vec<z3::ast::Dynamic>),
+    /// Anything else (a quantifier, a bound variable), as Z3 prints it.
+    Other(String),
+}
+
+/// Z3's id of a term, unique among the live terms of its context.
+pub(super) fn id(t: &z3::ast::Dynamic) -> u32 {
+    let c = t.get_ctx().get_z3_context();
+    // SAFETY: `t` is a live term of the live context `c`.
+    unsafe { z3_sys::Z3_get_ast_id(c, t.get_z3_ast()) }
+}
+
+/// The top node of `t`.
+pub(super) fn view(t: &z3::ast::Dynamic) -> Node {
+    let ctx = t.get_ctx();
+    let c = ctx.get_z3_context();
+    let a = t.get_z3_ast();
+    // SAFETY: as in `Walk::node`: `a` is a live term of the live context `c`, only
+    // read-only accessors are called, each on a node of the kind it requires, and every
+    // child is wrapped (which takes a reference on it) before it is returned.
+    unsafe {
+        match Z3_get_ast_kind(c, a) {
+            NUMERAL_AST => Node::Numeral(string(z3_sys::Z3_get_numeral_string(c, a))),
+            APP_AST => {
+                let Some(app) = z3_sys::Z3_to_app(c, a) else { return Node::Other(t.to_string()) };
+                let Some(d) = z3_sys::Z3_get_app_decl(c, app) else { return Node::Other(t.to_string()) };
+                let n = z3_sys::Z3_get_app_num_args(c, app);
+                if Z3_get_decl_kind(c, d) == uninterpreted() {
+                    return if n == 0 { Node::Const } else { Node::Other(t.to_string()) };
+                }
+                let mut args = Vec::with_capacity(n as usize);
+                for i in 0..n {
+                    let Some(arg) = z3_sys::Z3_get_app_arg(c, app, i) else { return Node::Other(t.to_string()) };
+                    args.push(<z3::ast::Dynamic as z3::ast::Ast>::wrap(ctx, arg));
+                }
+                Node::App(decl_name(c, d), args)
+            }
+            _ => Node::Other(t.to_string()),
+        }
+    }
 }
 
 #[cfg(test)]

@@ -25,6 +25,7 @@
 //! - **No IO.** Dumps and progress go through callbacks in [`SmtConfig`] ([`DumpSink`],
 //!   [`ProgressSink`]); the IO edge provides them (`crate::io`).
 
+mod confirm;
 mod encode;
 pub mod goals;
 mod guess;
@@ -888,26 +889,46 @@ impl Worker<'_> {
         pool::maybe_hang(&label);
         let mut result = solver.check();
         let mut timed_out = self.watchdog.disarm(seq);
-        // A sat question needs a genuine witness: when the model's sin/cos values are
-        // only the enclosure's, look for one with every trigonometric argument 0, where
-        // the enclosure is exact. (Counterexamples keep the stricter "unknown".)
-        if !model && matches!(result, z3::SatResult::Sat) && solver.get_model().is_some_and(|m| q.enc.spurious_trig(&m))
-        {
-            for pin in q.enc.trig_at_zero() {
-                solver.assert(&pin);
-            }
-            let seq = self.watchdog.arm(self.timeout);
-            result = match solver.check() {
-                z3::SatResult::Sat => z3::SatResult::Sat,
-                // No witness at 0: the original question stays open.
-                _ => z3::SatResult::Unknown,
+        // A sat question needs a genuine witness, and a model of a query that encloses
+        // `sin`, `cos` or `pi` may give them values the real functions do not take
+        // (`x == sin(1) && x == 0.8414709848078965` has such a model and no real
+        // solution). The witness is confirmed in exact arithmetic ([`confirm`]); failing
+        // that, one is looked for with every trigonometric argument 0, where the
+        // enclosures are exact, and confirmed the same way. Neither: unknown.
+        // (Counterexamples are replayed in exact arithmetic instead, [`replay`].)
+        let mut unconfirmed = None;
+        if !model && matches!(result, z3::SatResult::Sat) && q.enc.encloses() {
+            let first = match solver.get_model() {
+                Some(m) => confirm::confirm(&q, &m),
+                None => Err("the solver gave no model".into()),
             };
-            timed_out = self.watchdog.disarm(seq);
+            if let Err(why) = first {
+                let mut second = Err(why);
+                if q.enc.has_trig() {
+                    for pin in q.enc.trig_at_zero() {
+                        solver.assert(&pin);
+                    }
+                    let seq = self.watchdog.arm(self.timeout);
+                    let r = solver.check();
+                    timed_out |= self.watchdog.disarm(seq);
+                    if matches!(r, z3::SatResult::Sat) {
+                        if let Some(m) = solver.get_model() {
+                            second = confirm::confirm(&q, &m);
+                        }
+                    }
+                }
+                if let Err(why) = second {
+                    result = z3::SatResult::Unknown;
+                    unconfirmed = Some(why);
+                }
+            }
         }
         let answer = match result {
             z3::SatResult::Unsat => Answer::Unsat,
             z3::SatResult::Sat => match solver.get_model() {
-                Some(m) if q.enc.spurious_trig(&m) => Answer::Unknown(Why::Incomplete(
+                // (A sat question's witness was confirmed above, whatever values the
+                // model gives the enclosed functions.)
+                Some(m) if model && q.enc.spurious_trig(&m) => Answer::Unknown(Why::Incomplete(
                     "its counterexample gives sin/cos values the real functions do not take (the encoding encloses them)"
                         .into(),
                     Hard::of(&q),
@@ -928,6 +949,13 @@ impl Worker<'_> {
                 None => Answer::Sat { values: Vec::new(), overlap: None, bound: Vec::new(), exact: Default::default() },
             },
             z3::SatResult::Unknown if timed_out => Answer::Unknown(Why::Timeout(self.timeout, Hard::of(&q))),
+            z3::SatResult::Unknown if unconfirmed.is_some() => Answer::Unknown(Why::Incomplete(
+                format!(
+                    "its witness holds only of the encoding's enclosure of `sin`, `cos` or `pi`, not of the real functions' values ({})",
+                    unconfirmed.unwrap_or_default()
+                ),
+                Hard::of(&q),
+            )),
             z3::SatResult::Unknown => Answer::Unknown(Why::Incomplete(
                 solver.get_reason_unknown().unwrap_or_else(|| "unknown".into()),
                 Hard::of(&q),
