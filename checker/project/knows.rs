@@ -44,10 +44,7 @@ impl super::Projector<'_> {
     /// message between two other participants.
     fn foreign(&self, v: &Var) -> bool {
         match v {
-            Var::Value(id, _) => matches!(
-                self.prog.value(*id).origin,
-                ValueOrigin::Message { from, to } if from != self.role && to != self.role
-            ),
+            Var::Value(id, _) => self.prog.value(*id).origin.unheld_by(self.role),
             _ => false,
         }
     }
@@ -109,10 +106,7 @@ pub fn unheld_reads(prog: &Program, role: RoleId, t: &Local) -> Vec<String> {
     let mut read = |e: &Expr| {
         e.visit_vars(&mut |v, _| {
             if let Var::Value(id, name) = v {
-                let unheld = matches!(
-                    prog.value(*id).origin,
-                    ValueOrigin::Message { from, to } if from != role && to != role
-                );
+                let unheld = prog.value(*id).origin.unheld_by(role);
                 if unheld && !out.contains(name) {
                     out.push(name.clone());
                 }

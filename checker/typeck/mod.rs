@@ -309,9 +309,7 @@ impl State<'_> {
     /// `b` and relate payloads of different rounds (`n == b` and `m == b` give `n == m`).
     fn forget_foreign(&mut self, prog: &Program, role: RoleId) {
         let foreign = |v: &Var| match v {
-            Var::Value(id, _) => {
-                matches!(prog.value(*id).origin, ValueOrigin::Message { from, to } if from != role && to != role)
-            }
+            Var::Value(id, _) => prog.value(*id).origin.unheld_by(role),
             _ => false,
         };
         self.sigma.forget(&foreign);

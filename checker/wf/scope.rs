@@ -388,6 +388,7 @@ impl<'a> Contexts<'a> {
                 // but the protocol itself is there to establish it (a program may have no
                 // processes at all).
                 if !self.choice_firsts.contains(&m.loc.0) {
+                    observe(&mut sigma, &m.observed);
                     let e = enabled(self.prog, m);
                     if e.guard.is_some() || !e.refinement.is_true() {
                         self.obligations.push(Obligation {
@@ -432,6 +433,16 @@ impl<'a> Contexts<'a> {
                 cur
             }
             Global::Choice(branches, _) => {
+                // The deciding participant's snapshot, shared by the branches' first messages.
+                let mut snap: Vec<Observed> = Vec::new();
+                for m in branches.iter().filter_map(super::side::first_message) {
+                    for o in &m.observed {
+                        if !snap.iter().any(|x| x.value == o.value) {
+                            snap.push(o.clone());
+                        }
+                    }
+                }
+                observe(&mut sigma, &snap);
                 self.total_choice(branches, &sigma);
                 self.progress(branches, &sigma);
                 let mut out: Option<Sigma> = None;
@@ -894,6 +905,21 @@ impl<'a> Contexts<'a> {
             self.runs.truncate(marks.1);
             self.jumps.truncate(marks.2);
         }
+    }
+}
+
+/// A snapshot of observed values is taken (LANGUAGE.md, "Observed state"): each is a new
+/// value (what was known of the same binding site, an earlier round's snapshot, is
+/// forgotten) of which only its refinement is known: the field's wire range and float
+/// model and the stream's invariant. Nothing relates it to any other step's snapshot.
+fn observe(sigma: &mut Sigma, snap: &[Observed]) {
+    if snap.is_empty() {
+        return;
+    }
+    let ids: Vec<ValueId> = snap.iter().map(|o| o.value).collect();
+    sigma.forget_values(&ids);
+    for r in snap.iter().filter_map(|o| o.refinement.as_ref()) {
+        sigma.assume(&defined_and(r.clone()));
     }
 }
 
