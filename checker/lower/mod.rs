@@ -156,6 +156,8 @@ struct Lowerer {
     /// The participant deciding at the message being lowered (its guard and payload), where
     /// observed values are read: for the diagnostic of a read of a stream it does not see.
     deciding: Option<RoleId>,
+    /// Lowering a process body: an observed value read there is E0715 (not supported yet).
+    in_process: bool,
 }
 
 /// Whose variables an unqualified name may denote.

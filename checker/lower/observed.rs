@@ -164,6 +164,18 @@ impl Lowerer {
             s.to.iter().map(|r| self.prog.role_name(*r)).collect::<Vec<_>>().join(", "),
             s.label
         );
+        if self.in_process {
+            self.diags.push(
+                Diagnostic::error(
+                    Code::ObservedInProcess,
+                    span,
+                    format!("not supported yet: a process reads `{name}`, observed from `{text}`"),
+                )
+                .with_note("processes do not read streams yet; their local types may (a guard over the latest reading)")
+                .with_help("check the protocol alone (no `process` items), or let the process receive the reading in a payload field"),
+            );
+            return Some(());
+        }
         match self.deciding {
             Some(r) => {
                 let who = self.prog.role_name(r).to_string();
