@@ -269,6 +269,14 @@ codes! {
          motion's arguments are read by several participants or at several times, and an \
          observed value has no one value there. To carry a reading into the loop, send it: \
          `GCS -> UAV: MSG(field as h {h == relative_alt})` binds `h`, a value both ends hold.";
+    StepIsStreamed = "E0246", "a protocol step that a stream also carries",
+        "A `stream FROM -> TO: LABEL` says `FROM` sends `LABEL` to `TO` at any time, as \
+         telemetry that is no step of the session. A message `FROM -> TO: LABEL` of the \
+         choreography (the same label, or the same MAVLink message with and without a fixed \
+         command) would be indistinguishable on the wire from the stream's messages: a monitor \
+         could not tell the step from telemetry, and the session would advance on any of the \
+         stream's messages. Drop the step (read the stream's latest value in a guard instead), or \
+         the stream.";
     SelfMessage = "E0301", "message to oneself",
         "Def 4.1 requires `p != q` in `p -> q : l`. A participant cannot send a message to itself; \
          use a local computation in its process instead.";

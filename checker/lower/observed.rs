@@ -64,31 +64,49 @@ impl Lowerer {
                 if let Some((k, _)) = self.observed_name(&name).filter(|(k, _)| *k != idx) {
                     let first = self.prog.streams[k as usize].loc.0;
                     self.diags.push(
-                        Diagnostic::error(
-                            Code::Duplicate,
-                            span,
-                            format!("`{name}` is observed from two streams"),
-                        )
-                        .with_label(first, "the other stream")
-                        .with_help(format!("name one of them apart: `FIELD as NAME` (`{name} as other_{name}`)")),
+                        Diagnostic::error(Code::Duplicate, span, format!("`{name}` is observed from two streams"))
+                            .with_label(first, "the other stream")
+                            .with_help(format!("name one of them apart: `FIELD as NAME` (`{name} as other_{name}`)")),
                     );
                 }
             }
-            self.prog.streams.push(Stream {
-                from,
-                to,
-                label: st.label.name.clone(),
-                fields,
-                loc: Loc(st.span),
-            });
+            self.prog.streams.push(Stream { from, to, label: st.label.name.clone(), fields, loc: Loc(st.span) });
         }
+    }
+
+    /// E0246: the step `from -> to: label` at `span` is also carried by a stream.
+    pub(super) fn streamed_step(&mut self, from: RoleId, to: RoleId, label: &str, span: Span) {
+        let Some(s) = self
+            .prog
+            .streams
+            .iter()
+            .find(|s| s.from == from && s.to.contains(&to) && crate::hir::labels_overlap(&s.label, label))
+        else {
+            return;
+        };
+        let loc = s.loc.0;
+        let (f, t) = (self.prog.role_name(from).to_string(), self.prog.role_name(to).to_string());
+        self.diags.push(
+            Diagnostic::error(
+                Code::StepIsStreamed,
+                span,
+                format!("`{f} -> {t}: {label}` is a step, and `{f}` also streams `{label}` to `{t}`"),
+            )
+            .with_label(loc, "the stream")
+            .with_note("a stream's messages may come at any time: a monitor could not tell this step from them")
+            .with_help(
+                "read the stream's latest value in a guard instead of waiting for the message, or drop the stream",
+            ),
+        );
     }
 
     /// The stream and field that observe `name`, if any.
     pub(super) fn observed_name(&self, name: &str) -> Option<(u32, u32)> {
-        self.prog.streams.iter().enumerate().find_map(|(k, s)| {
-            s.fields.iter().position(|f| f.name == name).map(|j| (k as u32, j as u32))
-        })
+        self.prog
+            .streams
+            .iter()
+            .enumerate()
+            .find_map(|(k, s)| s.fields.iter().position(|f| f.name == name).map(|j| (k as u32, j as u32)))
     }
 
     /// Fresh snapshots of every field of every stream `reader` sees, each with its template's
@@ -203,5 +221,134 @@ impl Lowerer {
             ),
         }
         Some(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::diag::Code;
+    use crate::hir::{Global, ValueOrigin};
+    use crate::lower::tests::lower_src;
+
+    const SYS: &str = "system S { participant P; participant Q; participant R;
+        stream Q -> P, R: tick(h: int {0 <= h && h <= 100}, k: int); }";
+
+    fn codes(chor: &str) -> Vec<(Code, String)> {
+        let (_, d) = lower_src(&format!("{SYS} choreography G = {chor};"));
+        d.into_iter().map(|d| (d.code, d.message)).collect()
+    }
+
+    fn messages(g: &Global, out: &mut Vec<crate::hir::Msg>) {
+        match g {
+            Global::Msg(m) => out.push(m.clone()),
+            Global::Seq(gs, _) | Global::Choice(gs, _) | Global::Par(gs, _) => gs.iter().for_each(|g| messages(g, out)),
+            Global::Rec { body, .. } => messages(body, out),
+            _ => {}
+        }
+    }
+
+    #[test]
+    fn a_stream_is_parsed_with_its_receivers_and_fields() {
+        let (p, d) = lower_src(&format!("{SYS} choreography G = P -> Q: a. R -> Q: b. end;"));
+        assert!(d.is_empty(), "{d:?}");
+        let s = &p.streams[0];
+        assert_eq!((p.role_name(s.from), s.to.len(), s.label.as_str()), ("Q", 2, "tick"));
+        assert_eq!(s.fields.iter().map(|f| f.name.as_str()).collect::<Vec<_>>(), ["h", "k"]);
+        assert!(s.fields.iter().all(|f| matches!(p.value(f.value).origin, ValueOrigin::Stream { stream: 0 })));
+    }
+
+    #[test]
+    fn a_malformed_stream_is_a_syntax_error_at_the_token() {
+        let src = "system S { participant P; participant Q; stream Q P: tick; }";
+        let mut db = crate::source::SourceDb::new();
+        let id = db.add("t.chor", src);
+        let (_, d) = crate::syntax::parser::parse(id, src);
+        assert_eq!(d.len(), 1, "{d:?}");
+        assert_eq!(d[0].span.start as usize, src.find("P: tick").unwrap());
+    }
+
+    #[test]
+    fn each_message_reads_its_own_snapshot_and_a_choice_one() {
+        let (p, d) = lower_src(&format!(
+            "{SYS} choreography G = P -> Q: [h > 1] a. ( P -> Q: [h > 5] b. end + P -> Q: [h <= 5 && k == 0] c. R -> Q: [k > 0] e. end );"
+        ));
+        assert!(d.is_empty(), "{d:?}");
+        let mut ms = Vec::new();
+        messages(&p.choreography.as_ref().unwrap().body, &mut ms);
+        let ids = |i: usize| ms[i].observed.iter().map(|o| (o.name.clone(), o.value)).collect::<Vec<_>>();
+        assert_eq!(ids(0).len(), 1);
+        assert_ne!(ids(0)[0].1, ids(1)[0].1, "a later message reads a new value");
+        assert_eq!(ids(1)[0], ids(2)[0], "the branches of one choice share the reading of `h`");
+        assert_eq!(ids(2).len(), 2);
+        assert_eq!(ids(3).len(), 1);
+        assert_ne!(ids(3)[0].1, ids(2)[1].1, "R's reading is R's");
+        assert!(
+            matches!(p.value(ids(3)[0].1).origin, ValueOrigin::Observed { reader, stream: 0 } if p.role_name(reader) == "R")
+        );
+        // Each reading carries the stream's refinement over itself.
+        let r = ms[0].observed[0].refinement.as_ref().unwrap();
+        assert!(crate::hir::expr::mentions(r, &|v| matches!(v, crate::hir::Var::Value(id, _) if *id == ids(0)[0].1)));
+    }
+
+    #[test]
+    fn a_reading_is_only_where_its_reader_decides() {
+        // Not a receiver: E0305, at the read.
+        let c = codes("( Q -> P: [k > 0] a. end + Q -> P: [k <= 0] b. end )");
+        assert!(c.is_empty(), "the stream's sender reads its own state: {c:?}");
+        let (_, d) = lower_src(
+            "system S { participant P; participant Q; participant R; stream Q -> P: tick(h: int); }
+            choreography G = R -> Q: [h > 0] a. P -> R: b. end;",
+        );
+        assert_eq!(d.iter().map(|d| d.code).collect::<Vec<_>>(), [Code::GuardNotLocal]);
+        // Outside a message: E0245.
+        for chor in [
+            "mu t(n: int = h). P -> Q: a. t(n)",
+            "mu t(n: int = 0) decreases k. P -> Q: a. t(n)",
+            "mu t(n: int = 0). P -> Q: a. t(k)",
+        ] {
+            assert_eq!(
+                codes(chor).into_iter().map(|c| c.0).collect::<Vec<_>>(),
+                [Code::ObservedOutsideMessage],
+                "{chor}"
+            );
+        }
+        // A reading does not outlive its message.
+        assert_eq!(codes("P -> Q: [h > 0] a. mu t(n: int = h). P -> Q: b. end").len(), 1);
+    }
+
+    #[test]
+    fn a_payload_field_shadows_a_reading_in_its_own_refinements() {
+        let (p, d) = lower_src(&format!("{SYS} choreography G = P -> Q: a(h: int {{h == 3}}). R -> Q: b. end;"));
+        assert!(d.is_empty(), "{d:?}");
+        let mut ms = Vec::new();
+        messages(&p.choreography.as_ref().unwrap().body, &mut ms);
+        assert!(ms[0].observed.is_empty(), "`h` is the field");
+    }
+
+    #[test]
+    fn a_streams_invariant_reads_its_own_fields_and_constants() {
+        let (_, d) = lower_src(
+            "const C: int = 3; system S { participant P; participant Q;
+             stream Q -> P: tick(h: int {h <= C}, k: int {k <= h}); } choreography G = P -> Q: a. end;",
+        );
+        assert!(d.is_empty(), "{d:?}");
+        let (_, d) = lower_src(
+            "system S { participant P; participant Q; stream Q -> P: tick(h: int); stream Q -> P: tock(h: int); }
+             choreography G = P -> Q: a. end;",
+        );
+        assert_eq!(d.iter().map(|d| d.code).collect::<Vec<_>>(), [Code::Duplicate]);
+        let (_, d) = lower_src(
+            "system S { participant P; participant Q; stream Q -> Q, P, P: tick(h: int); }
+             choreography G = P -> Q: a. end;",
+        );
+        assert_eq!(d.iter().map(|d| d.code).collect::<Vec<_>>(), [Code::SelfMessage, Code::Duplicate]);
+    }
+
+    #[test]
+    fn a_step_a_stream_carries_is_refused() {
+        let c = codes("Q -> P: tick(h: int, k: int). R -> Q: a. end");
+        assert_eq!(c.into_iter().map(|c| c.0).collect::<Vec<_>>(), [Code::StepIsStreamed]);
+        // The other direction is another message.
+        assert!(codes("P -> Q: tick(h: int, k: int). R -> Q: a. end").is_empty());
     }
 }

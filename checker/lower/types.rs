@@ -42,6 +42,7 @@ impl Lowerer {
                 let from = self.role(&m.from);
                 let to = self.role(&m.to);
                 let (Some(from), Some(to)) = (from, to) else { return Global::End(Loc(m.span)) };
+                self.streamed_step(from, to, &m.label.name, m.label.span);
                 // The sender's snapshot of what it observes: the choice's, or this message's own.
                 let snap = match pending {
                     Some(s) if s.iter().all(|o| matches!(self.prog.value(o.value).origin, ValueOrigin::Observed { reader, .. } if reader == from)) => s,

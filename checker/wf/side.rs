@@ -331,7 +331,11 @@ impl<'a> Side<'a> {
                     // (lowering binds a snapshot only for a reader that sees the stream).
                     let sees = prog.streams.get(*stream as usize).is_some_and(|s| s.seen_by(*reader));
                     if viewer != Some(*reader) || !sees {
-                        bad.push((name.clone(), loc, format!("it is `{}`'s reading of a stream", prog.role_name(*reader))));
+                        bad.push((
+                            name.clone(),
+                            loc,
+                            format!("it is `{}`'s reading of a stream", prog.role_name(*reader)),
+                        ));
                     }
                 } else if matches!(prog.value(*id).origin, ValueOrigin::Stream { .. }) {
                     bad.push((name.clone(), loc, "it is a stream's field as declared, read by no step".to_string()));
