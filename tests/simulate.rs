@@ -95,6 +95,11 @@ const REPLAY_UNDECIDED: &[(&str, &str)] = &[(
     "the carts turn by pi / 4 and 3 * pi / 4: Z3's witness of the motion has cos/sin values inside the encoder's enclosure (a few ulps of f64 wide), outside the 1e-40-wide enclosure the exact replay uses since counterexamples are replayed against their goals; the simulator cannot draw an exact witness there (the check's verdict does not rest on witnesses)",
 )];
 
+/// Verified files whose system declares streams (observed state): the simulator does not
+/// draw streams yet, so each must be reported undecided, as not supported, and never run as
+/// if clean.
+const STREAMS: &[&str] = &["choreographies/mavlink/parachute.chor"];
+
 /// Every file under `choreographies/` (not `rejected/`) that `mochi check` verifies
 /// simulates with no finding and no undecided run.
 fn verified_files_are_clean(filter: &dyn Fn(&str) -> bool) {
@@ -111,6 +116,16 @@ fn verified_files_are_clean(filter: &dyn Fn(&str) -> bool) {
         }
         seen += 1;
         let r = simulate_path(path, &cfg(2, 12, 100 + k as u64));
+        if STREAMS.contains(&path.as_str()) {
+            assert!(
+                r.failures().next().is_none()
+                    && r.undecided().count() == 1
+                    && r.undecided().all(|f| f.message.starts_with("not supported yet")),
+                "{path}: a program with streams is reported not supported: {:?}",
+                r.findings
+            );
+            continue;
+        }
         let bad: Vec<String> = r
             .findings
             .iter()
@@ -160,8 +175,11 @@ const NOT_FOUND: &[(&str, &str)] = &[
     ("mavlink/rejected/E0417-retries-never-spent.chor", "a termination measure: a defect of infinitely many steps, beyond a bounded run"),
     ("mavlink/rejected/E0419-param-pass-index-out-of-range.chor", "stuck only at the 14th choice's second answer, 27 messages in, beyond the 16 steps of a run"),
     ("mavlink/rejected/E0419-float-window-holds-no-float32.chor", "a refinement with real solutions and no float32 one: the simulator draws real payloads and rounds them, so it reports the run undecided, not stuck"),
-    ("mavlink/rejected/E0419-parachute-seed-formula.chor", "stuck only at states (climbing, or below the minimum altitude) Z3's payload models do not pick in 2 runs"),
-    ("mavlink/rejected/E0419-parachute-vz-sign-as-printed.chor", "stuck only with vz < 0 (climbing), a payload Z3's models do not pick in 2 runs"),
+    ("mavlink/rejected/E0419-parachute-seed-formula.chor", "the system declares streams (observed state), which the simulator does not draw yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
+    ("mavlink/rejected/E0419-parachute-vz-sign-as-printed.chor", "the system declares streams (observed state), which the simulator does not draw yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
+    ("mavlink/rejected/E0419-parachute-ack-trusts-the-gcs-reading.chor", "the system declares streams (observed state), which the simulator does not draw yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
+    ("mavlink/rejected/E0316-choice-trusts-an-earlier-altitude-reading.chor", "the system declares streams (observed state), which the simulator does not draw yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
+    ("mavlink/rejected/E0715-process-typed-against-an-observed-guard.chor", "the system declares streams (observed state), which the simulator does not draw yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
     ("rejected/E0301-self-message.chor", "a message to oneself runs like any other: the rule is about the type's form (Def 4.1), not an event of a run"),
     ("rejected/E0302-command-with-and-without-its-command.chor", "two branches with one label are ambiguous to the receiver's projection, which a motion choreography's run (the global type) does not consult"),
     ("rejected/E0302-duplicate-label.chor", "two branches with one label are ambiguous to the receiver's projection, which a motion choreography's run (the global type) does not consult"),

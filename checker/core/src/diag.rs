@@ -260,6 +260,23 @@ codes! {
          them on purpose. The warning names the replacement the XML gives, once per message, \
          at its first use. (Deprecated enum entries are not reported: the dialect reader does \
          not read their deprecation.)";
+    ObservedOutsideMessage = "E0245", "an observed value read where no snapshot is taken",
+        "A field of a `stream` declaration is observed state: the latest value its reader has \
+         received, which may change between any two steps of the session. mochi takes a snapshot \
+         of it where a participant decides, at a message's guard and refinements (one snapshot per \
+         message, shared by the first messages of a choice), and nowhere else: a recursion \
+         parameter's initial value or refinement, a jump's arguments, a loop's measure and a \
+         motion's arguments are read by several participants or at several times, and an \
+         observed value has no one value there. To carry a reading into the loop, send it: \
+         `GCS -> UAV: MSG(field as h {h == relative_alt})` binds `h`, a value both ends hold.";
+    StepIsStreamed = "E0246", "a protocol step that a stream also carries",
+        "A `stream FROM -> TO: LABEL` says `FROM` sends `LABEL` to `TO` at any time, as \
+         telemetry that is no step of the session. A message `FROM -> TO: LABEL` of the \
+         choreography (the same label, or the same MAVLink message with and without a fixed \
+         command) would be indistinguishable on the wire from the stream's messages: a monitor \
+         could not tell the step from telemetry, and the session would advance on any of the \
+         stream's messages. Drop the step (read the stream's latest value in a guard instead), or \
+         the stream.";
     SelfMessage = "E0301", "message to oneself",
         "Def 4.1 requires `p != q` in `p -> q : l`. A participant cannot send a message to itself; \
          use a local computation in its process instead.";
@@ -692,6 +709,14 @@ codes! {
          type's, evaluated with what the process knows (values it sent and received). This is how \
          guards and refinements that read the type's parameters are checked in the process. The \
          counterexample is a state where the process passes a different value than its type.";
+    ObservedInProcess = "E0715", "a process typed against a protocol with observed values: not supported yet",
+        "Processes are typed against their local types (Table 1), but the typing rules do not yet \
+         know observed state: a guard of the local type that reads a stream's latest value would \
+         need the process to read the same snapshot, which the process language cannot express \
+         yet. The protocol is still checked as a protocol (well-formedness, total choice, progress, \
+         termination and knowledge over fresh snapshots). Remove the `process` items to check the \
+         protocol alone, or type the processes against a protocol without `stream` reads (send the \
+         reading in a payload field and guard on that field).";
     Undecided = "U0001", "proof obligations undecided",
         "Some checks reduce to predicate validity (total choice, [AGCOMP] compatibility, full \
          separation of footprints, refinement and typing side conditions). When a query could not \

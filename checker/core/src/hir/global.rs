@@ -106,6 +106,9 @@ pub struct Msg {
     pub loc: Loc,
     /// Where the label is written (for duplicate-label diagnostics).
     pub label_loc: Loc,
+    /// The snapshots of observed values the guard and refinements read (the sender's), in
+    /// stream and field order; shared with the other first messages of a choice.
+    pub observed: Vec<super::Observed>,
 }
 
 /// Whether two labels may be the same message on the wire, so that a receiver cannot tell

@@ -41,6 +41,8 @@ pub enum Local {
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct SendBranch {
+    /// The snapshots of observed values the guard and refinements read ([`super::Observed`]).
+    pub observed: Vec<super::Observed>,
     pub guard: Option<Expr>,
     pub to: RoleId,
     pub label: String,

@@ -246,6 +246,28 @@ pub enum ValueOrigin {
     RecParam,
     /// A variable bound by a receive (or a recursion) in `role`'s process or local type.
     Bound { role: RoleId },
+    /// A field of a stream declaration ([`Stream`]) as declared: the template each snapshot
+    /// copies. No expression outside the stream's own invariant reads it.
+    Stream { stream: u32 },
+    /// A snapshot of an observed value: the latest value of a field of stream `stream` that
+    /// `reader` had received when it evaluated one message's guard and refinements (or one
+    /// choice's). Known to `reader` only; a fresh value at every step (LANGUAGE.md,
+    /// "Observed state").
+    Observed { reader: RoleId, stream: u32 },
+}
+
+impl ValueOrigin {
+    /// Whether `role` never holds a value of this origin: a payload field of a message
+    /// between two other participants, a snapshot another participant took, or a stream's
+    /// template field (which only its own invariant reads).
+    pub fn unheld_by(&self, role: RoleId) -> bool {
+        match self {
+            ValueOrigin::Message { from, to } => *from != role && *to != role,
+            ValueOrigin::Observed { reader, .. } => *reader != role,
+            ValueOrigin::Stream { .. } => true,
+            ValueOrigin::RecParam | ValueOrigin::Bound { .. } => false,
+        }
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -316,6 +338,45 @@ pub struct Program {
     /// [`Builtin::Float64`]: every such value is a finite float of that format (the
     /// model of LANGUAGE.md, "Floats are float32"), a fact the encoder may use anywhere.
     pub wire_floats: std::collections::HashMap<ValueId, Builtin>,
+    /// The system's streams (`stream UAV -> GCS: HEARTBEAT(base_mode);`), in declaration order.
+    pub streams: Vec<Stream>,
+}
+
+/// `stream from -> to, ...: LABEL(fields)`: `from` sends `LABEL` at any time, any number of
+/// times, to each of `to`; it is no step of the session. Each field is observed: a guard or
+/// refinement of a message sent by a participant that receives the stream (or by `from`)
+/// reads the latest value it has seen, a fresh snapshot at each message ([`Observed`]).
+/// The fields' refinements (the wire range and the user's invariant) are what every value
+/// of the stream satisfies: an assumption, enforced by a monitor at run time.
+#[derive(Clone, Debug)]
+pub struct Stream {
+    pub from: RoleId,
+    pub to: Vec<RoleId>,
+    pub label: String,
+    /// The template fields (values of origin [`ValueOrigin::Stream`]).
+    pub fields: Vec<global::Field>,
+    pub loc: Loc,
+}
+
+impl Stream {
+    /// Whether `r` sees the stream's values: its sender or one of its receivers.
+    pub fn seen_by(&self, r: RoleId) -> bool {
+        self.from == r || self.to.contains(&r)
+    }
+}
+
+/// A snapshot of an observed field read by one message (or one choice: the branches' first
+/// messages share it): a fresh value of the stream field `field` of stream `stream`, with
+/// `refinement` (the field's wire range and the stream's invariant, over the snapshots of
+/// the same stream message taken at the same step) assumed, and nothing else.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Observed {
+    pub value: ValueId,
+    pub name: String,
+    pub sort: Sort,
+    pub stream: u32,
+    pub field: u32,
+    pub refinement: Option<Expr>,
 }
 
 impl Program {

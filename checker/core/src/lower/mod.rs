@@ -32,6 +32,7 @@ pub use mav::{
 #[cfg(test)]
 mod mav_tests;
 mod names;
+mod observed;
 mod process;
 #[cfg(test)]
 pub(crate) mod tests;
@@ -76,6 +77,12 @@ pub fn lower(parsed: &Parsed) -> (Program, Vec<Diagnostic>) {
         }
     }
     l.connect_inputs();
+    if l.prog.system.is_some() {
+        // The first system's streams (a second system is E0206, reported above).
+        if let Some(ast::Item::System(s)) = items.iter().find(|it| matches!(it, ast::Item::System(_))) {
+            l.streams(s);
+        }
+    }
     for it in &items {
         match it {
             ast::Item::Choreography(c) => l.choreography(c),
@@ -144,6 +151,11 @@ struct Lowerer {
     plain_kind: Option<KindId>,
     /// Deprecated MAVLink messages warned about (E0244, once each).
     deprecated_seen: std::collections::HashSet<String>,
+    /// The participant deciding at the message being lowered (its guard and payload), where
+    /// observed values are read: for the diagnostic of a read of a stream it does not see.
+    deciding: Option<RoleId>,
+    /// Lowering a process body: an observed value read there is E0715 (not supported yet).
+    in_process: bool,
 }
 
 /// Whose variables an unqualified name may denote.
@@ -228,4 +240,7 @@ struct Scopes {
     values: Vec<ValueId>,
     /// The recursion variables in scope, innermost last, with their parameters' sorts.
     recs: Vec<(String, Vec<Sort>)>,
+    /// The snapshot of observed values taken at a choice, for its branches' first messages
+    /// (taken by the first message lowered; see `lower::observed`).
+    choice_snapshot: Option<Vec<Observed>>,
 }

@@ -81,6 +81,9 @@ impl Lowerer {
         if let Some(c) = self.entry_const(name) {
             return mk(Var::Const(c), Sort::Int);
         }
+        if self.observed_elsewhere(name, span).is_some() {
+            return Expr::error(loc);
+        }
         let mut help = "declare it as a `const`, a parameter, a robot variable, or bind it in a message".to_string();
         if let Some(d) = self.prog.dialect {
             let close =

@@ -15,7 +15,10 @@ impl Lowerer {
         }
         self.process_roles.insert(role, p.role.span);
         let mut cx = Scopes::default();
-        if let Some(body) = self.process(&p.body, role, &mut cx) {
+        self.in_process = true;
+        let body = self.process(&p.body, role, &mut cx);
+        self.in_process = false;
+        if let Some(body) = body {
             self.prog.processes.push(ProcessDef { role, body, span: p.role.span });
         }
     }

@@ -35,17 +35,29 @@ impl Lowerer {
     }
 
     pub(super) fn global_inner(&mut self, g: &ast::Global, cx: &mut Scopes) -> Global {
+        // A choice's snapshot is for the first message of each branch only.
+        let pending = cx.choice_snapshot.take();
         match g {
             ast::Global::Msg(m) => {
                 let from = self.role(&m.from);
                 let to = self.role(&m.to);
                 let (Some(from), Some(to)) = (from, to) else { return Global::End(Loc(m.span)) };
+                self.streamed_step(from, to, &m.label.name, m.label.span);
+                // The sender's snapshot of what it observes: the choice's, or this message's own.
+                let snap = match pending {
+                    Some(s) if s.iter().all(|o| matches!(self.prog.value(o.value).origin, ValueOrigin::Observed { reader, .. } if reader == from)) => s,
+                    _ => self.snapshot(from),
+                };
+                cx.values.extend(snap.iter().map(|o| o.value));
+                let outer = self.deciding.replace(from);
                 let guard = m.guard.as_ref().map(|gd| {
                     let env = Env::role(from, &cx.values);
                     self.pred(gd, &env, "a guard")
                 });
                 let payload =
                     self.message(&m.label, &m.payload, from, ValueOrigin::Message { from, to }, &mut cx.values);
+                self.deciding = outer;
+                let observed = self.snapshots_read(&snap, guard.as_ref(), &payload, &mut cx.values);
                 Global::Msg(Msg {
                     from,
                     to,
@@ -54,6 +66,7 @@ impl Lowerer {
                     payload,
                     loc: Loc(m.span),
                     label_loc: Loc(m.label.span),
+                    observed,
                 })
             }
             ast::Global::Motion { parts, span } => {
@@ -67,17 +80,36 @@ impl Lowerer {
                 Global::Motion(Motion { parts: out, loc: Loc(*span) })
             }
             ast::Global::Seq(items, span) => {
-                Global::Seq(items.iter().map(|g| self.global(g, cx)).collect(), Loc(*span))
+                let mut pending = pending;
+                Global::Seq(
+                    items
+                        .iter()
+                        .map(|g| {
+                            cx.choice_snapshot = pending.take();
+                            self.global(g, cx)
+                        })
+                        .collect(),
+                    Loc(*span),
+                )
             }
             ast::Global::Choice(items, span) | ast::Global::Par(items, span) => {
                 let mark = cx.values.len();
+                // One decision, one snapshot: the sender of the first branch's first message
+                // reads its observed values once for all branches (a choice whose branches
+                // have different senders is E0303).
+                let snap = match (g, items.first().and_then(first_sender)) {
+                    (ast::Global::Choice(..), Some(who)) => self.prog.role_by_name(&who.name).map(|r| self.snapshot(r)),
+                    _ => None,
+                };
                 let lowered = items
                     .iter()
                     .map(|g| {
                         cx.values.truncate(mark);
+                        cx.choice_snapshot = snap.clone();
                         self.global(g, cx)
                     })
                     .collect();
+                cx.choice_snapshot = None;
                 cx.values.truncate(mark);
                 if matches!(g, ast::Global::Choice(..)) {
                     Global::Choice(lowered, Loc(*span))
@@ -245,17 +277,34 @@ impl Lowerer {
             }
             ast::Local::Send { branches, span } => {
                 let mut out = Vec::new();
+                // One decision, one snapshot of what `me` observes, for every branch.
+                let snap = self.snapshot(me);
                 for b in branches {
                     cx.values.truncate(mark);
+                    cx.values.extend(snap.iter().map(|o| o.value));
+                    let outer = self.deciding.replace(me);
                     let guard = b.guard.as_ref().map(|g| {
                         let env = Env::role(me, &cx.values);
                         self.pred(g, &env, "a guard")
                     });
-                    let Some(to) = self.role(&b.to) else { continue };
+                    let Some(to) = self.role(&b.to) else {
+                        self.deciding = outer;
+                        continue;
+                    };
                     let origin = ValueOrigin::Message { from: me, to };
                     let payload = self.message(&b.label, &b.payload, me, origin, &mut cx.values);
+                    self.deciding = outer;
+                    let observed = self.snapshots_read(&snap, guard.as_ref(), &payload, &mut cx.values);
                     let cont = self.local(&b.cont, me, cx);
-                    out.push(SendBranch { guard, to, label: b.label.name.clone(), payload, cont, loc: Loc(b.span) });
+                    out.push(SendBranch {
+                        observed,
+                        guard,
+                        to,
+                        label: b.label.name.clone(),
+                        payload,
+                        cont,
+                        loc: Loc(b.span),
+                    });
                 }
                 Local::Send { branches: out, loc: Loc(*span) }
             }
@@ -293,5 +342,14 @@ impl Lowerer {
         };
         cx.values.truncate(mark);
         out
+    }
+}
+
+/// The sender of the first message of `g`, if it starts with one (as written).
+fn first_sender(g: &ast::Global) -> Option<&ast::Ident> {
+    match g {
+        ast::Global::Msg(m) => Some(&m.from),
+        ast::Global::Seq(items, _) => items.first().and_then(first_sender),
+        _ => None,
     }
 }

@@ -148,6 +148,16 @@ impl<'t> Differ<'t> {
         })
     }
 
+    /// The snapshots of observed values two sends read: the same stream fields, in order,
+    /// renamed like binders (each is a fresh value at its send).
+    pub(super) fn bind_observed(&mut self, a: &[Observed], b: &[Observed]) -> bool {
+        if a.len() != b.len() || a.iter().zip(b).any(|(x, y)| (x.stream, x.field) != (y.stream, y.field)) {
+            return false;
+        }
+        self.ren.extend(a.iter().zip(b).map(|(x, y)| (x.value, y.value)));
+        a.iter().zip(b).all(|(x, y)| x.sort == y.sort && self.opt_expr(&x.refinement, &y.refinement))
+    }
+
     /// As [`Differ::bind_fields`] for recursion parameters; their initial values are
     /// read outside the binders.
     pub(super) fn bind_params(&mut self, a: &[RecParam], b: &[RecParam]) -> bool {
@@ -190,7 +200,10 @@ impl<'t> Differ<'t> {
                         return Some((x.loc, b.loc()));
                     };
                     // The guard reads the values before the message.
-                    if !self.opt_expr(&x.guard, &y.guard) || !self.bind_fields(&x.payload, &y.payload) {
+                    if !self.bind_observed(&x.observed, &y.observed)
+                        || !self.opt_expr(&x.guard, &y.guard)
+                        || !self.bind_fields(&x.payload, &y.payload)
+                    {
                         self.ren.truncate(mark);
                         return Some((x.loc, y.loc));
                     }

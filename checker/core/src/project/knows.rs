@@ -32,9 +32,29 @@ impl super::Projector<'_> {
             .iter()
             .map(|f| {
                 let mut f = f.clone();
-                if let Some(r) = f.refinement.take() {
-                    f.refinement = self.what_receiver_learns(&r);
+                let Some(r) = f.refinement.take() else { return f };
+                // A MAVLink field's refinement is `implicit && user` (`hir::MavField`): the
+                // implicit part (wire range, enum, fixed command) reads no value, and only
+                // the user's part is reduced; when none of it is left, the field has no user
+                // refinement any more, so that it prints (and reads back) as such.
+                if let Some(mav) = f.mav.as_mut().filter(|m| m.user) {
+                    let (implicit, user) = match (&r.kind, mav.implicit) {
+                        (ExprKind::Binary(BinOp::And, i, u), true) => (Some((**i).clone()), (**u).clone()),
+                        (_, false) => (None, r.clone()),
+                        _ => {
+                            f.refinement = self.what_receiver_learns(&r);
+                            return f;
+                        }
+                    };
+                    let learned = self.what_receiver_learns(&user);
+                    mav.user = learned.is_some();
+                    f.refinement = match (implicit, learned) {
+                        (Some(i), Some(u)) => Some(Expr { loc: r.loc, ..Expr::and(i, u) }),
+                        (i, u) => i.or(u),
+                    };
+                    return f;
                 }
+                f.refinement = self.what_receiver_learns(&r);
                 f
             })
             .collect()
@@ -44,10 +64,7 @@ impl super::Projector<'_> {
     /// message between two other participants.
     fn foreign(&self, v: &Var) -> bool {
         match v {
-            Var::Value(id, _) => matches!(
-                self.prog.value(*id).origin,
-                ValueOrigin::Message { from, to } if from != self.role && to != self.role
-            ),
+            Var::Value(id, _) => self.prog.value(*id).origin.unheld_by(self.role),
             _ => false,
         }
     }
@@ -109,10 +126,7 @@ pub fn unheld_reads(prog: &Program, role: RoleId, t: &Local) -> Vec<String> {
     let mut read = |e: &Expr| {
         e.visit_vars(&mut |v, _| {
             if let Var::Value(id, name) = v {
-                let unheld = matches!(
-                    prog.value(*id).origin,
-                    ValueOrigin::Message { from, to } if from != role && to != role
-                );
+                let unheld = prog.value(*id).origin.unheld_by(role);
                 if unheld && !out.contains(name) {
                     out.push(name.clone());
                 }

@@ -286,6 +286,11 @@ fn rename_local<'t>(
             branches: branches
                 .iter()
                 .map(|b| SendBranch {
+                    observed: b
+                        .observed
+                        .iter()
+                        .map(|o| Observed { value: to(o.value), refinement: o.refinement.as_ref().map(e), ..o.clone() })
+                        .collect(),
                     guard: b.guard.as_ref().map(e),
                     payload: fields(&b.payload),
                     cont: rename_local(&b.cont, map, memo),

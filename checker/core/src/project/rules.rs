@@ -96,6 +96,7 @@ impl Projector<'_> {
             let mut out = Vec::new();
             for (m, rest) in &split {
                 out.push(SendBranch {
+                    observed: m.observed.clone(),
                     guard: m.guard.clone(),
                     to: m.to,
                     label: m.label.clone(),

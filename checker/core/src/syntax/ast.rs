@@ -173,6 +173,18 @@ pub struct SystemDecl {
     pub name: Ident,
     pub participants: Vec<ParticipantDecl>,
     pub obstacles: Vec<ObstacleDecl>,
+    pub streams: Vec<StreamDecl>,
+    pub span: Span,
+}
+
+/// `stream FROM -> TO, ...: LABEL(fields);` in a system: a message `FROM` sends to each `TO`
+/// at any time, whose fields are observed state (LANGUAGE.md, "Observed state").
+#[derive(Clone, Debug)]
+pub struct StreamDecl {
+    pub from: Ident,
+    pub to: Vec<Ident>,
+    pub label: Ident,
+    pub payload: Vec<Field>,
     pub span: Span,
 }
 

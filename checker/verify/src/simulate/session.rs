@@ -100,6 +100,10 @@ pub(super) fn unknown_read(
                     }
                     ValueOrigin::RecParam => "a recursion parameter whose value it could not compute".to_string(),
                     ValueOrigin::Bound { role } => format!("bound by `{}`", prog.role_name(*role)),
+                    ValueOrigin::Stream { .. } => "a stream's field as declared".to_string(),
+                    ValueOrigin::Observed { reader, .. } => {
+                        format!("observed by `{}` from a stream", prog.role_name(*reader))
+                    }
                 };
                 bad = Some(format!("`{name}` ({how})"));
             }

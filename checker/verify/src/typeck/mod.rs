@@ -72,6 +72,9 @@ pub fn check_processes_hinted(
     let mut hints = Hints::new();
     let mut diags = Vec::new();
     let mut obligations = Vec::new();
+    if let Some(d) = observed_in_process(prog) {
+        return (obligations, vec![d], hints);
+    }
     for role in prog.role_ids() {
         let name = prog.role_name(role);
         let Some(def) = prog.processes.iter().find(|p| p.role == role) else {
@@ -154,6 +157,41 @@ pub fn check_processes_hinted(
 /// no process is typed and E0701 is not asked. With one process, every participant needs
 /// one: a partial set of processes is most likely an omission, and a cell half typed
 /// would read as typed, so each missing one is E0701.
+/// E0715: processes typed against a protocol that reads observed values (LANGUAGE.md,
+/// "Observed state"). The typing rules do not know snapshots yet, so such a program is
+/// refused here rather than typed as if the readings were ordinary values.
+fn observed_in_process(prog: &Program) -> Option<Diagnostic> {
+    if prog.processes.is_empty() {
+        return None;
+    }
+    let chor = prog.choreography.as_ref()?;
+    let m = first_observing(&chor.body)?;
+    let o = &m.observed[0];
+    Some(
+        Diagnostic::error(
+            Code::ObservedInProcess,
+            m.loc.0,
+            format!(
+                "not supported yet: this message reads the observed value `{}`, and processes are typed against this protocol",
+                o.name
+            ),
+        )
+        .with_label(prog.role(m.from).span, "a process is typed for this participant")
+        .with_note("process typing does not know snapshots of observed state yet; the protocol alone is checked over fresh readings")
+        .with_help("remove the `process` items to check the protocol alone, or send the reading in a payload field and guard on that field"),
+    )
+}
+
+/// The first message, in the order of the type, that reads an observed value.
+fn first_observing(g: &Global) -> Option<&Msg> {
+    match g {
+        Global::Msg(m) => (!m.observed.is_empty()).then_some(m),
+        Global::Seq(gs, _) | Global::Choice(gs, _) | Global::Par(gs, _) => gs.iter().find_map(first_observing),
+        Global::Rec { body, .. } => crate::stack::deep(|| first_observing(body)),
+        Global::Motion(_) | Global::Var(_) | Global::End(_) => None,
+    }
+}
+
 pub fn protocol_only(prog: &Program) -> bool {
     prog.processes.is_empty()
 }
@@ -309,9 +347,7 @@ impl State<'_> {
     /// `b` and relate payloads of different rounds (`n == b` and `m == b` give `n == m`).
     fn forget_foreign(&mut self, prog: &Program, role: RoleId) {
         let foreign = |v: &Var| match v {
-            Var::Value(id, _) => {
-                matches!(prog.value(*id).origin, ValueOrigin::Message { from, to } if from != role && to != role)
-            }
+            Var::Value(id, _) => prog.value(*id).origin.unheld_by(role),
             _ => false,
         };
         self.sigma.forget(&foreign);

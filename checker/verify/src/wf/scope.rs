@@ -388,6 +388,7 @@ impl<'a> Contexts<'a> {
                 // but the protocol itself is there to establish it (a program may have no
                 // processes at all).
                 if !self.choice_firsts.contains(&m.loc.0) {
+                    observe(&mut sigma, &m.observed);
                     let e = enabled(self.prog, m);
                     if e.guard.is_some() || !e.refinement.is_true() {
                         self.obligations.push(Obligation {
@@ -432,6 +433,16 @@ impl<'a> Contexts<'a> {
                 cur
             }
             Global::Choice(branches, _) => {
+                // The deciding participant's snapshot, shared by the branches' first messages.
+                let mut snap: Vec<Observed> = Vec::new();
+                for m in branches.iter().filter_map(super::side::first_message) {
+                    for o in &m.observed {
+                        if !snap.iter().any(|x| x.value == o.value) {
+                            snap.push(o.clone());
+                        }
+                    }
+                }
+                observe(&mut sigma, &snap);
                 self.total_choice(branches, &sigma);
                 self.progress(branches, &sigma);
                 let mut out: Option<Sigma> = None;
@@ -894,6 +905,21 @@ impl<'a> Contexts<'a> {
             self.runs.truncate(marks.1);
             self.jumps.truncate(marks.2);
         }
+    }
+}
+
+/// A snapshot of observed values is taken (LANGUAGE.md, "Observed state"): each is a new
+/// value (what was known of the same binding site, an earlier round's snapshot, is
+/// forgotten) of which only its refinement is known: the field's wire range and float
+/// model and the stream's invariant. Nothing relates it to any other step's snapshot.
+fn observe(sigma: &mut Sigma, snap: &[Observed]) {
+    if snap.is_empty() {
+        return;
+    }
+    let ids: Vec<ValueId> = snap.iter().map(|o| o.value).collect();
+    sigma.forget_values(&ids);
+    for r in snap.iter().filter_map(|o| o.refinement.as_ref()) {
+        sigma.assume(&defined_and(r.clone()));
     }
 }
 
@@ -1530,5 +1556,113 @@ mod refined_tests {
         assert_eq!(failing(&nested("m", "v == n && v < c", "n + 1")).0, vec![]);
         let (rules, _) = failing(&nested("m", "v == n && v >= c", "n + 1"));
         assert_eq!(rules, vec![Rule::Progress]);
+    }
+}
+
+/// Observed state (LANGUAGE.md, "Observed state"): each message reads a fresh snapshot of
+/// what its sender observes, one per choice, constrained only by the stream's refinements.
+/// Each case that must fail here holds when the same value is sent once and read at every
+/// step (a stable value): that is the unsoundness the snapshots remove.
+#[cfg(test)]
+mod observed_tests {
+    use crate::lower::tests::lower_src;
+    use crate::obligation::Rule;
+    use crate::smt::{discharge, Decision, SmtConfig};
+
+    /// The rules whose obligations fail (dead branches aside), or the lowering errors.
+    fn failing(src: &str) -> Vec<Rule> {
+        let (p, d) = lower_src(src);
+        assert!(d.is_empty(), "{d:?}");
+        let body = &p.choreography.as_ref().expect("choreography").body;
+        let side = super::super::side::check(&p, body);
+        assert!(side.is_empty(), "{side:?}");
+        let (obs, d) = super::check(&p, body);
+        assert!(d.is_empty(), "{d:?}");
+        let labels: Vec<String> = obs.iter().map(|o| o.rule.slug().to_string()).collect();
+        let mut rules = Vec::new();
+        for (ob, (dec, _)) in obs.iter().zip(discharge(&p, &obs, &labels, &SmtConfig::default())) {
+            match dec {
+                Decision::Holds(_) => {}
+                Decision::Fails(_)
+                    if matches!(ob.goal, crate::obligation::Goal::Reachable { dead_branch: true, .. }) => {}
+                Decision::Fails(_) => rules.push(ob.rule),
+                Decision::Unknown { why, .. } => panic!("undecided: {} ({why})", ob.what),
+            }
+        }
+        rules
+    }
+
+    /// `Q` streams `h` in [0, 100] to `P`.
+    fn observed(chor: &str) -> String {
+        format!(
+            "system S {{ participant P; participant Q; stream Q -> P: tick(h: int {{0 <= h && h <= 100}}); }}
+             choreography G = {chor};"
+        )
+    }
+
+    /// `Q` sends `h` once, at the start: every later step reads that one value.
+    fn stable(chor: &str) -> String {
+        format!(
+            "system S {{ participant P; participant Q; }}
+             choreography G = Q -> P: tick(h: int {{0 <= h && h <= 100}}). {chor};"
+        )
+    }
+
+    const LATER_CHOICE: &str = "( P -> Q: [h > 50] a.
+          ( P -> Q: [h > 10] b. end + P -> Q: [h < 0] c. end )
+        + P -> Q: [h <= 50] d. end )";
+
+    #[test]
+    fn a_later_choice_reads_a_fresh_value() {
+        assert_eq!(failing(&stable(LATER_CHOICE)), vec![]);
+        assert_eq!(failing(&observed(LATER_CHOICE)), vec![Rule::TotalChoice]);
+    }
+
+    #[test]
+    fn the_branches_of_one_choice_read_one_snapshot() {
+        // Per-message readings would leave a gap between the two guards.
+        assert_eq!(failing(&observed("( P -> Q: [h > 10] a. end + P -> Q: [h <= 10] b. end )")), vec![]);
+    }
+
+    #[test]
+    fn a_reading_satisfies_the_streams_refinement() {
+        // Total only because every value of the stream is in [0, 100].
+        assert_eq!(failing(&observed("( P -> Q: [h >= 0] a. end + P -> Q: [h > 100] b. end )")), vec![]);
+        assert_eq!(
+            failing(&observed("( P -> Q: [h >= 1] a. end + P -> Q: [h > 100] b. end )")),
+            vec![Rule::TotalChoice]
+        );
+    }
+
+    #[test]
+    fn a_guard_and_refinement_of_one_message_read_one_snapshot() {
+        // The payload fits the guard's reading: `x == h` with `h > 10` gives `x > 10`.
+        let g = "( P -> Q: [h > 10] a(x: int {x == h && x > 10}). end + P -> Q: [h <= 10] b. end )";
+        assert_eq!(failing(&observed(g)), vec![]);
+    }
+
+    #[test]
+    fn progress_at_a_later_step_reads_a_fresh_value() {
+        // Q answers below P's reading at `a`: sent in `a`, a value Q holds, so it exists.
+        // Q answers below its own reading when it answers (Q streams `h`, so it reads its
+        // own current value): a fresh value, which may be 41 or less: stuck.
+        let sent = "( P -> Q: [h > 50] a(x: int {x == h}). Q -> P: b(y: int {y > 40 && y < x}). end
+                    + P -> Q: [h <= 50] c. end )";
+        assert_eq!(failing(&observed(sent)), vec![]);
+        let reread = "( P -> Q: [h > 50] a. Q -> P: b(y: int {y > 40 && y < h}). end
+                      + P -> Q: [h <= 50] c. end )";
+        assert_eq!(failing(&stable(reread)), vec![]);
+        assert_eq!(failing(&observed(reread)), vec![Rule::Progress]);
+    }
+
+    #[test]
+    fn a_loop_reads_a_fresh_value_each_round() {
+        let g = "mu t. ( P -> Q: [h > 50] a. ( P -> Q: [h > 10] b. t + P -> Q: [h <= 10] c. end )
+                       + P -> Q: [h <= 50] d. end )";
+        assert_eq!(failing(&observed(g)), vec![]);
+        let g = "mu t. ( P -> Q: [h > 50] a. ( P -> Q: [h > 10] b. t + P -> Q: [h < 0] c. end )
+                       + P -> Q: [h <= 50] d. end )";
+        assert_eq!(failing(&stable(g)), vec![]);
+        assert_eq!(failing(&observed(g)), vec![Rule::TotalChoice]);
     }
 }

@@ -326,6 +326,19 @@ impl<'a> Side<'a> {
                             format!("it was sent by `{}` to `{}`", prog.role_name(*from), prog.role_name(*to)),
                         ));
                     }
+                } else if let ValueOrigin::Observed { reader, stream } = &prog.value(*id).origin {
+                    // A snapshot: the value its reader saw when it decided, held by it alone
+                    // (lowering binds a snapshot only for a reader that sees the stream).
+                    let sees = prog.streams.get(*stream as usize).is_some_and(|s| s.seen_by(*reader));
+                    if viewer != Some(*reader) || !sees {
+                        bad.push((
+                            name.clone(),
+                            loc,
+                            format!("it is `{}`'s reading of a stream", prog.role_name(*reader)),
+                        ));
+                    }
+                } else if matches!(prog.value(*id).origin, ValueOrigin::Stream { .. }) {
+                    bad.push((name.clone(), loc, "it is a stream's field as declared, read by no step".to_string()));
                 } else if let Some(pt) = holders.get(id) {
                     // A recursion parameter: known to the participants of its loop (each
                     // knows every value it is given, checked at its entry and jumps).

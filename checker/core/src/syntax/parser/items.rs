@@ -292,13 +292,18 @@ impl Parser {
         let name = self.ident("a system name")?;
         let mut participants = Vec::new();
         let mut obstacles = Vec::new();
+        let mut streams = Vec::new();
         self.block(|p| {
             if p.is_kw("obstacle") {
                 obstacles.push(p.obstacle()?);
                 return Ok(());
             }
+            if p.is_kw("stream") {
+                streams.push(p.stream()?);
+                return Ok(());
+            }
             if !p.is_kw("participant") {
-                return p.error_expected("`participant` or `obstacle`");
+                return p.error_expected("`participant`, `stream` or `obstacle`");
             }
             let pstart = p.bump().span;
             let name = p.ident("a participant name")?;
@@ -348,7 +353,29 @@ impl Parser {
             participants.push(part);
             Ok(())
         })?;
-        Ok(SystemDecl { name, participants, obstacles, span: start.to(self.prev_span()) })
+        Ok(SystemDecl { name, participants, obstacles, streams, span: start.to(self.prev_span()) })
+    }
+
+    /// `stream FROM -> TO, ...: LABEL(fields);` (the keyword is next).
+    fn stream(&mut self) -> PResult<StreamDecl> {
+        let start = self.expect_kw("stream")?;
+        let from = self.ident("the participant that sends the stream")?;
+        self.expect_punct("->")?;
+        let mut to = vec![self.ident("a participant that receives the stream")?];
+        while self.eat_punct(",") {
+            to.push(self.ident("a participant that receives the stream")?);
+        }
+        self.expect_punct(":")?;
+        let label = self.label()?;
+        let payload = if self.eat_punct("(") {
+            let f = self.fields()?;
+            self.expect_punct(")")?;
+            f
+        } else {
+            Vec::new()
+        };
+        self.expect_punct(";")?;
+        Ok(StreamDecl { from, to, label, payload, span: start.to(self.prev_span()) })
     }
 
     /// `obstacle Name { geometry: BODY; at: pose(...); }`.

@@ -226,7 +226,7 @@ fn a_bad_shape_or_pose_does_not_cascade() {
     // An unknown shape name is not a parse error: lowering says which shapes exist (E0214).
     let (_, d) = file("robot R { geometry: cone(1, 2) + boxx(1); }");
     assert!(d.is_empty(), "{d:?}");
-    // A system entry that is neither names both.
+    // A system entry that is none of them names them all.
     let (_, d) = file("system S { obstacl O { } }");
-    assert!(d[0].message.contains("`participant` or `obstacle`"), "{}", d[0].message);
+    assert!(d[0].message.contains("`participant`, `stream` or `obstacle`"), "{}", d[0].message);
 }
