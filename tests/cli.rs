@@ -977,7 +977,9 @@ fn mavlink_flags_strings_and_wire_ranges_are_decided_exactly() {
         ("request-index-divided-by-a-nonzero-count", "verified", None),
     ] {
         let path = format!("tests/data/mavlink/{file}.chor");
-        let o = mochi(&["check", &path]);
+        // The golden suite's patience: on a loaded machine the default 10 s a query can leave
+        // one of these exact queries unknown, and each verdict here is a decided one.
+        let o = mochi(&["check", "--timeout", "60", &path]);
         let out = stdout(&o) + &stderr(&o);
         assert!(out.contains(&format!("verdict: {want}")), "{path}:\n{out}");
         if let Some(cx) = cx {

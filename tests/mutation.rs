@@ -27,12 +27,20 @@
 //!   those and keeps every other entry (e.g. `MOCHI_MUTATION_ONLY=mavlink/`: every MAVLink
 //!   mutant, not only the sampled ones, is in the list).
 //! - `MOCHI_MUTATION_JOBS=n` mutants checked in parallel (default 2, one SMT thread each).
-//! - Which mutants run: all of them with `MOCHI_MUTATION_FULL=1` (9,114, seven times the
-//!   sample); otherwise, and so on CI, a fixed sample: one mutant in [`SAMPLE`] (1,303),
-//!   chosen by a hash of its id (the same every run), so that `cargo test` stays quick. The
-//!   sample is a subset of the full set, so one survivors list serves both. `cargo test`
-//!   builds mochi optimised (`[profile.test.package.mochi]` in Cargo.toml), so the sample runs
-//!   at about the speed of a release build.
+//! - Which mutants run: all of them with `MOCHI_MUTATION_FULL=1` (seven times the sample);
+//!   otherwise, and so on CI, a fixed sample: one mutant in [`SAMPLE`] (about 2,100), chosen
+//!   by a hash of its id (the same every run). A run of `cargo test` checks one of the
+//!   sample's [`SLICES`] slices (the next bits of the same hash): the day's, so that
+//!   successive days check different mutants and the whole sample is checked every
+//!   [`SLICES`] days, at a quarter of the time. The run prints its slice;
+//!   `MOCHI_MUTATION_SLICE=k` checks slice `k` again and `MOCHI_MUTATION_SLICE=all` the whole
+//!   sample (the default when blessing or with `MOCHI_MUTATION_ONLY`). The sample is a subset
+//!   of the full set, so one survivors list serves both. `cargo test` builds mochi optimised
+//!   (`[profile.test.package.mochi]` in Cargo.toml), so the sample runs at about the speed of
+//!   a release build.
+//! - A run fails when more than one mutant in [`MAX_TIMED_OUT_ONE_IN`] is still undecided for
+//!   want of time after the second look: timeouts are neither kills nor survivors, and a run
+//!   with many of them tests too little.
 //! - `MOCHI_MUTATION_LIST=1` only lists the mutants (counts per operator on stderr, ids and
 //!   descriptions in `target/mutation/list.tsv`).
 //! - Blessing updates the entries of the mutants that ran and keeps the others (a sampled bless
@@ -65,15 +73,50 @@ const RETRY_TIMEOUT: Duration = Duration::from_secs(10);
 /// Outside CI, one mutant in this many runs (chosen by a hash of its id).
 const SAMPLE: u64 = 7;
 
+/// The sample is cut into this many slices (by the same hash); a run of `cargo test` checks
+/// one of them, a different one each day.
+const SLICES: u64 = 4;
+/// A run fails when more than one mutant in this many is still undecided for want of time
+/// after the second look: such a run tests too little of what it sampled.
+const MAX_TIMED_OUT_ONE_IN: usize = 20;
+
 /// Whether every mutant runs (`MOCHI_MUTATION_FULL=1`) or only the sample.
 fn full_run() -> bool {
     std::env::var("MOCHI_MUTATION_FULL").is_ok_and(|x| x == "1" || x == "true")
 }
 
-/// A stable hash of a mutant's id (FNV-1a), for the sample.
+/// A stable hash of a mutant's id (FNV-1a), for the sample and its slices.
+fn fnv(id: &str) -> u64 {
+    id.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3))
+}
+
 fn in_sample(id: &str) -> bool {
-    let h = id.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3));
-    h % SAMPLE == 0
+    fnv(id) % SAMPLE == 0
+}
+
+/// The slice of the sample a mutant is in (the hash's bits above those of the sample).
+fn slice_of(id: &str) -> u64 {
+    (fnv(id) / SAMPLE) % SLICES
+}
+
+/// Which slice of the sample this run checks: `MOCHI_MUTATION_SLICE=k` (0 to [`SLICES`] - 1),
+/// or every slice with `MOCHI_MUTATION_SLICE=all`; otherwise the day's (days since 1970
+/// modulo [`SLICES`]), so that successive days' CI runs check different mutants and every
+/// mutant of the sample is checked every [`SLICES`] days. The slice is printed, with how to
+/// run it again. A blessing or a filtered run checks every slice unless told one.
+fn slice(whole_by_default: bool) -> Option<u64> {
+    match std::env::var("MOCHI_MUTATION_SLICE").ok().as_deref().map(str::trim) {
+        Some("all") => None,
+        Some(k) => {
+            Some(k.parse::<u64>().unwrap_or_else(|_| panic!("MOCHI_MUTATION_SLICE={k}: a number or `all`")) % SLICES)
+        }
+        None if whole_by_default => None,
+        None => {
+            let days =
+                std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_secs() / 86_400);
+            Some(days % SLICES)
+        }
+    }
 }
 
 fn root() -> PathBuf {
@@ -130,33 +173,52 @@ fn timed_out(report: &mochi::driver::Report) -> bool {
         && undecided.iter().all(|d| d.notes.iter().any(|n| LIMITS.iter().any(|l| n.contains(l))))
 }
 
-/// The verified examples: every `.chor` under `choreographies/` except `rejected/`.
-fn verified_examples() -> Vec<String> {
-    let mut all = Vec::new();
-    let mut stack = vec![root().join("choreographies")];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).expect("readable dir") {
-            let p = e.expect("entry").path();
-            if p.is_dir() {
-                // Not `pending/` either: unknown after minutes (corpus.rs).
-                if p.file_name().is_some_and(|n| n != "rejected" && n != "pending") {
-                    stack.push(p);
+/// The verified examples: every `.chor` under `choreographies/` except `rejected/` (and
+/// `pending/`) whose golden snapshot says `Verified`. The corpus harness (tests/corpus.rs)
+/// checks each file once and fails unless its report is the snapshot's, so the snapshot's
+/// verdict is the file's; reading it spares checking every example again here.
+fn verified_examples() -> &'static [String] {
+    static EXAMPLES: std::sync::OnceLock<Vec<String>> = std::sync::OnceLock::new();
+    EXAMPLES.get_or_init(|| {
+        let mut all = Vec::new();
+        let mut stack = vec![root().join("choreographies")];
+        while let Some(d) = stack.pop() {
+            for e in std::fs::read_dir(&d).expect("readable dir") {
+                let p = e.expect("entry").path();
+                if p.is_dir() {
+                    // Not `pending/` either: unknown after minutes (corpus.rs).
+                    if p.file_name().is_some_and(|n| n != "rejected" && n != "pending") {
+                        stack.push(p);
+                    }
+                } else if p.extension().is_some_and(|x| x == "chor") {
+                    all.push(p);
                 }
-            } else if p.extension().is_some_and(|x| x == "chor") {
-                all.push(p);
             }
         }
+        all.sort();
+        let examples: Vec<String> = all
+            .into_iter()
+            .map(|p| p.strip_prefix(root().join("choreographies")).unwrap().display().to_string())
+            .filter(|ex| golden_verdict(ex) == Verdict::Verified)
+            .collect();
+        assert!(examples.len() >= 20, "the verified examples were found ({})", examples.len());
+        examples
+    })
+}
+
+/// The verdict recorded in the golden snapshot of `example` (a path below `choreographies/`).
+fn golden_verdict(example: &str) -> Verdict {
+    let snap = root()
+        .join("tests/snapshots")
+        .join(format!("golden__every_choreography_matches_its_golden_file@{}.snap", example.replace('/', "__")));
+    let text = std::fs::read_to_string(&snap)
+        .unwrap_or_else(|e| panic!("{example}: no golden snapshot {} ({e})", snap.display()));
+    match text.split("==== VERDICT ====\n").nth(1).and_then(|r| r.lines().next()).map(str::trim) {
+        Some("Verified") => Verdict::Verified,
+        Some("Rejected") => Verdict::Rejected,
+        Some("Unknown") => Verdict::Unknown,
+        other => panic!("{}: no verdict line ({other:?})", snap.display()),
     }
-    all.sort();
-    all.into_iter()
-        .filter(|p| {
-            let mut db = SourceDb::new();
-            check_file(&mut db, p, &cfg(Duration::from_secs(10)))
-                .map(|r| r.verdict == Verdict::Verified)
-                .unwrap_or(false)
-        })
-        .map(|p| p.strip_prefix(root().join("choreographies")).unwrap().display().to_string())
-        .collect()
 }
 
 /// The MAVLink dialect of an example (`dialect NAME;`), for the MAVLink operators.
@@ -212,8 +274,13 @@ fn jobs(filter: Option<&str>) -> Vec<Job> {
 
 /// Every mutant (`all`), or the sample, of the ids containing `filter`.
 fn jobs_of(filter: Option<&str>, all: bool) -> Vec<Job> {
+    jobs_of_examples(verified_examples(), filter, all)
+}
+
+/// Every mutant (`all`), or the sample, of the ids containing `filter`, of `examples`.
+fn jobs_of_examples(examples: &[String], filter: Option<&str>, all: bool) -> Vec<Job> {
     let mut out = Vec::new();
-    for ex in verified_examples() {
+    for ex in examples {
         let files = closure(&ex);
         let (mut consts, mut states) = (Vec::new(), Vec::new());
         for f in files.iter().filter(|f| !f.ends_with(".urdf")) {
@@ -412,8 +479,21 @@ fn every_survivor_is_explained() {
     let allow_bugs = std::env::var("MOCHI_MUTATION_ALLOW_KNOWN_BUGS").is_ok_and(|v| v == "1");
     let workers = std::env::var("MOCHI_MUTATION_JOBS").ok().and_then(|v| v.parse().ok()).unwrap_or(2usize);
     let t = Instant::now();
-    let jobs = jobs(filter.as_deref());
+    let mut jobs = jobs(filter.as_deref());
     assert!(!jobs.is_empty() || filter.is_some(), "no mutants generated");
+    let slice = slice(bless || filter.is_some() || full_run());
+    let which = match slice {
+        Some(k) => {
+            let before = jobs.len();
+            jobs.retain(|j| slice_of(&j.id) == k);
+            format!(
+                "slice {k} of {SLICES} of the sample ({} of {before} mutants; the day's slice: MOCHI_MUTATION_SLICE={k} checks it again, MOCHI_MUTATION_SLICE=all every slice)",
+                jobs.len()
+            )
+        }
+        None => format!("{} mutants, every slice", jobs.len()),
+    };
+    eprintln!("mutation: {which}");
     if std::env::var("MOCHI_MUTATION_LIST").is_ok_and(|v| v == "1") {
         let mut per_op = BTreeMap::<String, usize>::new();
         for j in &jobs {
@@ -547,7 +627,7 @@ fn every_survivor_is_explained() {
     }
     assert!(
         unlisted.is_empty() && unexplained.is_empty(),
-        "{} survivor(s) not in {LIST} and {} without an explanation (run with MOCHI_MUTATION_BLESS=1 to add them, then explain each):\n  {}",
+        "{} survivor(s) not in {LIST} and {} without an explanation ({which}; run with MOCHI_MUTATION_BLESS=1 to add them, then explain each):\n  {}",
         unlisted.len(),
         unexplained.len(),
         unlisted.iter().chain(&unexplained).cloned().collect::<Vec<_>>().join("\n  ")
@@ -556,6 +636,15 @@ fn every_survivor_is_explained() {
         bugs.is_empty() || allow_bugs,
         "{} survivor(s) are known soundness bugs (listed with status = \"bug\" in {LIST}); set MOCHI_MUTATION_ALLOW_KNOWN_BUGS=1 to accept them for now",
         bugs.len()
+    );
+    // A timeout is neither a kill nor a survivor; a run where many mutants end undecided
+    // tests too little of its sample to pass.
+    assert!(
+        timeouts.len() * MAX_TIMED_OUT_ONE_IN <= outcomes.len(),
+        "{} of {} mutants ({which}) were still undecided for want of time after a second look with {RETRY_TIMEOUT:?} a query (at most one in {MAX_TIMED_OUT_ONE_IN} may be): they are neither killed nor survivors, and so many leave the sample untested:\n  {}",
+        timeouts.len(),
+        outcomes.len(),
+        timeouts.iter().map(|o| format!("{}  ({})", o.id, o.desc)).collect::<Vec<_>>().join("\n  ")
     );
 }
 
@@ -713,7 +802,9 @@ fn a_wrong_mutant_of_an_example_is_killed() {
     // both processes): the green arm would start `pick` while the cart may still be driving
     // in, with nothing telling it the cart has stopped. mochi must not verify it, and the
     // harness must report it killed.
-    let js: Vec<Job> = jobs(Some("cart-and-arms.chor:"))
+    let example = "cart-and-arms.chor".to_string();
+    assert!(verified_examples().contains(&example), "cart-and-arms.chor is a verified example");
+    let js: Vec<Job> = jobs_of_examples(&[example], Some("cart-and-arms.chor:"), full_run())
         .into_iter()
         .filter(|j| j.id.ends_with(":drop-msg-all") && j.desc.contains("Cart -> GRobot: ready"))
         .collect();

@@ -12,7 +12,7 @@ use mochi::driver::{check_loaded, Config, Verdict};
 use mochi::source::SourceDb;
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
-use std::sync::{Mutex, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Instant;
 
 /// What the relations compare: the verdict and the codes of every diagnostic (errors and
@@ -154,17 +154,15 @@ pub fn corpus() -> Vec<PathBuf> {
     out
 }
 
-/// The outcome of each corpus file as it is on disk, computed once per test binary (and
-/// per configuration), shared by the properties.
+/// The outcome of each corpus file as it is on disk under `config(1, false)`, computed once
+/// per test binary and shared by its tests: a test that asks for a file another is checking
+/// waits for that check rather than running its own.
 pub fn baseline(p: &Path) -> Outcome {
-    static BASE: OnceLock<Mutex<BTreeMap<PathBuf, Outcome>>> = OnceLock::new();
+    type Cell = Arc<OnceLock<Outcome>>;
+    static BASE: OnceLock<Mutex<BTreeMap<PathBuf, Cell>>> = OnceLock::new();
     let base = BASE.get_or_init(|| Mutex::new(BTreeMap::new()));
-    if let Some(o) = base.lock().expect("baseline lock").get(p) {
-        return o.clone();
-    }
-    let o = check(&Program::on_disk(p), &config(1, false));
-    base.lock().expect("baseline lock").insert(p.to_path_buf(), o.clone());
-    o
+    let cell: Cell = Arc::clone(base.lock().unwrap_or_else(|e| e.into_inner()).entry(p.to_path_buf()).or_default());
+    cell.get_or_init(|| check(&Program::on_disk(p), &config(1, false))).clone()
 }
 
 /// Runs `f` on every item of `items` on `threads` threads, results in the items' order,

@@ -20,7 +20,7 @@ fn verdict(chor: &str) -> (crate::driver::Verdict, Vec<&'static str>) {
         &mut crate::source::SourceDb::new(),
         "virtual/enum.chor",
         &src,
-        &crate::driver::Config::default(),
+        &crate::driver::Config::patient(),
     );
     let errors = report.diagnostics.iter().filter(|d| d.is_error()).map(|d| d.code.as_str()).collect();
     (report.verdict, errors)

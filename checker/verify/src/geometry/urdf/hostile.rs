@@ -1,10 +1,11 @@
 //! Hostile URDFs and meshes (files users download): each is refused at once with a
 //! diagnostic that points into the URDF, or loads with its meaning pinned. None may panic,
-//! hang, or take time worse than linear in the file's size.
+//! hang, or take time worse than linear in the file's size. The tests here assert what is
+//! refused and where; the times of the same inputs are measured by `cargo bench --bench urdf`
+//! (benches/urdf.rs), not asserted by timed unit tests.
 
 use super::tests::{arm, mem_load, one_error, CUBE};
 use super::*;
-use std::time::{Duration, Instant};
 
 /// `<robot>` holding `n` nested `<a>` elements.
 fn nested(n: usize) -> String {
@@ -17,14 +18,11 @@ fn nested(n: usize) -> String {
 /// pre-scan this document was E0505 "the robot has no link", after a long parse.
 #[test]
 fn deep_nesting_is_refused_at_the_first_element_past_the_limit() {
-    let start = Instant::now();
     let (code, msg, at) = one_error(&nested(200_000), &[]);
-    let took = start.elapsed();
     assert_eq!(code, Code::UrdfInvalid, "{msg}");
     // `<robot name="r">` is 16 characters and level 1; the 128th `<a>` is level 129.
     assert_eq!(at, (1, 17 + 127 * 3), "{msg}");
     assert!(msg.contains("128"), "{msg}");
-    assert!(took < Duration::from_secs(2), "took {took:?}");
 }
 
 /// The limit itself: elements nested exactly [`crate::xmlscan::MAX_NESTING`] deep (robot,
@@ -56,13 +54,11 @@ fn nesting_up_to_the_limit_loads() {
 fn too_many_attributes_are_refused_at_once() {
     let attrs: String = (0..100_000).map(|k| format!(" a{k}=\"1\"")).collect();
     let urdf = format!("<robot name=\"r\">\n<link name=\"a\"{attrs}/>\n</robot>\n");
-    let start = Instant::now();
     let (code, msg, at) = one_error(&urdf, &[]);
     assert_eq!(code, Code::UrdfInvalid, "{msg}");
     // ` name="a"` is the first attribute, ` a63` the 65th.
     assert_eq!(at, (2, 5 + 9 + (0..63).map(|k: usize| 6 + k.to_string().len()).sum::<usize>() + 2), "{msg}");
     assert!(msg.contains("64"), "{msg}");
-    assert!(start.elapsed() < Duration::from_secs(2), "{:?}", start.elapsed());
 }
 
 /// Namespace declarations around many elements that declare one more: the parsers copy or
@@ -81,14 +77,12 @@ fn too_many_namespaces_are_refused_at_once() {
         urdf += &format!("</e{k}>");
     }
     urdf += "\n</robot>\n";
-    let start = Instant::now();
     let (code, msg, at) = one_error(&urdf, &[]);
     assert_eq!(code, Code::UrdfInvalid, "{msg}");
     assert!(msg.contains("64"), "{msg}");
     // The 65th declaration is the 5th of `<e1>`, on line 4.
     let col = "<e1".len() + decls(1).find(" xmlns:n1_4=").expect("there") + 2;
     assert_eq!(at, (4, col), "{msg}");
-    assert!(start.elapsed() < Duration::from_secs(2), "{:?}", start.elapsed());
 }
 
 fn joint_with_origin(xyz: &str) -> String {
@@ -116,12 +110,10 @@ fn non_finite_numbers_are_refused_at_their_attribute() {
 #[test]
 fn a_million_numbers_are_refused_with_a_short_message() {
     let xyz = vec!["1"; 1_000_000].join(" ");
-    let start = Instant::now();
     let (code, msg, at) = one_error(&joint_with_origin(&xyz), &[("/mem/pkg/urdf/m.obj", CUBE)]);
     assert_eq!((code, at.0), (Code::UrdfInvalid, 13), "{}", &msg[..msg.len().min(200)]);
     assert!(msg.len() < 300, "a message of {} bytes", msg.len());
     assert!(msg.contains("1000000 values"), "{msg}");
-    assert!(start.elapsed() < Duration::from_secs(5), "{:?}", start.elapsed());
 }
 
 /// Finite offsets whose sum overflows: each joint origin is 1e308 m up, so the second
@@ -196,29 +188,26 @@ fn chain(n: usize) -> String {
     s + "</robot>\n"
 }
 
-/// 100,000 links in a chain load, and forward kinematics and displacement bounds over
-/// them take linear time. Before, [`Robot::new`] kept every link's chain of joints (5·10^9
-/// indices, 40 GB, for this robot) and the displacement bound walked each.
+/// 10,000 links in a chain load, and forward kinematics and displacement bounds over them
+/// are right at the tip. The walks over the chain do not recurse per link: a recursion
+/// 10,000 deep, at a few hundred bytes a frame, overflows the 2 MiB stack of a test thread.
+/// That the times are linear in the chain's length (before, [`Robot::new`] kept every link's
+/// chain of joints: 5·10^9 indices, 40 GB, at 100,000 links) is measured by
+/// `cargo bench --bench urdf` (benches/urdf.rs), 1,000 to 100,000 links side by side.
 #[test]
-fn a_chain_of_100_000_links_is_linear() {
-    let n = 100_000;
+fn a_chain_of_10_000_links_loads_and_its_tip_is_right() {
+    let n = 10_000;
     let text = chain(n);
-    let start = Instant::now();
     let (_, r) = mem_load(&text, &[]);
     let robot = r.expect("the chain loads");
-    let loaded = start.elapsed();
     assert_eq!(robot.links.len(), n);
     let q = vec![0.0; n - 1];
-    let start = Instant::now();
     let poses = robot.link_poses(&q);
     let b = robot.displacement_bound(&q, &vec![1e-3; n - 1]);
-    let kin = start.elapsed();
     assert!((poses[n - 1].translation.vector.z - 0.01 * (n - 1) as f64).abs() < 1e-6);
     // The tip is 0.01·k above joint k (k from the tip): Σ 0.01·k·1e-3 over k < n.
     let tip = 1e-5 * ((n - 1) * (n - 2) / 2) as f64;
     assert!(b[n - 1] >= tip && b[n - 1] < tip * (1.0 + 1e-6), "{} vs {tip}", b[n - 1]);
-    assert!(kin < Duration::from_secs(2), "kinematics took {kin:?}");
-    assert!(loaded < Duration::from_secs(60), "loading took {loaded:?}");
 }
 
 /// Mesh files that are not meshes: empty, truncated, a binary STL whose header claims
@@ -245,11 +234,9 @@ fn broken_meshes_are_refused_at_the_filename() {
         ("m.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -99\n"),
     ];
     for (name, bytes) in cases {
-        let start = Instant::now();
         let path = format!("/mem/pkg/urdf/{name}");
         let (code, msg, at) = one_error(&arm(name, "revolute"), &[(&path, bytes)]);
         assert_eq!((code, at), (Code::MeshUnreadable, (6, 20)), "{name} {bytes:?}: {msg}");
-        assert!(start.elapsed() < Duration::from_secs(2), "{:?}", start.elapsed());
     }
 }
 
