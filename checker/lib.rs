@@ -38,6 +38,8 @@ pub mod hir;
 pub mod io;
 pub mod library;
 pub mod lower;
+pub mod mavio;
+pub mod monitor;
 pub mod obligation;
 pub mod project;
 pub mod render;
