@@ -8,8 +8,8 @@
 //! ```
 
 use mavlink::dialects::common::{
-    MavMessage, MavMissionResult, MavMissionType, MISSION_ACK_DATA, MISSION_COUNT_DATA, MISSION_ITEM_INT_DATA,
-    MISSION_REQUEST_INT_DATA, ATTITUDE_DATA,
+    MavMessage, MavMissionResult, MavMissionType, ATTITUDE_DATA, MISSION_ACK_DATA, MISSION_COUNT_DATA,
+    MISSION_ITEM_INT_DATA, MISSION_REQUEST_INT_DATA,
 };
 use mavlink::{MavlinkVersion, Message};
 use mochi::mavio::Frame;

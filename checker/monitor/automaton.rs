@@ -66,7 +66,12 @@ pub enum StateKind {
     /// Waiting for one of these edges.
     Branch(Vec<u32>),
     /// Assign the registers in parallel, check the refinements, go on at `next`.
-    Assign { assigns: Vec<(u16, Code)>, checks: Vec<(u16, Code)>, next: u32, span: Span },
+    Assign {
+        assigns: Vec<(u16, Code)>,
+        checks: Vec<(u16, Code)>,
+        next: u32,
+        span: Span,
+    },
     End,
 }
 
@@ -258,7 +263,8 @@ impl Builder<'_> {
                 let b = self.compile(body, k);
                 self.loops.pop();
                 let b = b?;
-                self.a.states[head as usize] = StateKind::Assign { assigns: Vec::new(), checks: Vec::new(), next: b, span: loc.0 };
+                self.a.states[head as usize] =
+                    StateKind::Assign { assigns: Vec::new(), checks: Vec::new(), next: b, span: loc.0 };
                 Ok(self.state(StateKind::Assign { assigns, checks, next: head, span: loc.0 }))
             }
             Global::Var(v) => {
@@ -374,7 +380,11 @@ impl Builder<'_> {
             });
             if let Some(name) = bad {
                 return err(
-                    format!("`{}` reads `{name}`, which its sender `{}` does not know", m.label, self.prog.role_name(m.from)),
+                    format!(
+                        "`{}` reads `{name}`, which its sender `{}` does not know",
+                        m.label,
+                        self.prog.role_name(m.from)
+                    ),
                     Some(c.expr.loc.0),
                 );
             }

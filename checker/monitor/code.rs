@@ -173,7 +173,9 @@ impl Arena {
                 Some(r) => Node::Reg(*r),
                 None => return Err(format!("`{name}` is not a value of the protocol")),
             },
-            ExprKind::Var(_) => return Err("a participant's state variable (protocols without motion have none)".into()),
+            ExprKind::Var(_) => {
+                return Err("a participant's state variable (protocols without motion have none)".into())
+            }
             ExprKind::Unary(UnOp::Not, a) => Node::Not(go(self, a)?),
             ExprKind::Unary(UnOp::Neg, a) => Node::Neg(go(self, a)?),
             ExprKind::Binary(op, a, b) => {
@@ -378,9 +380,7 @@ impl Env<'_> {
                     Some(c) => c,
                     None => {
                         let first = (0..self.regs.len())
-                            .find(|&k| {
-                                matches!(self.regs[k], Val::Str(_)) && self.bytes(self.regs[k]) == Some(bytes)
-                            })
+                            .find(|&k| matches!(self.regs[k], Val::Str(_)) && self.bytes(self.regs[k]) == Some(bytes))
                             .unwrap_or(r as usize);
                         self.prog.strings.len() + first
                     }

@@ -191,11 +191,12 @@ struct Session {
 /// The monitor: protocols, their open sessions, and what it found.
 pub struct Monitor {
     protos: Vec<Automaton>,
-    /// Session slots; `open` lists those in use, `free` those to reuse (their buffers
-    /// kept, so a new session allocates nothing once the slots exist).
+    /// Session slots; `open` lists those in use, `free` per protocol those to reuse (their
+    /// buffers, sized for that protocol, kept: a new session allocates nothing once a slot
+    /// of its protocol exists).
     slots: Vec<Session>,
     open: Vec<usize>,
-    free: Vec<usize>,
+    free: Vec<Vec<usize>>,
     next_id: u64,
     undo: Vec<(u16, Val)>,
     undo_strs: Vec<u8>,
@@ -219,11 +220,12 @@ impl Monitor {
     pub fn new(protos: Vec<Automaton>) -> Monitor {
         let undo = protos.iter().map(|a| a.arena.regs.len()).max().unwrap_or(0);
         let strs = protos.iter().map(|a| a.arena.str_size as usize).max().unwrap_or(0);
+        let n = protos.len();
         Monitor {
             protos,
             slots: Vec::new(),
             open: Vec::with_capacity(16),
-            free: Vec::with_capacity(16),
+            free: (0..n).map(|_| Vec::with_capacity(16)).collect(),
             next_id: 0,
             undo: Vec::with_capacity(undo * 2 + 8),
             undo_strs: Vec::with_capacity(strs),
@@ -274,7 +276,13 @@ impl Monitor {
         match result {
             Some(o) => o,
             None if in_alphabet => {
-                let v = self.record(None, None, f, index, Fail { kind: Kind::OutsideSession, edge: None, pred: None, field: None, why: None });
+                let v = self.record(
+                    None,
+                    None,
+                    f,
+                    index,
+                    Fail { kind: Kind::OutsideSession, edge: None, pred: None, field: None, why: None },
+                );
                 Outcome::Violation(v)
             }
             None => {
@@ -324,7 +332,13 @@ impl Monitor {
         if let Some(slot) = between_ends {
             let s = &self.slots[slot];
             let state = s.state;
-            let v = self.record(Some(slot), Some(state), f, index, Fail { kind: Kind::Unexpected, edge: None, pred: None, field: None, why: None });
+            let v = self.record(
+                Some(slot),
+                Some(state),
+                f,
+                index,
+                Fail { kind: Kind::Unexpected, edge: None, pred: None, field: None, why: None },
+            );
             self.slots[slot].violations += 1;
             return Some(Outcome::Violation(v));
         }
@@ -333,7 +347,7 @@ impl Monitor {
 
     fn start(&mut self, p: usize, index: u64) -> usize {
         let a = &self.protos[p];
-        let slot = match self.free.pop() {
+        let slot = match self.free[p].pop() {
             Some(i) => i,
             None => {
                 self.slots.push(Session {
@@ -451,7 +465,13 @@ impl Monitor {
                 match env.holds(g, &mut self.stats.fallbacks) {
                     Ok(true) => {}
                     Ok(false) => {
-                        first_fail.get_or_insert(Fail { kind: Kind::Guard, edge: Some(e), pred: Some(g.id), field: None, why: None });
+                        first_fail.get_or_insert(Fail {
+                            kind: Kind::Guard,
+                            edge: Some(e),
+                            pred: Some(g.id),
+                            field: None,
+                            why: None,
+                        });
                         continue;
                     }
                     Err(v) => {
@@ -464,7 +484,13 @@ impl Monitor {
             break;
         }
         let Some(e) = chosen else {
-            return Err(first_fail.unwrap_or(Fail { kind: Kind::Unexpected, edge: None, pred: None, field: None, why: None }));
+            return Err(first_fail.unwrap_or(Fail {
+                kind: Kind::Unexpected,
+                edge: None,
+                pred: None,
+                field: None,
+                why: None,
+            }));
         };
         let edge = &a.edges[e as usize];
         // Decode the listed fields into their registers.
@@ -483,7 +509,13 @@ impl Monitor {
                         Scalar::Int(i) => i as f64,
                     };
                     if !x.is_finite() {
-                        return Err(Fail { kind: Kind::NonFinite, edge: Some(e), pred: None, field: Some(i as u16), why: None });
+                        return Err(Fail {
+                            kind: Kind::NonFinite,
+                            edge: Some(e),
+                            pred: None,
+                            field: Some(i as u16),
+                            why: None,
+                        });
                     }
                     match Q::from_f64(x) {
                         Some(q) => Val::Num(q),
@@ -509,7 +541,15 @@ impl Monitor {
                 s.evaluated[c.id as usize] += 1;
                 match env.holds(c, &mut self.stats.fallbacks) {
                     Ok(true) => {}
-                    Ok(false) => return Err(Fail { kind: Kind::Entry, edge: Some(e), pred: Some(c.id), field: Some(i as u16), why: None }),
+                    Ok(false) => {
+                        return Err(Fail {
+                            kind: Kind::Entry,
+                            edge: Some(e),
+                            pred: Some(c.id),
+                            field: Some(i as u16),
+                            why: None,
+                        })
+                    }
                     Err(v) => return Err(verdict_fail(v, e, c.id, Some(i as u16))),
                 }
             }
@@ -517,7 +557,15 @@ impl Monitor {
                 s.evaluated[c.id as usize] += 1;
                 match env.holds(c, &mut self.stats.fallbacks) {
                     Ok(true) => {}
-                    Ok(false) => return Err(Fail { kind: Kind::Refinement, edge: Some(e), pred: Some(c.id), field: Some(i as u16), why: None }),
+                    Ok(false) => {
+                        return Err(Fail {
+                            kind: Kind::Refinement,
+                            edge: Some(e),
+                            pred: Some(c.id),
+                            field: Some(i as u16),
+                            why: None,
+                        })
+                    }
                     Err(v) => return Err(verdict_fail(v, e, c.id, Some(i as u16))),
                 }
             }
@@ -553,10 +601,22 @@ impl Monitor {
                     match env.value(c, &mut self.stats.fallbacks) {
                         Ok(v) => self.args.push(v),
                         Err(Verdict::Undefined(why)) => {
-                            return Err(Fail { kind: Kind::Undefined, edge: None, pred: Some(c.id), field: None, why: Some(why) })
+                            return Err(Fail {
+                                kind: Kind::Undefined,
+                                edge: None,
+                                pred: Some(c.id),
+                                field: None,
+                                why: Some(why),
+                            })
                         }
                         Err(Verdict::Undecided) => {
-                            return Err(Fail { kind: Kind::Undecided, edge: None, pred: Some(c.id), field: None, why: None })
+                            return Err(Fail {
+                                kind: Kind::Undecided,
+                                edge: None,
+                                pred: Some(c.id),
+                                field: None,
+                                why: None,
+                            })
                         }
                     }
                 }
@@ -570,12 +630,32 @@ impl Monitor {
                 sess.evaluated[c.id as usize] += 1;
                 match env.holds(c, &mut self.stats.fallbacks) {
                     Ok(true) => {}
-                    Ok(false) => return Err(Fail { kind: Kind::Invariant, edge: None, pred: Some(c.id), field: None, why: None }),
+                    Ok(false) => {
+                        return Err(Fail {
+                            kind: Kind::Invariant,
+                            edge: None,
+                            pred: Some(c.id),
+                            field: None,
+                            why: None,
+                        })
+                    }
                     Err(Verdict::Undefined(why)) => {
-                        return Err(Fail { kind: Kind::Undefined, edge: None, pred: Some(c.id), field: None, why: Some(why) })
+                        return Err(Fail {
+                            kind: Kind::Undefined,
+                            edge: None,
+                            pred: Some(c.id),
+                            field: None,
+                            why: Some(why),
+                        })
                     }
                     Err(Verdict::Undecided) => {
-                        return Err(Fail { kind: Kind::Undecided, edge: None, pred: Some(c.id), field: None, why: None })
+                        return Err(Fail {
+                            kind: Kind::Undecided,
+                            edge: None,
+                            pred: Some(c.id),
+                            field: None,
+                            why: None,
+                        })
                     }
                 }
             }
@@ -624,7 +704,7 @@ impl Monitor {
         } else {
             self.stats.sessions_started -= 1;
         }
-        self.free.push(slot);
+        self.free[self.slots[slot].proto].push(slot);
     }
 
     /// Ends the stream: every open session is reported incomplete. Returns all summaries.
@@ -633,7 +713,7 @@ impl Monitor {
         open.sort_by_key(|&i| self.slots[i].id);
         for slot in open {
             self.summaries.push(summary(&self.slots[slot], false));
-            self.free.push(slot);
+            self.free[self.slots[slot].proto].push(slot);
         }
         &self.summaries
     }
@@ -695,7 +775,11 @@ impl Monitor {
 
 fn find_code(a: &Automaton, id: u32) -> Option<&code::Code> {
     for e in &a.edges {
-        for c in e.guard.iter().chain(e.fields.iter().flat_map(|f| f.refinement.iter().chain(f.entry.iter().map(|(c, _)| c)))) {
+        for c in e
+            .guard
+            .iter()
+            .chain(e.fields.iter().flat_map(|f| f.refinement.iter().chain(f.entry.iter().map(|(c, _)| c))))
+        {
             if c.id == id {
                 return Some(c);
             }
@@ -746,7 +830,9 @@ fn summary(s: &Session, conformant: bool) -> SessionSummary {
 
 fn verdict_fail(v: Verdict, e: u32, pred: u32, field: Option<u16>) -> Fail {
     match v {
-        Verdict::Undefined(why) => Fail { kind: Kind::Undefined, edge: Some(e), pred: Some(pred), field, why: Some(why) },
+        Verdict::Undefined(why) => {
+            Fail { kind: Kind::Undefined, edge: Some(e), pred: Some(pred), field, why: Some(why) }
+        }
         Verdict::Undecided => Fail { kind: Kind::Undecided, edge: Some(e), pred: Some(pred), field, why: None },
     }
 }
@@ -789,9 +875,10 @@ fn ends_fit(e: &Edge, roles: &[Binding], f: &Frame) -> bool {
         (s, c) => {
             s.is_none_or(|s| s == f.sysid)
                 && c.is_none_or(|c| c == f.compid)
-                && !roles.iter().enumerate().any(|(k, b)| {
-                    k != e.from.idx() && b.sys == Some(f.sysid) && b.comp == Some(f.compid)
-                })
+                && !roles
+                    .iter()
+                    .enumerate()
+                    .any(|(k, b)| k != e.from.idx() && b.sys == Some(f.sysid) && b.comp == Some(f.compid))
         }
     };
     if !sender_ok {
@@ -816,7 +903,9 @@ fn ends_fit(e: &Edge, roles: &[Binding], f: &Frame) -> bool {
 fn vec_fresh_check(a: &Automaton, f: &Frame) -> bool {
     let none = [Binding::default(); 64];
     let roles = &none[..a.roles.len().min(64)];
-    a.edges_of(a.settle(a.start)).iter().any(|&e| label_fits(&a.edges[e as usize], f) && ends_fit(&a.edges[e as usize], roles, f))
+    a.edges_of(a.settle(a.start))
+        .iter()
+        .any(|&e| label_fits(&a.edges[e as usize], f) && ends_fit(&a.edges[e as usize], roles, f))
 }
 
 #[cfg(test)]

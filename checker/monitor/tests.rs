@@ -129,7 +129,8 @@ fn sessions_are_keyed_by_both_ends_and_strangers_are_reported() {
     let (mut m, d) = upload_monitor(&mut db);
     // Two ground stations upload to two vehicles at once.
     m.on_frame(&frame(255, 190, &to_uav(d, "MISSION_COUNT", &[("count", int(1))])));
-    let count2 = payload(d, "MISSION_COUNT", &[("target_system", int(2)), ("target_component", int(1)), ("count", int(1))], &[]);
+    let count2 =
+        payload(d, "MISSION_COUNT", &[("target_system", int(2)), ("target_component", int(1)), ("count", int(1))], &[]);
     m.on_frame(&frame(255, 230, &count2));
     let req2 = payload(d, "MISSION_REQUEST_INT", &[("target_system", int(255)), ("target_component", int(230))], &[]);
     assert!(matches!(m.on_frame(&frame(2, 1, &req2)), Outcome::Step { session: 1, .. }));
@@ -159,14 +160,21 @@ choreography P =
     let d = prog.dialect.expect("dialect");
     let mut m = Monitor::new(vec![Automaton::compile(&prog).expect("compiles")]);
     let set = |x: f32, id: &[u8]| {
-        payload(d, "PARAM_SET", &[("target_system", int(1)), ("target_component", int(1)), ("param_value", Scalar::F32(x))], &[("param_id", id)])
+        payload(
+            d,
+            "PARAM_SET",
+            &[("target_system", int(1)), ("target_component", int(1)), ("param_value", Scalar::F32(x))],
+            &[("param_id", id)],
+        )
     };
     // 0.1f32 is 0.100000001490116..., above 1/10: a violation.
     let Outcome::Violation(v) = m.on_frame(&frame(255, 190, &set(0.1, b"RATE"))) else { panic!("accepted 0.1f32") };
     assert_eq!(m.violation(v).map(|v| v.kind), Some(Kind::Refinement));
     let Outcome::Violation(v) = m.on_frame(&frame(255, 190, &set(f32::NAN, b"RATE"))) else { panic!("accepted NaN") };
     assert_eq!(m.violation(v).map(|v| v.kind), Some(Kind::NonFinite));
-    let Outcome::Violation(v) = m.on_frame(&frame(255, 190, &set(f32::NEG_INFINITY, b"RATE"))) else { panic!("accepted -inf") };
+    let Outcome::Violation(v) = m.on_frame(&frame(255, 190, &set(f32::NEG_INFINITY, b"RATE"))) else {
+        panic!("accepted -inf")
+    };
     assert_eq!(m.violation(v).map(|v| v.kind), Some(Kind::NonFinite));
     let Outcome::Violation(_) = m.on_frame(&frame(255, 190, &set(0.05, b"RATEX"))) else { panic!("accepted RATEX") };
     assert!(matches!(m.on_frame(&frame(255, 190, &set(0.05, b"RATE"))), Outcome::Step { .. }));
@@ -189,9 +197,7 @@ choreography A =
     );
     let d = prog.dialect.expect("dialect");
     let mut m = Monitor::new(vec![Automaton::compile(&prog).expect("compiles")]);
-    let cmd = |c: i128, arm: f32| {
-        to_uav(d, "COMMAND_LONG", &[("command", int(c)), ("param1", Scalar::F32(arm))])
-    };
+    let cmd = |c: i128, arm: f32| to_uav(d, "COMMAND_LONG", &[("command", int(c)), ("param1", Scalar::F32(arm))]);
     // Another command is not this protocol's message: outside any session.
     let Outcome::Violation(v) = m.on_frame(&frame(255, 190, &cmd(176, 1.0))) else { panic!() };
     assert_eq!(m.violation(v).map(|v| v.kind), Some(Kind::OutsideSession));

@@ -129,22 +129,18 @@ pub fn write(payload: &mut [u8], slot: Slot, k: usize, v: Scalar) {
         Scalar::F64(x) => x as i128,
     };
     match slot.wire {
-        Wire::F32 => put(
-            &(match v {
-                Scalar::F32(x) => x,
-                Scalar::F64(x) => x as f32,
-                Scalar::Int(i) => i as f32,
-            })
-            .to_le_bytes(),
-        ),
-        Wire::F64 => put(
-            &(match v {
-                Scalar::F32(x) => f64::from(x),
-                Scalar::F64(x) => x,
-                Scalar::Int(i) => i as f64,
-            })
-            .to_le_bytes(),
-        ),
+        Wire::F32 => put(&(match v {
+            Scalar::F32(x) => x,
+            Scalar::F64(x) => x as f32,
+            Scalar::Int(i) => i as f32,
+        })
+        .to_le_bytes()),
+        Wire::F64 => put(&(match v {
+            Scalar::F32(x) => f64::from(x),
+            Scalar::F64(x) => x,
+            Scalar::Int(i) => i as f64,
+        })
+        .to_le_bytes()),
         _ => put(&(i as i64).to_le_bytes()),
     }
 }
