@@ -66,7 +66,7 @@ fn stream(d: &Dialect) -> Vec<Owned> {
         msg(d, uav, "VFR_HUD", &[("groundspeed", Scalar::F32(3.25))]),
     ];
     let mut out = Vec::new();
-    let mut push = |m: Owned, out: &mut Vec<Owned>| {
+    let push = |m: Owned, out: &mut Vec<Owned>| {
         out.push(m);
         out.extend(telemetry.iter().cloned());
     };

@@ -397,7 +397,7 @@ fn the_payload_decoder_agrees_with_the_mavlink_crate() {
                     let mine = String::from_utf8_lossy(wire::read_str(&p, *s)).to_string();
                     assert_eq!(Some(mine.as_str()), j.as_str(), "{}.{}", msg.name, f.name);
                 } else {
-                    let Some(theirs) = crate_value(&d, f, j) else {
+                    let Some(theirs) = crate_value(d, f, j) else {
                         panic!("{}.{}: the crate's value {j} is not read", msg.name, f.name)
                     };
                     assert_eq!(theirs.len(), s.len as usize, "{}.{}", msg.name, f.name);

@@ -33,6 +33,9 @@ fn gcd(mut a: i128, mut b: i128) -> i128 {
     a
 }
 
+// Checked operations named as the operators they are; they return `Option` (overflow),
+// so they are not the `std::ops` traits.
+#[allow(clippy::should_implement_trait)]
 impl Q {
     pub const ZERO: Q = Q { num: 0, den: 1 };
     pub const ONE: Q = Q { num: 1, den: 1 };
@@ -45,6 +48,9 @@ impl Q {
     pub fn new(num: i128, den: i128) -> Option<Q> {
         if den == 0 || num == i128::MIN || den == i128::MIN {
             return None;
+        }
+        if den == 1 {
+            return Some(Q { num, den });
         }
         let g = gcd(num, den).max(1);
         let (mut n, mut d) = (num / g, den / g);
@@ -60,6 +66,9 @@ impl Q {
     }
 
     pub fn add(self, o: Q) -> Option<Q> {
+        if self.den == 1 && o.den == 1 {
+            return Some(Q::int(self.num.checked_add(o.num)?)).filter(|q| q.num != i128::MIN);
+        }
         let g = gcd(self.den, o.den);
         let (a, b) = (self.den / g, o.den / g);
         let n = self.num.checked_mul(b)?.checked_add(o.num.checked_mul(a)?)?;
@@ -75,6 +84,9 @@ impl Q {
     }
 
     pub fn mul(self, o: Q) -> Option<Q> {
+        if self.den == 1 && o.den == 1 {
+            return Some(Q::int(self.num.checked_mul(o.num)?)).filter(|q| q.num != i128::MIN);
+        }
         // Cross-reduce first so that the products stay as small as they can.
         let g1 = gcd(self.num, o.den).max(1);
         let g2 = gcd(o.num, self.den).max(1);
