@@ -18,7 +18,12 @@
 //! - (g) the core is pure: `checker/core/Cargo.toml` depends on no solver, no geometry
 //!   crate and no other crate of mochi (Cargo then keeps its code from naming them), and
 //!   no file under `checker/core/`, its tests included, touches the file system or names
-//!   a crate of the verifier or the command line.
+//!   a crate of the verifier or the command line;
+//! - (h) the run-time monitor, `checker/monitor/` (the crate `mochi-monitor`, over the core
+//!   alone), names only the modules of the verification core (`hir`, `lower`, `dialect`,
+//!   `exact`, `sigma`, `project`, `syntax`, `source`, `diag`) and its own (`mavio`,
+//!   `monitor`), never `z3` or `parry3d`: it must run without the solver and the geometry
+//!   engine.
 //!
 //! The rules are textual on purpose: simple to state, simple to audit. Rules (a), (b), (d)
 //! ignore comments (`//` to the end of a line) and everything from the first line that is
@@ -196,6 +201,58 @@ fn only_geometry_names_the_geometry_crates() {
             "{GEOMETRY} names no `{w}`: is the rule's word list stale?"
         );
     }
+}
+
+/// The crate modules `checker/monitor/` may name (rule (h)): the verification core, the
+/// frame type, and itself.
+const MONITOR_MAY_NAME: &[&str] =
+    &["hir", "lower", "dialect", "exact", "sigma", "project", "syntax", "source", "diag", "mavio", "monitor"];
+
+/// `crate::X` (or `mochi::X`) paths of `line` whose `X` is not in `allowed`.
+fn foreign_modules(line: &str, allowed: &[&str]) -> Vec<String> {
+    let mut out = Vec::new();
+    for prefix in ["crate::", "mochi::"] {
+        for (at, _) in line.match_indices(prefix) {
+            if line[..at].chars().next_back().is_some_and(|c| c.is_alphanumeric() || c == '_') {
+                continue;
+            }
+            let rest = &line[at + prefix.len()..];
+            let name: String = rest.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+            if !allowed.contains(&name.as_str()) {
+                out.push(name);
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn the_monitor_names_only_the_core() {
+    let files = code_sources();
+    let monitor: Vec<&(String, String)> = files.iter().filter(|(f, _)| f.starts_with("checker/monitor/")).collect();
+    assert!(!monitor.is_empty(), "no checker/monitor/: is the rule stale?");
+    let mut bad = Vec::new();
+    for (f, t) in &monitor {
+        for (n, l) in code_lines(t) {
+            for m in foreign_modules(l, MONITOR_MAY_NAME) {
+                bad.push(format!("{f}:{n}: names `{m}`: {}", l.trim()));
+            }
+        }
+        bad.extend(hits(f, t, &["z3", "parry3d"]));
+    }
+    assert!(
+        bad.is_empty(),
+        "checker/monitor/ may name only the verification core ({}) and never z3 or parry3d:\n{}",
+        MONITOR_MAY_NAME.join(", "),
+        bad.join("\n")
+    );
+}
+
+#[test]
+fn the_monitor_rule_finds_foreign_modules() {
+    assert_eq!(foreign_modules("use crate::smt::goals; crate::hir::Expr", MONITOR_MAY_NAME), ["smt"]);
+    assert_eq!(foreign_modules("mochi::driver::program(x)", MONITOR_MAY_NAME), ["driver"]);
+    assert!(foreign_modules("use crate::exact::Rat; my_crate::smt", MONITOR_MAY_NAME).is_empty());
 }
 
 #[test]

@@ -40,7 +40,7 @@ mod run;
 mod session;
 mod space;
 
-pub use report::{Finding, Kind, SimReport};
+pub use report::{Finding, Kind, SimMessage, SimReport};
 
 use crate::exact::{self, Num, Rat, Tri, Value};
 use crate::hir::expr::map_vars;
@@ -104,6 +104,7 @@ pub fn simulate(prog: &Program, cfg: &SimConfig) -> SimReport {
             }
             report.steps += r.steps;
             report.findings.extend(r.findings);
+            report.messages.push(r.messages);
         }
         report.queries = sess.queries.get();
     });

@@ -33,6 +33,20 @@ pub struct Finding {
     pub trace: Vec<String>,
 }
 
+/// A message a run of a protocol without motion sent: for tests that replay runs elsewhere
+/// (the run-time monitor's agreement with the static checks, `tests/monitor.rs`).
+#[derive(Clone, Debug)]
+pub struct SimMessage {
+    pub from: crate::hir::RoleId,
+    pub to: crate::hir::RoleId,
+    pub label: String,
+    /// Per payload field: its value id, its MAVLink field (`None` without a dialect), its
+    /// refinement as the sender's local type states it, and the value sent.
+    pub fields: Vec<(crate::hir::ValueId, Option<String>, Option<crate::hir::Expr>, crate::exact::Value)>,
+    /// The values the sender had when it sent (recursion parameters included).
+    pub known: Vec<(crate::hir::ValueId, crate::exact::Value)>,
+}
+
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct SimReport {
     pub runs: usize,
@@ -40,6 +54,9 @@ pub struct SimReport {
     pub steps: usize,
     pub queries: usize,
     pub findings: Vec<Finding>,
+    /// Per run, the messages sent (protocols without motion only; not part of the output).
+    #[serde(skip)]
+    pub messages: Vec<Vec<SimMessage>>,
 }
 
 impl SimReport {
@@ -69,6 +86,7 @@ mod tests {
             steps: 3,
             queries: 0,
             findings: vec![finding(Kind::Undecided), finding(Kind::Collision)],
+            messages: Vec::new(),
         };
         assert_eq!(r.failures().count(), 1);
         assert_eq!(r.failures().next().map(|f| f.kind), Some(Kind::Collision));

@@ -38,6 +38,8 @@ pub(super) struct Runner<'a, 'p> {
     pub(super) segments: Vec<Segment>,
     pub(super) steps: usize,
     pub(super) trace: Vec<String>,
+    /// The messages of a protocol run without motion, as sent (for `SimReport::messages`).
+    pub(super) messages: Vec<super::report::SimMessage>,
     pub(super) findings: Vec<Finding>,
     pub(super) over: bool,
     /// Per participant, the values it has (the global walk's knowledge: payloads sent or
@@ -61,6 +63,7 @@ impl<'a, 'p> Runner<'a, 'p> {
             segments: Vec::new(),
             steps: 0,
             trace: Vec::new(),
+            messages: Vec::new(),
             findings: Vec::new(),
             over: false,
             known: vec![HashSet::new(); prog.roles.len()],

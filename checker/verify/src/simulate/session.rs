@@ -582,6 +582,18 @@ impl Runner<'_, '_> {
                     }
                 }
             }
+            self.messages.push(super::report::SimMessage {
+                from: roles[s].id,
+                to: b.to,
+                label: b.label.clone(),
+                fields: b
+                    .payload
+                    .iter()
+                    .zip(&vals)
+                    .map(|(f, v)| (f.value, f.mav.as_ref().map(|m| m.field.clone()), f.refinement.clone(), v.clone()))
+                    .collect(),
+                known: roles[s].known.iter().map(|(k, v)| (*k, v.clone())).collect(),
+            });
             let Local::Recv { branches: rbs, .. } = &*roles[q].at.clone() else { return };
             let Some(rb) = rbs.iter().find(|rb| rb.from == roles[s].id && rb.label == b.label) else { return };
             receive(&mut roles[q], rb, &vals);

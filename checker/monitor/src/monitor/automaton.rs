@@ -1,0 +1,440 @@
+//! A verified MAVLink protocol compiled once into a flat automaton.
+//!
+//! States are the points of the global type before a message (a [`StateKind::Branch`] with
+//! its outgoing edges: every first message of a choice's branches), the points where a
+//! loop is entered or jumped back to (a [`StateKind::Assign`]: recursion parameters are
+//! registers, assigned in parallel, their refinements checked), and `end`. An edge is a
+//! message `from -> to : [guard] LABEL(fields)`: the message id, the command a
+//! `COMMAND_LONG[MAV_CMD_X]` label fixes, the guard, and per listed field where it lies in
+//! the payload, its register, its refinement and its enum membership. The compilation is
+//! continuation-passing over the global type (`compile(g, k)` is the state from which `g`
+//! runs and then goes on at `k`), so a choice in the middle of a sequence and loops nested
+//! in loops need nothing special.
+//!
+//! Made for what comes next: a register is an index into the session's register file, so
+//! a message of the stream outside the protocol's steps can update one (observed state),
+//! and an edge's label is an enum, to which a timeout edge can be added.
+
+use super::code::{Arena, Code, RegInfo};
+use super::wire::{Layout, Slot};
+use crate::hir::{Global, Msg, Program, RoleId, Sort, ValueId, ValueOrigin};
+use crate::source::Span;
+
+/// What a listed payload field is read as.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FieldKind {
+    Int,
+    Float,
+    Str,
+}
+
+/// A field of an edge's payload the protocol lists.
+#[derive(Clone, Debug)]
+pub struct FieldRead {
+    pub name: String,
+    pub reg: u16,
+    pub slot: Slot,
+    pub kind: FieldKind,
+    /// The field's refinement (wire range, float format and enum as lowering conjoined them,
+    /// and the user's), if any.
+    pub refinement: Option<Code>,
+    /// Membership of the field's enum (or bitmask), as the static type states it.
+    pub entry: Option<(Code, String)>,
+    pub span: Span,
+}
+
+/// A message step.
+#[derive(Clone, Debug)]
+pub struct Edge {
+    pub from: RoleId,
+    pub to: RoleId,
+    pub msgid: u32,
+    pub label: String,
+    /// The `command` field's slot and value, for `COMMAND_LONG[MAV_CMD_X]`.
+    pub command: Option<(Slot, i128)>,
+    pub guard: Option<Code>,
+    pub fields: Vec<FieldRead>,
+    /// `target_system` and `target_component`, when the message has them.
+    pub target: (Option<Slot>, Option<Slot>),
+    pub target_state: u32,
+    pub span: Span,
+}
+
+/// A state of the automaton.
+#[derive(Clone, Debug)]
+pub enum StateKind {
+    /// Waiting for one of these edges.
+    Branch(Vec<u32>),
+    /// Assign the registers in parallel, check the refinements, go on at `next`.
+    Assign {
+        assigns: Vec<(u16, Code)>,
+        checks: Vec<(u16, Code)>,
+        next: u32,
+        span: Span,
+    },
+    End,
+}
+
+/// A protocol compiled for the monitor.
+#[derive(Clone, Debug)]
+pub struct Automaton {
+    pub name: String,
+    pub prog: Program,
+    pub roles: Vec<String>,
+    pub states: Vec<StateKind>,
+    pub edges: Vec<Edge>,
+    pub arena: Arena,
+    pub start: u32,
+    /// The message ids of every edge (sorted, deduplicated).
+    pub alphabet: Vec<u32>,
+    /// Predicates compiled (guards, refinements, enum memberships, parameter refinements),
+    /// each with an index for coverage: `(edge or state, what)`.
+    pub preds: usize,
+}
+
+/// Why a program cannot be monitored.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CompileError {
+    pub message: String,
+    pub span: Option<Span>,
+}
+
+fn err<T>(message: impl Into<String>, span: Option<Span>) -> Result<T, CompileError> {
+    Err(CompileError { message: message.into(), span })
+}
+
+struct Loop {
+    var: String,
+    regs: Vec<u16>,
+    checks: Vec<(u16, Code)>,
+    head: u32,
+}
+
+struct Builder<'p> {
+    prog: &'p Program,
+    dialect: &'static crate::dialect::Dialect,
+    a: Automaton,
+    loops: Vec<Loop>,
+}
+
+impl Automaton {
+    /// Compiles the choreography of `prog` (a lowered program with a dialect, one that
+    /// `mochi check` verifies: the monitor trusts what the static checks proved, such as
+    /// that guards and refinements read only what their participant knows).
+    pub fn compile(prog: &Program) -> Result<Automaton, CompileError> {
+        let Some(chor) = &prog.choreography else { return err("the program has no choreography", None) };
+        let Some(dialect) = prog.dialect else {
+            return err("the program names no MAVLink dialect (`dialect common;`)", Some(chor.span));
+        };
+        if prog.roles.len() > 64 {
+            return err("more than 64 participants", Some(chor.span));
+        }
+        // Observed state (docs/observed-and-timeouts.md says what a monitor must check of
+        // it) is not enforced yet: refused, never monitored as if the readings were not
+        // there.
+        if let Some(v) =
+            prog.values.iter().find(|v| matches!(v.origin, ValueOrigin::Stream { .. } | ValueOrigin::Observed { .. }))
+        {
+            return err(
+                format!(
+                    "the protocol reads observed state (`{}`, a field of a `stream`), which the monitor does not enforce yet",
+                    v.name
+                ),
+                Some(chor.span),
+            );
+        }
+        let mut arena = Arena::default();
+        for (i, v) in prog.values.iter().enumerate() {
+            let knowers = match &v.origin {
+                ValueOrigin::Message { from, to } => (1u64 << from.idx()) | (1u64 << to.idx()),
+                ValueOrigin::RecParam => (1u64 << prog.roles.len()) - 1,
+                ValueOrigin::Bound { role } => 1u64 << role.idx(),
+                ValueOrigin::Stream { .. } | ValueOrigin::Observed { .. } => 0,
+            };
+            let id = ValueId(i as u32);
+            let r = arena.regs.len() as u16;
+            arena.reg_of.insert(id, r);
+            if let Some(f) = prog.wire_floats.get(&id) {
+                arena.float_regs.insert(r, *f);
+            }
+            arena.regs.push(RegInfo {
+                value: id,
+                name: v.name.clone(),
+                sort: v.sort.clone(),
+                str_at: 0,
+                str_cap: 0,
+                knowers,
+            });
+        }
+        let mut b = Builder {
+            prog,
+            dialect,
+            a: Automaton {
+                name: chor.name.clone(),
+                prog: prog.clone(),
+                roles: prog.roles.iter().map(|r| r.name.clone()).collect(),
+                states: vec![StateKind::End],
+                edges: Vec::new(),
+                arena,
+                start: 0,
+                alphabet: Vec::new(),
+                preds: 0,
+            },
+            loops: Vec::new(),
+        };
+        let start = b.compile(&chor.body, 0)?;
+        b.a.start = start;
+        b.check_guarded()?;
+        let mut alphabet: Vec<u32> = b.a.edges.iter().map(|e| e.msgid).collect();
+        alphabet.sort_unstable();
+        alphabet.dedup();
+        b.a.alphabet = alphabet;
+        Ok(b.a)
+    }
+
+    /// Whether message `msgid` is a step of some edge.
+    #[inline]
+    pub fn in_alphabet(&self, msgid: u32) -> bool {
+        self.alphabet.binary_search(&msgid).is_ok()
+    }
+
+    /// The edges of `state` (empty unless it is a branch).
+    pub fn edges_of(&self, state: u32) -> &[u32] {
+        match &self.states[state as usize] {
+            StateKind::Branch(es) => es,
+            _ => &[],
+        }
+    }
+
+    /// The states reached from `s` by assignments only: the branch or end a step lands on.
+    pub fn settle(&self, mut s: u32) -> u32 {
+        for _ in 0..=self.states.len() {
+            match &self.states[s as usize] {
+                StateKind::Assign { next, .. } => s = *next,
+                _ => return s,
+            }
+        }
+        s
+    }
+}
+
+impl Builder<'_> {
+    fn state(&mut self, k: StateKind) -> u32 {
+        self.a.states.push(k);
+        (self.a.states.len() - 1) as u32
+    }
+
+    fn code(&mut self, e: &crate::hir::Expr) -> Result<Code, CompileError> {
+        let mut c = self.a.arena.compile(self.prog, e).map_err(|m| CompileError { message: m, span: Some(e.loc.0) })?;
+        c.id = self.a.preds as u32;
+        self.a.preds += 1;
+        Ok(c)
+    }
+
+    fn compile(&mut self, g: &Global, k: u32) -> Result<u32, CompileError> {
+        match g {
+            Global::Msg(m) => {
+                let e = self.edge(m, k)?;
+                Ok(self.state(StateKind::Branch(vec![e])))
+            }
+            Global::Seq(items, _) => {
+                let mut cur = k;
+                for item in items.iter().rev() {
+                    cur = self.compile(item, cur)?;
+                }
+                Ok(cur)
+            }
+            Global::Choice(bs, loc) => {
+                let mut edges = Vec::new();
+                for b in bs {
+                    let s = self.compile(b, k)?;
+                    match &self.a.states[s as usize] {
+                        StateKind::Branch(es) => edges.extend(es.iter().copied()),
+                        _ => return err("a branch of a choice that does not start with a message", Some(loc.0)),
+                    }
+                }
+                Ok(self.state(StateKind::Branch(edges)))
+            }
+            Global::Rec { var, params, body, loc, .. } => {
+                let head = self.state(StateKind::End);
+                let mut regs = Vec::new();
+                let mut checks = Vec::new();
+                let mut assigns = Vec::new();
+                for p in params {
+                    if p.sort == Sort::Str {
+                        return err(
+                            format!("the recursion parameter `{}` is a string: the monitor holds strings only in payload fields", p.name),
+                            Some(loc.0),
+                        );
+                    }
+                    let r = self.reg(p.value, loc.0)?;
+                    regs.push(r);
+                    assigns.push((r, self.code(&p.init)?));
+                    if let Some(rf) = &p.refinement {
+                        checks.push((r, self.code(rf)?));
+                    }
+                }
+                self.loops.push(Loop { var: var.clone(), regs, checks: checks.clone(), head });
+                let b = self.compile(body, k);
+                self.loops.pop();
+                let b = b?;
+                self.a.states[head as usize] =
+                    StateKind::Assign { assigns: Vec::new(), checks: Vec::new(), next: b, span: loc.0 };
+                Ok(self.state(StateKind::Assign { assigns, checks, next: head, span: loc.0 }))
+            }
+            Global::Var(v) => {
+                let Some(l) = self.loops.iter().rev().find(|l| l.var == v.var) else {
+                    return err(format!("`{}` is not a loop around this jump", v.var), Some(v.loc.0));
+                };
+                if l.regs.len() != v.args.len() {
+                    return err(format!("`{}` takes {} arguments", v.var, l.regs.len()), Some(v.loc.0));
+                }
+                let (regs, checks, head) = (l.regs.clone(), l.checks.clone(), l.head);
+                let mut assigns = Vec::new();
+                for (r, a) in regs.into_iter().zip(&v.args) {
+                    assigns.push((r, self.code(a)?));
+                }
+                Ok(self.state(StateKind::Assign { assigns, checks, next: head, span: v.loc.0 }))
+            }
+            Global::End(_) => Ok(0),
+            Global::Motion(m) => err("a motion: the monitor runs MAVLink protocols only", Some(m.loc.0)),
+            Global::Par(_, loc) => err("a `*`: the monitor runs MAVLink protocols only", Some(loc.0)),
+        }
+    }
+
+    fn reg(&self, v: ValueId, span: Span) -> Result<u16, CompileError> {
+        match self.a.arena.reg_of.get(&v) {
+            Some(r) => Ok(*r),
+            None => err("a value that is not a register", Some(span)),
+        }
+    }
+
+    fn edge(&mut self, m: &Msg, k: u32) -> Result<u32, CompileError> {
+        let span = m.loc.0;
+        let (name, cmd) = match m.label.split_once('[') {
+            Some((n, c)) => (n, Some(c.trim_end_matches(']'))),
+            None => (m.label.as_str(), None),
+        };
+        let Some(msg) = self.dialect.message(name) else {
+            return err(format!("`{name}` is not a message of `{}`", self.dialect.name), Some(span));
+        };
+        let layout = Layout::of(msg);
+        let command = match cmd {
+            Some(c) => {
+                let Some((_, entry)) = self.dialect.entry(c) else {
+                    return err(format!("`{c}` is not an entry of the dialect"), Some(span));
+                };
+                let Some(slot) = layout.slot(msg, "command") else {
+                    return err(format!("`{name}` has no `command` field"), Some(span));
+                };
+                Some((slot, i128::from(entry.value)))
+            }
+            None => None,
+        };
+        let guard = match &m.guard {
+            Some(g) => Some(self.code(g)?),
+            None => None,
+        };
+        let mut fields = Vec::new();
+        for f in &m.payload {
+            let Some(mav) = &f.mav else {
+                return err(format!("the field `{}` is not a MAVLink field", f.name), Some(span));
+            };
+            let Some(df) = msg.field(&mav.field) else {
+                return err(format!("`{}` is not a field of `{name}`", mav.field), Some(span));
+            };
+            let Some(slot) = layout.slot(msg, &mav.field) else {
+                return err(format!("`{}` is not a field of `{name}`", mav.field), Some(span));
+            };
+            let kind = if df.is_string() {
+                FieldKind::Str
+            } else if df.array.is_some() {
+                return err(format!("the array field `{}` (the language cannot list one)", mav.field), Some(span));
+            } else if df.wire.is_float() {
+                FieldKind::Float
+            } else {
+                FieldKind::Int
+            };
+            let reg = self.reg(f.value, span)?;
+            if kind == FieldKind::Str {
+                let info = &mut self.a.arena.regs[reg as usize];
+                info.str_at = self.a.arena.str_size;
+                info.str_cap = slot.len;
+                self.a.arena.str_size += u32::from(slot.len);
+            }
+            let refinement = match &f.refinement {
+                Some(r) => Some(self.code(r)?),
+                None => None,
+            };
+            let entry = match &mav.entry {
+                Some(check) => {
+                    let x = crate::hir::expr::value_expr(f.value, &f.name, &f.sort);
+                    let (pred, what) = crate::lower::entry_predicate(Some(self.dialect), check, &x);
+                    Some((self.code(&pred)?, what))
+                }
+                None => None,
+            };
+            fields.push(FieldRead { name: f.name.clone(), reg, slot, kind, refinement, entry, span: m.loc.0 });
+        }
+        // Each participant is monitored with only what it knows: the message is its sender's
+        // obligation, so its guard and refinements may read only registers the sender
+        // knows (E0305 proves it of a verified protocol; checked again here so that the
+        // monitor's single register file is never read beyond a role's knowledge).
+        let from_bit = 1u64 << m.from.idx();
+        let codes = guard.iter().chain(fields.iter().flat_map(|f: &FieldRead| f.refinement.iter()));
+        for c in codes {
+            let mut bad = None;
+            let arena = &self.a.arena;
+            c.expr.visit_vars(&mut |v, _| {
+                if let crate::hir::Var::Value(id, name) = v {
+                    let known = arena.reg_of.get(id).is_some_and(|r| arena.regs[*r as usize].knowers & from_bit != 0);
+                    if !known {
+                        bad = Some(name.clone());
+                    }
+                }
+            });
+            if let Some(name) = bad {
+                return err(
+                    format!(
+                        "`{}` reads `{name}`, which its sender `{}` does not know",
+                        m.label,
+                        self.prog.role_name(m.from)
+                    ),
+                    Some(c.expr.loc.0),
+                );
+            }
+        }
+        let target = (layout.slot(msg, "target_system"), layout.slot(msg, "target_component"));
+        self.a.edges.push(Edge {
+            from: m.from,
+            to: m.to,
+            msgid: msg.id,
+            label: m.label.clone(),
+            command,
+            guard,
+            fields,
+            target,
+            target_state: k,
+            span,
+        });
+        Ok((self.a.edges.len() - 1) as u32)
+    }
+
+    /// Refuses a loop that can jump back to itself without a message (the run would
+    /// assign forever): well-formed protocols are guarded, this keeps the monitor total.
+    fn check_guarded(&self) -> Result<(), CompileError> {
+        for s in 0..self.a.states.len() {
+            let mut at = s;
+            for _ in 0..=self.a.states.len() {
+                match &self.a.states[at] {
+                    StateKind::Assign { next, .. } => at = *next as usize,
+                    _ => break,
+                }
+            }
+            if let StateKind::Assign { span, .. } = &self.a.states[at] {
+                return err("a loop that jumps back without a message", Some(*span));
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,254 @@
+//! Unit tests of the monitor: frames built by hand against small protocols.
+
+use super::wire::{self, Layout, Scalar};
+use super::*;
+use crate::dialect::Dialect;
+use crate::source::SourceDb;
+
+/// A lowered program from source text (no imports).
+pub(crate) fn program(db: &mut SourceDb, src: &str) -> crate::hir::Program {
+    let file = db.add("t.chor", src);
+    let mut no_imports = |_: &std::path::Path| Err(std::io::Error::other("no imports"));
+    match mochi_verify::driver::prepare(db, file, &mut no_imports, mochi_verify::driver::Stage::Names) {
+        Ok(p) => p,
+        Err(d) => panic!("{:?}", d.iter().map(|d| d.message.clone()).collect::<Vec<_>>()),
+    }
+}
+
+/// A frame of message `name` with these fields (the rest zero), as owned bytes.
+pub(crate) fn payload(d: &Dialect, name: &str, ints: &[(&str, Scalar)], strs: &[(&str, &[u8])]) -> (u32, Vec<u8>) {
+    let m = d.message(name).expect("message");
+    let l = Layout::of(m);
+    let mut p = vec![0u8; l.size as usize];
+    for (f, v) in ints {
+        wire::write(&mut p, l.slot(m, f).expect("field"), 0, *v);
+    }
+    for (f, s) in strs {
+        wire::write_str(&mut p, l.slot(m, f).expect("field"), s);
+    }
+    let n = wire::truncate(&p).len();
+    p.truncate(n);
+    (m.id, p)
+}
+
+fn frame(sysid: u8, compid: u8, (msgid, payload): &(u32, Vec<u8>)) -> Frame<'_> {
+    Frame { time_us: Some(1000), version: 2, sysid, compid, msgid: *msgid, payload, signed: false, raw: &[] }
+}
+
+fn int(i: i128) -> Scalar {
+    Scalar::Int(i)
+}
+
+const UPLOAD: &str = "dialect common;
+system S { participant GCS; participant UAV; }
+choreography Upload =
+  GCS -> UAV: MISSION_COUNT(count {1 <= count && count < 500},
+                            mission_type {mission_type == MAV_MISSION_TYPE_MISSION}).
+  mu t(i: int {0 <= i && i <= count} = 0) decreases count - i.
+    ( UAV -> GCS: [i < count] MISSION_REQUEST_INT(seq as x {x == i},
+                                                  mission_type {mission_type == MAV_MISSION_TYPE_MISSION}).
+      GCS -> UAV: MISSION_ITEM_INT(seq as y {y == x},
+                                   mission_type {mission_type == MAV_MISSION_TYPE_MISSION}).
+      t(i + 1)
+    + UAV -> GCS: MISSION_ACK(type {(type == MAV_MISSION_ACCEPTED && i == count)
+                                     || (MAV_MISSION_ERROR <= type && type <= MAV_MISSION_OPERATION_CANCELLED)},
+                              mission_type {mission_type == MAV_MISSION_TYPE_MISSION}).
+      end );";
+
+fn upload_monitor(db: &mut SourceDb) -> (Monitor, &'static Dialect) {
+    let prog = program(db, UPLOAD);
+    let d = prog.dialect.expect("dialect");
+    (Monitor::new(vec![Automaton::compile(&prog).expect("compiles")]), d)
+}
+
+fn to_uav(d: &Dialect, name: &str, fields: &[(&str, Scalar)]) -> (u32, Vec<u8>) {
+    let mut f = vec![("target_system", int(1)), ("target_component", int(1))];
+    f.extend_from_slice(fields);
+    payload(d, name, &f, &[])
+}
+
+fn to_gcs(d: &Dialect, name: &str, fields: &[(&str, Scalar)]) -> (u32, Vec<u8>) {
+    let mut f = vec![("target_system", int(255)), ("target_component", int(190))];
+    f.extend_from_slice(fields);
+    payload(d, name, &f, &[])
+}
+
+#[test]
+fn a_conforming_upload_steps_to_its_end_and_telemetry_passes() {
+    let mut db = SourceDb::new();
+    let (mut m, d) = upload_monitor(&mut db);
+    let count = to_uav(d, "MISSION_COUNT", &[("count", int(2))]);
+    assert!(matches!(m.on_frame(&frame(255, 190, &count)), Outcome::Step { .. }));
+    let hb = payload(d, "HEARTBEAT", &[], &[]);
+    assert_eq!(m.on_frame(&frame(1, 1, &hb)), Outcome::Passed);
+    for i in 0..2 {
+        let req = to_gcs(d, "MISSION_REQUEST_INT", &[("seq", int(i))]);
+        assert!(matches!(m.on_frame(&frame(1, 1, &req)), Outcome::Step { .. }), "request {i}");
+        let item = to_uav(d, "MISSION_ITEM_INT", &[("seq", int(i))]);
+        assert!(matches!(m.on_frame(&frame(255, 190, &item)), Outcome::Step { .. }), "item {i}");
+    }
+    let ack = to_gcs(d, "MISSION_ACK", &[]);
+    assert!(matches!(m.on_frame(&frame(1, 1, &ack)), Outcome::Ended { .. }));
+    let s = m.finish();
+    assert_eq!(s.len(), 1);
+    assert!(s[0].conformant);
+    assert_eq!(s[0].taken.iter().filter(|&&n| n > 0).count(), 4);
+    assert_eq!(m.stats.violations, 0);
+}
+
+#[test]
+fn an_early_accept_is_the_refinement_that_fails_with_its_values() {
+    let mut db = SourceDb::new();
+    let (mut m, d) = upload_monitor(&mut db);
+    m.on_frame(&frame(255, 190, &to_uav(d, "MISSION_COUNT", &[("count", int(3))])));
+    m.on_frame(&frame(1, 1, &to_gcs(d, "MISSION_REQUEST_INT", &[("seq", int(0))])));
+    m.on_frame(&frame(255, 190, &to_uav(d, "MISSION_ITEM_INT", &[("seq", int(0))])));
+    // The seed's stale buffer: ACCEPTED after one item of three.
+    let Outcome::Violation(v) = m.on_frame(&frame(1, 1, &to_gcs(d, "MISSION_ACK", &[]))) else { panic!("accepted") };
+    let viol = m.violation(v).expect("recorded").clone();
+    assert_eq!(viol.kind, Kind::Refinement);
+    assert_eq!(viol.field.as_deref(), Some("type"));
+    let text = m.describe(&db, v);
+    assert!(text.contains("t.chor:"), "{text}");
+    assert!(text.contains("i = 1"), "{text}");
+    assert!(text.contains("count = 3"), "{text}");
+    assert!(text.contains("role UAV (1/1)"), "{text}");
+    // Not delivered: the session still takes the next request.
+    let req = to_gcs(d, "MISSION_REQUEST_INT", &[("seq", int(1))]);
+    assert!(matches!(m.on_frame(&frame(1, 1, &req)), Outcome::Step { .. }));
+    // A request out of order breaks `x == i`.
+    m.on_frame(&frame(255, 190, &to_uav(d, "MISSION_ITEM_INT", &[("seq", int(1))])));
+    let bad = to_gcs(d, "MISSION_REQUEST_INT", &[("seq", int(0))]);
+    let Outcome::Violation(v) = m.on_frame(&frame(1, 1, &bad)) else { panic!("accepted") };
+    assert_eq!(m.violation(v).map(|v| v.kind), Some(Kind::Refinement));
+}
+
+#[test]
+fn sessions_are_keyed_by_both_ends_and_strangers_are_reported() {
+    let mut db = SourceDb::new();
+    let (mut m, d) = upload_monitor(&mut db);
+    // Two ground stations upload to two vehicles at once.
+    m.on_frame(&frame(255, 190, &to_uav(d, "MISSION_COUNT", &[("count", int(1))])));
+    let count2 =
+        payload(d, "MISSION_COUNT", &[("target_system", int(2)), ("target_component", int(1)), ("count", int(1))], &[]);
+    m.on_frame(&frame(255, 230, &count2));
+    let req2 = payload(d, "MISSION_REQUEST_INT", &[("target_system", int(255)), ("target_component", int(230))], &[]);
+    assert!(matches!(m.on_frame(&frame(2, 1, &req2)), Outcome::Step { session: 1, .. }));
+    let req1 = to_gcs(d, "MISSION_REQUEST_INT", &[]);
+    assert!(matches!(m.on_frame(&frame(1, 1, &req1)), Outcome::Step { session: 0, .. }));
+    // A request from a third vehicle, to nobody's upload: outside any session.
+    let stray = payload(d, "MISSION_REQUEST_INT", &[("target_system", int(255)), ("target_component", int(1))], &[]);
+    let Outcome::Violation(v) = m.on_frame(&frame(3, 1, &stray)) else { panic!("passed") };
+    assert_eq!(m.violation(v).map(|v| v.kind), Some(Kind::OutsideSession));
+    // The first upload is left incomplete at the end of the stream.
+    let s = m.finish();
+    assert_eq!(s.iter().filter(|s| !s.conformant).count(), 2);
+}
+
+#[test]
+fn floats_are_exact_and_nan_is_rejected() {
+    let mut db = SourceDb::new();
+    let prog = program(
+        &mut db,
+        "dialect common;
+system S { participant GCS; participant UAV; }
+choreography P =
+  GCS -> UAV: PARAM_SET(param_id {param_id == \"RATE\"}, param_value as v {v <= 0.1}).
+  UAV -> GCS: PARAM_VALUE(param_id {param_id == \"RATE\"}, param_value as w {w == v}).
+  end;",
+    );
+    let d = prog.dialect.expect("dialect");
+    let mut m = Monitor::new(vec![Automaton::compile(&prog).expect("compiles")]);
+    let set = |x: f32, id: &[u8]| {
+        payload(
+            d,
+            "PARAM_SET",
+            &[("target_system", int(1)), ("target_component", int(1)), ("param_value", Scalar::F32(x))],
+            &[("param_id", id)],
+        )
+    };
+    // 0.1f32 is 0.100000001490116..., above 1/10: a violation.
+    let Outcome::Violation(v) = m.on_frame(&frame(255, 190, &set(0.1, b"RATE"))) else { panic!("accepted 0.1f32") };
+    assert_eq!(m.violation(v).map(|v| v.kind), Some(Kind::Refinement));
+    let Outcome::Violation(v) = m.on_frame(&frame(255, 190, &set(f32::NAN, b"RATE"))) else { panic!("accepted NaN") };
+    assert_eq!(m.violation(v).map(|v| v.kind), Some(Kind::NonFinite));
+    let Outcome::Violation(v) = m.on_frame(&frame(255, 190, &set(f32::NEG_INFINITY, b"RATE"))) else {
+        panic!("accepted -inf")
+    };
+    assert_eq!(m.violation(v).map(|v| v.kind), Some(Kind::NonFinite));
+    let Outcome::Violation(_) = m.on_frame(&frame(255, 190, &set(0.05, b"RATEX"))) else { panic!("accepted RATEX") };
+    assert!(matches!(m.on_frame(&frame(255, 190, &set(0.05, b"RATE"))), Outcome::Step { .. }));
+    let value = |x: f32| payload(d, "PARAM_VALUE", &[("param_value", Scalar::F32(x))], &[("param_id", b"RATE")]);
+    let Outcome::Violation(_) = m.on_frame(&frame(1, 1, &value(0.05000001))) else { panic!("accepted another value") };
+    assert!(matches!(m.on_frame(&frame(1, 1, &value(0.05))), Outcome::Ended { .. }));
+}
+
+#[test]
+fn enum_fields_must_hold_an_entry_and_commands_are_fixed_by_the_label() {
+    let mut db = SourceDb::new();
+    let prog = program(
+        &mut db,
+        "dialect common;
+system S { participant GCS; participant UAV; }
+choreography A =
+  GCS -> UAV: COMMAND_LONG[MAV_CMD_COMPONENT_ARM_DISARM](arm).
+  UAV -> GCS: COMMAND_ACK(command {command == MAV_CMD_COMPONENT_ARM_DISARM}, result).
+  end;",
+    );
+    let d = prog.dialect.expect("dialect");
+    let mut m = Monitor::new(vec![Automaton::compile(&prog).expect("compiles")]);
+    let cmd = |c: i128, arm: f32| to_uav(d, "COMMAND_LONG", &[("command", int(c)), ("param1", Scalar::F32(arm))]);
+    // Another command is not this protocol's message: outside any session.
+    let Outcome::Violation(v) = m.on_frame(&frame(255, 190, &cmd(176, 1.0))) else { panic!() };
+    assert_eq!(m.violation(v).map(|v| v.kind), Some(Kind::OutsideSession));
+    // MAV_BOOL has 0 and 1: 0.5 is no entry.
+    let Outcome::Violation(v) = m.on_frame(&frame(255, 190, &cmd(400, 0.5))) else { panic!("accepted 0.5") };
+    assert_eq!(m.violation(v).map(|v| v.kind), Some(Kind::Entry));
+    assert!(matches!(m.on_frame(&frame(255, 190, &cmd(400, 1.0))), Outcome::Step { .. }));
+    // MAV_RESULT has no 200.
+    let ack = |r: i128| to_gcs(d, "COMMAND_ACK", &[("command", int(400)), ("result", int(r))]);
+    let Outcome::Violation(v) = m.on_frame(&frame(1, 1, &ack(200))) else { panic!("accepted 200") };
+    assert_eq!(m.violation(v).map(|v| v.kind), Some(Kind::Entry));
+    assert!(matches!(m.on_frame(&frame(1, 1, &ack(0))), Outcome::Ended { .. }));
+}
+
+#[test]
+fn a_division_by_zero_is_a_violation() {
+    let mut db = SourceDb::new();
+    let prog = program(
+        &mut db,
+        "dialect common;
+system S { participant GCS; participant UAV; }
+choreography P =
+  GCS -> UAV: MISSION_COUNT(count as n).
+  UAV -> GCS: MISSION_REQUEST_INT(seq as q {q <= 100 / n}).
+  end;",
+    );
+    let d = prog.dialect.expect("dialect");
+    let mut m = Monitor::new(vec![Automaton::compile(&prog).expect("compiles")]);
+    m.on_frame(&frame(255, 190, &to_uav(d, "MISSION_COUNT", &[("count", int(0))])));
+    let Outcome::Violation(v) = m.on_frame(&frame(1, 1, &to_gcs(d, "MISSION_REQUEST_INT", &[]))) else { panic!() };
+    assert_eq!(m.violation(v).map(|v| v.kind), Some(Kind::Undefined));
+}
+
+#[test]
+fn big_values_take_the_exact_fallback() {
+    let mut db = SourceDb::new();
+    let prog = program(
+        &mut db,
+        "dialect common;
+system S { participant GCS; participant UAV; }
+choreography P =
+  GCS -> UAV: PARAM_SET(param_value as v {v * v * v * v * v > 0}).
+  end;",
+    );
+    let d = prog.dialect.expect("dialect");
+    let mut m = Monitor::new(vec![Automaton::compile(&prog).expect("compiles")]);
+    let set = |x: f32| to_uav(d, "PARAM_SET", &[("param_value", Scalar::F32(x))]);
+    // (2^100)^5 leaves 128 bits: decided over big rationals, and counted.
+    assert!(matches!(m.on_frame(&frame(255, 190, &set(2f32.powi(100)))), Outcome::Ended { .. }));
+    assert!(m.stats.fallbacks >= 1);
+    let Outcome::Violation(_) = m.on_frame(&frame(255, 190, &set(-(2f32.powi(100))))) else { panic!() };
+    // f32::MAX does not fit a register's rational either: decided the same way.
+    assert!(matches!(m.on_frame(&frame(255, 190, &set(f32::MAX))), Outcome::Ended { .. }));
+}

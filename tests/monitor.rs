@@ -1,0 +1,510 @@
+//! The run-time monitor (`mochi::monitor`) against the rest of mochi and the world:
+//!
+//! - static and run time agree: every protocol under `choreographies/mavlink/` that
+//!   `mochi check` verifies is simulated (payloads are Z3 models, `mochi::simulate`), each
+//!   run is encoded into MAVLink frames and fed to the monitor, which must take every
+//!   message (never stuck, never a violation on a conforming trace); then one refined field
+//!   of one message is changed so that its refinement (evaluated independently, with what
+//!   the sender knew) is false, and the monitor must reject exactly that frame;
+//! - the payload decoder agrees with the `mavlink` crate on random messages of the common
+//!   dialect, field by field;
+//! - the hot path does not allocate: a counting global allocator (the reason this is a
+//!   test binary of its own) sees no allocation over a long conforming stream after
+//!   warm-up.
+
+use mochi::dialect::Dialect;
+use mochi::driver::{Config, Verdict};
+use mochi::exact::{self, Tri, Value};
+use mochi::hir::{Program, RoleId};
+use mochi::mavio::Frame;
+use mochi::monitor::wire::{self, Layout, Scalar};
+use mochi::monitor::{Automaton, Kind, Monitor, Outcome};
+use mochi::simulate::{SimConfig, SimMessage};
+use mochi::source::SourceDb;
+use num_traits::ToPrimitive;
+use std::alloc::{GlobalAlloc, Layout as AllocLayout, System};
+use std::cell::Cell;
+use std::path::Path;
+
+// ---- a counting allocator (per thread: the test harness runs tests on several) ----------
+
+struct Counting;
+
+thread_local! {
+    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
+}
+
+fn count() {
+    let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+}
+
+// SAFETY: every call is forwarded to the system allocator unchanged; the counter is a
+// thread-local `Cell` with a constant initialiser, which never allocates.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, l: AllocLayout) -> *mut u8 {
+        count();
+        System.alloc(l)
+    }
+    unsafe fn alloc_zeroed(&self, l: AllocLayout) -> *mut u8 {
+        count();
+        System.alloc_zeroed(l)
+    }
+    unsafe fn realloc(&self, p: *mut u8, l: AllocLayout, n: usize) -> *mut u8 {
+        count();
+        System.realloc(p, l, n)
+    }
+    unsafe fn dealloc(&self, p: *mut u8, l: AllocLayout) {
+        System.dealloc(p, l)
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn allocations() -> u64 {
+    ALLOCATIONS.with(Cell::get)
+}
+
+// ---- loading -------------------------------------------------------------------------
+
+/// The lowered program of a file and whether `mochi check` verifies it.
+fn load(path: &Path) -> (SourceDb, Program, Verdict) {
+    let mut db = SourceDb::new();
+    let verdict = mochi::fsload::check_file(&mut db, path, &Config::default()).expect("readable").verdict;
+    let mut db = SourceDb::new();
+    let root = mochi::fsload::load_root(&mut db, path).expect("readable");
+    let mut read = |p: &Path| mochi::fsload::read_bytes(p);
+    let prog = mochi::driver::prepare(&mut db, root, &mut read, mochi::driver::Stage::Names).expect("lowered");
+    (db, prog, verdict)
+}
+
+fn protocols() -> Vec<std::path::PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("choreographies/mavlink");
+    let mut out: Vec<_> = std::fs::read_dir(&dir)
+        .expect("choreographies/mavlink")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "chor"))
+        .collect();
+    out.sort();
+    out
+}
+
+// ---- frames from simulated messages -------------------------------------------------
+
+/// A role's MAVLink end: the first role is a ground station (255/190), the others
+/// vehicles (1/1, 2/1, ...).
+fn end_of(r: RoleId) -> (u8, u8) {
+    if r.0 == 0 {
+        (255, 190)
+    } else {
+        (r.0 as u8, 1)
+    }
+}
+
+/// The wire scalar of a simulated value for a field of this wire type.
+fn scalar(prog: &Program, v: &Value, wire: mochi::dialect::Wire) -> Option<Scalar> {
+    let Value::Num(n) = v else {
+        return match v {
+            Value::Bool(Tri::True) => Some(Scalar::Int(1)),
+            Value::Bool(Tri::False) => Some(Scalar::Int(0)),
+            _ => None,
+        };
+    };
+    let r = n.value()?;
+    let _ = prog;
+    Some(match wire {
+        mochi::dialect::Wire::F32 => Scalar::F32(r.to_f64()? as f32),
+        mochi::dialect::Wire::F64 => Scalar::F64(r.to_f64()?),
+        _ => Scalar::Int(r.to_integer().to_i128()?),
+    })
+}
+
+/// A message's payload, its fields set to `values` (field name, value), its targets to the
+/// receiver's end (unless listed), and the command a `[MAV_CMD_X]` label fixes.
+fn encode(prog: &Program, d: &Dialect, m: &SimMessage, values: &[(Option<String>, Value)]) -> (u32, Vec<u8>) {
+    let (name, cmd) = match m.label.split_once('[') {
+        Some((n, c)) => (n, Some(c.trim_end_matches(']'))),
+        None => (m.label.as_str(), None),
+    };
+    let msg = d.message(name).expect("message of the dialect");
+    let l = Layout::of(msg);
+    let mut p = vec![0u8; l.size as usize];
+    let (ts, tc) = end_of(m.to);
+    if let Some(s) = l.slot(msg, "target_system") {
+        wire::write(&mut p, s, 0, Scalar::Int(i128::from(ts)));
+    }
+    if let Some(s) = l.slot(msg, "target_component") {
+        wire::write(&mut p, s, 0, Scalar::Int(i128::from(tc)));
+    }
+    if let Some(c) = cmd {
+        let (_, e) = d.entry(c).expect("command entry");
+        wire::write(&mut p, l.slot(msg, "command").expect("command field"), 0, Scalar::Int(i128::from(e.value)));
+    }
+    for (field, v) in values {
+        let Some(field) = field else { continue };
+        let slot = l.slot(msg, field).expect("field");
+        let df = msg.field(field).expect("field");
+        if df.is_string() {
+            let bytes = match v {
+                Value::Num(n) => {
+                    let code = n.value().and_then(|r| r.to_integer().to_usize()).unwrap_or(usize::MAX);
+                    match prog.strings.get(code) {
+                        Some(s) => s.clone().into_bytes(),
+                        None => format!("#{code}").into_bytes(),
+                    }
+                }
+                _ => Vec::new(),
+            };
+            wire::write_str(&mut p, slot, &bytes);
+        } else if let Some(s) = scalar(prog, v, df.wire) {
+            wire::write(&mut p, slot, 0, s);
+        }
+    }
+    let n = wire::truncate(&p).len();
+    p.truncate(n);
+    (msg.id, p)
+}
+
+fn frame(from: (u8, u8), (msgid, payload): &(u32, Vec<u8>)) -> Frame<'_> {
+    Frame { time_us: None, version: 2, sysid: from.0, compid: from.1, msgid: *msgid, payload, signed: false, raw: &[] }
+}
+
+fn values_of(m: &SimMessage) -> Vec<(Option<String>, Value)> {
+    m.fields.iter().map(|(_, f, _, v)| (f.clone(), v.clone())).collect()
+}
+
+/// Candidate wrong values for a field: around the sent value and at the ends of its range.
+fn candidates(v: &Value, wire: mochi::dialect::Wire) -> Vec<Value> {
+    let Value::Num(n) = v else { return vec![Value::Bool(Tri::True), Value::Bool(Tri::False)] };
+    let Some(r) = n.value().cloned() else { return Vec::new() };
+    let rat = |i: i128| exact::Rat::from_integer(num_bigint::BigInt::from(i));
+    let mut out: Vec<exact::Rat> =
+        [1, -1, 2, 7, 100, 1000, -1000].iter().map(|&d| r.clone() + rat(d)).chain([rat(0), rat(1)]).collect();
+    match wire.int_range() {
+        Some((lo, hi)) => {
+            out.push(rat(lo));
+            out.push(rat(hi));
+            out.retain(|x| *x >= rat(lo) && *x <= rat(hi) && x.is_integer());
+        }
+        None => {
+            out.push(rat(1_000_000));
+            out.push(rat(-1_000_000));
+            if wire == mochi::dialect::Wire::Char {
+                out.clear();
+                // A string no literal writes.
+                out.push(rat(1_000_000));
+            }
+        }
+    }
+    out.retain(|x| *x != r);
+    out.into_iter().map(Value::rat).collect()
+}
+
+/// The first wrong value of some refined field of `m` whose refinement, evaluated with
+/// what the sender knew, is false: `(field index, value)`.
+fn mutation(prog: &Program, d: &Dialect, m: &SimMessage) -> Option<(usize, Value)> {
+    let name = m.label.split('[').next()?;
+    let msg = d.message(name)?;
+    for (k, (_, field, refinement, v)) in m.fields.iter().enumerate() {
+        let (Some(field), Some(refinement)) = (field, refinement) else { continue };
+        // The command a `[MAV_CMD_X]` label fixes is the label: changing it makes another
+        // message, not a broken refinement.
+        if field == "command" && m.label.contains('[') {
+            continue;
+        }
+        let df = msg.field(field)?;
+        let wire = if df.is_string() { mochi::dialect::Wire::Char } else { df.wire };
+        for c in candidates(v, wire) {
+            let env = |var: &mochi::hir::Var| match var {
+                mochi::hir::Var::Value(id, _) => {
+                    if let Some(j) = m.fields.iter().position(|(fid, ..)| fid == id) {
+                        return Some(if j == k { c.clone() } else { m.fields[j].3.clone() });
+                    }
+                    m.known.iter().find(|(kid, _)| kid == id).map(|(_, v)| v.clone())
+                }
+                _ => None,
+            };
+            if exact::holds(prog, refinement, &env) == Tri::False {
+                return Some((k, c));
+            }
+        }
+    }
+    None
+}
+
+#[test]
+fn static_and_run_time_agree_on_every_verified_protocol() {
+    let mut checked = 0;
+    let mut mutated = 0;
+    for path in protocols() {
+        let (_db, prog, verdict) = load(&path);
+        if verdict != Verdict::Verified {
+            continue;
+        }
+        let name = path.display().to_string();
+        let automaton = Automaton::compile(&prog).unwrap_or_else(|e| panic!("{name}: {}", e.message));
+        let d = prog.dialect.expect("a MAVLink protocol");
+        let cfg = SimConfig { runs: 3, steps: 40, seed: 7, ..SimConfig::default() };
+        let report = mochi::simulate::simulate(&prog, &cfg);
+        let mut messages = 0;
+        for run in &report.messages {
+            // The conforming trace: every message is a step; the run's end is the session's.
+            let mut m = Monitor::new(vec![automaton.clone()]);
+            for (k, msg) in run.iter().enumerate() {
+                let bytes = encode(&prog, d, msg, &values_of(msg));
+                let o = m.on_frame(&frame(end_of(msg.from), &bytes));
+                if let Outcome::Violation(v) = o {
+                    panic!("{name}: a conforming message {k} ({}) rejected: {}", msg.label, m.describe(&_db, v));
+                }
+                messages += 1;
+            }
+            // The same trace with one refined field broken at the first message where
+            // that is possible: rejected at exactly that frame, accepted before.
+            if let Some((k, (field, wrong))) =
+                run.iter().enumerate().find_map(|(k, msg)| mutation(&prog, d, msg).map(|x| (k, x)))
+            {
+                let mut m = Monitor::new(vec![automaton.clone()]);
+                for (j, msg) in run.iter().enumerate().take(k + 1) {
+                    let mut values = values_of(msg);
+                    if j == k {
+                        values[field].1 = wrong.clone();
+                    }
+                    let o = m.on_frame(&frame(end_of(msg.from), &encode(&prog, d, msg, &values)));
+                    match (j == k, o) {
+                        (false, Outcome::Violation(v)) => {
+                            panic!("{name}: message {j} rejected: {}", m.describe(&_db, v))
+                        }
+                        (true, Outcome::Violation(v)) => {
+                            let kind = m.violation(v).map(|v| v.kind);
+                            assert!(
+                                matches!(kind, Some(Kind::Refinement | Kind::Entry)),
+                                "{name}: message {k} broken in field {field}: {kind:?}"
+                            );
+                        }
+                        (true, o) => panic!(
+                            "{name}: message {k} ({}) with field {} = {wrong} accepted: {o:?}",
+                            msg.label,
+                            msg.fields[field].1.as_deref().unwrap_or("?")
+                        ),
+                        _ => {}
+                    }
+                }
+                mutated += 1;
+            }
+        }
+        assert!(messages > 0, "{name}: the simulation sent nothing");
+        checked += 1;
+    }
+    assert!(checked >= 10, "only {checked} verified protocols under choreographies/mavlink/");
+    assert!(mutated >= checked, "only {mutated} mutated traces for {checked} protocols");
+}
+
+// ---- the decoder against the mavlink crate ---------------------------------------------
+
+/// A small deterministic generator (SplitMix64).
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+}
+
+/// The crate's value of one field, from its serde form, as what this decoder reads.
+fn crate_value(d: &Dialect, f: &mochi::dialect::Field, j: &serde_json::Value) -> Option<Vec<Scalar>> {
+    let entry = |name: &str| d.entry(name).map(|(_, e)| e.value as i128);
+    let one = |j: &serde_json::Value| -> Option<Scalar> {
+        Some(match j {
+            serde_json::Value::Null => Scalar::F64(f64::NAN),
+            serde_json::Value::Number(n) if f.wire.is_float() => Scalar::F64(n.as_f64()?),
+            serde_json::Value::Number(n) => Scalar::Int(n.as_i64().map(i128::from).or(n.as_u64().map(i128::from))?),
+            serde_json::Value::Object(o) => Scalar::Int(entry(o.get("type")?.as_str()?)?),
+            // A bitmask: flag names and hexadecimal rests joined by `|`.
+            serde_json::Value::String(s) => {
+                let mut v = 0i128;
+                for part in s.split('|').map(str::trim).filter(|p| !p.is_empty()) {
+                    v |= match part.strip_prefix("0x") {
+                        Some(h) => i128::from_str_radix(h, 16).ok()?,
+                        None => entry(part)?,
+                    };
+                }
+                Scalar::Int(v)
+            }
+            _ => return None,
+        })
+    };
+    match j {
+        serde_json::Value::Array(xs) => xs.iter().map(one).collect(),
+        _ => Some(vec![one(j)?]),
+    }
+}
+
+fn same(mine: Scalar, theirs: Scalar) -> bool {
+    match (mine, theirs) {
+        (Scalar::Int(a), Scalar::Int(b)) => a == b,
+        (Scalar::F32(a), Scalar::F64(b)) => {
+            (a.is_nan() && b.is_nan()) || f64::from(a) == b || (!a.is_finite() && b.is_nan())
+        }
+        (Scalar::F64(a), Scalar::F64(b)) => (a.is_nan() && b.is_nan()) || a == b || (!a.is_finite() && b.is_nan()),
+        _ => false,
+    }
+}
+
+#[test]
+fn the_payload_decoder_agrees_with_the_mavlink_crate() {
+    use mavlink::{dialects::common::MavMessage, MavlinkVersion, Message};
+    let d = mochi::dialect::builtin("common").expect("common");
+    let mut rng = Rng(21);
+    let (mut decoded, mut fields, mut tried) = (0, 0, 0);
+    for msg in &d.messages {
+        let l = Layout::of(msg);
+        for round in 0..8 {
+            tried += 1;
+            let mut p: Vec<u8> = (0..l.size).map(|_| rng.next() as u8).collect();
+            // Strings in ASCII (the crate's serde form of a string needs UTF-8), cut short
+            // at a random place; small values in enum fields half of the time so that the
+            // crate's typed enums parse.
+            for (f, s) in msg.fields.iter().zip(&l.slots) {
+                if f.is_string() {
+                    let cut = (rng.next() % (u64::from(s.len) + 1)) as usize;
+                    for k in 0..s.len as usize {
+                        p[s.offset as usize + k] = if k < cut { b'A' + (rng.next() % 26) as u8 } else { 0 };
+                    }
+                } else if f.enum_name.is_some() && round % 2 == 0 {
+                    let e = d.enum_(f.enum_name.as_deref().unwrap_or("")).expect("enum");
+                    let v = e.entries[(rng.next() as usize) % e.entries.len().max(1)].value;
+                    for k in 0..s.len as usize {
+                        wire::write(&mut p, *s, k, Scalar::Int(i128::from(v)));
+                    }
+                }
+            }
+            // MAVLink 2 truncation of trailing zeros, sometimes a shorter payload still.
+            let n = wire::truncate(&p).len();
+            p.truncate(n);
+            let Ok(parsed) = MavMessage::parse(MavlinkVersion::V2, msg.id, &p) else { continue };
+            assert_eq!(parsed.message_id(), msg.id);
+            let Ok(serde_json::Value::Object(json)) = serde_json::to_value(&parsed) else { continue };
+            decoded += 1;
+            for (f, s) in msg.fields.iter().zip(&l.slots) {
+                // The crate names the field `type` `mavtype` (a Rust keyword).
+                // (`type` itself is the serde tag holding the message's name).
+                let j = if f.name == "type" { json.get("mavtype") } else { json.get(&f.name) };
+                let Some(j) = j else { panic!("{}.{}: not in the crate's form {json:?}", msg.name, f.name) };
+                if f.is_string() {
+                    let mine = String::from_utf8_lossy(wire::read_str(&p, *s)).to_string();
+                    assert_eq!(Some(mine.as_str()), j.as_str(), "{}.{}", msg.name, f.name);
+                } else {
+                    let Some(theirs) = crate_value(d, f, j) else {
+                        panic!("{}.{}: the crate's value {j} is not read", msg.name, f.name)
+                    };
+                    assert_eq!(theirs.len(), s.len as usize, "{}.{}", msg.name, f.name);
+                    for (k, t) in theirs.into_iter().enumerate() {
+                        let mut mine = wire::read(&p, *s, k);
+                        // The crate reads an enum-typed field in its enum's primitive type
+                        // (CAMERA_IMAGE_CAPTURED's `int8_t` MAV_BOOL as a `u8`): the same
+                        // bytes, compared as such.
+                        if let (Some(_), Scalar::Int(i), Scalar::Int(_)) = (&f.enum_name, mine, t) {
+                            let bits = 8 * f.wire.bytes();
+                            let unsigned = i.rem_euclid(1i128 << bits);
+                            if Scalar::Int(unsigned) == t {
+                                mine = t;
+                            }
+                        }
+                        assert!(same(mine, t), "{}.{}[{k}]: mine {mine:?}, the crate's {t:?}", msg.name, f.name);
+                    }
+                }
+                fields += 1;
+            }
+        }
+    }
+    // Random bytes break some typed enums; most messages must still be compared.
+    assert!(decoded * 2 > tried, "only {decoded} of {tried} random messages parsed by the crate");
+    assert!(fields > 1000, "only {fields} fields compared");
+}
+
+// ---- no allocation on the hot path ----------------------------------------------------
+
+#[test]
+fn the_hot_path_does_not_allocate() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("choreographies/mavlink");
+    let (_db, prog, _) = load(&dir.join("mission-upload-tolerant.chor"));
+    let (_db2, param, _) = load(&dir.join("param-set.chor"));
+    let d = prog.dialect.expect("dialect");
+    let automata = vec![Automaton::compile(&prog).expect("compiles"), Automaton::compile(&param).expect("compiles")];
+    let msg = |name: &str, fields: &[(&str, Scalar)], strs: &[(&str, &[u8])]| {
+        let m = d.message(name).expect("message");
+        let l = Layout::of(m);
+        let mut p = vec![0u8; l.size as usize];
+        for (f, v) in fields {
+            wire::write(&mut p, l.slot(m, f).expect("field"), 0, *v);
+        }
+        for (f, s) in strs {
+            wire::write_str(&mut p, l.slot(m, f).expect("field"), s);
+        }
+        (m.id, p)
+    };
+    let int = Scalar::Int;
+    let (to_uav, to_gcs) = (
+        [("target_system", int(1)), ("target_component", int(1))],
+        [("target_system", int(255)), ("target_component", int(190))],
+    );
+    let with = |a: &[(&'static str, Scalar)], b: &[(&'static str, Scalar)]| [a, b].concat();
+    let items = 300;
+    let mut stream = vec![((255, 190), msg("MISSION_COUNT", &with(&to_uav, &[("count", int(items))]), &[]))];
+    let telemetry = msg("ATTITUDE", &[("roll", Scalar::F32(0.25))], &[]);
+    for i in 0..items {
+        stream.push(((1, 1), msg("MISSION_REQUEST_INT", &with(&to_gcs, &[("seq", int(i))]), &[])));
+        stream.push(((1, 1), telemetry.clone()));
+        let item = [("seq", int(i)), ("command", int(16)), ("x", int(-353_632_621))];
+        stream.push(((255, 190), msg("MISSION_ITEM_INT", &with(&to_uav, &item), &[])));
+    }
+    stream.push(((1, 1), msg("MISSION_ACK", &to_gcs, &[])));
+    let last = ((1, 1), msg("MISSION_CURRENT", &[("total", int(items))], &[]));
+    // A string field on the way too: param-set.chor's reads, the first in the warm-up and
+    // the second measured.
+    let read = |id: &[u8]| {
+        ((255, 190), msg("PARAM_REQUEST_READ", &with(&to_uav, &[("param_index", int(-1))]), &[("param_id", id)]))
+    };
+    let value = |id: &[u8], v: f32| {
+        ((1, 1), msg("PARAM_VALUE", &[("param_value", Scalar::F32(v)), ("param_type", int(9))], &[("param_id", id)]))
+    };
+    let mut warm: Vec<_> = stream.clone();
+    warm.extend([last, read(b"MC_PITCH_P"), value(b"MC_PITCH_P", 6.5)]);
+    // Measured: a second upload (its session reuses the first one's slot) without the
+    // message that ends it (an end records the session's summary), and the second read.
+    let mut measured = stream;
+    measured.extend([read(b"MC_PITCHRATE_FF"), value(b"MC_PITCHRATE_FF", 0.25)]);
+    let mut m = Monitor::new(automata);
+    let mut outcomes = Vec::with_capacity(warm.len() + measured.len());
+    for (from, x) in &warm {
+        outcomes.push(m.on_frame(&frame(*from, x)));
+    }
+    assert_eq!(m.stats.violations, 0, "{:?}", m.violations().first().map(|v| v.kind));
+    assert_eq!(m.stats.sessions_ended, 1);
+    let frames: Vec<Frame> = measured.iter().map(|(from, x)| frame(*from, x)).collect();
+    outcomes.clear();
+    let fallbacks = m.stats.fallbacks;
+    let mut allocating = Vec::with_capacity(frames.len());
+    let before = allocations();
+    for (k, f) in frames.iter().enumerate() {
+        let at = allocations();
+        outcomes.push(m.on_frame(f));
+        if allocations() != at {
+            allocating.push((k, f.msgid));
+        }
+    }
+    let after = allocations();
+    assert_eq!(m.stats.fallbacks, fallbacks, "fallbacks on the way");
+    assert!(allocating.is_empty(), "frames that allocated (index, message id): {allocating:?}");
+    assert_eq!(m.stats.violations, 0, "{:?}", m.violations().first().map(|v| v.kind));
+    assert!(outcomes.iter().all(|o| matches!(o, Outcome::Step { .. } | Outcome::Passed)));
+    assert_eq!(after - before, 0, "allocations over {} conforming messages", frames.len());
+    // The counter counts: a violation is recorded with its values (off the hot path).
+    let before = allocations();
+    let stray = msg("MISSION_ACK", &to_gcs, &[]);
+    let _ = m.on_frame(&frame((9, 9), &stray));
+    assert!(allocations() > before, "the counting allocator counts nothing");
+}
