@@ -38,6 +38,7 @@ pub mod hir;
 pub mod io;
 pub mod library;
 pub mod lower;
+pub mod mavio;
 pub mod obligation;
 pub mod project;
 pub mod render;
