@@ -152,7 +152,7 @@ fn the_captures_read_cleanly() {
     for path in captures() {
         let bytes = std::fs::read(&path).unwrap();
         let (_, rows, c) = ours(&bytes);
-        assert!(rows.len() > 0, "{}", path.display());
+        assert!(!rows.is_empty(), "{}", path.display());
         // Chunked reading of the raw streams gives the same frames as reading them whole.
         if detect(&bytes) == Format::Raw {
             for chunk in [1usize, 7, 64, 1500] {

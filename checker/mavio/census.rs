@@ -8,10 +8,12 @@
 //! Sessions, keyed by the two ends (sysid/compid of the opener and of the target the opening
 //! message names):
 //!
-//! - **mission upload**: MISSION_COUNT from A to B opens it, unless B has a download from A
-//!   open (then the COUNT is the download's). MISSION_REQUEST(_INT) from B and MISSION_ITEM(_INT)
-//!   from A belong to it; MISSION_ACK from B to A closes it with its result. A new COUNT
-//!   before the ACK abandons the open one.
+//! - **mission transfer**: MISSION_COUNT from A to B opens it, unless B has a download from A
+//!   open (then the COUNT is the download's): an upload from A, or a download whose
+//!   MISSION_REQUEST_LIST the log does not have (after the COUNT the two are the same
+//!   exchange). MISSION_REQUEST(_INT) from B and MISSION_ITEM(_INT) from A belong to it;
+//!   MISSION_ACK from B to A closes it with its result (an ACK from A, a cancel, closes it
+//!   too, marked "from the sender"). A new COUNT before the ACK abandons the open one.
 //! - **mission download**: MISSION_REQUEST_LIST from A to B opens it; MISSION_COUNT,
 //!   MISSION_ITEM(_INT) from B belong to it; MISSION_ACK from A closes it.
 //! - **param list stream**: PARAM_REQUEST_LIST from A to B opens it; it has no closing message:
@@ -19,6 +21,8 @@
 //!   end of the log, and reports how many distinct indices of `param_count` arrived.
 //! - **param read / param set**: PARAM_REQUEST_READ or PARAM_SET from A to B, answered by the
 //!   next PARAM_VALUE from B with the same name (or, for a read by index, the same index).
+//!   Reads, sets and commands may be pipelined: a new one abandons an open one only for the
+//!   same parameter or command.
 //! - **command**: COMMAND_LONG or COMMAND_INT from A to B with command c, answered by the next
 //!   COMMAND_ACK from B to A for c (IN_PROGRESS acks counted, the final one closes it).
 //!
@@ -50,7 +54,7 @@ pub enum End {
 /// One session found.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Session {
-    /// "mission upload", "mission download", "param list", "param read", "param set", "command".
+    /// "mission transfer", "mission download", "param list", "param read", "param set", "command".
     pub kind: &'static str,
     /// Who opened it.
     pub from: Ends,
@@ -128,7 +132,10 @@ pub fn census(bytes: &[u8], config: Config) -> Census {
             })
         };
         let start = |sessions: &mut Vec<Session>, open: &mut Vec<usize>, kind: &'static str, what: String| {
-            if let Some(i) = find(sessions, open, kind, me, target) {
+            // Reads, sets and commands are pipelined: only one for the same name or command
+            // abandons the open one.
+            let keyed = matches!(kind, "param read" | "param set" | "command");
+            if let Some(i) = find(sessions, open, kind, me, target).filter(|&i| !keyed || sessions[i].what == what) {
                 sessions[i].end = End::Abandoned;
                 open.retain(|&j| j != i);
             }
@@ -153,7 +160,7 @@ pub fn census(bytes: &[u8], config: Config) -> Census {
                         format!("{:?} count {}", d.mission_type, d.count).replace("MAV_MISSION_TYPE_", "");
                 } else {
                     let what = format!("{:?} count {}", d.mission_type, d.count).replace("MAV_MISSION_TYPE_", "");
-                    start(&mut sessions, &mut open, "mission upload", what);
+                    start(&mut sessions, &mut open, "mission transfer", what);
                 }
             }
             MavMessage::MISSION_REQUEST_LIST(d) => {
@@ -161,13 +168,13 @@ pub fn census(bytes: &[u8], config: Config) -> Census {
                 start(&mut sessions, &mut open, "mission download", what);
             }
             MavMessage::MISSION_REQUEST(_) | MavMessage::MISSION_REQUEST_INT(_) => {
-                match find(&sessions, &open, "mission upload", target, me) {
+                match find(&sessions, &open, "mission transfer", target, me) {
                     Some(i) => sessions[i].messages += 1,
                     None => bump(&mut c.orphans, name),
                 }
             }
             MavMessage::MISSION_ITEM(_) | MavMessage::MISSION_ITEM_INT(_) => {
-                let up = find(&sessions, &open, "mission upload", me, target);
+                let up = find(&sessions, &open, "mission transfer", me, target);
                 let down = find(&sessions, &open, "mission download", target, me);
                 match up.or(down) {
                     Some(i) => sessions[i].messages += 1,
@@ -176,11 +183,15 @@ pub fn census(bytes: &[u8], config: Config) -> Census {
             }
             MavMessage::MISSION_ACK(d) => {
                 let result = format!("{:?}", d.mavtype).replace("MAV_MISSION_", "");
-                let up = find(&sessions, &open, "mission upload", target, me);
+                let up = find(&sessions, &open, "mission transfer", target, me);
                 let down = find(&sessions, &open, "mission download", me, target);
-                match up.or(down) {
-                    Some(i) => close(&mut sessions, &mut open, i, result),
-                    None => bump(&mut c.orphans, name),
+                // The sender of the list may end it too (MAVLink: a cancel is an ACK from it).
+                let by_sender = find(&sessions, &open, "mission transfer", me, target)
+                    .or_else(|| find(&sessions, &open, "mission download", target, me));
+                match (up.or(down), by_sender) {
+                    (Some(i), _) => close(&mut sessions, &mut open, i, result),
+                    (None, Some(i)) => close(&mut sessions, &mut open, i, format!("{result} from the sender")),
+                    (None, None) => bump(&mut c.orphans, name),
                 }
             }
             MavMessage::PARAM_REQUEST_LIST(_) => {
@@ -211,7 +222,10 @@ pub fn census(bytes: &[u8], config: Config) -> Census {
                 {
                     sessions[i].messages += 1;
                     if let Some((seen, count)) = lists.get_mut(&i) {
-                        seen.insert(d.param_index);
+                        // Index 65535 is a value outside the list (sent after a set).
+                        if d.param_index != u16::MAX {
+                            seen.insert(d.param_index);
+                        }
                         *count = d.param_count;
                     }
                 } else {
@@ -258,6 +272,9 @@ pub fn census(bytes: &[u8], config: Config) -> Census {
     c
 }
 
+/// A row of the sessions table: kind, from, to, what, end.
+type GroupKey = (&'static str, String, String, String, String);
+
 fn rate(n: u64, first: Option<u64>, last: Option<u64>) -> String {
     match (first, last) {
         (Some(a), Some(b)) if b > a && n > 1 => format!("{:.2} Hz", (n - 1) as f64 / ((b - a) as f64 / 1e6)),
@@ -291,7 +308,7 @@ pub fn render_table(name: &str, c: &Census) -> String {
         }
     }
     // Sessions grouped: kind, ends, what, end → count and messages.
-    let mut groups: BTreeMap<(&str, String, String, String, String), (u32, u32)> = BTreeMap::new();
+    let mut groups: BTreeMap<GroupKey, (u32, u32)> = BTreeMap::new();
     for ss in &c.sessions {
         let end = match &ss.end {
             End::Closed(r) => format!("closed: {r}"),

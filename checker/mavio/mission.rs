@@ -212,7 +212,7 @@ pub fn scaled_int(text: &str, digits: u32) -> Option<i32> {
         None => (t, 0),
     };
     let (int, frac) = mant.split_once('.').unwrap_or((mant, ""));
-    if int.is_empty() && frac.is_empty() || !int.bytes().chain(frac.bytes()).all(|b| b.is_ascii_digit()) {
+    if (int.is_empty() && frac.is_empty()) || !int.bytes().chain(frac.bytes()).all(|b| b.is_ascii_digit()) {
         return None;
     }
     // digits of the mantissa, and where the decimal point falls after scaling.

@@ -118,7 +118,7 @@ impl State {
             if let Some(next) = flow.next_seq {
                 // Bytes before `next` were seen already: drop them (serial-number arithmetic).
                 let behind = next.wrapping_sub(seq);
-                if behind < 0x8000_0000 && behind > 0 {
+                if (1..0x8000_0000).contains(&behind) {
                     if behind as usize >= payload.len() {
                         self.counts.retransmissions += 1;
                         return;
