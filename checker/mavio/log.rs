@@ -113,14 +113,11 @@ impl<'a> TlogReader<'a> {
         let mut s = from + 8;
         while s < b.len() {
             if b[s] == STX_V1 || b[s] == STX_V2 {
-                match look(&b[s..], &self.framer.config, true, 8) {
-                    Look::Frame(f) => {
-                        self.framer.counts.garbage_bytes += (s - 8 - from) as u64;
-                        self.pos = s + f.raw.len();
-                        self.framer.count_frame(&f);
-                        return Some(self.timed(s - 8, f));
-                    }
-                    _ => {}
+                if let Look::Frame(f) = look(&b[s..], &self.framer.config, true, 8) {
+                    self.framer.counts.garbage_bytes += (s - 8 - from) as u64;
+                    self.pos = s + f.raw.len();
+                    self.framer.count_frame(&f);
+                    return Some(self.timed(s - 8, f));
                 }
             }
             s += 1;

@@ -185,7 +185,7 @@ fn read_pcapng(bytes: &[u8], each: &mut impl FnMut(u32, Option<u64>, &[u8])) -> 
                             unit = if r & 0x80 == 0 { 10u64.checked_pow(e) } else { 1u64.checked_shl(e) }.unwrap_or(0);
                         }
                     }
-                    o += 4 + (usize::from(olen) + 3) / 4 * 4;
+                    o += 4 + usize::from(olen).div_ceil(4) * 4;
                 }
                 ifaces.push((u32::from(link), unit));
             }
