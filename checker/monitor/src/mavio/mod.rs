@@ -2,3 +2,9 @@
 
 pub mod frame;
 pub use frame::Frame;
+
+pub mod census;
+pub mod log;
+pub mod mission;
+pub mod parse;
+pub mod pcap;
