@@ -1089,3 +1089,100 @@ fn a_collision_counterexample_gives_every_participants_state_and_the_time_since_
     assert!(line.contains("; GRobot: ze = "), "{line}");
     assert!(line.contains("at the start of the joint motion: Cart: v = "), "{line}");
 }
+
+/// `mochi monitor` on logs written here: a conforming mission upload is one conformant
+/// session; the seed's stale-buffer attack (the vehicle accepts after 1 of 3 items) is a
+/// violation that names the refinement with its position, exit 1; telemetry in between
+/// passes through. A protocol `mochi check` does not verify is refused, and so is one that
+/// reads observed state (the monitor does not enforce readings yet).
+#[test]
+fn monitor_reads_logs_against_a_verified_protocol() {
+    use mavlink::dialects::common::{
+        MavMessage, MavMissionResult, MavMissionType, ATTITUDE_DATA, MISSION_ACK_DATA, MISSION_COUNT_DATA,
+        MISSION_ITEM_INT_DATA, MISSION_REQUEST_INT_DATA,
+    };
+    use mavlink::{MavHeader, MavlinkVersion};
+    let (gcs, uav) = ((255u8, 190u8), (1u8, 1u8));
+    let mt = MavMissionType::MAV_MISSION_TYPE_MISSION;
+    let count = MavMessage::MISSION_COUNT(MISSION_COUNT_DATA {
+        target_system: 1,
+        target_component: 1,
+        count: 3,
+        mission_type: mt,
+        ..Default::default()
+    });
+    let request = |seq| {
+        MavMessage::MISSION_REQUEST_INT(MISSION_REQUEST_INT_DATA {
+            target_system: 255,
+            target_component: 190,
+            seq,
+            mission_type: mt,
+        })
+    };
+    let item = |seq| {
+        MavMessage::MISSION_ITEM_INT(MISSION_ITEM_INT_DATA {
+            target_system: 1,
+            target_component: 1,
+            seq,
+            mission_type: mt,
+            ..Default::default()
+        })
+    };
+    let ack = MavMessage::MISSION_ACK(MISSION_ACK_DATA {
+        target_system: 255,
+        target_component: 190,
+        mavtype: MavMissionResult::MAV_MISSION_ACCEPTED,
+        mission_type: mt,
+        ..Default::default()
+    });
+    let telemetry = MavMessage::ATTITUDE(ATTITUDE_DATA::default());
+    let log = |msgs: &[((u8, u8), &MavMessage)]| {
+        let mut bytes = Vec::new();
+        for (k, (from, m)) in msgs.iter().enumerate() {
+            let h = MavHeader { system_id: from.0.into(), component_id: from.1, sequence: k as u8 };
+            mavlink::write_versioned_msg(&mut bytes, MavlinkVersion::V2, h, *m).expect("encode");
+        }
+        bytes
+    };
+    let dir = TempDir::new("monitor");
+    let (r0, r1, r2, i0, i1, i2) = (request(0), request(1), request(2), item(0), item(1), item(2));
+    let good = log(&[
+        (gcs, &count),
+        (uav, &r0),
+        (uav, &telemetry),
+        (gcs, &i0),
+        (uav, &r1),
+        (gcs, &i1),
+        (uav, &r2),
+        (gcs, &i2),
+        (uav, &ack),
+    ]);
+    let good_path = dir.0.join("good.bin");
+    std::fs::write(&good_path, good).expect("write");
+    let protocol = "choreographies/mavlink/mission-upload.chor";
+    let o = mochi(&["monitor", "-p", protocol, good_path.to_str().expect("utf-8")]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(0), "{out}{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.contains("9 frames") && out.contains("1 passed through") && out.contains("conformant"), "{out}");
+    assert!(out.contains("0 violation(s)"), "{out}");
+
+    let attack = log(&[(gcs, &count), (uav, &r0), (gcs, &i0), (uav, &ack)]);
+    let attack_path = dir.0.join("attack.bin");
+    std::fs::write(&attack_path, attack).expect("write");
+    let o = mochi(&["monitor", "-p", protocol, attack_path.to_str().expect("utf-8")]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(o.status.code(), Some(1), "{out}");
+    assert!(out.contains("violation: frame 3") && out.contains("mission-upload.chor:"), "{out}");
+    assert!(out.contains("incomplete"), "the session stays open after the dropped ACK: {out}");
+    // The same as JSON: one log, its violation listed.
+    let o = mochi(&["monitor", "-p", protocol, "--format", "json", attack_path.to_str().expect("utf-8")]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    assert_eq!(v["logs"][0]["violations"].as_array().map(Vec::len), Some(1), "{v}");
+
+    let o = mochi(&["monitor", "-p", "choreographies/mavlink/rejected/E0316-rally-count-beyond-storage.chor", "x.bin"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("not verified"));
+    let o = mochi(&["monitor", "-p", "choreographies/mavlink/parachute.chor", "x.bin"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("observed state"), "{}", String::from_utf8_lossy(&o.stderr));
+}

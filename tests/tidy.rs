@@ -267,8 +267,11 @@ fn only_render_knows_formats_and_colours() {
         .iter()
         .filter(|(f, _)| f != "checker/cli/render.rs")
         .flat_map(|(f, t)| {
-            let words: Vec<&str> =
-                words.iter().copied().filter(|w| !(*w == "serde_json" && f == "checker/monitor/src/mavio/mission.rs")).collect();
+            let words: Vec<&str> = words
+                .iter()
+                .copied()
+                .filter(|w| !(*w == "serde_json" && f == "checker/monitor/src/mavio/mission.rs"))
+                .collect();
             hits(f, t, &words)
         })
         .collect();
@@ -353,7 +356,9 @@ fn the_mavlink_readers_stand_alone() {
         bad.join("\n")
     );
     // Not vacuous: the rule reads the readers' code (they name the module itself).
-    assert!(files.iter().any(|(f, t)| f.starts_with("checker/monitor/src/mavio/") && !hits(f, t, &["super::"]).is_empty()));
+    assert!(files
+        .iter()
+        .any(|(f, t)| f.starts_with("checker/monitor/src/mavio/") && !hits(f, t, &["super::"]).is_empty()));
 }
 
 #[test]

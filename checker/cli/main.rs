@@ -61,6 +61,23 @@ enum Command {
     /// Run the choreography on concrete trajectories (a protocol without motion as each
     /// participant's projection) and report collisions, stuck states and violations
     Simulate(SimulateArgs),
+    /// Check MAVLink logs (.tlog, raw streams, .pcapng) against verified protocols: each
+    /// session conformant, incomplete, or its violations, with coverage
+    Monitor(MonitorArgs),
+}
+
+#[derive(Args)]
+struct MonitorArgs {
+    /// A verified MAVLink protocol (`.chor` with a `dialect`); repeat for several, monitored
+    /// together over each log
+    #[arg(long = "protocol", short = 'p', required = true, value_name = "FILE")]
+    protocols: Vec<PathBuf>,
+    /// The logs; a directory means every log below it (`.tlog`, `.bin`, `.raw`, `.mav`,
+    /// `.pcapng`, `.pcap`; sorted), checked in parallel
+    #[arg(required = true, value_name = "LOG")]
+    logs: Vec<PathBuf>,
+    #[arg(long, value_enum, default_value_t = Format::Text)]
+    format: Format,
 }
 
 #[derive(Args)]
@@ -209,7 +226,187 @@ fn run(cli: Cli) -> u8 {
         Command::Project(args) => project(&args, cli.color).exit_code(),
         Command::Explain(args) => explain(&args),
         Command::Simulate(args) => simulate(&args, cli.color).exit_code(),
+        Command::Monitor(args) => monitor(&args, cli.color).exit_code(),
     }
+}
+
+/// `mochi monitor`: 0 when no log breaks a protocol, 1 for a violation (or invalid input).
+/// Only verified protocols are monitored: the monitor enforces what the static checks
+/// assumed, which is worth nothing for a protocol they did not prove.
+fn monitor(args: &MonitorArgs, color: ColorChoice) -> Outcome {
+    use mochi::monitor::{Automaton, Monitor};
+    let mut db = SourceDb::new();
+    let mut automata = Vec::new();
+    for p in &args.protocols {
+        let report = match fsload::check_file(&mut db, p, &Config::default()) {
+            Ok(r) => r,
+            Err(e) => {
+                eprintln_safe(&format!("error: cannot read {}: {e}", p.display()));
+                return Outcome::Invalid;
+            }
+        };
+        if report.verdict != Verdict::Verified {
+            let color = color.for_stream(false);
+            let shown: String =
+                report.diagnostics.iter().filter(|d| d.is_error()).map(|d| render::text(&db, d, color)).collect();
+            eprint_safe(&shown);
+            eprintln_safe(&format!(
+                "error: {} is {}, not verified: mochi monitors only verified protocols (the monitor enforces what the static checks assume); run `mochi check {}`",
+                p.display(),
+                format!("{:?}", report.verdict).to_lowercase(),
+                p.display()
+            ));
+            return Outcome::Invalid;
+        }
+        let root = match fsload::load_root(&mut db, p) {
+            Ok(r) => r,
+            Err(e) => {
+                eprintln_safe(&format!("error: cannot read {}: {e}", p.display()));
+                return Outcome::Invalid;
+            }
+        };
+        let prog = match mochi::driver::prepare(&mut db, root, &mut fsload::read_bytes, mochi::driver::Stage::Names) {
+            Ok(prog) => prog,
+            Err(diags) => {
+                let color = color.for_stream(false);
+                eprint_safe(&diags.iter().map(|d| render::text(&db, d, color)).collect::<String>());
+                return Outcome::Invalid;
+            }
+        };
+        match Automaton::compile(&prog) {
+            Ok(a) => automata.push(a),
+            Err(e) => {
+                let at = e
+                    .span
+                    .map(|s| {
+                        let (f, l, c) = db.location(s);
+                        format!("{f}:{l}:{c}: ")
+                    })
+                    .unwrap_or_default();
+                eprintln_safe(&format!("error: {at}{} cannot be monitored: {}", p.display(), e.message));
+                return Outcome::Invalid;
+            }
+        }
+    }
+    let mut files = Vec::new();
+    for l in &args.logs {
+        if l.is_dir() {
+            collect_files(l, &mut files);
+        } else {
+            files.push(l.clone());
+        }
+    }
+    // Logs are checked in parallel, each with its own monitor; the results keep the order.
+    let workers = std::thread::available_parallelism().map_or(1, |n| n.get()).min(files.len().max(1));
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let results: Vec<std::sync::Mutex<Option<render::MonitoredLog>>> =
+        files.iter().map(|_| std::sync::Mutex::new(None)).collect();
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let Some(path) = files.get(i) else { break };
+                let mut m = Monitor::new(automata.clone());
+                let log = monitor_log(&db, path, &mut m);
+                if let Ok(mut slot) = results[i].lock() {
+                    *slot = Some(log);
+                }
+            });
+        }
+    });
+    let logs: Vec<render::MonitoredLog> = results.into_iter().filter_map(|r| r.into_inner().ok().flatten()).collect();
+    match args.format {
+        Format::Text => print_safe(&render::monitor_text(&logs)),
+        Format::Json => match render::monitor_json_text(&logs) {
+            Ok(s) => print_safe(&s),
+            Err(e) => {
+                eprintln_safe(&format!("error: cannot write the report as JSON: {e}"));
+                return Outcome::Crashed;
+            }
+        },
+    }
+    if logs.iter().any(|l| l.stats.violations > 0 || l.error.is_some()) {
+        Outcome::Rejected
+    } else {
+        Outcome::Verified
+    }
+}
+
+/// The extensions of the logs a directory is searched for: telemetry logs (`.tlog`), raw
+/// MAVLink streams (`.bin`, `.raw`, `.mav`) and packet captures (`.pcapng`, `.pcap`). A
+/// file named on the command line is read whatever its name (its format is told from its
+/// content).
+const LOG_EXTENSIONS: &[&str] = &["tlog", "bin", "raw", "mav", "pcapng", "pcap"];
+
+/// Every log below `dir` ([`LOG_EXTENSIONS`]), sorted, depth first.
+fn collect_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    let mut paths: Vec<PathBuf> = entries.filter_map(|e| e.ok().map(|e| e.path())).collect();
+    paths.sort();
+    for p in paths {
+        if p.is_dir() {
+            collect_files(&p, out);
+        } else if p.is_file()
+            && p.extension()
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| LOG_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()))
+        {
+            out.push(p);
+        }
+    }
+}
+
+/// One log read and run through `m`.
+fn monitor_log(db: &SourceDb, path: &Path, m: &mut mochi::monitor::Monitor) -> render::MonitoredLog {
+    let mut log = render::MonitoredLog { file: path.display().to_string(), ..Default::default() };
+    let bytes = match std::fs::read(path) {
+        Ok(b) => b,
+        Err(e) => {
+            log.error = Some(e.to_string());
+            return log;
+        }
+    };
+    let summary = mochi::mavio::log::read_log(&bytes, mochi::mavio::parse::Config::default(), |f| {
+        m.on_frame(&f);
+    });
+    m.finish();
+    log.format = summary.format.name().to_string();
+    log.counts = summary.counts;
+    if let Some(e) = summary.error {
+        log.error = Some(format!("the capture is malformed at byte {}: {}", e.offset, e.what));
+    }
+    log.stats = m.stats;
+    let protos = m.protocols();
+    log.sessions = m
+        .summaries()
+        .iter()
+        .map(|s| {
+            let a = &protos[s.protocol];
+            let roles = a
+                .roles
+                .iter()
+                .zip(&s.roles)
+                .map(|(name, b)| {
+                    let id = |x: Option<u8>| x.map_or("?".to_string(), |v| v.to_string());
+                    format!("{name} = {}/{}", id(b.sys), id(b.comp))
+                })
+                .collect();
+            render::MonitoredSession {
+                protocol: a.name.clone(),
+                session: s.session,
+                conformant: s.conformant,
+                state: s.state,
+                first_frame: s.first_frame,
+                last_frame: s.last_frame,
+                roles,
+                violations: s.violations,
+                states: (s.visited.iter().filter(|v| **v).count(), s.visited.len()),
+                edges: (s.taken.iter().filter(|t| **t > 0).count(), s.taken.len()),
+            }
+        })
+        .collect();
+    log.violations = (0..m.violations().len()).map(|i| m.describe(db, i)).collect();
+    log
 }
 
 /// `mochi simulate`: 0 when nothing was found, 1 for a finding (or invalid input), 3
