@@ -242,6 +242,15 @@ fn static_and_run_time_agree_on_every_verified_protocol() {
             continue;
         }
         let name = path.display().to_string();
+        // A protocol that reads observed state is refused, never monitored without its
+        // readings (the monitor does not take them yet).
+        if !prog.streams.is_empty() {
+            match Automaton::compile(&prog) {
+                Ok(_) => panic!("{name}: a protocol with streams was compiled"),
+                Err(e) => assert!(e.message.contains("observed state"), "{name}: {}", e.message),
+            }
+            continue;
+        }
         let automaton = Automaton::compile(&prog).unwrap_or_else(|e| panic!("{name}: {}", e.message));
         let d = prog.dialect.expect("a MAVLink protocol");
         let cfg = SimConfig { runs: 3, steps: 40, seed: 7, ..SimConfig::default() };
