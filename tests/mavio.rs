@@ -1,4 +1,4 @@
-//! The MAVLink readers (`checker/mavio/`) against the real captures, pymavlink, random
+//! The MAVLink readers (`checker/monitor/src/mavio/`) against the real captures, pymavlink, random
 //! frames and random bytes; the mission files of `../shared/data/missions/`; and the census of
 //! what the captures contain (docs/captures.md).
 //!
