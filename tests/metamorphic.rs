@@ -110,7 +110,7 @@ fn mix(mut x: u64) -> u64 {
 /// A new name for the `i`-th binder: a fresh one, or (when `tricky`) one of mochi's own.
 fn new_name(seed: u64, i: usize, tricky: bool) -> String {
     let r = mix(seed ^ (i as u64).wrapping_mul(0x1000_0001));
-    if tricky && r % 3 == 0 {
+    if tricky && r.is_multiple_of(3) {
         transform::TRICKY[(r / 3) as usize % transform::TRICKY.len()].to_string()
     } else {
         // Fresh names of assorted shapes: short, long, with digits and underscores.
@@ -144,7 +144,7 @@ fn renaming_every_binder_keeps_the_verdict() {
 fn constants_case(file: &Path, seed: u64) -> Result<(), String> {
     let mut picked = Vec::new();
     let Some(p) = transform::rewrite_constants(file, &mut |k| {
-        let yes = mix(seed ^ k as u64) % 2 == 0;
+        let yes = mix(seed ^ k as u64).is_multiple_of(2);
         if yes {
             picked.push(k);
         }

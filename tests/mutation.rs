@@ -91,7 +91,7 @@ fn fnv(id: &str) -> u64 {
 }
 
 fn in_sample(id: &str) -> bool {
-    fnv(id) % SAMPLE == 0
+    fnv(id).is_multiple_of(SAMPLE)
 }
 
 /// The slice of the sample a mutant is in (the hash's bits above those of the sample).
@@ -281,7 +281,7 @@ fn jobs_of(filter: Option<&str>, all: bool) -> Vec<Job> {
 fn jobs_of_examples(examples: &[String], filter: Option<&str>, all: bool) -> Vec<Job> {
     let mut out = Vec::new();
     for ex in examples {
-        let files = closure(&ex);
+        let files = closure(ex);
         let (mut consts, mut states) = (Vec::new(), Vec::new());
         for f in files.iter().filter(|f| !f.ends_with(".urdf")) {
             let (c, s) = ops::declared_names(&std::fs::read_to_string(root().join(f)).unwrap());
@@ -290,7 +290,7 @@ fn jobs_of_examples(examples: &[String], filter: Option<&str>, all: bool) -> Vec
         }
         states.sort();
         states.dedup();
-        let dialect = dialect_of(&std::fs::read_to_string(root().join("choreographies").join(&ex)).unwrap());
+        let dialect = dialect_of(&std::fs::read_to_string(root().join("choreographies").join(ex)).unwrap());
         for f in &files {
             let text = std::fs::read_to_string(root().join(f)).unwrap();
             let prefix = if f == &format!("choreographies/{ex}") { ex.clone() } else { format!("{ex}@{f}") };
