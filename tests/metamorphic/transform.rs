@@ -336,6 +336,13 @@ impl Names {
                     o.geometry.iter().for_each(|b| self.body(b));
                     o.at.iter().for_each(|a| self.pose(a));
                 }
+                // A stream names its participants, and its fields bind observed names as a
+                // payload's do.
+                for st in &s.streams {
+                    self.use_(&st.from);
+                    st.to.iter().for_each(|t| self.use_(t));
+                    st.payload.iter().for_each(|f| self.field(f));
+                }
             }
             Item::Choreography(c) => {
                 self.decl(&c.name);
