@@ -183,7 +183,7 @@ pub struct LogSummary {
 /// Reads the log in `bytes` (format from [`detect`]) and hands every frame to `each`, in order.
 ///
 /// ```
-/// use mochi::mavio::{log::{read_log, Format}, parse::Config};
+/// use mochi_monitor::mavio::{log::{read_log, Format}, parse::Config};
 /// // One .tlog record: time 1 s, then a MAVLink 1 HEARTBEAT.
 /// let mut b = 1_000_000u64.to_be_bytes().to_vec();
 /// b.extend([0xfe, 0x09, 0x00, 0x01, 0x01, 0x00, 0x04, 0, 0, 0, 0x02, 0x03, 0x51, 0x03, 0x03, 0xe4, 0xe1]);

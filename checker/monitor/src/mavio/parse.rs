@@ -339,7 +339,7 @@ impl Framer {
 /// The frames of a complete raw MAVLink byte stream (no timestamps), in order.
 ///
 /// ```
-/// use mochi::mavio::parse::{Config, RawReader};
+/// use mochi_monitor::mavio::parse::{Config, RawReader};
 /// // A MAVLink 1 HEARTBEAT from system 1, component 1, after two bytes of garbage.
 /// let bytes = [0x00, 0x42, 0xfe, 0x09, 0x00, 0x01, 0x01, 0x00,
 ///              0x04, 0, 0, 0, 0x02, 0x03, 0x51, 0x03, 0x03, 0xe4, 0xe1];
