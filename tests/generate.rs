@@ -1635,18 +1635,11 @@ choreography G = dt<A: go({arg})>. end;
     verified(&lone("true", "1 / (x + 1)"));
 }
 
-/// A sat question answered by a point of the encoding's enclosures only: a postcondition
-/// no real state satisfies (`x == sin(1) && x == 0.8414709848078965`, a decimal 6.7e-17
-/// from sin 1; `x == pi` and a decimal inside π's 1e-20 enclosure) had a model, so the
-/// motion "could end" and the cell verified. A witness of a question that encloses `sin`,
-/// `cos` or `pi` is now confirmed in exact arithmetic (`smt/confirm.rs`), else unknown.
-/// The honest postconditions still verify, the confirmation reading `x == sin(1)` as the
-/// definition of `x`.
-#[test]
-fn a_can_end_witness_of_the_enclosure_only_is_not_trusted() {
-    let src = |post: &str| {
-        format!(
-            "robot R {{ state x: real; }}
+/// A cell whose one motion ends in the state `post` (its can-end question, E0408, is the
+/// sat question the confirmation of witnesses decides).
+fn one_motion_ending_in(post: &str) -> String {
+    format!(
+        "robot R {{ state x: real; }}
 motion R.go {{
   interruptible: false;
   pre: x == 0;
@@ -1658,8 +1651,19 @@ motion R.go {{
 system S {{ participant A: R {{ init: x == 0; at: pose(0, 0, 0); }} }}
 choreography G = dt<A: go>. end;
 "
-        )
-    };
+    )
+}
+
+/// A sat question answered by a point of the encoding's enclosures only: a postcondition
+/// no real state satisfies (`x == sin(1) && x == 0.8414709848078965`, a decimal 6.7e-17
+/// from sin 1; `x == pi` and a decimal inside π's 1e-20 enclosure) had a model, so the
+/// motion "could end" and the cell verified. A witness of a question that encloses `sin`,
+/// `cos` or `pi` is now confirmed in exact arithmetic (`smt/confirm.rs`), else unknown.
+/// The honest postconditions still verify, the confirmation reading `x == sin(1)` as the
+/// definition of `x`.
+#[test]
+fn a_can_end_witness_of_the_enclosure_only_is_not_trusted() {
+    let src = one_motion_ending_in;
     for post in [
         "x == sin(1) && x == 0.8414709848078965",
         "x == pi && x == 3.14159265358979323846",
@@ -1693,22 +1697,7 @@ choreography G = dt<A: go>. end;
 /// 1e-12 of `d` must (the first would be vacuous, the others are honest).
 #[test]
 fn every_irrational_constant_is_told_apart_from_its_double() {
-    let src = |post: &str| {
-        format!(
-            "robot R {{ state x: real; }}
-motion R.go {{
-  interruptible: false;
-  pre: x == 0;
-  guarantee: true;
-  post: {post};
-  footprint(px, py, pz): px == x && py == 0 && pz == 0;
-  duration: [1, 1];
-}}
-system S {{ participant A: R {{ init: x == 0; at: pose(0, 0, 0); }} }}
-choreography G = dt<A: go>. end;
-"
-        )
-    };
+    let src = one_motion_ending_in;
     let constants: [(&str, f64); 10] = [
         ("sin(0.3)", 0.3f64.sin()),
         ("cos(2)", 2f64.cos()),
