@@ -1,5 +1,6 @@
 //! Tests of the encoder: numerals read back exactly, one symbol per name.
 
+use super::numeral::exact_decimal;
 use super::*;
 
 fn q(n: i64, d: i64) -> BigRational {
