@@ -29,6 +29,9 @@
 //!   the run-time side (the monitor, the proxy) can use them without the verifier.
 //!   `checker/monitor/src/mavio/mission.rs` may name `serde_json`: it reads `.plan` files
 //!   (an input format; rule (d) is about output).
+//! - (j) the modules of `mochi-verify` import each other without cycles: among the
+//!   top-level modules and among the files of each folder, every import goes one way
+//!   (paths from `crate::`, `super::` and `self::` outside tests and comments).
 //!
 //! The rules are textual on purpose: simple to state, simple to audit. Rules (a), (b), (d)
 //! ignore comments (`//` to the end of a line) and everything from the first line that is
@@ -670,4 +673,178 @@ fn the_map_check_finds_what_does_not_exist() {
               `E0316-guards-about-shadowed-value`, `E0408-*`, `Expr::map`, [c](#title).\n";
     let bad = stale_names("ARCHITECTURE.md", md, &repo, &[], &modules);
     assert_eq!(bad.len(), 8, "{bad:#?}");
+}
+
+// ---- (j) the modules of mochi-verify import each other without cycles -----------------
+
+/// Folders of `checker/verify/src/` whose files still import each other in a cycle. The
+/// test fails when a listed folder has none, so the list cannot go stale.
+const CYCLES_ALLOWED_FOR_NOW: &[&str] = &["geometry", "simulate"];
+
+/// The module path of a source file of a crate whose sources are under `src`
+/// (`smt/goals/query.rs` is `smt::goals::query`; `smt/mod.rs` is `smt`; `lib.rs` the root).
+fn module_of(src: &str, file: &str) -> Option<Vec<String>> {
+    let rel = file.strip_prefix(src)?.strip_prefix('/')?.strip_suffix(".rs")?;
+    let mut segs: Vec<String> = rel.split('/').map(str::to_string).collect();
+    if matches!(segs.last().map(String::as_str), Some("mod" | "lib")) {
+        segs.pop();
+    }
+    Some(segs)
+}
+
+/// The paths a line names from `crate::`, `super::` or `self::`, each as the segments after
+/// the root it names, resolved against `module` (`super::query::zero` in `smt::goals::agcomp`
+/// is `smt::goals::query::zero`); a group `a::{b, c::d}` gives `a::b` and `a::c::d`.
+fn named_paths(module: &[String], line: &str) -> Vec<Vec<String>> {
+    let ident = |c: char| c.is_alphanumeric() || c == '_';
+    let mut out = Vec::new();
+    for (at, _) in line.match_indices("::") {
+        // Only the first `::` of a path, after `crate`, `super` or `self` read as a whole word.
+        let head_start =
+            line[..at].rfind(|c: char| !ident(c)).map_or(0, |i| i + line[i..].chars().next().map_or(1, char::len_utf8));
+        let head = &line[head_start..at];
+        if !matches!(head, "crate" | "super" | "self") || line[..head_start].ends_with("::") {
+            continue;
+        }
+        let mut base: Vec<String> = if head == "crate" { Vec::new() } else { module.to_vec() };
+        if head == "super" {
+            base.pop();
+        }
+        let mut rest = &line[at + 2..];
+        while let Some(r) = rest.strip_prefix("super::") {
+            base.pop();
+            rest = r;
+        }
+        let path_end = rest.find(|c: char| !(ident(c) || c == ':')).unwrap_or(rest.len());
+        let mut stem = base.clone();
+        stem.extend(rest[..path_end].split("::").filter(|s| !s.is_empty()).map(str::to_string));
+        let group = rest[path_end..].starts_with('{') && (path_end == 0 || rest[..path_end].ends_with("::"));
+        if group {
+            let inner = &rest[path_end + 1..];
+            let inner = &inner[..inner.find('}').unwrap_or(inner.len())];
+            for item in inner.split(',') {
+                let mut p = stem.clone();
+                p.extend(item.trim().split("::").filter(|s| !s.is_empty() && s.chars().all(ident)).map(str::to_string));
+                out.push(p);
+            }
+        } else {
+            out.push(stem);
+        }
+    }
+    out
+}
+
+/// The cycles among the children of each folder of a crate: the edge `a → b` between two
+/// children of one folder when a file in `a` (or under it) names `b` or something in it,
+/// outside the tests and comments (an import through a parent's glob re-export is not
+/// seen). Each cycle as `folder: a → b → ... → a (file:line: text, ...)`.
+fn sibling_cycles(src: &str, files: &[(String, String)]) -> Vec<(String, String)> {
+    use std::collections::{BTreeMap, BTreeSet};
+    let modules: BTreeSet<Vec<String>> = files.iter().filter_map(|(f, _)| module_of(src, f)).collect();
+    // (parent, from child, to child) -> the first line that makes the edge.
+    let mut edges: BTreeMap<(Vec<String>, String, String), String> = BTreeMap::new();
+    for (f, t) in files {
+        let Some(m) = module_of(src, f) else { continue };
+        for (n, l) in code_lines(t) {
+            for p in named_paths(&m, l) {
+                // The module the path names: its longest prefix that is a module.
+                let Some(target) = (0..=p.len()).rev().map(|k| p[..k].to_vec()).find(|k| modules.contains(k)) else {
+                    continue;
+                };
+                let common = m.iter().zip(&target).take_while(|(a, b)| a == b).count();
+                if common < m.len() && common < target.len() {
+                    let key = (m[..common].to_vec(), m[common].clone(), target[common].clone());
+                    edges.entry(key).or_insert_with(|| format!("{f}:{n}: {}", l.trim()));
+                }
+            }
+        }
+    }
+    let mut out = Vec::new();
+    let parents: BTreeSet<&Vec<String>> = edges.keys().map(|(p, _, _)| p).collect();
+    for parent in parents {
+        let next = |a: &str| -> Vec<String> {
+            edges.keys().filter(|(p, x, _)| p == parent && x == a).map(|(_, _, y)| y.clone()).collect()
+        };
+        let nodes: BTreeSet<String> = edges.keys().filter(|(p, _, _)| p == parent).map(|(_, x, _)| x.clone()).collect();
+        // A depth-first search from each node, in order; the first back edge found is a cycle.
+        for start in &nodes {
+            let mut path = vec![start.clone()];
+            let mut stack = vec![next(start)];
+            let mut found = None;
+            while let Some(top) = stack.last_mut() {
+                let Some(n) = top.pop() else {
+                    stack.pop();
+                    path.pop();
+                    continue;
+                };
+                if n == *start {
+                    found = Some(path.clone());
+                    break;
+                }
+                if !path.contains(&n) && n > *start {
+                    path.push(n.clone());
+                    stack.push(next(&n));
+                }
+            }
+            if let Some(cycle) = found {
+                let mut ring = cycle.clone();
+                ring.push(start.clone());
+                let why: Vec<&String> =
+                    ring.windows(2).map(|w| &edges[&(parent.clone(), w[0].clone(), w[1].clone())]).collect();
+                let folder = if parent.is_empty() { "(crate root)".to_string() } else { parent.join("::") };
+                let text = format!(
+                    "{folder}: {}\n    {}",
+                    ring.join(" → "),
+                    why.iter().map(|s| s.as_str()).collect::<Vec<_>>().join("\n    ")
+                );
+                out.push((parent.join("::"), text));
+            }
+        }
+    }
+    out
+}
+
+/// The modules of mochi-verify form no import cycle: at the crate's top level (the stages:
+/// `wf`, `smt`, `space`, `driver`, ...) and among the files of each folder, an import goes
+/// one way. A cycle is broken by moving what both sides need into a module of its own.
+#[test]
+fn the_verifier_modules_import_each_other_without_cycles() {
+    let src = "checker/verify/src";
+    let files: Vec<(String, String)> = code_sources().into_iter().filter(|(f, _)| f.starts_with(src)).collect();
+    let cycles = sibling_cycles(src, &files);
+    let bad: Vec<&String> =
+        cycles.iter().filter(|(p, _)| !CYCLES_ALLOWED_FOR_NOW.contains(&p.as_str())).map(|(_, t)| t).collect();
+    assert!(
+        bad.is_empty(),
+        "the modules of mochi-verify import each other in a cycle; move what both sides need into a module \
+         of its own:\n{}",
+        bad.iter().map(|s| s.as_str()).collect::<Vec<_>>().join("\n")
+    );
+    let stale: Vec<&&str> = CYCLES_ALLOWED_FOR_NOW.iter().filter(|a| !cycles.iter().any(|(p, _)| p == *a)).collect();
+    assert!(stale.is_empty(), "{stale:?} have no cycle any more: remove them from CYCLES_ALLOWED_FOR_NOW");
+}
+
+/// The cycle check finds a cycle between two files of a folder and between two top-level
+/// modules, sees groups and `super::` paths, and ignores tests and comments.
+#[test]
+fn the_cycle_check_finds_cycles() {
+    let src = "c/src";
+    let f = |p: &str, t: &str| (format!("{src}/{p}"), t.to_string());
+    let files = vec![
+        f("lib.rs", "//! r\npub mod a;\npub mod b;\npub mod d;\n"),
+        f("a/mod.rs", "//! a\nmod x;\nmod y;\nuse crate::b::f;\n"),
+        f("a/x.rs", "//! x\nuse super::{y::g, z};\n"),
+        f("a/y.rs", "//! y\nfn h() { super::super::a::x::k(); }\n"),
+        f("b.rs", "//! b\nuse crate::{d, a::x};\n"),
+        f("d.rs", "//! d\n// use crate::b;\n#[cfg(test)]\nmod tests { use crate::b; }\n"),
+    ];
+    let cycles = sibling_cycles(src, &files);
+    let folders: Vec<&str> = cycles.iter().map(|(p, _)| p.as_str()).collect();
+    assert_eq!(folders, ["", "a"], "{cycles:#?}");
+    assert!(cycles[0].1.contains("a → b → a") && cycles[1].1.contains("x → y → x"), "{cycles:#?}");
+    // Without `b`'s import of `a`, the top level is acyclic (`d`'s comment and test do not count).
+    let mut files = files;
+    files[4].1 = "//! b\nuse crate::d;\n".into();
+    let cycles = sibling_cycles(src, &files);
+    assert_eq!(cycles.iter().map(|(p, _)| p.as_str()).collect::<Vec<_>>(), ["a"], "{cycles:#?}");
 }

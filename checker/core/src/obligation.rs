@@ -165,6 +165,10 @@ pub enum Goal {
     /// A primitive's contract admits a run that ends, for some arguments and start state
     /// (a satisfiability question; the obligation's `hyps` are empty).
     CanEnd { prim: PrimId },
+    /// A primitive's footprint holds a point: some argument, start state, time in its
+    /// duration and state its guarantee allows then, and a point its footprint's predicate
+    /// holds of (a satisfiability question; the obligation's `hyps` are empty).
+    Occupies { prim: PrimId },
     /// The obligation's `hyps` (Σ after a step) are satisfiable. When they are not, the
     /// step is where the protocol gets stuck, provided every context in `before` (Σ
     /// before the step) is satisfiable; otherwise an earlier step is to blame. With

@@ -447,13 +447,13 @@ impl Pipeline {
         // obligations took on the workers.
         let labels: Vec<String> = obligations.iter().map(|o| label(db, o)).collect();
         let results = smt::discharge(prog, obligations, &labels, cfg);
-        // A primitive that can never end (E0409) makes every motion using it unable to
-        // end too; that is said once, at its declaration.
+        // A primitive that can never end (E0409), or whose footprint holds no point (E0412),
+        // makes every motion using it unable to end too; that is said once, at its declaration.
         let never_ends: Vec<crate::hir::PrimId> = obligations
             .iter()
             .zip(&results)
             .filter_map(|(ob, (d, _))| match (&ob.goal, d) {
-                (Goal::CanEnd { prim }, Decision::Fails(_)) => Some(*prim),
+                (Goal::CanEnd { prim } | Goal::Occupies { prim }, Decision::Fails(_)) => Some(*prim),
                 _ => None,
             })
             .collect();
@@ -462,7 +462,7 @@ impl Pipeline {
             .iter()
             .zip(&results)
             .filter_map(|(ob, (d, _))| match (&ob.goal, d) {
-                (Goal::CanEnd { prim }, Decision::Fails(_)) if ob.rule == Rule::Occupies => Some(*prim),
+                (Goal::Occupies { prim }, Decision::Fails(_)) => Some(*prim),
                 _ => None,
             })
             .collect();

@@ -120,7 +120,7 @@ pub fn contracts(prog: &crate::hir::Program, used: &HashSet<PrimId>) -> Vec<Obli
         span: prog.prim(p).footprint.span().unwrap_or(prog.prim(p).span),
         what: format!("the footprint of `{}`", prog.prim(p).name),
         hyps: Vec::new(),
-        goal: Goal::CanEnd { prim: p },
+        goal: Goal::Occupies { prim: p },
     });
     let contracts = used.iter().map(|&p| Obligation {
         rule: Rule::Contract,

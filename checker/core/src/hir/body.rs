@@ -48,7 +48,7 @@ pub enum Shape {
 
 /// A shape placed in its owner's frame.
 #[derive(Clone, Debug)]
-pub struct Part {
+pub struct BodyPart {
     pub shape: Shape,
     /// `None`: the owner's frame itself.
     pub place: Option<Pose>,
@@ -58,7 +58,7 @@ pub struct Part {
 /// A body: the union of its parts.
 #[derive(Clone, Debug)]
 pub struct Body {
-    pub parts: Vec<Part>,
+    pub parts: Vec<BodyPart>,
     pub span: Span,
 }
 

@@ -8,7 +8,7 @@
 //! mount cycles E0216, an obstacle used as a participant E0217, unknown mounts E0218.
 
 use super::*;
-use crate::hir::body::{Body, Mount, MountedOn, Obstacle, Part, Pose, Shape};
+use crate::hir::body::{Body, BodyPart, Mount, MountedOn, Obstacle, Pose, Shape};
 
 /// The shapes, as the diagnostics list them.
 const SHAPES: &str =
@@ -64,7 +64,7 @@ impl Lowerer {
             let shape = self.shape(&p.shape, env);
             let place = p.place.as_ref().map(|pose| self.pose(pose, env));
             match shape {
-                Some(shape) => parts.push(Part { shape, place, span: p.span }),
+                Some(shape) => parts.push(BodyPart { shape, place, span: p.span }),
                 None => ok = false,
             }
         }

@@ -42,6 +42,7 @@
 //! arithmetic); `contract.rs` a primitive's predicates, `init` and invariants from a
 //! participant's view.
 
+pub mod cone;
 mod contract;
 mod interval;
 mod join;

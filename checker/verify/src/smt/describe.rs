@@ -27,7 +27,7 @@ pub(super) fn describe(prog: &Program, ob: &Obligation, part: &Part) -> String {
                 if parts.len() > 1 { "every part's" } else { "its" },
             )
         }
-        (Goal::CanEnd { prim: p }, Part::Occupies) => {
+        (Goal::Occupies { prim: p }, Part::Occupies) => {
             format!(
                 "the footprint of `{}` holds some point when it starts, for some arguments and start state its precondition and the invariant allow",
                 prog.prim(*p).name

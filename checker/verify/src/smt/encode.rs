@@ -42,7 +42,7 @@ use z3::ast::{Ast, Bool, Int, Real};
 mod numeral;
 mod term;
 
-pub use numeral::{as_real, one, rational, rational_value, real_of_f64, real_of_rational};
+pub use numeral::{as_real, one, rational, rational_value, real_of_f64, real_of_rational, zero};
 use numeral::{decimal, int_text};
 
 /// A construct the encoding does not handle; the message names it.

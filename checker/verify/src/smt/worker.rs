@@ -358,7 +358,11 @@ impl Worker<'_> {
         // shows them satisfiable), [T-SESS]'s the initial states (checked on their own).
         let covered = matches!(
             ob.goal,
-            Goal::Reachable { .. } | Goal::CanEnd { .. } | Goal::Separated { .. } | Goal::InitiallyDisjoint { .. }
+            Goal::Reachable { .. }
+                | Goal::CanEnd { .. }
+                | Goal::Occupies { .. }
+                | Goal::Separated { .. }
+                | Goal::InitiallyDisjoint { .. }
         );
         if !vacuous && !sat && !covered && !ob.hyps.is_empty() {
             // Obligations with the same hypotheses share the answer.

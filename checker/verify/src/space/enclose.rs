@@ -37,7 +37,7 @@
 
 use crate::bounds::compiled::{Compiled, VarTable};
 use crate::bounds::{self, Interval};
-use crate::hir::body::{Body, Part, Pose, Shape};
+use crate::hir::body::{Body, BodyPart, Pose, Shape};
 use crate::hir::expr::{BinOp, Builtin, ExprKind, Sort, UnOp};
 use crate::hir::{Expr, Footprint, Loc, PrimId, Program, Slot, Var};
 use num_bigint::BigInt;
@@ -175,11 +175,11 @@ impl Facts {
 }
 
 /// The search for one part; `Ok(pieces examined)` when the part lies within `fp`.
-fn part_within(prog: &Program, part: &Part, fp: &Expr, facts: &Facts, budget: usize) -> Result<usize, Undecided> {
+fn part_within(prog: &Program, part: &BodyPart, fp: &Expr, facts: &Facts, budget: usize) -> Result<usize, Undecided> {
     let loc = Loc::default();
     let q: [Expr; 3] = [0, 1, 2].map(|k| Expr { kind: ExprKind::Var(Var::Point(k)), sort: Sort::Real, loc });
     // The shape in its own frame, and a box around it.
-    let unplaced = Body { parts: vec![Part { place: None, ..part.clone() }], span: part.span };
+    let unplaced = Body { parts: vec![BodyPart { place: None, ..part.clone() }], span: part.span };
     let shape = crate::space::region::region(prog, &unplaced, &q).ok_or_else(|| undecided("a URDF or mesh part"))?;
     let exact =
         shape_box(prog, &part.shape).ok_or_else(|| undecided("a shape whose sizes are not rational constants"))?;

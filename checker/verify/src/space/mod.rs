@@ -105,7 +105,7 @@ fn sizes(prog: &Program, body: &Body, diags: &mut Vec<Diagnostic>) {
 
 #[cfg(test)]
 mod tests {
-    use crate::hir::body::{Body, Part, Pose, Shape};
+    use crate::hir::body::{Body, BodyPart, Pose, Shape};
     use crate::hir::{Expr, ExprKind, Loc, Slot, Sort, Var};
     use crate::smt::{discharge, Decision, SmtConfig};
 
@@ -129,7 +129,7 @@ mod tests {
         let x = Expr { kind: ExprKind::Var(Var::Own(Slot::State(0))), sort: Sort::Real, loc: Loc::default() };
         let at = Pose { args: [x, lit("0"), lit("0"), lit("0"), lit("0"), lit("0")], span: Default::default() };
         prog.kinds[0].body = Some(Body {
-            parts: vec![Part {
+            parts: vec![BodyPart {
                 shape: Shape::Box([lit("0.5"), lit("0.4"), lit("0.1")]),
                 place: Some(at),
                 span: Default::default(),

@@ -11,7 +11,7 @@
 //! ones soundly (LANGUAGE.md, Systems), and an exact quarter turn is written with 0, ±1.
 
 use crate::bounds;
-use crate::hir::body::{Body, Part, Pose, Shape};
+use crate::hir::body::{Body, BodyPart, Pose, Shape};
 use crate::hir::expr::{BinOp, Builtin, ExprKind, Sort};
 use crate::hir::{Expr, Loc, Program};
 
@@ -26,7 +26,7 @@ pub fn region(prog: &Program, body: &Body, p: &[Expr; 3]) -> Option<Expr> {
     Some(parts.into_iter().reduce(|a, b| bin(BinOp::Or, a, b, Sort::Bool)).unwrap_or_else(|| Expr::bool(false, loc)))
 }
 
-fn part_region(prog: &Program, part: &Part, p: &[Expr; 3]) -> Option<Expr> {
+fn part_region(prog: &Program, part: &BodyPart, p: &[Expr; 3]) -> Option<Expr> {
     let q = match &part.place {
         Some(pose) => to_part_frame(prog, pose, p),
         None => p.clone(),
@@ -188,7 +188,7 @@ mod tests {
     }
 
     fn body(shape: Shape, place: Option<Pose>) -> Body {
-        Body { parts: vec![Part { shape, place, span: Default::default() }], span: Default::default() }
+        Body { parts: vec![BodyPart { shape, place, span: Default::default() }], span: Default::default() }
     }
 
     fn prog() -> Program {

@@ -227,6 +227,7 @@ enum GoalKey<'o> {
     Separated(Vec<(&'o [RoleId], Vec<RunKey<'o>>)>),
     InitiallyDisjoint(Vec<(RoleId, Vec<AppKey<'o>>)>),
     CanEnd(PrimId),
+    Occupies(PrimId),
     Contains(PrimId),
     Reachable(&'o [Vec<Expr>], bool),
     /// Each branch's guard, fields (by binding site and sort) and refinement.
@@ -261,6 +262,7 @@ impl<'o> GoalKey<'o> {
                 firsts.iter().map(|(r, apps)| (*r, apps.iter().map(app).collect())).collect(),
             ),
             Goal::CanEnd { prim } => GoalKey::CanEnd(*prim),
+            Goal::Occupies { prim } => GoalKey::Occupies(*prim),
             Goal::Contains { prim } => GoalKey::Contains(*prim),
             Goal::Reachable { before, dead_branch } => GoalKey::Reachable(before, *dead_branch),
             Goal::Progress { branches } => GoalKey::Progress(

@@ -749,9 +749,9 @@ impl<'a> Contexts<'a> {
                 rule: Rule::EnumEntry,
                 span: check.at.0,
                 what: format!("`{written}` of {}: some value its refinement admits is {what}", m.label),
-                hyps: crate::smt::goals::cone(self.prog, after.facts(), &x),
+                hyps: crate::sigma::cone::cone(self.prog, after.facts(), &x),
                 goal: Goal::Reachable {
-                    before: vec![crate::smt::goals::cone(self.prog, s.facts(), &x)],
+                    before: vec![crate::sigma::cone::cone(self.prog, s.facts(), &x)],
                     dead_branch: false,
                 },
             });

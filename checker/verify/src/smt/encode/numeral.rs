@@ -12,6 +12,10 @@ pub fn as_real(t: Term) -> Result<Real, Unsupported> {
     }
 }
 
+pub fn zero() -> Real {
+    Int::from_i64(0).to_real()
+}
+
 pub fn one() -> Real {
     Int::from_i64(1).to_real()
 }

@@ -7,15 +7,17 @@
 //! and builds their queries; pairs of footprints whose boxes are apart are proved by
 //! [`super::boxes`] without a query.
 
+use super::super::encode::zero;
 use super::super::encode::{Frame, Unsupported};
 use super::boxes::{app_box, meeting_pairs};
 use super::frames::world_point;
+use super::hyps;
 use super::motion::{ends, Inst};
-use super::query::{hyps, seeds_of, slice, zero};
 use super::{Part, Plan, Query};
 use crate::bounds::{self, Interval};
 use crate::hir::expr::BinOp;
 use crate::hir::{Expr, ExprKind, PrimApp, Program, RoleId, Slot, Var};
+use crate::sigma::cone::{seeds_of, slice};
 use std::collections::HashMap;
 use z3::ast::{Bool, Real};
 
@@ -550,7 +552,7 @@ mod tests {
     /// 0.2-wide obstacle box standing at x = 2 (placed by its `at:` pose). The obstacle
     /// is built by hand: it is checked against every part of every joint motion.
     fn cart_and_wall(xf: &str) -> Decision {
-        use crate::hir::body::{Body, Obstacle, Part as BodyPart, Pose, Shape};
+        use crate::hir::body::{Body, BodyPart, Obstacle, Pose, Shape};
         use crate::hir::{Expr, ExprKind, Loc, Sort};
         let src = format!(
             "robot Cart {{ state x: real; }}

@@ -62,8 +62,7 @@ pub enum Part {
     Before(usize),
     /// [`Goal::CanEnd`]: the declared primitive admits a run that ends.
     Realisable,
-    /// [`Goal::CanEnd`] under [`crate::obligation::Rule::Occupies`]: the primitive's
-    /// footprint holds some point when it starts (a footprint no point satisfies would make
+    /// [`Goal::Occupies`]: the primitive's footprint holds some point when it starts (a footprint no point satisfies would make
     /// every collision check about it hold vacuously).
     Occupies,
     /// [`Goal::Contains`]: part `k` of the kind's body lies in the footprint.
@@ -155,7 +154,7 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
         },
         Goal::Refines { concrete, abstract_, .. } => refine::plan(prog, concrete, abstract_),
         Goal::InitiallyDisjoint { firsts } => boxes::initially_disjoint(prog, ob, firsts),
-        Goal::CanEnd { .. } if ob.rule == crate::obligation::Rule::Occupies => Plan::Parts(vec![Part::Occupies]),
+        Goal::Occupies { .. } => Plan::Parts(vec![Part::Occupies]),
         Goal::CanEnd { .. } => Plan::Parts(vec![Part::Realisable]),
         Goal::Reachable { .. } => Plan::Parts(vec![Part::Context]),
         Goal::Progress { .. } => Plan::Parts(vec![Part::Valid]),
@@ -187,12 +186,13 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
     }
 }
 
-/// The facts of `hs` in the cone of influence of `seed`'s variables (those sharing a
-/// variable with it, directly or through other facts kept, and the facts over constants
-/// only): the slice every query of a goal about `seed` uses. For the global walk's E0243
-/// contexts (`wf/scope.rs`), which are about one payload value.
-pub fn cone(prog: &Program, hs: &[crate::hir::Expr], seed: &crate::hir::Expr) -> Vec<crate::hir::Expr> {
-    query::slice(prog, hs, query::vars_of(prog, [seed]))
+/// Assumes the facts `hs` in the query `q`.
+pub(super) fn hyps(q: &mut Query, hs: &[crate::hir::Expr]) -> Result<(), super::encode::Unsupported> {
+    for h in hs {
+        let b = q.enc.assumed(|enc| enc.boolean(h))?;
+        q.assertions.push(b);
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -9,9 +9,8 @@
 //! - footprints are in the participant's frame: the world point `(x, y, z)` is moved
 //!   into it by the inverse of the participant's `pose` ([`super::frames`]).
 
-use super::super::encode::{Encoder, Frame, Term, Unsupported};
+use super::super::encode::{zero, Encoder, Frame, Term, Unsupported};
 use super::frames::to_local;
-use super::query::zero;
 use super::Query;
 use crate::hir::{Expr, Footprint, PrimApp, Primitive, RoleId, Slot};
 use z3::ast::{Bool, Real};

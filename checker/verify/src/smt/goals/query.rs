@@ -5,15 +5,18 @@
 //! questions are built here; [AGCOMP]'s and refinement's parts in their modules.
 
 use super::super::encode::Encoder;
-use super::super::encode::{Frame, Unsupported};
+use super::super::encode::{zero, Frame, Unsupported};
 use super::agcomp::compat;
 use super::frames::{to_local, world_point};
 use super::motion::{ends, Inst};
 use super::refine::refine;
 use super::{Part, Query};
-use crate::hir::{Expr, Footprint, PrimApp, Program, RoleId, Slot, Var};
+// The helpers every part's query uses, for the goals of `geo` too.
+pub(super) use super::hyps;
+use crate::hir::{Expr, Footprint, PrimApp, Program, Var};
 use crate::obligation::{Goal, Obligation};
-use std::collections::HashSet;
+use crate::sigma::cone::vars_of;
+pub(super) use crate::sigma::cone::{seeds_of, slice};
 use z3::ast::{Bool, Real};
 
 /// Builds the query of one part.
@@ -171,7 +174,7 @@ fn build_with<'p>(enc: Encoder<'p>, ob: &Obligation, part: &Part) -> Result<Quer
             inst.frame.params = p.params.iter().map(|(n, sort)| q.enc.named(n, sort)).collect::<Result<_, _>>()?;
             ends(&mut q, std::slice::from_ref(&inst), &t)?;
         }
-        (Goal::CanEnd { prim }, Part::Occupies) => {
+        (Goal::Occupies { prim }, Part::Occupies) => {
             // Some arguments, state and point (in the robot's own frame: a pose only moves
             // it) satisfy the footprint's predicate at time 0. Deliberately weak and cheap:
             // it catches footprints no point satisfies (`false`, contradictory bounds).
@@ -286,123 +289,5 @@ pub fn context_of(prog: &Program, ob: &Obligation) -> Vec<Expr> {
             vars_of(prog, branches.iter().flat_map(|b| b.guard.iter().chain(std::iter::once(&b.refinement)))),
         ),
         _ => ob.hyps.clone(),
-    }
-}
-
-pub(super) fn zero() -> Real {
-    z3::ast::Int::from_i64(0).to_real()
-}
-
-/// The variables of some expressions (constants excepted).
-/// Inputs count as their source's state variable, which they are.
-pub(super) fn vars_of<'e>(prog: &Program, es: impl IntoIterator<Item = &'e Expr>) -> HashSet<Var> {
-    let mut out = HashSet::new();
-    for e in es {
-        e.visit_vars(&mut |v, _| {
-            if !matches!(v, Var::Const(_)) {
-                out.insert(prog.source_of(v));
-            }
-        });
-    }
-    out
-}
-
-/// What the hypotheses of a motion query may be about: the participants' variables
-/// (now and at their latest snapshot), their input sources', and the arguments'.
-pub(super) fn seeds_of(prog: &Program, parts: &[(RoleId, PrimApp)]) -> HashSet<Var> {
-    let mut out = vars_of(prog, parts.iter().flat_map(|(_, a)| a.args.iter()));
-    for (r, _) in parts {
-        let mut roles = vec![*r];
-        roles.extend(prog.role(*r).input_sources.iter().flatten().copied());
-        for role in roles {
-            let kind = prog.kind_of(role);
-            for i in 0..kind.state.len() {
-                out.insert(Var::Role(role, Slot::State(i)));
-                out.insert(Var::Snap(role, Slot::State(i)));
-            }
-            for i in 0..kind.inputs.len() {
-                out.insert(prog.source_of(&Var::Role(role, Slot::Input(i))));
-            }
-        }
-    }
-    out
-}
-
-/// The hypotheses connected to `seeds` through shared variables (the cone of
-/// influence). Dropping the others keeps queries small and lets identical questions
-/// about different participants share a cache entry. It is sound: fewer hypotheses
-/// can only turn "holds" into "fails" — and only when the dropped ones contradict each
-/// other, i.e. the point is unreachable, which is reported rather than hidden.
-pub(super) fn slice(prog: &Program, hs: &[Expr], mut seeds: HashSet<Var>) -> Vec<Expr> {
-    // One visit of each hypothesis per pass, without collecting its variables first: a
-    // query of a wide `dt` slices a context of n facts, n times.
-    let mut keep = vec![false; hs.len()];
-    loop {
-        let mut grew = false;
-        for (i, h) in hs.iter().enumerate() {
-            if keep[i] {
-                continue;
-            }
-            let (mut any, mut hit) = (false, false);
-            h.visit_vars(&mut |v, _| {
-                if !hit && !matches!(v, Var::Const(_)) {
-                    any = true;
-                    hit = seeds.contains(&prog.source_of(v));
-                }
-            });
-            if hit || !any {
-                keep[i] = true;
-                grew = true;
-                seeds.extend(vars_of(prog, [h]));
-            }
-        }
-        if !grew {
-            break;
-        }
-    }
-    hs.iter().zip(keep).filter(|(_, k)| *k).map(|(h, _)| h.clone()).collect()
-}
-
-pub(super) fn hyps(q: &mut Query, hs: &[Expr]) -> Result<(), Unsupported> {
-    for h in hs {
-        let b = q.enc.assumed(|enc| enc.boolean(h))?;
-        q.assertions.push(b);
-    }
-    Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::{slice, vars_of};
-    use crate::hir::Expr;
-
-    /// The conjuncts of a guard over `A`'s state `x, y, z, w`.
-    fn facts(guard: &str) -> (crate::hir::Program, Vec<Expr>) {
-        let (prog, g) = crate::lower::tests::first_guard(&format!(
-            "robot R {{ state x: real, y: real, z: real, w: real; }} system S {{ participant A: R; participant B: R; }}
-             choreography G = A -> B : [{guard}] go. end;"
-        ));
-        let fs = g.conjuncts().into_iter().cloned().collect();
-        (prog, fs)
-    }
-
-    fn printed(prog: &crate::hir::Program, es: &[Expr]) -> Vec<String> {
-        es.iter().map(|e| crate::hir::print::expr(prog, None, e)).collect()
-    }
-
-    #[test]
-    fn a_slice_keeps_the_cone_of_influence_and_closed_facts() {
-        let (prog, fs) = facts("x >= 0 && y == x + 1 && z == 2 && w <= z && 1 <= 2 && y <= 5");
-        // From `x`: the facts linked to it through `y`, and the fact with no variable.
-        let kept = slice(&prog, &fs, vars_of(&prog, [&fs[0]]));
-        assert_eq!(
-            printed(&prog, &kept),
-            printed(&prog, &[fs[0].clone(), fs[1].clone(), fs[4].clone(), fs[5].clone()])
-        );
-        // From `w`: `z` through `w <= z`, whichever comes first.
-        let kept = slice(&prog, &fs, vars_of(&prog, [&fs[3]]));
-        assert_eq!(printed(&prog, &kept), printed(&prog, &[fs[2].clone(), fs[3].clone(), fs[4].clone()]));
-        // No seeds: only the closed fact.
-        assert_eq!(slice(&prog, &fs, Default::default()).len(), 1);
     }
 }

@@ -5,10 +5,9 @@
 //! `D_s ⊆ D_c`, non-interruptible `D_c ⊆ D_s`); and `c` can end from a start `s` allows
 //! (otherwise every item holds vacuously). One part per item.
 
-use super::super::encode::{Frame, Unsupported};
+use super::super::encode::{zero, Frame, Unsupported};
 use super::frames::world_point;
 use super::motion::{end_frame, ends, Inst};
-use super::query::zero;
 use super::{Part, Plan, Query};
 use crate::hir::body::{Body, Shape};
 use crate::hir::{Expr, PrimApp, Primitive, Program, RoleId, Var};
@@ -62,7 +61,7 @@ pub(super) enum Within {
 /// arguments differ; the state, `old(...)` and `clock` are shared in a refinement).
 fn same_body(prog: &Program, a: &Body, b: &Body) -> bool {
     let no_param = |e: &Expr| !crate::hir::expr::mentions(e, &|v| matches!(v, Var::Param(_)));
-    let exprs = |p: &crate::hir::body::Part| -> Vec<Expr> {
+    let exprs = |p: &crate::hir::body::BodyPart| -> Vec<Expr> {
         let mut out: Vec<Expr> = match &p.shape {
             Shape::Box(d) => d.to_vec(),
             Shape::Sphere(r) => vec![r.clone()],

@@ -153,7 +153,7 @@ impl<'e> Relevant<'e> {
 type Sides<'e> = &'e [(usize, u32)];
 
 /// One participant's part of a joint motion on a path.
-struct Part<'g> {
+struct MotionPart<'g> {
     /// The motion's event.
     ev: usize,
     role: RoleId,
@@ -184,7 +184,7 @@ enum Last {
     /// A message: its instant and its event.
     Msg(usize, usize),
     /// A part of a motion (index into the parts).
-    Part(usize),
+    MotionPart(usize),
 }
 
 fn names(prog: &Program, rs: &[RoleId]) -> String {
@@ -369,7 +369,7 @@ impl<'g> Checker<'_, 'g> {
         }
     }
 
-    fn part_name(&self, p: &Part) -> String {
+    fn part_name(&self, p: &MotionPart) -> String {
         format!("{}: {}", self.prog.role_name(p.role), self.prog.prim(p.app.prim).name)
     }
 
@@ -377,7 +377,7 @@ impl<'g> Checker<'_, 'g> {
     fn timing_path(&mut self, path: &[usize], seed: &Seed, ends_here: bool, everyone: &HashSet<RoleId>) -> PathEnd {
         let ev = self.ev;
         let mut inst = Instants::new();
-        let mut parts: Vec<Part<'g>> = Vec::new();
+        let mut parts: Vec<MotionPart<'g>> = Vec::new();
         let mut last: HashMap<RoleId, Last> = seed.iter().map(|&(r, by)| (r, Last::Msg(0, by))).collect();
         let mut relevant = Relevant::new(ev, path);
         let mut live: std::collections::VecDeque<usize> = std::collections::VecDeque::new();
@@ -392,7 +392,7 @@ impl<'g> Checker<'_, 'g> {
                         .map(|(r, _)| match last.get(r) {
                             None => (*r, 0, None),
                             Some(Last::Msg(i, by)) => (*r, *i, Some(*by)),
-                            Some(Last::Part(x)) => (*r, parts[*x].end_of_motion, Some(parts[*x].ev)),
+                            Some(Last::MotionPart(x)) => (*r, parts[*x].end_of_motion, Some(parts[*x].ev)),
                         })
                         .collect();
                     if starts.iter().any(|s| !inst.same(s.1, starts[0].1)) {
@@ -401,14 +401,14 @@ impl<'g> Checker<'_, 'g> {
                     }
                     let start = starts.first().map(|s| s.1).unwrap_or(0);
                     for (r, _) in &m.parts {
-                        if let Some(Last::Part(x)) = last.get(r) {
+                        if let Some(Last::MotionPart(x)) = last.get(r) {
                             let x = *x;
                             parts[x].left = Some(start);
                         }
                     }
                     let end = inst.end(start, &clock::motion_window(self.prog, m));
                     for (r, app) in &m.parts {
-                        parts.push(Part {
+                        parts.push(MotionPart {
                             ev: e,
                             role: *r,
                             app,
@@ -417,15 +417,15 @@ impl<'g> Checker<'_, 'g> {
                             left: None,
                             retired: usize::MAX,
                         });
-                        last.insert(*r, Last::Part(parts.len() - 1));
+                        last.insert(*r, Last::MotionPart(parts.len() - 1));
                         live.push_back(parts.len() - 1);
                     }
                 }
                 EventKind::Msg(msg) => {
-                    let ready = |who: RoleId, sender: bool, parts: &[Part]| match last.get(&who) {
+                    let ready = |who: RoleId, sender: bool, parts: &[MotionPart]| match last.get(&who) {
                         None => 0,
                         Some(Last::Msg(i, _)) => *i,
-                        Some(Last::Part(x)) => {
+                        Some(Last::MotionPart(x)) => {
                             let p = &parts[*x];
                             if !sender && self.prog.prim(p.app.prim).interruptible {
                                 p.start
@@ -438,7 +438,7 @@ impl<'g> Checker<'_, 'g> {
                     let r = ready(msg.to, false, &parts);
                     let at = inst.max(s, r);
                     for who in [msg.from, msg.to] {
-                        if let Some(Last::Part(x)) = last.get(&who) {
+                        if let Some(Last::MotionPart(x)) = last.get(&who) {
                             let x = *x;
                             let interruptible = self.prog.prim(parts[x].app.prim).interruptible;
                             parts[x].left = Some(if interruptible { at } else { parts[x].end_of_motion });
@@ -505,7 +505,7 @@ impl<'g> Checker<'_, 'g> {
     /// part kept is only compared exactly).
     fn retire<'e>(
         ev: &'e [Event],
-        parts: &mut [Part],
+        parts: &mut [MotionPart],
         live: &mut std::collections::VecDeque<usize>,
         last: &HashMap<RoleId, Last>,
         inst: &Instants,
@@ -516,7 +516,7 @@ impl<'g> Checker<'_, 'g> {
             let floor = |r: &RoleId| match last.get(r) {
                 None => 0,
                 Some(Last::Msg(i, _)) => *i,
-                Some(Last::Part(p)) => parts[*p].start,
+                Some(Last::MotionPart(p)) => parts[*p].start,
             };
             if !relevant.of(&ev[parts[x].ev].pars).iter().all(|r| inst.le(left, floor(r))) {
                 break;
@@ -526,7 +526,7 @@ impl<'g> Checker<'_, 'g> {
         }
     }
 
-    fn never_interrupted(&mut self, p: &Part) {
+    fn never_interrupted(&mut self, p: &MotionPart) {
         let prim = self.prog.prim(p.app.prim);
         let (lo, hi) = self.duration_text(prim);
         let d = Diagnostic::error(
@@ -578,7 +578,7 @@ impl<'g> Checker<'_, 'g> {
         self.push(d);
     }
 
-    fn interrupted_untied(&mut self, msg: usize, p: &Part) {
+    fn interrupted_untied(&mut self, msg: usize, p: &MotionPart) {
         let prim = self.prog.prim(p.app.prim);
         let (lo, hi) = self.duration_text(prim);
         let d = Diagnostic::error(

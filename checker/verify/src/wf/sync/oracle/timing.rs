@@ -113,7 +113,7 @@ impl Instants {
 type Sides<'e> = &'e [(usize, u32)];
 
 /// One participant's part of a joint motion on a path.
-struct Part<'g> {
+struct MotionPart<'g> {
     /// The motion's event.
     ev: usize,
     role: RoleId,
@@ -131,7 +131,7 @@ enum Last {
     /// A message: its instant and its event.
     Msg(usize, usize),
     /// A part of a motion (index into the parts).
-    Part(usize),
+    MotionPart(usize),
 }
 
 fn names(prog: &Program, rs: &[RoleId]) -> String {
@@ -189,14 +189,14 @@ impl<'g> Checker<'_, 'g> {
         }
     }
 
-    fn part_name(&self, p: &Part) -> String {
+    fn part_name(&self, p: &MotionPart) -> String {
         format!("{}: {}", self.prog.role_name(p.role), self.prog.prim(p.app.prim).name)
     }
 
     fn timing_path(&mut self, path: &[usize], ends_here: bool) {
         let ev = self.ev;
         let mut inst = Instants::new(path.len() + 1);
-        let mut parts: Vec<Part<'g>> = Vec::new();
+        let mut parts: Vec<MotionPart<'g>> = Vec::new();
         let mut last: HashMap<RoleId, Last> = HashMap::new();
         for &e in path {
             match ev[e].kind {
@@ -208,7 +208,7 @@ impl<'g> Checker<'_, 'g> {
                         .map(|(r, _)| match last.get(r) {
                             None => (*r, 0, None),
                             Some(Last::Msg(i, by)) => (*r, *i, Some(*by)),
-                            Some(Last::Part(x)) => (*r, parts[*x].end_of_motion, Some(parts[*x].ev)),
+                            Some(Last::MotionPart(x)) => (*r, parts[*x].end_of_motion, Some(parts[*x].ev)),
                         })
                         .collect();
                     if starts.iter().any(|s| !inst.same(s.1, starts[0].1)) {
@@ -217,7 +217,7 @@ impl<'g> Checker<'_, 'g> {
                     }
                     let start = starts.first().map(|s| s.1).unwrap_or(0);
                     for (r, _) in &m.parts {
-                        if let Some(Last::Part(x)) = last.get(r) {
+                        if let Some(Last::MotionPart(x)) = last.get(r) {
                             let x = *x;
                             parts[x].left = Some(start);
                         }
@@ -225,15 +225,15 @@ impl<'g> Checker<'_, 'g> {
                     inst.off.after(start, &crate::wf::sync::clock::motion_window(self.prog, m));
                     let end = inst.add(&[start]);
                     for (r, app) in &m.parts {
-                        parts.push(Part { ev: e, role: *r, app, start, end_of_motion: end, left: None });
-                        last.insert(*r, Last::Part(parts.len() - 1));
+                        parts.push(MotionPart { ev: e, role: *r, app, start, end_of_motion: end, left: None });
+                        last.insert(*r, Last::MotionPart(parts.len() - 1));
                     }
                 }
                 EventKind::Msg(msg) => {
-                    let ready = |who: RoleId, sender: bool, parts: &[Part]| match last.get(&who) {
+                    let ready = |who: RoleId, sender: bool, parts: &[MotionPart]| match last.get(&who) {
                         None => 0,
                         Some(Last::Msg(i, _)) => *i,
-                        Some(Last::Part(x)) => {
+                        Some(Last::MotionPart(x)) => {
                             let p = &parts[*x];
                             if !sender && self.prog.prim(p.app.prim).interruptible {
                                 p.start
@@ -246,7 +246,7 @@ impl<'g> Checker<'_, 'g> {
                     let r = ready(msg.to, false, &parts);
                     let at = inst.max(s, r);
                     for who in [msg.from, msg.to] {
-                        if let Some(Last::Part(x)) = last.get(&who) {
+                        if let Some(Last::MotionPart(x)) = last.get(&who) {
                             let x = *x;
                             let interruptible = self.prog.prim(parts[x].app.prim).interruptible;
                             parts[x].left = Some(if interruptible { at } else { parts[x].end_of_motion });
@@ -276,7 +276,7 @@ impl<'g> Checker<'_, 'g> {
         self.overlaps(&parts, &inst, ends_here);
     }
 
-    fn never_interrupted(&mut self, p: &Part) {
+    fn never_interrupted(&mut self, p: &MotionPart) {
         let prim = self.prog.prim(p.app.prim);
         let (lo, hi) = self.duration_text(prim);
         let d = Diagnostic::error(
@@ -328,7 +328,7 @@ impl<'g> Checker<'_, 'g> {
         self.push(d);
     }
 
-    fn interrupted_untied(&mut self, msg: usize, p: &Part) {
+    fn interrupted_untied(&mut self, msg: usize, p: &MotionPart) {
         let prim = self.prog.prim(p.app.prim);
         let (lo, hi) = self.duration_text(prim);
         let d = Diagnostic::error(
@@ -352,12 +352,12 @@ impl<'g> Checker<'_, 'g> {
 
     /// E0318: two parts of different participants that may run at the same time and that
     /// neither [AGCOMP] (one dt) nor a separation obligation (two sides of one `*`) covers.
-    fn overlaps(&mut self, parts: &[Part], inst: &Instants, ends_here: bool) {
+    fn overlaps(&mut self, parts: &[MotionPart], inst: &Instants, ends_here: bool) {
         // Parts of one dt are compared by [AGCOMP] while all of them run (its query bounds
         // the time by every part's duration and assumes every guarantee). Two interruptible
         // parts that run on after the motion ends (left later, or never before `end`) are
         // not compared after that when a third part bounds the query.
-        let overruns = |p: &Part| {
+        let overruns = |p: &MotionPart| {
             self.prog.prim(p.app.prim).interruptible
                 && match p.left {
                     Some(l) => !inst.same(l, p.end_of_motion),
@@ -366,7 +366,7 @@ impl<'g> Checker<'_, 'g> {
         };
         // A part bounds the query in time when its duration has an upper bound or its
         // guarantee reads the clock (its other variables are its own, fresh at each time).
-        let bounds_time = |p: &Part| {
+        let bounds_time = |p: &MotionPart| {
             let prim = self.prog.prim(p.app.prim);
             let mut clock = false;
             prim.guarantee.visit_vars(&mut |v, _| clock |= matches!(v, Var::Clock));
@@ -457,7 +457,7 @@ impl<'g> Checker<'_, 'g> {
         }
         let covered =
             |a: &[(usize, u32)], b: &[(usize, u32)]| a.iter().any(|(n, s)| b.iter().any(|(m, t)| n == m && s != t));
-        let before = |x: &Part, y: &Part| x.left.is_some_and(|l| inst.le(l, y.start));
+        let before = |x: &MotionPart, y: &MotionPart| x.left.is_some_and(|l| inst.le(l, y.start));
         // Per pair of motions (earlier, later), the pairs of parts that may overlap.
         type Pairs = Vec<(String, String, RoleId, RoleId)>;
         let mut found: std::collections::BTreeMap<(usize, usize), Pairs> = std::collections::BTreeMap::new();

@@ -6,12 +6,12 @@ use super::*;
 impl Checker<'_, '_> {
     /// E0318: two parts of different participants that may run at the same time and that
     /// neither [AGCOMP] (one dt) nor a separation obligation (two sides of one `*`) covers.
-    pub(super) fn overlaps(&mut self, parts: &[Part], inst: &Instants, ends_here: bool) {
+    pub(super) fn overlaps(&mut self, parts: &[MotionPart], inst: &Instants, ends_here: bool) {
         // Parts of one dt are compared by [AGCOMP] while all of them run (its query bounds
         // the time by every part's duration and assumes every guarantee). Two interruptible
         // parts that run on after the motion ends (left later, or never before `end`) are
         // not compared after that when a third part bounds the query.
-        let overruns = |p: &Part| {
+        let overruns = |p: &MotionPart| {
             self.prog.prim(p.app.prim).interruptible
                 && match p.left {
                     Some(l) => !inst.same(l, p.end_of_motion),
@@ -20,7 +20,7 @@ impl Checker<'_, '_> {
         };
         // A part bounds the query in time when its duration has an upper bound or its
         // guarantee reads the clock (its other variables are its own, fresh at each time).
-        let bounds_time = |p: &Part| {
+        let bounds_time = |p: &MotionPart| {
             let prim = self.prog.prim(p.app.prim);
             let mut clock = false;
             prim.guarantee.visit_vars(&mut |v, _| clock |= matches!(v, Var::Clock));
@@ -128,7 +128,7 @@ impl Checker<'_, '_> {
             });
             groups[g].1.push(i);
         }
-        let before = |x: &Part, y: &Part| x.left.is_some_and(|l| inst.le(l, y.start));
+        let before = |x: &MotionPart, y: &MotionPart| x.left.is_some_and(|l| inst.le(l, y.start));
         // Each part's group and position in it, and each group's uncovered groups.
         let mut slot = vec![(0, 0); parts.len()];
         for (g, (_, members)) in groups.iter().enumerate() {
