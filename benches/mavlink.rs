@@ -1,4 +1,4 @@
-//! End-to-end benchmark of the MAVLink refined sessions (issue 10, Deliver 5): every example
+//! End-to-end benchmark of the MAVLink refined sessions: every example
 //! under `choreographies/mavlink/` checked from its file (dialect, imports and profile
 //! included), then a generated protocol of 200 messages.
 //!
@@ -23,6 +23,14 @@
 //! error result), and a final MISSION_ACK ACCEPTED. Each seq refines the previous one (`r_k ==
 //! s_{k-1} + 1`), so the refinements form a chain as long as the protocol: the contexts grow
 //! with it. For n items it has 3n + 2 messages; n = 66 gives 200.
+//!
+//! A last table times the dialect reader on the bundled definitions (`common` and
+//! `ardupilotmega`, which includes it and five more files), best of the runs, read from
+//! `checker/core/src/dialect/definitions/` as the build bundles them: milliseconds, the XML
+//! read (KiB, every included file counted), microseconds per KiB, and the ratio of
+//! ardupilotmega's time per KiB to common's. A reader linear in its input keeps that ratio
+//! near 1 whatever the machine's load; a quadratic one makes it grow with the size ratio
+//! (the first version took 117 ms on ardupilotmega in release, where 7 ms is usual).
 
 use mochi::driver::{Config, Report};
 use mochi::fsload::{check_file, check_source};
@@ -40,7 +48,7 @@ const EXAMPLES: &[&str] = &[
     "choreographies/mavlink/arm-command.chor",
 ];
 
-/// Per example, milliseconds (issue 10, Deliver 5).
+/// Per example, milliseconds.
 const EXAMPLE_TARGET_MS: f64 = 500.0;
 /// The 200-message protocol, milliseconds.
 const GENERATED_TARGET_MS: f64 = 2000.0;
@@ -163,5 +171,40 @@ fn main() {
     }
     if let Some(report) = last {
         row(&format!("generated upload, {n} messages"), &times, &report, GENERATED_TARGET_MS);
+    }
+    dialects(runs);
+}
+
+/// The dialect reader on the bundled definitions (see the module comment).
+fn dialects(runs: usize) {
+    let dir = Path::new("checker/core/src/dialect/definitions");
+    println!("\n{:<16} {:>9} {:>9} {:>10}", "dialect", "min ms", "KiB", "us per KiB");
+    let mut per_kib = Vec::new();
+    for name in ["common", "ardupilotmega"] {
+        let mut best = f64::INFINITY;
+        let mut bytes = 0usize;
+        for _ in 0..runs {
+            let mut read = 0usize;
+            let mut load = |file: &str| {
+                let text = std::fs::read_to_string(dir.join(file)).ok()?;
+                read += text.len();
+                Some(text)
+            };
+            let t = Instant::now();
+            let parsed = mochi::dialect::parse(&format!("{name}.xml"), &mut load);
+            let ms = t.elapsed().as_secs_f64() * 1000.0;
+            if let Err(e) = parsed {
+                println!("{name}: not read: {}", e.message);
+                return;
+            }
+            best = best.min(ms);
+            bytes = read;
+        }
+        let kib = bytes as f64 / 1024.0;
+        per_kib.push(best * 1000.0 / kib);
+        println!("{name:<16} {best:>9.2} {kib:>9.0} {:>10.2}", best * 1000.0 / kib);
+    }
+    if let [common, apm] = per_kib[..] {
+        println!("time per KiB, ardupilotmega / common: {:.2} (near 1: linear)", apm / common);
     }
 }

@@ -14,22 +14,27 @@
 //! ratios compare like with like. With the separating conjunction the checker should
 //! grow about linearly, i.e. ratios near 10. Peak RSS (`VmHWM`) is printed at the end.
 //!
-//! A second table times the hostile input shapes of issue 8 once each (`MOCHI_BENCH_SHAPES=0`
+//! A second table times hostile input shapes once each (`MOCHI_BENCH_SHAPES=0`
 //! skips it): flat sequences of 1,000, 10,000 and 100,000 messages, checked end to end
-//! (issue 8 item 4: 10^5 in under 2 s), with the time of each stage that took a
+//! (target: 10^5 in under 2 s), with the time of each stage that took a
 //! millisecond or more; sequences of 1,000 to 100,000 joint motions, each followed by a
 //! message, through the well-formedness checks only (their compatibility obligations,
 //! one per motion, are the SMT stage's cost, not a shape cost); 20 MB of one repeated
 //! definition, and a 10^4 chain of `^`. For each it prints the size of the rendered text
 //! diagnostics, which the caps keep small.
 //!
-//! A third table times issue 8's wide joint motion once per size (`MOCHI_BENCH_WIDE=0` skips
+//! A third table times the wide joint motion once per size (`MOCHI_BENCH_WIDE=0` skips
 //! it): `wide_dt(n)` (`examples/common/lanes.rs`), the n carts in one `dt`, for n = 10, 100,
 //! 300, 1000, with the whole check's time, the stages that grew with the participants of one
 //! `dt` (well-scoped, synchronisable, compatibility, typing obligations) and the queries
 //! [AGCOMP] asked. Without the interval index every pair of footprints was a query over all
 //! n carts (n = 100: 131 s); until the snapshots of Σ were eliminated through an index of
 //! their uses, the well-scoped stage was quadratic (n = 1000: 5.4 s, now 0.06 s).
+//!
+//! A fourth table times each file of `tests/fuzz-corpus/` (past crashes and hangs;
+//! `MOCHI_BENCH_FUZZ=0` skips it) beside the 10-cart lanes checked just before it, best of
+//! three each, with the ratio of the two: a past hang that came back shows as a ratio in
+//! the hundreds, whatever the machine's load (`tests/props.rs` checks that none panics).
 //!
 //! No dependencies (no criterion): the numbers are meant to be read, not tracked.
 
@@ -93,6 +98,13 @@ fn main() {
 
     if std::env::var("MOCHI_BENCH_WIDE").map_or(true, |v| v != "0") {
         wide();
+    }
+
+    if std::env::var("MOCHI_BENCH_FUZZ").map_or(true, |v| v != "0") {
+        let worker = std::thread::Builder::new().stack_size(256 << 20).spawn(fuzz_corpus);
+        if let Err(e) = worker.map(|w| w.join()) {
+            println!("fuzz corpus: cannot start the thread: {e}");
+        }
     }
 
     match peak_rss_kib() {
@@ -249,7 +261,7 @@ enum Depth {
     Full,
 }
 
-/// Times the input shapes of issue 8 (see the module documentation).
+/// Times the hostile input shapes (see the module documentation).
 fn shapes() {
     let mut cases: Vec<(String, String, Depth)> = Vec::new();
     for n in [1_000, 10_000, 100_000] {
@@ -359,4 +371,31 @@ fn peak_rss_kib() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
     let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
     line.split_whitespace().nth(1)?.parse().ok()
+}
+
+/// Each file of the fuzz corpus beside the 10-cart lanes (see the module comment).
+fn fuzz_corpus() {
+    let dir = std::path::Path::new("tests/fuzz-corpus");
+    let mut files: Vec<std::path::PathBuf> = match std::fs::read_dir(dir) {
+        Ok(entries) => entries.filter_map(|e| Some(e.ok()?.path())).collect(),
+        Err(e) => {
+            println!("\nfuzz corpus: cannot list {}: {e}", dir.display());
+            return;
+        }
+    };
+    files.sort();
+    let cfg = Config::default();
+    let baseline = parallel_lanes(10);
+    println!("\n{:<28} {:>10} {:>12} {:>8}", "fuzz corpus file", "min ms", "lanes10 ms", "ratio");
+    for path in files {
+        let Ok(text) = std::fs::read_to_string(&path) else { continue };
+        let name = path.display().to_string();
+        let (mut file_ms, mut base_ms) = (f64::INFINITY, f64::INFINITY);
+        for _ in 0..3 {
+            base_ms = base_ms.min(run_once("lanes10.chor", &baseline, &cfg).0);
+            file_ms = file_ms.min(run_once(&name, &text, &cfg).0);
+        }
+        let short = path.file_name().map_or(name.clone(), |f| f.to_string_lossy().to_string());
+        println!("{short:<28} {file_ms:>10.2} {base_ms:>12.2} {:>8.2}", file_ms / base_ms);
+    }
 }

@@ -398,7 +398,7 @@ fn dump_smt_writes_one_smt_lib_file_per_query() {
     assert!(files.iter().any(|f| f.file_name().to_string_lossy().contains("-agcomp-")), "no [AGCOMP] query dumped");
 }
 
-// ---- hardening: option values, special inputs, output size (issue 8) -----------------
+// ---- hardening: option values, special inputs, output size ---------------------------
 
 /// A small verified choreography with `steps` messages in sequence; `lib` is its library.
 fn sequence(steps: usize) -> (String, String) {
@@ -455,9 +455,11 @@ fn imports_of_devices_and_non_mochi_files_are_refused_quickly() {
         (".", "not a mochi file"),
     ] {
         let file = dir.write("main.chor", &format!("import \"{import}\";\n"));
-        let started = std::time::Instant::now();
+        // Refused before it is opened: the words are those of the metadata check (a device)
+        // and of the extension check, which run before any byte is read, so `/dev/zero` is
+        // never read (were it read, the run would not end, or would end with E0107 for its
+        // size).
         let o = mochi(&["check", "--format", "json", path_arg(&file)]);
-        assert!(started.elapsed().as_secs() < 10, "{import} took {:?}", started.elapsed());
         let v: Value = serde_json::from_slice(&o.stdout).expect("JSON");
         let d = &v["diagnostics"][0];
         assert_eq!(d["code"], "E0106", "{import}: {v}");
@@ -835,11 +837,10 @@ fn every_subcommand_writes_results_to_stdout_and_problems_to_stderr() {
     }
 }
 
-// ---- the SMT stage's sinks and hard limit (issues 8 and 11) ----------------------------
+// ---- the SMT stage's sinks and hard limit --------------------------------------------
 
 /// A dump that cannot be written is reported (E0430, a warning at the obligation whose
 /// query it was) instead of being dropped; the verdict stands and nothing more is dumped.
-/// (Before, `smt/mod.rs` wrote dumps with `let _ = std::fs::write`: no word, exit 0.)
 #[test]
 fn a_dump_that_cannot_be_written_is_a_warning_not_a_lost_error() {
     let dir = TempDir::new("dump-fails");
@@ -888,7 +889,7 @@ fn projecting_a_library_says_it_is_one() {
     assert!(e.contains("is a library") && e.contains("mochi check"), "{e}");
 }
 
-// ---- clearance (issue 9) --------------------------------------------------------------
+// ---- clearance -----------------------------------------------------------------------
 
 /// `--clearance` lists the least distance between the cart and the bridge it passes under:
 /// the deck is 3 cm above the cart's top (bridge.chor's header), so the certified lower
@@ -913,7 +914,7 @@ fn clearance_lists_the_least_distance_of_each_pair() {
     assert_eq!(v["clearance"][0]["b"], "Bridge", "{v}");
 }
 
-// ---- MAVLink protocols (issue 10): the front end end to end ---------------------------
+// ---- MAVLink protocols: the front end end to end -------------------------------------
 
 /// A protocol with a dialect and no process is checked without typing processes, says so
 /// (the note E0242), and is verified; its projection prints MAVLink labels and fields.

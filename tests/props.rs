@@ -171,7 +171,7 @@ enum Mutation {
     Odd(usize, usize),
 }
 
-/// Inputs that are not what they seem (issue 8): a byte-order mark, line ends, control
+/// Inputs that are not what they seem: a byte-order mark, line ends, control
 /// characters, deep nesting and long operator chains.
 const ODD: &[&str] =
     &["\u{feff}", "\r", "\r\n", "\0", "\x1b[31m", "\t", "((((((((((", "2 ^ 2 ^ 2 ^ ", "~~~~", "\u{2192}"];
@@ -259,10 +259,10 @@ fn the_fuzz_corpus_of_past_crashes_is_handled() {
         corpus().into_iter().filter(|(p, _)| p.starts_with("tests/fuzz-corpus")).collect();
     assert!(corpus.len() >= 8, "{} files in tests/fuzz-corpus", corpus.len());
     on_big_stack(move || {
+        // How long each takes is measured by `cargo bench --bench pipeline` (the fuzz corpus
+        // table, beside a baseline run at the same moment), not asserted here.
         for (path, text) in &corpus {
-            let started = std::time::Instant::now();
             check_does_not_panic(&path.display().to_string(), text);
-            assert!(started.elapsed().as_secs() < 20, "{} took {:?}", path.display(), started.elapsed());
         }
     });
 }
@@ -308,7 +308,7 @@ fn the_bundled_examples_are_found() {
     }
 }
 
-// The URDF reader on hostile input (issue: URDF files and meshes are downloaded): arbitrary
+// The URDF reader on hostile input (URDF files and meshes are downloaded): arbitrary
 // bytes, and the Moveo arm's URDF (robots/moveo_urdf) mutated by deletions, duplications
 // and insertions of XML fragments, go to `geometry::load_robot`. It must return, without a
 // panic, either a robot whose link poses are finite (at zero and at random joint values)

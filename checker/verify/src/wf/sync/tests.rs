@@ -226,10 +226,16 @@ fn synchronised(k: usize, l: &str) -> String {
 
 #[test]
 fn choices_in_a_row_are_read_between_synchronisation_points() {
-    let t = std::time::Instant::now();
-    // 2^20 paths.
-    assert_eq!(codes4(&in_a_row(20, synchronised, "end")), vec![]);
-    assert!(t.elapsed() < std::time::Duration::from_secs(5), "{:?}", t.elapsed());
+    // 2^20 paths, read segment by segment: the events the path walks step over grow with the
+    // number of choices, not with the number of paths (twice the choices, about twice the
+    // steps; all 2^20 paths at once would be 2^10 times as many).
+    let steps = |n: usize| {
+        super::timing::STEPS.with(|s| s.set(0));
+        assert_eq!(codes4(&in_a_row(n, synchronised, "end")), vec![]);
+        super::timing::STEPS.with(|s| s.get())
+    };
+    let (ten, twenty) = (steps(10), steps(20));
+    assert!(ten > 0 && twenty <= 2 * ten + ten / 2, "10 choices: {ten} steps; 20 choices: {twenty}");
     // A defect in one branch of the 13th choice is still found: after it, `*`'s sides
     // release the next motion's participants at independent times.
     let broken = |k: usize, l: &str| {

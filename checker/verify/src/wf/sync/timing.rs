@@ -22,6 +22,8 @@ mod overlap;
 mod paths;
 
 pub(super) use paths::Layout;
+#[cfg(test)]
+pub(super) use paths::STEPS;
 use paths::*;
 
 /// The state at a *synchronisation point* of a path: every participant that has an event

@@ -27,6 +27,13 @@ pub(super) fn paths(
 /// What [`paths`] calls on each path.
 pub(super) type Visit<'v> = &'v mut dyn FnMut(&[usize], &HashMap<u32, u32>);
 
+#[cfg(test)]
+thread_local! {
+    /// Events stepped over by [`walk_paths`] on this thread: the tests' measure of the work
+    /// the timing checks do, which no machine's load changes.
+    pub(in crate::wf::sync) static STEPS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
 /// One pass of [`paths`]; without `visit`, only the count is checked.
 pub(super) fn walk_paths(
     ev: &[Event],
@@ -40,6 +47,8 @@ pub(super) fn walk_paths(
     let mut work: Vec<(HashMap<u32, u32>, Vec<usize>, usize)> = vec![(HashMap::new(), Vec::new(), range.start)];
     while let Some((mut assign, mut list, mut i)) = work.pop() {
         'ev: while i < range.end {
+            #[cfg(test)]
+            STEPS.with(|s| s.set(s.get() + 1));
             for &(node, b, choice) in &ev[i].path {
                 if !choice {
                     continue;
