@@ -1,6 +1,6 @@
 //! End-to-end benchmark on the bundled examples: the paper's cart and arms (Fig 2),
 //! the sorting case (Sec 4.5), PGCD's Fetch and Handover (Sec 5 (2), Table 2), and the
-//! geometry examples of issue 9 (a bridge, turning and diagonal carts, and the sorting case
+//! geometry examples (a bridge, turning and diagonal carts, and the sorting case
 //! study of Sec 5 (3) with the robots' URDFs, the arm mounted on a turning cart with a rover
 //! driving around it), and the rejected variants of the two geometric case studies (how long
 //! a contact takes to find and confirm).
@@ -26,12 +26,11 @@
 //! this machine did not finish in 900 s. The benchmark measures and prints; it asserts no
 //! time (the verdict it prints says whether the times are those of a proof).
 //!
-//! Measured (`--quick`, 2 cores shared with other jobs, session 7): the case study verified
-//! in 220 ms wall (min 204 ms; compatibility about 160 ms of worker time, typing
-//! obligations 100 ms, separation 40 ms, geometry stage 35 ms), against PGCD's 2410 s
-//! (paper) and more than 900 s here; 405 ms in session 6, before the geometric search's
-//! contraction was compiled (`bounds::compiled`). The mounted arm verified in 170 ms (it was
-//! unknown within 10 s per question before session 7); its variant with the rover's circle
+//! Measured (`--quick`, 2 cores shared with other jobs): the case study verified in 220 ms
+//! wall (min 204 ms; compatibility about 160 ms of worker time, typing obligations 100 ms,
+//! separation 40 ms, geometry stage 35 ms), against PGCD's 2410 s (paper) and more than
+//! 900 s here; 405 ms without the compiled contraction of the geometric search
+//! (`bounds::compiled`). The mounted arm verified in 170 ms; its variant with the rover's circle
 //! too tight rejected in 655 ms and the Panda variant of the case study in 728 ms (each
 //! about half the search for a contact, half its refinement towards the first). The other
 //! examples: cart-and-arms 91 ms, sorting 98, fetch 63, handover 144, bridge 12,
@@ -57,7 +56,7 @@ const EXAMPLES: &[(&str, &str)] = &[
     (CASE_STUDY, "PGCD: did not finish in 900 s here (paper: 2410 s of compatibility checks, dReal, 6 cores)"),
 ];
 
-/// The example whose phases are tabulated one per line (issue 9, Benchmark).
+/// The example whose phases are tabulated one per line.
 const CASE_STUDY: &str = "choreographies/sorting-case-study.chor";
 
 /// PGCD's figure for a phase of the case study, where there is one: the paper (Sec 5 (3))

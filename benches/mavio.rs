@@ -1,6 +1,6 @@
 //! Offline throughput of the MAVLink readers (`checker/mavio/`) against pymavlink's
-//! `mavlogdump.py` on the same log, side by side in one run (issue 21, deliverable 10's
-//! offline target: 100 times pymavlink).
+//! `mavlogdump.py` on the same log, side by side in one run (the offline target: 100
+//! times pymavlink).
 //!
 //! ```text
 //! cargo bench --bench mavio                  # the largest capture in ../shared/data/mavlink_captures

@@ -1,4 +1,4 @@
-//! The run-time monitor's work per message (issue 21, Deliver 10: target under 100 ns).
+//! The run-time monitor's work per message (target: under 100 ns).
 //!
 //! ```text
 //! cargo bench --bench monitor             # 200 passes over the stream

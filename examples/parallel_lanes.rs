@@ -1,5 +1,5 @@
 //! Writes the parallel-lanes benchmark source (paper Sec 5 (1)) for N carts, or with
-//! `--wide` the same carts in one joint motion (issue 8's wide `dt`).
+//! `--wide` the same carts in one joint motion (the wide `dt`).
 //!
 //! ```text
 //! cargo run --example parallel_lanes -- N [--wide] [--out FILE]

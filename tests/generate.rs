@@ -1,5 +1,5 @@
 //! A generator of random well-formed motion choreographies with a ground truth of their
-//! own, checked end to end (issue 18: defences that find the next false `verified`).
+//! own, checked end to end: a defence that finds the next false `verified`.
 //!
 //! Each scene is a few box-shaped carts on a plane, steps in which a leader tells every
 //! other cart to go and then all of them move together (each straight to a target, or

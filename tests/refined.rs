@@ -1,4 +1,4 @@
-//! Refined sessions (issue 10, Deliver 2) end to end through the CLI: termination
+//! Refined sessions end to end through the CLI: termination
 //! (`decreases`, E0416-E0418), progress (E0419, dead branches) and counterexample traces
 //! in text and JSON. The files are under `tests/data/refined/` and
 //! `choreographies/rejected/E041[6-8]-*.chor`; the decision procedures themselves are

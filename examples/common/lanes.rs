@@ -145,7 +145,7 @@ motion LaneCart.cruise(d: real) {
 
 ";
 
-/// Generates one joint motion of `n` carts (issue 8's wide `dt`): the same carts and lanes
+/// Generates one joint motion of `n` carts (the wide `dt`): the same carts and lanes
 /// as [`parallel_lanes`], but all in a single `dt<C1: cruise(0.5), ..., Cn: cruise(0.5)>`
 /// instead of `n` conjuncts of `*`. [AGCOMP] then compares every pair of footprints inside
 /// one obligation: the shape that scales only if pairs whose boxes are apart need no

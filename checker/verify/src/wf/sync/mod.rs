@@ -574,8 +574,9 @@ impl Checker<'_, '_> {
 mod clock;
 mod timing;
 
-/// The former implementation (happens-before as a materialised transitive closure and
-/// reduction, instants as bit sets), kept as the oracle of [`tests::same_as_the_oracle`].
+/// A second implementation (happens-before as a materialised transitive closure and
+/// reduction, instants as bit sets): quadratic, simple, the oracle of
+/// [`tests::same_as_the_oracle`].
 #[cfg(test)]
 mod oracle;
 
