@@ -24,7 +24,7 @@ use nalgebra::{Isometry3, Point3, Vector3};
 use parry3d::math::{Isometry as PIso, Point as PPoint, Vector as PVec};
 use parry3d::shape::SharedShape;
 
-use super::placement::{chain_motion_bound, pose_isometry, AffinePose, FrameBound};
+use crate::geometry::placement::{chain_motion_bound, pose_isometry, AffinePose, FrameBound};
 
 /// The distance of the two sides placed at one configuration.
 #[derive(Clone, Debug, PartialEq)]
@@ -930,9 +930,9 @@ pub struct ParryScene {
 /// may be closer only if one lies inside a closed mesh, and then their distance is 0).
 /// It is never a lower bound: proofs use the hulls.
 pub fn mesh_distance(
-    s1: &super::Solid,
+    s1: &crate::geometry::Solid,
     p1: &Isometry3<f64>,
-    s2: &super::Solid,
+    s2: &crate::geometry::Solid,
     p2: &Isometry3<f64>,
 ) -> Option<(f64, [[f64; 3]; 2])> {
     let g1: &dyn parry3d::shape::Shape = if s1.is_hull { s1.mesh()? } else { s1.shape.as_ref() };
@@ -1022,7 +1022,7 @@ impl Scene for ParryScene {
     }
 
     fn distance(&self, q: &[f64]) -> Closest {
-        let place = |s: &Solid| super::placement::compose(&s.place.frames(q));
+        let place = |s: &Solid| crate::geometry::placement::compose(&s.place.frames(q));
         let a: Vec<Isometry3<f64>> = self.sides[0].iter().map(place).collect();
         let b: Vec<Isometry3<f64>> = self.sides[1].iter().map(place).collect();
         let mut best = Closest { distance: f64::INFINITY, lower: f64::INFINITY, points: [[0.0; 3]; 2], solids: [0, 0] };
@@ -1046,7 +1046,7 @@ impl Scene for ParryScene {
             s.iter().map(|x| chain_motion_bound(&x.place.bounds(lo, hi, centre), x.radius)).fold(0.0, f64::max)
         };
         // Each side's points move by at most the largest of its solids' bounds.
-        (side(&self.sides[0]) + side(&self.sides[1])) * (1.0 + super::placement::PAD)
+        (side(&self.sides[0]) + side(&self.sides[1])) * (1.0 + crate::geometry::placement::PAD)
     }
 
     fn feasible(&self, lo: &[f64], hi: &[f64]) -> Feasible {
@@ -1340,7 +1340,7 @@ mod tests {
     /// the certified lower bound never exceeds the truth and is close to it.
     #[test]
     fn certified_lower_bound_on_random_box_ball_pairs() {
-        use super::super::placement::tests::Rng;
+        use crate::geometry::placement::tests::Rng;
         let mut rng = Rng::new(17);
         let mut worst: f64 = 0.0;
         for _ in 0..2000 {
@@ -1405,7 +1405,7 @@ mod tests {
     /// claimed lower bound); contact means the returned `q` is in the box and touches.
     #[test]
     fn random_scenes_agree_with_sampling() {
-        use super::super::placement::tests::Rng;
+        use crate::geometry::placement::tests::Rng;
         let mut rng = Rng::new(3);
         let (mut apart, mut contact, mut unknown) = (0, 0, 0);
         for case in 0..60 {
@@ -1502,7 +1502,7 @@ mod tests {
     fn sampled_min(s: &ParryScene, n: usize) -> f64 {
         let r = arm_root();
         let mut m = f64::INFINITY;
-        let mut rng = super::super::placement::tests::Rng::new(5);
+        let mut rng = crate::geometry::placement::tests::Rng::new(5);
         for _ in 0..n {
             let q: Vec<f64> = r.lo.iter().zip(&r.hi).map(|(l, h)| rng.range(*l, *h)).collect();
             m = m.min(s.distance(&q).distance);

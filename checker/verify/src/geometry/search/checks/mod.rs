@@ -1,7 +1,8 @@
-//! The geometric decision procedure's side of the SMT stage: collision questions whose
-//! bodies the solver cannot represent (a URDF robot, a mesh, a participant mounted on a
-//! moving carrier) are decided by branch and bound over boxes of configurations
-//! ([`crate::geometry::bnb`]), with Z3 asked only for witnesses.
+//! The checks' collision questions posed to the geometric search: those whose bodies the
+//! SMT solver cannot represent (a URDF robot, a mesh, a participant mounted on a moving
+//! carrier) are decided by branch and bound over boxes of configurations
+//! ([`crate::geometry::search::bnb`]), with Z3 asked only for witnesses, through
+//! `smt::goals::geo` ([`crate::smt::goals::geo::exists`], `witness`, `assignments`).
 //!
 //! A configuration `q` holds each motion's clock and the state variables the bodies are
 //! placed by (a cart's `x` and heading, a robot's joints, its carrier's state). A box of
@@ -23,24 +24,20 @@ mod contract;
 mod pose;
 mod squares;
 
-use super::motion::Inst;
-use super::query::{hyps, seeds_of, slice};
-use super::Part;
-use super::Query;
 use crate::bounds::{self, Interval};
 use crate::diag::{Assignment, Overlap};
-use crate::geometry::bnb::{self, Bound, Closest, Feasible, Focus, Options, QBox, Scene};
+use crate::geometry::search::bnb::{self, Bound, Closest, Feasible, Focus, Options, QBox, Scene};
 use crate::geometry::placement::{chain_motion_bound, ArgBounds, FrameBound};
 use crate::geometry::{self, Pose3};
 use crate::hir::body::Pose;
 use crate::hir::{Expr, PrimApp, Program, RoleId, Slot, Var};
 use crate::obligation::{Goal, Obligation};
-use crate::smt::encode::{real_of_f64, Encoder};
+use crate::smt::goals::geo::{self as ask, Configs, Exists};
+use crate::smt::goals::Part;
 use crate::space::truth::truth;
 use crate::space::world::{Piece, World};
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
-use z3::ast::{Bool, Real};
 
 /// A robot's link poses at a box's centre and its links' displacement bounds over it.
 type Kinematics = (Vec<Pose3>, Vec<f64>);
@@ -174,11 +171,11 @@ fn run(p: &(RoleId, PrimApp), hyps: &[Expr], clock: usize) -> Run {
 
 /// A participant in the question: running `app` from the context `hyps` on clock `clock`,
 /// or (at the start, [T-SESS]) standing in a state `hyps` allows.
-struct Run {
-    role: RoleId,
-    app: PrimApp,
-    hyps: Vec<Expr>,
-    clock: usize,
+pub(crate) struct Run {
+    pub role: RoleId,
+    pub app: PrimApp,
+    pub hyps: Vec<Expr>,
+    pub clock: usize,
 }
 
 /// What is placed: the primitives' footprints while they run, the robots' bodies at the
@@ -198,7 +195,7 @@ enum Who {
 
 /// A dimension of the configuration space.
 #[derive(Clone, Copy, PartialEq, Eq, Debug)]
-enum Dim {
+pub(crate) enum Dim {
     Clock(usize),
     Now(RoleId, Slot),
 }
@@ -863,65 +860,9 @@ impl<'a> Geo<'a> {
         }
     }
 
-    /// The Z3 query of the constraints: the context, each run started and running, and
-    /// the dimensions within `[lo, hi]`. Returns it with the terms of the dimensions.
-    fn constraints(&self, lo: &[f64], hi: &[f64]) -> Option<(Query<'a>, Vec<Real>)> {
-        let prog = self.prog;
-        let mut q = Query { enc: Encoder::new(prog), assertions: Vec::new(), point: None, times: Vec::new() };
-        let mut terms: Vec<Option<Real>> = vec![None; self.dims.len()];
-        if self.initial {
-            hyps(&mut q, &self.ob.hyps).ok()?;
-            for (i, d) in self.dims.iter().enumerate() {
-                if let Dim::Now(r, slot) = d {
-                    let t = q.enc.role_var(*r, *slot).ok()?;
-                    terms[i] = Some(crate::smt::encode::as_real(t).ok()?);
-                }
-            }
-        } else {
-            let mut insts = Vec::new();
-            let clocks: Vec<Real> = (0..self.runs.iter().map(|r| r.clock + 1).max().unwrap_or(1))
-                .map(|k| {
-                    q.enc.named_real(if self.runs.iter().any(|r| r.clock == 1) {
-                        ["time 1", "time 2"][k.min(1)]
-                    } else {
-                        "time"
-                    })
-                })
-                .collect();
-            for r in &self.runs {
-                let seeds = seeds_of(prog, &[(r.role, r.app.clone())]);
-                hyps(&mut q, &slice(prog, &r.hyps, seeds)).ok()?;
-            }
-            for (k, r) in self.runs.iter().enumerate() {
-                let tag = if clocks.len() > 1 { ["t1", "t2"][r.clock.min(1)] } else { "t" };
-                let inst = Inst::new(&mut q.enc, r.role, &r.app, clocks[r.clock].clone(), tag).ok()?;
-                let _ = k;
-                insts.push(inst);
-            }
-            if clocks.len() == 1 {
-                super::agcomp::connect(&mut q, &mut insts);
-            }
-            for inst in &insts {
-                inst.started(&mut q).ok()?;
-                inst.running(&mut q).ok()?;
-            }
-            for (i, d) in self.dims.iter().enumerate() {
-                match d {
-                    Dim::Clock(k) => terms[i] = clocks.get(*k).cloned(),
-                    Dim::Now(r, slot) => {
-                        // A carrier that runs nothing here is not in the query: no witness.
-                        let inst = insts.iter().find(|x| x.role == *r)?;
-                        terms[i] = Some(crate::smt::encode::as_real(inst.frame.own.get(slot)?.clone()).ok()?);
-                    }
-                }
-            }
-        }
-        let terms: Vec<Real> = terms.into_iter().collect::<Option<_>>()?;
-        for (i, t) in terms.iter().enumerate() {
-            let (l, h) = (real_of_f64(lo[i])?, real_of_f64(hi[i])?);
-            q.assertions.push(Bool::and(&[t.ge(&l), t.le(&h)]));
-        }
-        Some((q, terms))
+    /// The question's configurations, as the SMT stage is asked about them.
+    fn configs(&self) -> Configs<'_> {
+        Configs { prog: self.prog, hyps: &self.ob.hyps, runs: &self.runs, dims: &self.dims, initial: self.initial }
     }
 
     /// The search cut every box of the root away as infeasible: by the contraction, no
@@ -933,42 +874,28 @@ impl<'a> Geo<'a> {
     /// it cannot tell.
     fn all_cut_away(&self, nodes: usize) -> GeoAnswer {
         let what = format!("every box of the geometric search ({nodes}) was cut away as infeasible");
-        let Some((query, _)) = self.constraints(&self.root.lo, &self.root.hi) else {
-            return GeoAnswer::Unknown(format!("{what}, and the constraints could not be put to Z3 to confirm it"));
-        };
-        let solver = crate::smt::solver_for(&query);
-        for a in query.assertions.iter().chain(query.enc.side_conditions()) {
-            solver.assert(a);
-        }
-        match solver.check() {
-            z3::SatResult::Unsat => GeoAnswer::Apart,
-            z3::SatResult::Sat => {
-                let values = solver.get_model().map(|m| query.enc.assignments(&m)).unwrap_or_default();
+        match ask::exists(&self.configs(), &self.root.lo, &self.root.hi) {
+            Exists::No => GeoAnswer::Apart,
+            Exists::Yes(values) => {
                 let at: Vec<String> = values.iter().map(|a| format!("{} = {}", a.name, a.value)).collect();
                 GeoAnswer::Unknown(format!(
                     "{what}, yet Z3 finds a configuration that satisfies every constraint ({}): the interval contraction contradicts this witness, so the search proves nothing",
                     if at.is_empty() { "no values shown".to_string() } else { at.join(", ") }
                 ))
             }
-            z3::SatResult::Unknown => GeoAnswer::Unknown(format!(
-                "{what}, and Z3 could not confirm that no configuration satisfies the constraints ({})",
-                solver.get_reason_unknown().unwrap_or_else(|| "no reason given".into())
+            Exists::Unknown(reason) => GeoAnswer::Unknown(format!(
+                "{what}, and Z3 could not confirm that no configuration satisfies the constraints ({reason})"
             )),
+            Exists::NotPosed => {
+                GeoAnswer::Unknown(format!("{what}, and the constraints could not be put to Z3 to confirm it"))
+            }
         }
     }
 
     /// The counterexample's values at the configuration `q` (a model of the constraints
     /// with the dimensions pinned near `q`).
     fn assignments(&self, q: &[f64]) -> Option<Vec<Assignment>> {
-        let (query, _) = self.constraints(q, q)?;
-        let solver = crate::smt::solver_for(&query);
-        for a in query.assertions.iter().chain(query.enc.side_conditions()) {
-            solver.assert(a);
-        }
-        match solver.check() {
-            z3::SatResult::Sat => Some(query.enc.assignments(&solver.get_model()?)),
-            _ => None,
-        }
+        ask::assignments(&self.configs(), q)
     }
 }
 
@@ -1218,21 +1145,7 @@ impl Scene for Geo<'_> {
     }
 
     fn witness(&self, lo: &[f64], hi: &[f64], _near: &[f64]) -> Option<Vec<f64>> {
-        let (query, terms) = self.constraints(lo, hi)?;
-        let solver = crate::smt::solver_for(&query);
-        for a in query.assertions.iter().chain(query.enc.side_conditions()) {
-            solver.assert(a);
-        }
-        match solver.check() {
-            z3::SatResult::Sat => {
-                let m = solver.get_model()?;
-                if query.enc.spurious_trig(&m) {
-                    return None;
-                }
-                terms.iter().map(|t| Encoder::value_of(&m, t)).collect()
-            }
-            _ => None,
-        }
+        ask::witness(&self.configs(), lo, hi)
     }
 
     fn solid_name(&self, side: usize, solid: usize) -> String {
