@@ -16,10 +16,10 @@
 //! Everything is f64: parry is its f64 build (`parry3d-f64`, imported under the name
 //! `parry3d`), so no f32 rounding enters a clearance proof.
 
-pub mod search;
 pub mod kinematics;
 pub mod mesh;
 pub mod placement;
+pub mod search;
 pub mod shape;
 pub mod urdf;
 

@@ -121,9 +121,12 @@ fn out(v: f64) -> f64 {
     v + 1e-9 + 1e-9 * v.abs()
 }
 
+/// A cylinder about the z axis: its radius, floor and top.
+type Cylinder = (f64, f64, f64);
+
 /// The stand-ins of one solid, in its part's frame: a sphere of radius `r` about the
 /// origin, and `Some((r_xy, floor, top))` a cylinder about the z axis holding it.
-fn stand_ins(piece: &Piece) -> Option<(f64, Option<(f64, f64, f64)>)> {
+fn stand_ins(piece: &Piece) -> Option<(f64, Option<Cylinder>)> {
     if let Some(link) = &piece.link {
         let reach = link.robot.reach();
         let r = reach.get(link.link)?.1;
