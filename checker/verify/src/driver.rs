@@ -7,9 +7,9 @@
 //! passed; any undecided obligation makes it `Unknown`, any error `Rejected`.
 
 use crate::diag::{self, Code, Counterexample, Diagnostic};
+use crate::geometry::search::checks::PairClearance;
 use crate::hir::print;
 use crate::obligation::{Goal, Obligation, Rule};
-use crate::smt::goals::geo::PairClearance;
 use crate::smt::{self, goals::Part, Decision, SmtConfig};
 use crate::source::{FileId, SourceDb};
 use crate::{library, lower, project, space, subtype, syntax, typeck, wf};
@@ -232,7 +232,8 @@ pub fn unreadable_root(d: Diagnostic) -> Report {
 pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut syntax::ByteLoader<'_>) -> Report {
     let mut report = checks(db, root, cfg, load);
     if let (Some(tolerance), Some(p)) = (cfg.clearance, &report.planned) {
-        report.clearances = smt::goals::geo::clearances(&p.program, &p.obligations, tolerance, cfg.smt.timeout);
+        report.clearances =
+            crate::geometry::search::checks::clearances(&p.program, &p.obligations, tolerance, cfg.smt.timeout);
     }
     report
 }

@@ -1,6 +1,6 @@
 //! Kinematic trees: links carrying collision solids, joints between them, forward
 //! kinematics (nalgebra) and sound bounds on how far a link can move when its joints move
-//! within a box (for branch and bound, `geometry::bnb`).
+//! within a box (for branch and bound, `geometry::search::bnb`).
 //!
 //! A joint places its child link's frame in its parent's: `parent ∘ origin ∘ motion(q)`,
 //! where `motion` is a rotation by `q` about the joint's unit axis (revolute, continuous),

@@ -739,7 +739,7 @@ mod tests {
         assert!(inside > 1000, "{inside}");
         // A box in the slot: the hulls overlap, the pieces are 1 cm apart from it.
         let part = Solid::mochi_box(0.08, 0.1, 0.05, Isometry3::translation(0.0, 0.0, 0.04), "part").unwrap();
-        let (_, hull_lower, _) = super::super::bnb::parry_closest(&s.shape, &s.pose, &part.shape, &part.pose);
+        let (_, hull_lower, _) = super::super::search::bnb::parry_closest(&s.shape, &s.pose, &part.shape, &part.pose);
         assert!(hull_lower < 0.0, "{hull_lower}");
         let (_, lower, _) = super::super::solid_closest(&s, &s.pose, &part, &part.pose);
         assert!(lower > 0.0 && lower <= 0.01 + 1e-9, "{lower}");

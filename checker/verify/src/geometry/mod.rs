@@ -9,15 +9,17 @@
 //! - [`urdf`]: URDF files to kinematic trees, with diagnostics pointing into the URDF;
 //! - [`kinematics`]: forward kinematics and sound displacement bounds;
 //! - [`placement`]: bounds on how far a point placed by a chain of poses moves over a box;
-//! - [`bnb`]: the branch and bound over boxes of configurations (clearance, first contact).
+//! - [`search`]: the geometric search: the branch and bound over boxes of configurations
+//!   (clearance, first contact, [`search::bnb`]) and the checks' collision questions posed
+//!   to it ([`search::checks`]).
 //!
 //! Everything is f64: parry is its f64 build (`parry3d-f64`, imported under the name
 //! `parry3d`), so no f32 rounding enters a clearance proof.
 
-pub mod bnb;
 pub mod kinematics;
 pub mod mesh;
 pub mod placement;
+pub mod search;
 pub mod shape;
 pub mod urdf;
 
@@ -168,7 +170,7 @@ pub fn contains(a: &[(Pose3, &Solid)], p: [f64; 3], tol: f64) -> bool {
     a.iter().any(|(owner, s)| s.shape.distance_to_point(&(owner * s.pose), &pt, true) <= tol)
 }
 
-/// [`bnb::parry_closest`] of two solids placed at `pa` and `pb` (the world poses of their
+/// [`search::bnb::parry_closest`] of two solids placed at `pa` and `pb` (the world poses of their
 /// shapes: owner pose times [`Solid::pose`]): parry's distance, a certified lower bound and
 /// the closest points. When a side is a decomposed concave mesh ([`Solid::pieces`]) and the
 /// shapes' lower bound is not positive (the hulls touch), the lower bound is raised to the least over pairs of pieces (a side without pieces counts
@@ -177,7 +179,7 @@ pub fn contains(a: &[(Pose3, &Solid)], p: [f64; 3], tol: f64) -> bool {
 /// the pieces', not the hulls'). The caller subtracts the solids' slacks, as before; the
 /// pieces' slack beyond those is subtracted here.
 pub fn solid_closest(sa: &Solid, pa: &Isometry3<f64>, sb: &Solid, pb: &Isometry3<f64>) -> (f64, f64, [[f64; 3]; 2]) {
-    let (d, lower, points) = bnb::parry_closest(&sa.shape, pa, &sb.shape, pb);
+    let (d, lower, points) = search::bnb::parry_closest(&sa.shape, pa, &sb.shape, pb);
     // Only where the hulls touch: a box whose hulls are apart at its centre needs no more,
     // and a proof that never met touching hulls costs what it did before.
     // (`lower <= 0` fails for NaN too: then the hulls' answer stands.)
@@ -213,7 +215,7 @@ pub fn solid_closest(sa: &Solid, pa: &Isometry3<f64>, sb: &Solid, pb: &Isometry3
         if gap - 1e-9 * gap.abs() > best.1 {
             break;
         }
-        let (dd, low, pts) = bnb::parry_closest(&ka[i].shape, pa, &kb[j].shape, pb);
+        let (dd, low, pts) = search::bnb::parry_closest(&ka[i].shape, pa, &kb[j].shape, pb);
         if low.is_nan() || dd.is_nan() {
             return (d, lower, points);
         }

@@ -1,6 +1,6 @@
 //! Sound bounds on how far a placed point can move while the configuration `q` ranges
 //! over a box: the motion term of the branch and bound
-//! (`checker/verify/src/geometry/bnb.rs`, ARCHITECTURE.md "Geometric decision procedure").
+//! (`checker/verify/src/geometry/search/bnb.rs`, ARCHITECTURE.md "Geometric decision procedure").
 //!
 //! A frame places its children by `x ↦ R x + t`, a rigid motion. A part's world place is
 //! a chain of frames, outermost first: a participant's `at:` pose, a carrier's mount

@@ -72,7 +72,7 @@ fn meet(a: &[(Pose3, &Solid)], b: &[(Pose3, &Solid)]) -> Option<Meet> {
     for (pa, sa) in a {
         for (pb, sb) in b {
             let (wa, wb) = (pa * sa.pose, pb * sb.pose);
-            if let Some((d, pts)) = geometry::bnb::mesh_distance(sa, &wa, sb, &wb) {
+            if let Some((d, pts)) = geometry::search::bnb::mesh_distance(sa, &wa, sb, &wb) {
                 if d <= 0.0 {
                     return Some(Meet::Contact {
                         distance: d,

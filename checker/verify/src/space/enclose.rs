@@ -35,6 +35,9 @@
 //! search that runs out of pieces, or a predicate reading a variable with no finite range,
 //! leaves the question undecided: the caller asks Z3 (never a pass).
 
+mod solid;
+pub use solid::{solid_parts_in_predicate, Solids};
+
 use crate::bounds::compiled::{Compiled, VarTable};
 use crate::bounds::{self, Interval};
 use crate::hir::body::{Body, BodyPart, Pose, Shape};

@@ -168,8 +168,21 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
                 // A predicate that turns with the state (its `cos`/`sin`, or the body's) is
                 // decided first by the interval search of `space::enclose` with a small
                 // budget, then by Z3 (`Worker::contains_turning` orders the engines).
+                // A body with a URDF or mesh part (no predicate for Z3): those parts are
+                // decided by the interval search against stand-ins (`space::enclose::solid`),
+                // the others by Z3.
                 crate::hir::Footprint::Predicate(_) | crate::hir::Footprint::Shapes { .. } => {
-                    Plan::Parts((0..n).map(Part::Contains).collect())
+                    use crate::space::enclose::{solid_parts_in_predicate, Solids};
+                    match solid_parts_in_predicate(prog, *prim) {
+                        None => Plan::Parts((0..n).map(Part::Contains).collect()),
+                        Some((Solids::Fails(why), _)) => Plan::Fails(why),
+                        Some((Solids::Unknown(why), _)) => Plan::Unknown(Unsupported(format!(
+                            "a URDF or mesh body in the predicate footprint of `{}`: {why}; widen the footprint, or write it as `footprint: geometry;`",
+                            p.name
+                        ))),
+                        Some((Solids::Holds(note), others)) if others.is_empty() => Plan::Holds(Some(note)),
+                        Some((Solids::Holds(_), others)) => Plan::Parts(others.into_iter().map(Part::Contains).collect()),
+                    }
                 }
                 // No predicate: decided by the solids when each part of the body lies in a
                 // part of the footprint placed the same way, else unknown.
