@@ -38,7 +38,7 @@
 use super::{exact_double, normalise_bool, part_within, place, strip, Facts, Tree, BUDGET};
 use crate::bounds::compiled::VarTable;
 use crate::bounds::Interval;
-use crate::hir::body::{Part, Pose, Shape};
+use crate::hir::body::{BodyPart, Pose, Shape};
 use crate::hir::expr::{ExprKind, Sort};
 use crate::hir::{Expr, Loc, PrimId, Program, Var};
 use crate::space::world::Piece;
@@ -177,7 +177,7 @@ fn piece_within(prog: &Program, piece: &Piece, fp: &Expr, facts: &Facts) -> Resu
     }
     let mut why = Vec::new();
     for (shape, place, what) in shapes {
-        let part = Part { shape, place, span: Default::default() };
+        let part = BodyPart { shape, place, span: Default::default() };
         match part_within(prog, &part, fp, facts, BUDGET) {
             Ok(n) => return Ok(format!("`{}` within {what}, {n} pieces", piece.solid.name)),
             Err(u) => why.push(format!("{what} around it: {}", u.why)),
