@@ -150,7 +150,7 @@ fn stand_ins(piece: &Piece) -> Option<(f64, Option<Cylinder>)> {
     // The floor is padded downwards, the top upwards; a solid in its part's frame itself
     // (identity pose, no slack) has an exact box (the least and greatest coordinates of its
     // points, no arithmetic), and its floor is kept.
-    let exact = piece.solid.pose == nalgebra::Isometry3::identity() && piece.solid.slack == 0.0;
+    let exact = piece.solid.pose == crate::geometry::identity() && piece.solid.slack == 0.0;
     let floor = if exact { lo.z } else { lo.z - 1e-9 - 1e-9 * lo.z.abs() };
     let cyl = (floor.is_finite() && hi.z.is_finite()).then(|| (out(rxy), floor, out(hi.z)));
     Some((out(r), cyl))

@@ -1,3 +1,6 @@
+//! Tests of the branch and bound: turned boxes, passing balls, an arm on a cart past a
+//! pillar, the first contact, the minimum distance, and the certified distance bound.
+
 use super::*;
 use parry3d::shape::SharedShape;
 
