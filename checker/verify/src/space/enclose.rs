@@ -478,10 +478,6 @@ fn describe(v: &Var) -> String {
     }
 }
 
-/// The box around the shape in its own frame, exactly (mochi's conventions: boxes,
-
-// ---- three-valued truth on compiled terms --------------------------------------------
-
 /// Whether the containment question of `prim` reads the cosine or sine of a variable (the
 /// footprint's own, or its body placed by a turning pose): the questions Z3's nonlinear
 /// arithmetic decides only partially, for which [`body_in_predicate`] is tried first.

@@ -3,6 +3,7 @@
 
 use super::*;
 
+/// The box around the shape in its own frame, exactly (mochi's conventions: boxes,
 /// cylinders and capsules stand on z = 0, centred in x and y; a sphere is centred on the
 /// origin). `None` unless every size is a rational constant.
 pub(super) fn shape_box(prog: &Program, shape: &Shape) -> Option<[(BigRational, BigRational); 3]> {
