@@ -624,3 +624,71 @@ fn the_hot_path_does_not_allocate() {
     let _ = m.on_frame(&frame((9, 9), &stray));
     assert!(allocations() > before, "the counting allocator counts nothing");
 }
+
+// ---- the real captures: the verdict table of docs/captures.md -----------------------
+
+/// Every row of the verdict table in docs/captures.md (protocol, capture, verdict,
+/// violations, conformant and incomplete sessions) is what the monitor finds: the table
+/// is kept true. Every capture of ../shared/data/mavlink_captures and every verified
+/// protocol under choreographies/mavlink has its row.
+#[test]
+fn the_captures_table_is_what_the_monitor_finds() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let doc = std::fs::read_to_string(root.join("docs/captures.md")).expect("docs/captures.md");
+    let table = doc.split("## Verdicts").nth(1).expect("a `## Verdicts` section");
+    let mut rows = Vec::new();
+    for line in table.lines().skip_while(|l| !l.starts_with("| protocol")).skip(2) {
+        if !line.starts_with('|') {
+            break;
+        }
+        let cells: Vec<&str> = line.trim_matches('|').split('|').map(str::trim).collect();
+        assert!(cells.len() >= 6, "a row of six cells at least: {line}");
+        let num = |s: &str| s.parse::<usize>().unwrap_or_else(|_| panic!("a number: {s} in {line}"));
+        let protocol = cells[0].trim_matches('`').to_string();
+        let capture = cells[1].trim_matches('`').to_string();
+        rows.push((protocol, capture, cells[2].to_string(), num(cells[3]), num(cells[4]), num(cells[5])));
+    }
+    let captures_dir = root.join("../shared/data/mavlink_captures");
+    let mut captures: Vec<String> = std::fs::read_dir(&captures_dir)
+        .expect("../shared/data/mavlink_captures")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .filter(|n| !n.ends_with(".md"))
+        .collect();
+    captures.sort();
+    let mut automata = std::collections::HashMap::new();
+    for path in protocols() {
+        let name = path.file_name().expect("name").to_string_lossy().into_owned();
+        let (_, prog, verdict) = load(&path);
+        if verdict == Verdict::Verified {
+            automata.insert(name, Automaton::compile(&prog).expect("compiled"));
+        }
+    }
+    for p in automata.keys() {
+        for c in &captures {
+            assert!(rows.iter().any(|r| &r.0 == p && &r.1 == c), "docs/captures.md has no row for {p} x {c}");
+        }
+    }
+    for (p, c, verdict, violations, conformant, incomplete) in &rows {
+        let a = automata.get(p).unwrap_or_else(|| panic!("{p}: not a verified protocol"));
+        let bytes = std::fs::read(captures_dir.join(c)).unwrap_or_else(|e| panic!("{c}: {e}"));
+        let mut m = Monitor::new(vec![a.clone()]);
+        mochi::mavio::log::read_log(&bytes, mochi::mavio::parse::Config::default(), |f| {
+            m.on_frame(&f);
+        });
+        let found = m.violations().len();
+        let summaries = m.finish();
+        let conf = summaries.iter().filter(|s| s.conformant).count();
+        let inc = summaries.len() - conf;
+        assert_eq!((found, conf, inc), (*violations, *conformant, *incomplete), "{p} x {c}");
+        let expected = if found > 0 {
+            "violation"
+        } else if inc > 0 {
+            "incomplete"
+        } else if conf > 0 {
+            "conformant"
+        } else {
+            "not exercised"
+        };
+        assert_eq!(verdict, expected, "{p} x {c}");
+    }
+}

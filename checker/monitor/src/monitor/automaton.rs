@@ -347,11 +347,7 @@ impl Builder<'_> {
     }
 
     /// The message id, the decoder layout's slots and the fixed command of a label.
-    fn label(
-        &self,
-        label: &str,
-        span: Span,
-    ) -> Result<Label, CompileError> {
+    fn label(&self, label: &str, span: Span) -> Result<Label, CompileError> {
         let (name, cmd) = match label.split_once('[') {
             Some((n, c)) => (n, Some(c.trim_end_matches(']'))),
             None => (label, None),
