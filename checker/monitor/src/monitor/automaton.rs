@@ -11,9 +11,9 @@
 //! runs and then goes on at `k`), so a choice in the middle of a sequence and loops nested
 //! in loops need nothing special.
 //!
-//! Made for what comes next: a register is an index into the session's register file, so
-//! a message of the stream outside the protocol's steps can update one (observed state),
-//! and an edge's label is an enum, to which a timeout edge can be added.
+//! The system's `stream`s are compiled beside the steps ([`StreamDef`]): their fields are
+//! decoded into the stream's template registers and checked; an edge that reads observed
+//! state lists its snapshots ([`ObservedRead`]), bound when its message arrives.
 
 use super::code::{Arena, Code, RegInfo};
 use super::wire::{Layout, Slot};
@@ -57,6 +57,32 @@ pub struct Edge {
     /// `target_system` and `target_component`, when the message has them.
     pub target: (Option<Slot>, Option<Slot>),
     pub target_state: u32,
+    /// The observed values its guard and refinements read: a snapshot register each, bound
+    /// from the latest reading of a stream field when the message arrives.
+    pub observed: Vec<ObservedRead>,
+    pub span: Span,
+}
+
+/// A snapshot an edge takes: register `reg` is bound to field `field` of stream `stream`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ObservedRead {
+    pub reg: u16,
+    pub stream: u32,
+    pub field: u32,
+}
+
+/// A `stream` of the system: messages `from -> to` at any time, never a step. Its fields
+/// are decoded into the template registers and checked against their refinements (wire
+/// range, enum, the stream's invariant); an accepted message is the latest reading.
+#[derive(Clone, Debug)]
+pub struct StreamDef {
+    pub from: RoleId,
+    pub to: Vec<RoleId>,
+    pub msgid: u32,
+    pub label: String,
+    pub command: Option<(Slot, i128)>,
+    pub fields: Vec<FieldRead>,
+    pub target: (Option<Slot>, Option<Slot>),
     pub span: Span,
 }
 
@@ -87,6 +113,9 @@ pub struct Automaton {
     pub start: u32,
     /// The message ids of every edge (sorted, deduplicated).
     pub alphabet: Vec<u32>,
+    /// The system's streams, and their message ids (sorted, deduplicated).
+    pub streams: Vec<StreamDef>,
+    pub stream_alphabet: Vec<u32>,
     /// Predicates compiled (guards, refinements, enum memberships, parameter refinements),
     /// each with an index for coverage: `(edge or state, what)`.
     pub preds: usize,
@@ -102,6 +131,9 @@ pub struct CompileError {
 fn err<T>(message: impl Into<String>, span: Option<Span>) -> Result<T, CompileError> {
     Err(CompileError { message: message.into(), span })
 }
+
+/// A label resolved: its message, the message's layout, and the command it fixes.
+type Label = (&'static crate::dialect::Message, Layout, Option<(Slot, i128)>);
 
 struct Loop {
     var: String,
@@ -129,27 +161,16 @@ impl Automaton {
         if prog.roles.len() > 64 {
             return err("more than 64 participants", Some(chor.span));
         }
-        // Observed state (docs/observed-and-timeouts.md says what a monitor must check of
-        // it) is not enforced yet: refused, never monitored as if the readings were not
-        // there.
-        if let Some(v) =
-            prog.values.iter().find(|v| matches!(v.origin, ValueOrigin::Stream { .. } | ValueOrigin::Observed { .. }))
-        {
-            return err(
-                format!(
-                    "the protocol reads observed state (`{}`, a field of a `stream`), which the monitor does not enforce yet",
-                    v.name
-                ),
-                Some(chor.span),
-            );
-        }
         let mut arena = Arena::default();
         for (i, v) in prog.values.iter().enumerate() {
             let knowers = match &v.origin {
                 ValueOrigin::Message { from, to } => (1u64 << from.idx()) | (1u64 << to.idx()),
                 ValueOrigin::RecParam => (1u64 << prog.roles.len()) - 1,
                 ValueOrigin::Bound { role } => 1u64 << role.idx(),
-                ValueOrigin::Stream { .. } | ValueOrigin::Observed { .. } => 0,
+                // A stream's template fields are read only by the stream's own invariant; a
+                // snapshot is its reader's.
+                ValueOrigin::Stream { .. } => 0,
+                ValueOrigin::Observed { reader, .. } => 1u64 << reader.idx(),
             };
             let id = ValueId(i as u32);
             let r = arena.regs.len() as u16;
@@ -178,10 +199,16 @@ impl Automaton {
                 arena,
                 start: 0,
                 alphabet: Vec::new(),
+                streams: Vec::new(),
+                stream_alphabet: Vec::new(),
                 preds: 0,
             },
             loops: Vec::new(),
         };
+        for st in &prog.streams {
+            let s = b.stream(st)?;
+            b.a.streams.push(s);
+        }
         let start = b.compile(&chor.body, 0)?;
         b.a.start = start;
         b.check_guarded()?;
@@ -189,7 +216,17 @@ impl Automaton {
         alphabet.sort_unstable();
         alphabet.dedup();
         b.a.alphabet = alphabet;
+        let mut streams: Vec<u32> = b.a.streams.iter().map(|s| s.msgid).collect();
+        streams.sort_unstable();
+        streams.dedup();
+        b.a.stream_alphabet = streams;
         Ok(b.a)
+    }
+
+    /// Whether message `msgid` is some stream's message.
+    #[inline]
+    pub fn in_streams(&self, msgid: u32) -> bool {
+        self.stream_alphabet.binary_search(&msgid).is_ok()
     }
 
     /// Whether message `msgid` is a step of some edge.
@@ -309,11 +346,11 @@ impl Builder<'_> {
         }
     }
 
-    fn edge(&mut self, m: &Msg, k: u32) -> Result<u32, CompileError> {
-        let span = m.loc.0;
-        let (name, cmd) = match m.label.split_once('[') {
+    /// The message id, the decoder layout's slots and the fixed command of a label.
+    fn label(&self, label: &str, span: Span) -> Result<Label, CompileError> {
+        let (name, cmd) = match label.split_once('[') {
             Some((n, c)) => (n, Some(c.trim_end_matches(']'))),
-            None => (m.label.as_str(), None),
+            None => (label, None),
         };
         let Some(msg) = self.dialect.message(name) else {
             return err(format!("`{name}` is not a message of `{}`", self.dialect.name), Some(span));
@@ -331,12 +368,21 @@ impl Builder<'_> {
             }
             None => None,
         };
-        let guard = match &m.guard {
-            Some(g) => Some(self.code(g)?),
-            None => None,
-        };
+        Ok((msg, layout, command))
+    }
+
+    /// The listed fields of a payload: where each lies, its register, its checks.
+    fn fields(
+        &mut self,
+        msg: &'static crate::dialect::Message,
+        layout: &Layout,
+        payload: &[crate::hir::global::Field],
+        span: Span,
+        strings: bool,
+    ) -> Result<Vec<FieldRead>, CompileError> {
+        let name = &msg.name;
         let mut fields = Vec::new();
-        for f in &m.payload {
+        for f in payload {
             let Some(mav) = &f.mav else {
                 return err(format!("the field `{}` is not a MAVLink field", f.name), Some(span));
             };
@@ -355,6 +401,12 @@ impl Builder<'_> {
             } else {
                 FieldKind::Int
             };
+            if kind == FieldKind::Str && !strings {
+                return err(
+                    format!("the string field `{}` of a stream: the monitor keeps numeric readings only", mav.field),
+                    Some(span),
+                );
+            }
             let reg = self.reg(f.value, span)?;
             if kind == FieldKind::Str {
                 let info = &mut self.a.arena.regs[reg as usize];
@@ -374,7 +426,42 @@ impl Builder<'_> {
                 }
                 None => None,
             };
-            fields.push(FieldRead { name: f.name.clone(), reg, slot, kind, refinement, entry, span: m.loc.0 });
+            fields.push(FieldRead { name: f.name.clone(), reg, slot, kind, refinement, entry, span });
+        }
+        Ok(fields)
+    }
+
+    fn stream(&mut self, st: &crate::hir::Stream) -> Result<StreamDef, CompileError> {
+        let span = st.loc.0;
+        let (msg, layout, command) = self.label(&st.label, span)?;
+        let fields = self.fields(msg, &layout, &st.fields, span, false)?;
+        let target = (layout.slot(msg, "target_system"), layout.slot(msg, "target_component"));
+        Ok(StreamDef {
+            from: st.from,
+            to: st.to.clone(),
+            msgid: msg.id,
+            label: st.label.clone(),
+            command,
+            fields,
+            target,
+            span,
+        })
+    }
+
+    fn edge(&mut self, m: &Msg, k: u32) -> Result<u32, CompileError> {
+        let span = m.loc.0;
+        let (msg, layout, command) = self.label(&m.label, span)?;
+        let guard = match &m.guard {
+            Some(g) => Some(self.code(g)?),
+            None => None,
+        };
+        let fields = self.fields(msg, &layout, &m.payload, span, true)?;
+        let mut observed = Vec::new();
+        for o in &m.observed {
+            if self.prog.streams.get(o.stream as usize).is_none_or(|s| s.fields.get(o.field as usize).is_none()) {
+                return err(format!("`{}` reads a stream field that does not exist", m.label), Some(span));
+            }
+            observed.push(ObservedRead { reg: self.reg(o.value, span)?, stream: o.stream, field: o.field });
         }
         // Each participant is monitored with only what it knows: the message is its sender's
         // obligation, so its guard and refinements may read only registers the sender
@@ -415,6 +502,7 @@ impl Builder<'_> {
             fields,
             target,
             target_state: k,
+            observed,
             span,
         });
         Ok((self.a.edges.len() - 1) as u32)

@@ -1,0 +1,466 @@
+//! Sessions: which session a frame is a step of, starting one, taking a step (its
+//! guard, its fields decoded and checked, its ends bound), the assignments of loops.
+
+use super::automaton::{Automaton, Edge, FieldKind, FieldRead, StateKind};
+use super::code::{Env, Val};
+use super::num::Q;
+use super::wire::{self, Scalar};
+use super::{report::summary, reset, verdict_fail, Binding, Fail, Kind, Monitor, Outcome, Session};
+use crate::mavio::Frame;
+
+impl Monitor {
+    /// The frame against protocol `p`: a step of an open session, the start of a new one,
+    /// an unexpected message between a session's ends, or `None` (it fits nothing).
+    pub(super) fn on_protocol(&mut self, p: usize, f: &Frame, index: u64) -> Option<Outcome> {
+        let mut between_ends = None;
+        for k in 0..self.open.len() {
+            let slot = self.open[k];
+            let s = &self.slots[slot];
+            if s.proto != p {
+                continue;
+            }
+            let a = &self.protos[p];
+            let mut found = false;
+            for &e in a.edges_of(s.state) {
+                if label_fits(&a.edges[e as usize], f) && ends_fit(&a.edges[e as usize], &s.roles, f) {
+                    found = true;
+                    break;
+                }
+            }
+            if found {
+                return Some(self.step(slot, f, index));
+            }
+            if between_ends.is_none() && s.roles.iter().any(|b| b.sys == Some(f.sysid) && b.comp == Some(f.compid)) {
+                between_ends = Some(slot);
+            }
+        }
+        let a = &self.protos[p];
+        let fresh = vec_fresh_check(a, f);
+        if fresh {
+            let slot = self.start(p, index);
+            let o = self.step(slot, f, index);
+            if let Outcome::Violation(_) = o {
+                // A message that would start a session and breaks its first step starts
+                // nothing.
+                self.close(slot, false, false);
+            }
+            return Some(o);
+        }
+        if let Some(slot) = between_ends {
+            let s = &self.slots[slot];
+            let state = s.state;
+            let v = self.record(
+                Some(slot),
+                Some(state),
+                f,
+                index,
+                Fail { kind: Kind::Unexpected, edge: None, pred: None, field: None, why: None },
+            );
+            self.slots[slot].violations += 1;
+            return Some(Outcome::Violation(v));
+        }
+        None
+    }
+
+    pub(super) fn start(&mut self, p: usize, index: u64) -> usize {
+        let a = &self.protos[p];
+        let slot = match self.free[p].pop() {
+            Some(i) => i,
+            None => {
+                self.slots.push(Session {
+                    id: 0,
+                    proto: p,
+                    state: 0,
+                    regs: Vec::new(),
+                    strs: Vec::new(),
+                    roles: Vec::new(),
+                    first_frame: 0,
+                    last_frame: 0,
+                    violations: 0,
+                    visited: Vec::new(),
+                    taken: Vec::new(),
+                    evaluated: Vec::new(),
+                });
+                self.slots.len() - 1
+            }
+        };
+        let s = &mut self.slots[slot];
+        s.id = self.next_id;
+        self.next_id += 1;
+        s.proto = p;
+        s.state = a.start;
+        reset(&mut s.regs, a.arena.regs.len(), Val::Unset);
+        reset(&mut s.strs, a.arena.str_size as usize, 0);
+        reset(&mut s.roles, a.roles.len(), Binding::default());
+        reset(&mut s.visited, a.states.len(), false);
+        reset(&mut s.taken, a.edges.len(), 0);
+        reset(&mut s.evaluated, a.preds, 0);
+        s.first_frame = index;
+        s.last_frame = index;
+        s.violations = 0;
+        self.open.push(slot);
+        self.stats.sessions_started += 1;
+        // The initial assignments (a protocol that starts with a loop).
+        let start = self.slots[slot].state;
+        let settled = self.settle(slot, start);
+        if let Ok(st) = settled {
+            self.slots[slot].state = st;
+        }
+        slot
+    }
+
+    /// Takes the frame in session `slot`: the edge, its checks, the registers, the jumps.
+    pub(super) fn step(&mut self, slot: usize, f: &Frame, index: u64) -> Outcome {
+        let p = self.slots[slot].proto;
+        let state = self.slots[slot].state;
+        self.undo.clear();
+        self.undo_strs.clear();
+        match self.take(slot, f) {
+            Ok(next) => {
+                let s = &mut self.slots[slot];
+                s.state = next;
+                s.last_frame = index;
+                s.visited[next as usize] = true;
+                self.stats.steps += 1;
+                if matches!(self.protos[p].states[next as usize], StateKind::End) {
+                    let id = s.id;
+                    self.close(slot, true, true);
+                    Outcome::Ended { session: id }
+                } else {
+                    Outcome::Step { session: self.slots[slot].id, state: next }
+                }
+            }
+            Err(fail) => {
+                let v = self.record(Some(slot), Some(state), f, index, fail);
+                // Not delivered: the session stays where it was.
+                let s = &mut self.slots[slot];
+                while let Some((r, v)) = self.undo.pop() {
+                    s.regs[r as usize] = v;
+                }
+                let a = &self.protos[p];
+                let mut at = 0;
+                for fr in a.edges_of(state).iter().flat_map(|&e| a.edges[e as usize].fields.iter()) {
+                    if fr.kind == FieldKind::Str {
+                        let info = &a.arena.regs[fr.reg as usize];
+                        let (o, n) = (info.str_at as usize, info.str_cap as usize);
+                        if at + n <= self.undo_strs.len() {
+                            s.strs[o..o + n].copy_from_slice(&self.undo_strs[at..at + n]);
+                            at += n;
+                        }
+                    }
+                }
+                s.violations += 1;
+                s.last_frame = index;
+                Outcome::Violation(v)
+            }
+        }
+    }
+
+    /// The checks of a step, writing registers (old values in the undo log).
+    pub(super) fn take(&mut self, slot: usize, f: &Frame) -> Result<u32, Fail> {
+        let s = &mut self.slots[slot];
+        let a = &self.protos[s.proto];
+        // Strings of every field of the state's edges are saved once, in edge order (the
+        // restore walks the same order).
+        for fr in a.edges_of(s.state).iter().flat_map(|&e| a.edges[e as usize].fields.iter()) {
+            if fr.kind == FieldKind::Str {
+                let info = &a.arena.regs[fr.reg as usize];
+                let (o, n) = (info.str_at as usize, info.str_cap as usize);
+                self.undo_strs.extend_from_slice(&s.strs[o..o + n]);
+            }
+        }
+        self.inferred.clear();
+        let mut first_fail: Option<Fail> = None;
+        let mut chosen = None;
+        for &e in a.edges_of(s.state) {
+            let edge = &a.edges[e as usize];
+            if !label_fits(edge, f) || !ends_fit(edge, &s.roles, f) {
+                continue;
+            }
+            if !edge.observed.is_empty() {
+                self.inferred.clear();
+                let bound = super::stream::snapshot(a, &self.readings, s, e, f, &mut self.undo, &mut self.inferred);
+                if let Err(fail) = bound {
+                    first_fail.get_or_insert(fail);
+                    continue;
+                }
+            }
+            if let Some(g) = &edge.guard {
+                s.evaluated[g.id as usize] += 1;
+                let env = Env { regs: &s.regs, strs: &s.strs, arena: &a.arena, prog: &a.prog };
+                match env.holds(g, &mut self.stats.fallbacks) {
+                    Ok(true) => {}
+                    Ok(false) => {
+                        first_fail.get_or_insert(Fail {
+                            kind: Kind::Guard,
+                            edge: Some(e),
+                            pred: Some(g.id),
+                            field: None,
+                            why: None,
+                        });
+                        continue;
+                    }
+                    Err(v) => {
+                        first_fail.get_or_insert(verdict_fail(v, Some(e), g.id, None));
+                        continue;
+                    }
+                }
+            }
+            chosen = Some(e);
+            break;
+        }
+        let Some(e) = chosen else {
+            return Err(first_fail.unwrap_or(Fail {
+                kind: Kind::Unexpected,
+                edge: None,
+                pred: None,
+                field: None,
+                why: None,
+            }));
+        };
+        let edge = &a.edges[e as usize];
+        // Decode the listed fields into their registers.
+        for (i, fr) in edge.fields.iter().enumerate() {
+            let old = s.regs[fr.reg as usize];
+            self.undo.push((fr.reg, old));
+            let v = match fr.kind {
+                FieldKind::Int | FieldKind::Float => match decode_num(fr, f.payload) {
+                    Some(v) => v,
+                    None => {
+                        return Err(Fail {
+                            kind: Kind::NonFinite,
+                            edge: Some(e),
+                            pred: None,
+                            field: Some(i as u16),
+                            why: None,
+                        })
+                    }
+                },
+                FieldKind::Str => {
+                    let info = &a.arena.regs[fr.reg as usize];
+                    let (o, n) = (info.str_at as usize, info.str_cap as usize);
+                    let src = wire::read_str(f.payload, fr.slot);
+                    let dst = &mut s.strs[o..o + n];
+                    dst.fill(0);
+                    dst[..src.len().min(n)].copy_from_slice(&src[..src.len().min(n)]);
+                    Val::Str(fr.reg)
+                }
+            };
+            s.regs[fr.reg as usize] = v;
+        }
+        s.taken[e as usize] += 1;
+        let env = Env { regs: &s.regs, strs: &s.strs, arena: &a.arena, prog: &a.prog };
+        for (i, fr) in edge.fields.iter().enumerate() {
+            if let Some((c, _)) = &fr.entry {
+                s.evaluated[c.id as usize] += 1;
+                match env.holds(c, &mut self.stats.fallbacks) {
+                    Ok(true) => {}
+                    Ok(false) => {
+                        return Err(Fail {
+                            kind: Kind::Entry,
+                            edge: Some(e),
+                            pred: Some(c.id),
+                            field: Some(i as u16),
+                            why: None,
+                        })
+                    }
+                    Err(v) => return Err(verdict_fail(v, Some(e), c.id, Some(i as u16))),
+                }
+            }
+            if let Some(c) = &fr.refinement {
+                s.evaluated[c.id as usize] += 1;
+                match env.holds(c, &mut self.stats.fallbacks) {
+                    Ok(true) => {}
+                    Ok(false) => {
+                        return Err(Fail {
+                            kind: Kind::Refinement,
+                            edge: Some(e),
+                            pred: Some(c.id),
+                            field: Some(i as u16),
+                            why: None,
+                        })
+                    }
+                    Err(v) => return Err(verdict_fail(v, Some(e), c.id, Some(i as u16))),
+                }
+            }
+        }
+        // Bind the ends: the sender fully, the receiver as far as the targets say.
+        let (from, to) = (edge.from.idx(), edge.to.idx());
+        s.roles[from] = Binding { sys: Some(f.sysid), comp: Some(f.compid) };
+        let (ts, tc) = targets(edge, f);
+        if let Some(t) = ts.filter(|&t| t != 0) {
+            s.roles[to].sys.get_or_insert(t);
+            if let Some(c) = tc.filter(|&c| c != 0) {
+                s.roles[to].comp.get_or_insert(c);
+            }
+        }
+        // The ends a snapshot read the stream from, when the session did not know them:
+        // the role is the end whose state its sender decided on.
+        for &(role, (sys, comp)) in &self.inferred {
+            let taken =
+                s.roles.iter().enumerate().any(|(k, b)| k != role && b.sys == Some(sys) && b.comp == Some(comp));
+            let b = &mut s.roles[role];
+            if !taken && b.sys.is_none_or(|x| x == sys) && b.comp.is_none_or(|x| x == comp) {
+                *b = Binding { sys: Some(sys), comp: Some(comp) };
+            }
+        }
+        let target = edge.target_state;
+        self.settle(slot, target).map_err(|mut fail| {
+            fail.edge = Some(e);
+            fail
+        })
+    }
+
+    /// Follows the assignments from `s` to the branch or end they lead to.
+    pub(super) fn settle(&mut self, slot: usize, mut at: u32) -> Result<u32, Fail> {
+        let sess = &mut self.slots[slot];
+        let a = &self.protos[sess.proto];
+        for _ in 0..=a.states.len() {
+            sess.visited[at as usize] = true;
+            let StateKind::Assign { assigns, checks, next, .. } = &a.states[at as usize] else { return Ok(at) };
+            self.args.clear();
+            {
+                let env = Env { regs: &sess.regs, strs: &sess.strs, arena: &a.arena, prog: &a.prog };
+                for (_, c) in assigns {
+                    match env.value(c, &mut self.stats.fallbacks) {
+                        Ok(v) => self.args.push(v),
+                        Err(v) => return Err(verdict_fail(v, None, c.id, None)),
+                    }
+                }
+            }
+            for ((r, _), v) in assigns.iter().zip(&self.args) {
+                self.undo.push((*r, sess.regs[*r as usize]));
+                sess.regs[*r as usize] = *v;
+            }
+            let env = Env { regs: &sess.regs, strs: &sess.strs, arena: &a.arena, prog: &a.prog };
+            for (_, c) in checks {
+                sess.evaluated[c.id as usize] += 1;
+                match env.holds(c, &mut self.stats.fallbacks) {
+                    Ok(true) => {}
+                    Ok(false) => {
+                        return Err(Fail {
+                            kind: Kind::Invariant,
+                            edge: None,
+                            pred: Some(c.id),
+                            field: None,
+                            why: None,
+                        })
+                    }
+                    Err(v) => return Err(verdict_fail(v, None, c.id, None)),
+                }
+            }
+            at = *next;
+        }
+        Ok(at)
+    }
+
+    pub(super) fn close(&mut self, slot: usize, conformant: bool, keep: bool) {
+        if let Some(k) = self.open.iter().position(|&i| i == slot) {
+            self.open.swap_remove(k);
+        }
+        if keep {
+            self.stats.sessions_ended += 1;
+            let s = &self.slots[slot];
+            self.summaries.push(summary(s, conformant));
+        } else {
+            self.stats.sessions_started -= 1;
+        }
+        self.free[self.slots[slot].proto].push(slot);
+    }
+}
+
+/// Whether the frame is the edge's message (and command, for `COMMAND_LONG[MAV_CMD_X]`).
+#[inline]
+pub(super) fn label_fits(e: &Edge, f: &Frame) -> bool {
+    e.msgid == f.msgid
+        && match e.command {
+            Some((slot, cmd)) => wire::read(f.payload, slot, 0) == Scalar::Int(cmd),
+            None => true,
+        }
+}
+
+/// The frame's `target_system` and `target_component`, when the message has them.
+pub(super) fn targets(e: &Edge, f: &Frame) -> (Option<u8>, Option<u8>) {
+    targets_of(e.target, f)
+}
+
+/// The values at these target slots of the frame's payload.
+pub(super) fn targets_of(slots: (Option<wire::Slot>, Option<wire::Slot>), f: &Frame) -> (Option<u8>, Option<u8>) {
+    let get = |s: Option<wire::Slot>| {
+        s.map(|s| match wire::read(f.payload, s, 0) {
+            Scalar::Int(i) => i as u8,
+            _ => 0,
+        })
+    };
+    (get(slots.0), get(slots.1))
+}
+
+/// Whether the frame's ends fit the session's bindings: the sender is the edge's sender
+/// role (or that role is unbound and the sender plays no other role), and the targets, when
+/// the message has them and they are not broadcast (0), are the receiver role's.
+#[inline]
+pub(super) fn ends_fit(e: &Edge, roles: &[Binding], f: &Frame) -> bool {
+    let from = roles[e.from.idx()];
+    let sender_ok = match (from.sys, from.comp) {
+        (Some(s), Some(c)) => s == f.sysid && c == f.compid,
+        (s, c) => {
+            s.is_none_or(|s| s == f.sysid)
+                && c.is_none_or(|c| c == f.compid)
+                && !roles
+                    .iter()
+                    .enumerate()
+                    .any(|(k, b)| k != e.from.idx() && b.sys == Some(f.sysid) && b.comp == Some(f.compid))
+        }
+    };
+    if !sender_ok {
+        return false;
+    }
+    let to = roles[e.to.idx()];
+    let (ts, tc) = targets(e, f);
+    match ts {
+        None | Some(0) => true,
+        Some(t) => {
+            to.sys.is_none_or(|s| s == t)
+                && match tc {
+                    None | Some(0) => true,
+                    Some(c) => to.comp.is_none_or(|x| x == c),
+                }
+        }
+    }
+}
+
+/// Whether the frame can start a session of `a`: a first edge of its start state fits it
+/// with no role bound.
+pub(super) fn vec_fresh_check(a: &Automaton, f: &Frame) -> bool {
+    let none = [Binding::default(); 64];
+    let roles = &none[..a.roles.len().min(64)];
+    a.edges_of(a.settle(a.start))
+        .iter()
+        .any(|&e| label_fits(&a.edges[e as usize], f) && ends_fit(&a.edges[e as usize], roles, f))
+}
+
+/// A numeric field's value: an integer, or a float as the exact rational it is (`None`: NaN
+/// or infinite, outside the static model).
+pub(super) fn decode_num(fr: &FieldRead, payload: &[u8]) -> Option<Val> {
+    match fr.kind {
+        FieldKind::Int => Some(match wire::read(payload, fr.slot, 0) {
+            Scalar::Int(i) => Val::Num(Q::int(i)),
+            _ => Val::Unset,
+        }),
+        FieldKind::Float => {
+            let x = match wire::read(payload, fr.slot, 0) {
+                Scalar::F32(x) => f64::from(x),
+                Scalar::F64(x) => x,
+                Scalar::Int(i) => i as f64,
+            };
+            if !x.is_finite() {
+                return None;
+            }
+            Some(match Q::from_f64(x) {
+                Some(q) => Val::Num(q),
+                None => Val::Wide(x),
+            })
+        }
+        FieldKind::Str => None,
+    }
+}
