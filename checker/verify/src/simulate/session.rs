@@ -426,12 +426,11 @@ impl Runner<'_, '_> {
         }
         tries.push(other);
         tries.push(Vec::new());
-        let mut tries = tries.into_iter();
         let want: Vec<Expr> =
             snaps.iter().map(|o| var_expr(Var::Value(o.value, o.name.clone()), o.sort.clone())).collect();
         let now = self.now();
         let who = self.prog.role_name(role.id).to_string();
-        while let Some(extra) = tries.next() {
+        for extra in tries {
             let facts: Vec<Expr> = base.iter().chain(&extra).cloned().collect();
             match self.sess.values(self.prog, &facts, &want) {
                 Ok(Some(vs)) => {
