@@ -75,17 +75,18 @@ impl Default for SimConfig {
 pub fn simulate(prog: &Program, cfg: &SimConfig) -> SimReport {
     let mut report = SimReport { runs: cfg.runs, ..SimReport::default() };
     let Some(chor) = &prog.choreography else { return report };
-    // Streams (observed state) are not simulated yet: a run would have to draw each
-    // stream's messages between the steps and a fresh reading at each decision. Refused as
-    // undecided, never a clean run.
-    if let Some(s) = prog.streams.first() {
+    let sessions = session::applies(&chor.body);
+    // Streams (observed state) are drawn by the runner of protocols without motion
+    // (`session`: a fresh reading at each send that reads one); a choreography with motion
+    // that declares streams is refused as undecided, never a clean run.
+    if let Some(s) = prog.streams.first().filter(|_| !sessions) {
         report.findings.push(report::Finding {
             kind: report::Kind::Undecided,
             run: 0,
             step: 0,
             time: "0".to_string(),
             message: format!(
-                "not supported yet: the system declares streams (`stream {} -> ...: {}`), whose observed values the simulator does not draw; `mochi check` checks the protocol over fresh readings",
+                "not supported yet: a choreography with motion declares streams (`stream {} -> ...: {}`), whose observed values the simulator draws only in protocols without motion; `mochi check` checks the protocol over fresh readings",
                 prog.role_name(s.from),
                 s.label
             ),
@@ -93,7 +94,6 @@ pub fn simulate(prog: &Program, cfg: &SimConfig) -> SimReport {
         });
         return report;
     }
-    let sessions = session::applies(&chor.body);
     witness::session(cfg.timeout, |sess| {
         for run in 0..cfg.runs {
             let mut r = run::Runner::new(prog, sess, cfg, run);

@@ -353,6 +353,113 @@ impl Runner<'_, '_> {
         Some(out)
     }
 
+    /// Fresh readings of the streams `role` reads at its send (LANGUAGE.md, "Observed
+    /// state"): a value for every snapshot its branches' guards and refinements read, drawn
+    /// within the snapshot's refinement (the field's wire range, the stream's invariant)
+    /// and nothing else, new at every step. Drawn adversarially: first one where every
+    /// guard is false; then one where a random branch's guard holds (two times in three),
+    /// or one where a random comparison of a payload refinement that reads only the
+    /// readings (and what `role` knows) is false, or true; then any reading (Z3's models
+    /// sit on boundaries). A strategy no reading satisfies falls back to the next. False
+    /// when the run must stop.
+    fn observe(&mut self, role: &mut Role) -> bool {
+        let at = role.at.clone();
+        let Local::Send { branches, .. } = &*at else { return true };
+        let mut snaps: Vec<&crate::hir::Observed> = Vec::new();
+        for o in branches.iter().flat_map(|b| &b.observed) {
+            if !snaps.iter().any(|s| s.value == o.value) {
+                snaps.push(o);
+            }
+        }
+        if snaps.is_empty() {
+            return true;
+        }
+        let ids: Vec<ValueId> = snaps.iter().map(|o| o.value).collect();
+        for id in &ids {
+            role.known.remove(id);
+        }
+        let pin = |e: &Expr| {
+            map_vars(e, &mut |v, sort| match v {
+                Var::Value(id, _) if ids.contains(id) => None,
+                Var::Role(..) | Var::Value(..) => {
+                    self.lookup_as(role, v).and_then(|val| super::value_expr(&val, sort, Loc::default()))
+                }
+                _ => None,
+            })
+        };
+        let base: Vec<Expr> =
+            snaps.iter().filter_map(|o| o.refinement.as_ref()).map(|r| crate::hir::expr::defined_and(pin(r))).collect();
+        let guards: Vec<Expr> = branches.iter().filter_map(|b| b.guard.as_ref()).map(&pin).collect();
+        let mut atoms = Vec::new();
+        for b in branches {
+            let fields: Vec<ValueId> = b.payload.iter().map(|f| f.value).collect();
+            for r in b.payload.iter().filter_map(|f| f.refinement.as_ref()) {
+                comparisons(r, &mut |c| {
+                    let (mut reads, mut payload) = (false, false);
+                    c.visit_vars(&mut |v, _| {
+                        if let Var::Value(id, _) = v {
+                            reads |= ids.contains(id);
+                            payload |= fields.contains(id);
+                        }
+                    });
+                    if reads && !payload {
+                        atoms.push(pin(c));
+                    }
+                });
+            }
+        }
+        // First a reading where every guard is false (a stuck choice: the checks prove
+        // there is none), then one of the others; a strategy no reading satisfies falls
+        // back to the next, the last being any reading.
+        let all_false: Vec<Expr> = guards.iter().cloned().map(crate::hir::expr::not).collect();
+        let other = match self.rng.below(3) {
+            0 if !atoms.is_empty() => {
+                let a = atoms[self.rng.below(atoms.len())].clone();
+                vec![if self.rng.below(2) == 0 { crate::hir::expr::not(a) } else { a }]
+            }
+            _ if !guards.is_empty() => vec![guards[self.rng.below(guards.len())].clone()],
+            _ => Vec::new(),
+        };
+        let mut tries: Vec<Vec<Expr>> = Vec::new();
+        if !all_false.is_empty() {
+            tries.push(all_false);
+        }
+        tries.push(other);
+        tries.push(Vec::new());
+        let want: Vec<Expr> =
+            snaps.iter().map(|o| var_expr(Var::Value(o.value, o.name.clone()), o.sort.clone())).collect();
+        let now = self.now();
+        let who = self.prog.role_name(role.id).to_string();
+        for extra in tries {
+            let facts: Vec<Expr> = base.iter().chain(&extra).cloned().collect();
+            match self.sess.values(self.prog, &facts, &want) {
+                Ok(Some(vs)) => {
+                    for (id, v) in ids.iter().zip(vs) {
+                        let (v, rounded) = super::on_wire(self.prog, *id, v);
+                        if rounded {
+                            let msg = format!("`{who}`'s reading: Z3's value rounded to the wire's float (the simulator draws real readings)");
+                            self.report(Kind::Undecided, &now, msg);
+                            return false;
+                        }
+                        role.known.insert(*id, v);
+                    }
+                    return true;
+                }
+                Ok(None) if !extra.is_empty() => continue,
+                Ok(None) => {
+                    let msg = format!("`{who}`: no reading of its streams satisfies their declarations");
+                    self.report(Kind::Stuck, &now, msg);
+                    return false;
+                }
+                Err(why) => {
+                    self.undecided(&now, &format!("`{who}`'s reading of its streams"), why);
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
     /// The payload of `b` sent by `from`: a model of its refinements with everything the
     /// sender knows pinned. `None` when the run must stop.
     fn payload(&mut self, from: &Role, b: &SendBranch, who: &str) -> Option<Vec<Value>> {
@@ -431,6 +538,11 @@ impl Runner<'_, '_> {
             }
             if self.steps >= self.cfg.steps {
                 return;
+            }
+            for role in &mut roles {
+                if !self.observe(role) {
+                    return;
+                }
             }
             // Every send whose guard holds and whose receiver waits for it.
             let mut ready: Vec<(usize, usize, usize)> = Vec::new();
@@ -630,6 +742,21 @@ impl Runner<'_, '_> {
             let now = self.now();
             self.trace.push(format!("t = {}: {who}({})", exact::decimal(&now), shown.join(", ")));
         }
+    }
+}
+
+/// The comparisons `e` is built of through `&&`, `||`, `=>`, `!` and `if` conditions.
+fn comparisons(e: &Expr, f: &mut dyn FnMut(&Expr)) {
+    use crate::hir::expr::{BinOp, UnOp};
+    use crate::hir::ExprKind;
+    match &e.kind {
+        ExprKind::Binary(BinOp::And | BinOp::Or | BinOp::Implies, a, b) => {
+            comparisons(a, f);
+            comparisons(b, f);
+        }
+        ExprKind::Unary(UnOp::Not, a) => comparisons(a, f),
+        ExprKind::Binary(BinOp::Eq | BinOp::Ne | BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge, ..) => f(e),
+        _ => {}
     }
 }
 
