@@ -23,7 +23,7 @@
 //! /proc/PID/status after it started and after a flood of 200,000 datagrams (telemetry,
 //! garbage, frames with bad checksums, violations, session openings).
 
-use mavlink::common::*;
+use mavlink::dialects::common::*;
 use mavlink::{MavHeader, MavlinkVersion};
 use mochi::monitor::Automaton;
 use mochi::proxy::{Endpoint, Mode, Proxy, Totals};

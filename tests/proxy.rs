@@ -284,6 +284,7 @@ fn mavsdk_param_sets_a_parameter_on_param_server_through_the_proxy() {
 ///   at connection) are in it and fit no session;
 /// - MAVSDK's arm sends `param2` (force) as NaN, "unset", where the protocol asks `force == 0`:
 ///   a non-finite float, outside the static model, so a violation.
+///
 /// With `--alert-only` the arming goes through and those alerts are what is reported.
 #[test]
 fn mavsdk_action_arms_action_server_through_the_proxy() {
