@@ -224,8 +224,9 @@ fn alert_only_lets_the_early_ack_through_and_reports_it() {
     let gcs = peer(&["gcs-mission", &format!("udpout:127.0.0.1:{g}"), MISSION, "10"]);
     let d = done(&gcs, 40);
     assert_eq!(d["ack"], 0, "the early ACK went through: {d}");
-    let acks: Vec<_> = violations(&p).into_iter().filter(|l| l["msgid"] == 47).collect();
-    assert_eq!(acks.first().map(|a| a["action"].clone()), Some("alert".into()), "{:?}", violations(&p));
+    // The verdict line follows the forwarding: wait for it.
+    let ack = p.wait_for(Duration::from_secs(5), |l| l["event"] == "violation" && l["msgid"] == 47);
+    assert_eq!(ack.map(|a| a["action"].clone()), Some("alert".into()), "{:?}", violations(&p));
 }
 
 #[test]

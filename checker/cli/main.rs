@@ -232,7 +232,7 @@ fn run(cli: Cli) -> u8 {
         Command::Explain(args) => explain(&args),
         Command::Simulate(args) => simulate(&args, cli.color).exit_code(),
         Command::Monitor(args) => monitor(&args, cli.color).exit_code(),
-        Command::Proxy(args) => proxy_cmd::proxy(&args, cli.color).exit_code(),
+        Command::Proxy(args) => proxy_cmd::proxy(&args, cli.color, Box::new(std::io::stdout())).exit_code(),
     }
 }
 

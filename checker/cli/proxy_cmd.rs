@@ -4,13 +4,33 @@ use super::{eprint_safe, eprintln_safe, ColorChoice, Outcome};
 use clap::Args;
 use mochi::driver::{Config, Verdict};
 use mochi::fsload;
-use mochi::proxy::{Endpoint, Mode, Proxy, Totals};
+use mochi::proxy::{Endpoint, Event, Mode, Proxy, Sink, Totals};
 use mochi::render;
 use mochi::source::SourceDb;
 use std::io::Write;
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::sync::Mutex;
+
+/// Events rendered as JSON lines, written and flushed per batch.
+struct Lines<'a> {
+    out: Mutex<Box<dyn Write + Send>>,
+    protocols: &'a [String],
+}
+
+impl Sink for Lines<'_> {
+    fn events(&self, events: &[Event]) {
+        let mut text = String::new();
+        for e in events {
+            text += &render::proxy_event_json(e, self.protocols);
+            text.push('\n');
+        }
+        if let Ok(mut w) = self.out.lock() {
+            let _ = w.write_all(text.as_bytes());
+            let _ = w.flush();
+        }
+    }
+}
 
 #[derive(Args)]
 pub(crate) struct ProxyArgs {
@@ -33,9 +53,9 @@ pub(crate) struct ProxyArgs {
     violations_only: bool,
 }
 
-/// Runs until killed. Exit 1 when a protocol is not verified or cannot be monitored, or an
-/// end cannot be opened.
-pub(crate) fn proxy(args: &ProxyArgs, color: ColorChoice) -> Outcome {
+/// Runs until killed, writing the events to `out` (stdout). Exit 1 when a protocol is not
+/// verified or cannot be monitored, or an end cannot be opened.
+pub(crate) fn proxy(args: &ProxyArgs, color: ColorChoice, out: Box<dyn Write + Send>) -> Outcome {
     let mut db = SourceDb::new();
     let mut automata = Vec::new();
     for p in &args.protocols {
@@ -100,17 +120,16 @@ pub(crate) fn proxy(args: &ProxyArgs, color: ColorChoice) -> Outcome {
     let Some(vehicle) = open("vehicle", &args.vehicle) else { return Outcome::Invalid };
     let names: Vec<String> = automata.iter().map(|a| a.name.clone()).collect();
     let mode = if args.alert_only { Mode::AlertOnly } else { Mode::Enforce };
-    let start = serde_json::json!({
-        "event": "start",
-        "gcs": args.gcs.to_string(),
-        "gcs_local": gcs.local_addr().map(|a| a.to_string()),
-        "vehicle": args.vehicle.to_string(),
-        "vehicle_local": vehicle.local_addr().map(|a| a.to_string()),
-        "protocols": names,
-        "mode": if args.alert_only { "alert-only" } else { "enforce" },
-    });
-    let out: Mutex<Box<dyn Write + Send>> = Mutex::new(Box::new(std::io::stdout()));
-    if let Ok(mut w) = out.lock() {
+    let start = render::proxy_start_json(
+        &args.gcs.to_string(),
+        gcs.local_addr().map(|a| a.to_string()),
+        &args.vehicle.to_string(),
+        vehicle.local_addr().map(|a| a.to_string()),
+        &names,
+        args.alert_only,
+    );
+    let sink = Lines { out: Mutex::new(out), protocols: &names };
+    if let Ok(mut w) = sink.out.lock() {
         let _ = writeln!(w, "{start}");
         let _ = w.flush();
     }
@@ -122,6 +141,6 @@ pub(crate) fn proxy(args: &ProxyArgs, color: ColorChoice) -> Outcome {
         steps: !args.violations_only,
     };
     let stop = AtomicBool::new(false);
-    proxy.run(&*gcs, &*vehicle, &out, &stop, &Totals::default());
+    proxy.run(&*gcs, &*vehicle, &sink, &stop, &Totals::default());
     Outcome::Verified
 }

@@ -2,7 +2,8 @@
 //! point, seed 000 Sec 2 and 4). Frames are read from both ends, run through the monitor, and
 //! forwarded to the other end, byte for byte, unless the monitor finds a violation: then the
 //! frame is dropped (or, with `alert_only`, forwarded and reported). Every verdict on a
-//! protocol message is one JSON line on the output (docs/proxy.md gives the format).
+//! protocol message is an [`Event`] handed to a [`Sink`] (the command line renders each as
+//! one JSON line: docs/proxy.md gives the format).
 //!
 //! Two threads, one per direction, each blocked in a receive on its end (std threads: two
 //! blocking reads are the lowest latency there is on a link with two ends, and need no
@@ -19,7 +20,7 @@
 //! monitor's record of violations and ended sessions (which it keeps for its reports) is
 //! cleared by rebuilding the monitor once it holds [`REPORT_CAP`] entries and no session is
 //! open, or, whatever is open, at [`HARD_CAP`] entries or [`SESSION_CAP`] open sessions (a
-//! flood of session openings): a `reset` line says so. A session lost in a reset is not a
+//! flood of session openings): an [`Event::Reset`] says so. A session lost in a reset is not a
 //! pass: its next message fits no session and is dropped as outside any session, or starts a
 //! new one if it is a first message, as it would have anyway.
 
@@ -28,10 +29,8 @@ pub mod endpoint;
 pub use endpoint::{Endpoint, Port};
 
 use crate::mavio::parse::{Config, Counts, Stream};
-use crate::monitor::{Automaton, Monitor, Outcome};
+use crate::monitor::{Automaton, Kind, Monitor, Outcome};
 use crate::source::SourceDb;
-use std::fmt::Write as _;
-use std::io::Write;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
@@ -72,6 +71,50 @@ impl Dir {
     }
 }
 
+/// The frame a verdict is about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct At {
+    /// Arrival, microseconds since the Unix epoch.
+    pub time_us: u64,
+    pub dir: Dir,
+    pub msgid: u32,
+    pub from: (u8, u8),
+    pub signed: bool,
+}
+
+/// What the proxy reports.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Event {
+    /// A session took the message (forwarded); `state` is its state now.
+    Step { at: At, session: u64, state: u32 },
+    /// The message ended a session (forwarded); `protocol` indexes [`Proxy::protocols`].
+    End { at: At, session: u64, protocol: Option<usize>, conformant: bool },
+    /// The monitor rejects the message: dropped, or forwarded when `forwarded`.
+    Violation {
+        at: At,
+        kind: Kind,
+        protocol: Option<usize>,
+        session: Option<u64>,
+        state: u32,
+        field: Option<String>,
+        /// The monitor's explanation (`Monitor::describe`), when the sources are known.
+        detail: Option<String>,
+        forwarded: bool,
+    },
+    /// Malformed input seen on a direction (cumulative counts).
+    Input { time_us: u64, dir: Dir, counts: Counts },
+    /// The monitor was rebuilt with sessions open (the module comment says when).
+    Reset { time_us: u64, reason: &'static str, open_sessions_lost: u64, resets: u64 },
+    /// An end failed (once per distinct error); the proxy goes on.
+    Error { dir: Dir, error: String },
+}
+
+/// Where events go: called after the frames of one receive were forwarded, with the events
+/// of that receive, in order (the forwarding never waits for the report).
+pub trait Sink: Sync {
+    fn events(&self, events: &[Event]);
+}
+
 /// Counters of a run, over both directions.
 #[derive(Debug, Default)]
 pub struct Totals {
@@ -93,7 +136,8 @@ pub struct Proxy<'a> {
     pub mode: Mode,
     /// How frames are checked (dialect; a signing key is not used by the proxy).
     pub config: Config,
-    /// Verdict lines on every protocol message (`true`), or only violations, resets and errors.
+    /// Events on every protocol message (`true`), or only violations, resets, input counts
+    /// and errors.
     pub steps: bool,
 }
 
@@ -108,27 +152,11 @@ fn now_us() -> u64 {
     SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_micros() as u64)
 }
 
-/// A string as a JSON string literal.
-fn json_str(out: &mut String, s: &str) {
-    match serde_json::to_string(s) {
-        Ok(q) => out.push_str(&q),
-        Err(_) => out.push_str("\"\""),
-    }
-}
-
 impl Proxy<'_> {
-    /// Runs until `stop` is set: frames from `gcs` go to `vehicle` and back. Verdict lines go
-    /// to `out` (written and flushed after the frames of one receive were forwarded). Returns
-    /// when both directions have stopped; an error of one end is reported on `out` and the
-    /// proxy goes on (a link that fails is retried, as a ground station does).
-    pub fn run(
-        &self,
-        gcs: &dyn Port,
-        vehicle: &dyn Port,
-        out: &Mutex<Box<dyn Write + Send>>,
-        stop: &AtomicBool,
-        totals: &Totals,
-    ) {
+    /// Runs until `stop` is set: frames from `gcs` go to `vehicle` and back; events go to
+    /// `out`. Returns when both directions have stopped; an error of one end is reported and
+    /// the proxy goes on (a link that fails is retried, as a ground station does).
+    pub fn run(&self, gcs: &dyn Port, vehicle: &dyn Port, out: &dyn Sink, stop: &AtomicBool, totals: &Totals) {
         let shared = if self.protocols.is_empty() {
             None
         } else {
@@ -148,14 +176,14 @@ impl Proxy<'_> {
         from: &dyn Port,
         to: &dyn Port,
         shared: Option<&Mutex<Shared>>,
-        out: &Mutex<Box<dyn Write + Send>>,
+        out: &dyn Sink,
         stop: &AtomicBool,
         totals: &Totals,
     ) {
         let mut buf = vec![0u8; RECV_BUF];
         let mut stream = Stream::new(self.config);
         let mut fwd: Vec<u8> = Vec::with_capacity(RECV_BUF + crate::mavio::parse::MAX_FRAME);
-        let mut lines = String::with_capacity(4096);
+        let mut events: Vec<Event> = Vec::with_capacity(64);
         let mut last_counts = Counts::default();
         let mut last_report = Instant::now();
         let mut last_error: Option<String> = None;
@@ -165,13 +193,7 @@ impl Proxy<'_> {
                 Err(e) => {
                     let msg = e.to_string();
                     if last_error.as_deref() != Some(&msg) {
-                        lines.clear();
-                        lines.push_str("{\"event\":\"error\",\"dir\":\"");
-                        lines.push_str(dir.as_str());
-                        lines.push_str("\",\"error\":");
-                        json_str(&mut lines, &msg);
-                        lines.push_str("}\n");
-                        emit(out, &lines);
+                        out.events(&[Event::Error { dir, error: msg.clone() }]);
                         last_error = Some(msg);
                     }
                     std::thread::sleep(endpoint::POLL);
@@ -186,7 +208,7 @@ impl Proxy<'_> {
             stream.push(&buf[..n], Some(t));
             totals.bytes_in.fetch_add(n as u64, Ordering::Relaxed);
             fwd.clear();
-            lines.clear();
+            events.clear();
             while let Some(f) = stream.next_frame() {
                 totals.frames.fetch_add(1, Ordering::Relaxed);
                 let forward = match shared {
@@ -197,7 +219,7 @@ impl Proxy<'_> {
                             // nothing is forwarded unjudged.
                             continue;
                         };
-                        self.judge(dir, &mut g, &f, &mut lines, totals)
+                        self.judge(dir, &mut g, &f, &mut events, totals)
                     }
                 };
                 if forward {
@@ -209,103 +231,86 @@ impl Proxy<'_> {
             }
             if !fwd.is_empty() {
                 if let Err(e) = to.send(&fwd) {
-                    lines.push_str("{\"event\":\"error\",\"dir\":\"");
-                    lines.push_str(dir.as_str());
-                    lines.push_str("\",\"error\":");
-                    json_str(&mut lines, &format!("cannot forward: {e}"));
-                    lines.push_str("}\n");
+                    events.push(Event::Error { dir, error: format!("cannot forward: {e}") });
                 }
             }
-            if !lines.is_empty() {
-                emit(out, &lines);
+            if !events.is_empty() {
+                out.events(&events);
             }
             self.report_counts(dir, &stream, &mut last_counts, &mut last_report, out, false);
         }
-        lines.clear();
-        self.counts_line(dir, &stream.counts(), &mut lines);
-        emit(out, &lines);
+        out.events(&[Event::Input { time_us: now_us(), dir, counts: stream.counts() }]);
     }
 
-    /// One frame through the monitor: whether to forward it, with its verdict line added to
-    /// `lines`.
+    /// One frame through the monitor: whether to forward it, with its event added to
+    /// `events`.
     fn judge(
         &self,
         dir: Dir,
         g: &mut Shared,
         f: &crate::mavio::Frame<'_>,
-        lines: &mut String,
+        events: &mut Vec<Event>,
         totals: &Totals,
     ) -> bool {
         let outcome = g.monitor.on_frame(f);
-        let head = |lines: &mut String, event: &str| {
-            let _ = write!(
-                lines,
-                "{{\"event\":\"{event}\",\"time_us\":{},\"dir\":\"{}\",\"msgid\":{},\"from\":\"{}/{}\",\"signed\":{}",
-                f.time_us.unwrap_or(0),
-                dir.as_str(),
-                f.msgid,
-                f.sysid,
-                f.compid,
-                f.signed
-            );
-        };
+        let at =
+            At { time_us: f.time_us.unwrap_or(0), dir, msgid: f.msgid, from: (f.sysid, f.compid), signed: f.signed };
         let forward = match outcome {
             Outcome::Passed => true,
             Outcome::Step { session, state } => {
                 if self.steps {
-                    head(lines, "step");
-                    let _ = writeln!(lines, ",\"session\":{session},\"state\":{state},\"action\":\"forward\"}}");
+                    events.push(Event::Step { at, session, state });
                 }
                 true
             }
             Outcome::Ended { session } => {
                 if self.steps {
-                    head(lines, "end");
-                    let _ = write!(lines, ",\"session\":{session}");
-                    let protos = g.monitor.protocols();
-                    if let Some(s) = g.monitor.summaries().iter().rev().find(|s| s.session == session) {
-                        lines.push_str(",\"protocol\":");
-                        json_str(lines, &protos[s.protocol].name);
-                        let _ = write!(lines, ",\"conformant\":{}", s.conformant);
-                    }
-                    lines.push_str(",\"action\":\"forward\"}\n");
+                    let s = g.monitor.summaries().iter().rev().find(|s| s.session == session);
+                    events.push(Event::End {
+                        at,
+                        session,
+                        protocol: s.map(|s| s.protocol),
+                        conformant: s.is_some_and(|s| s.conformant),
+                    });
                 }
                 true
             }
             Outcome::Violation(i) => {
                 totals.violations.fetch_add(1, Ordering::Relaxed);
-                let forward = self.mode == Mode::AlertOnly;
-                head(lines, "violation");
-                if let Some(v) = g.monitor.violation(i) {
-                    lines.push_str(",\"kind\":");
-                    json_str(lines, v.kind.as_str());
-                    if let Some(p) = v.protocol {
-                        lines.push_str(",\"protocol\":");
-                        json_str(lines, &g.monitor.protocols()[p].name);
-                    }
-                    if let Some(s) = v.session {
-                        let _ = write!(lines, ",\"session\":{s}");
-                    }
-                    let _ = write!(lines, ",\"state\":{}", v.state);
-                    if let Some(field) = &v.field {
-                        lines.push_str(",\"field\":");
-                        json_str(lines, field);
-                    }
-                }
-                if let Some(db) = self.db {
-                    lines.push_str(",\"detail\":");
-                    json_str(lines, &g.monitor.describe(db, i));
-                }
-                let _ = writeln!(lines, ",\"action\":\"{}\"}}", if forward { "alert" } else { "drop" });
-                forward
+                let forwarded = self.mode == Mode::AlertOnly;
+                let detail = self.db.map(|db| g.monitor.describe(db, i));
+                let e = match g.monitor.violation(i) {
+                    Some(v) => Event::Violation {
+                        at,
+                        kind: v.kind,
+                        protocol: v.protocol,
+                        session: v.session,
+                        state: v.state,
+                        field: v.field.clone(),
+                        detail,
+                        forwarded,
+                    },
+                    None => Event::Violation {
+                        at,
+                        kind: Kind::OutsideSession,
+                        protocol: None,
+                        session: None,
+                        state: 0,
+                        field: None,
+                        detail,
+                        forwarded,
+                    },
+                };
+                events.push(e);
+                forwarded
             }
         };
-        self.bound(g, lines, totals);
+        self.bound(g, events, totals);
         forward
     }
 
     /// Keeps the monitor's memory bounded (the module comment says how).
-    fn bound(&self, g: &mut Shared, lines: &mut String, totals: &Totals) {
+    fn bound(&self, g: &mut Shared, events: &mut Vec<Event>, totals: &Totals) {
         let m = &g.monitor;
         let recorded = m.violations().len() + m.summaries().len();
         let open = m.stats.sessions_started.saturating_sub(m.stats.sessions_ended);
@@ -321,33 +326,12 @@ impl Proxy<'_> {
         if !reason.is_empty() {
             g.resets += 1;
             totals.resets.fetch_add(1, Ordering::Relaxed);
-            let _ = writeln!(
-                lines,
-                "{{\"event\":\"reset\",\"time_us\":{},\"reason\":\"{reason}\",\"open_sessions_lost\":{open},\"resets\":{}}}",
-                now_us(),
-                g.resets
-            );
+            events.push(Event::Reset { time_us: now_us(), reason, open_sessions_lost: open, resets: g.resets });
         }
         g.monitor = Monitor::new(self.protocols.clone());
     }
 
-    fn counts_line(&self, dir: Dir, c: &Counts, lines: &mut String) {
-        let _ = writeln!(
-            lines,
-            "{{\"event\":\"input\",\"time_us\":{},\"dir\":\"{}\",\"frames\":{},\"signed\":{},\"bad_crc\":{},\"bad_signature\":{},\"bad_flags\":{},\"unknown_id\":{},\"garbage_bytes\":{}}}",
-            now_us(),
-            dir.as_str(),
-            c.frames,
-            c.signed,
-            c.bad_crc,
-            c.bad_signature,
-            c.bad_flags,
-            c.unknown_id,
-            c.garbage_bytes
-        );
-    }
-
-    /// At most once a second, a line with the input counts of a direction when something
+    /// At most once a second, an event with the input counts of a direction when something
     /// malformed was seen since the last one (a flood of garbage is reported, not echoed).
     fn report_counts(
         &self,
@@ -355,7 +339,7 @@ impl Proxy<'_> {
         stream: &Stream,
         last: &mut Counts,
         at: &mut Instant,
-        out: &Mutex<Box<dyn Write + Send>>,
+        out: &dyn Sink,
         idle: bool,
     ) {
         if !idle && at.elapsed() < Duration::from_secs(1) {
@@ -364,20 +348,10 @@ impl Proxy<'_> {
         let c = stream.counts();
         let bad = |c: &Counts| c.bad_crc + c.bad_signature + c.bad_flags + c.unknown_id + c.garbage_bytes;
         if bad(&c) != bad(last) && at.elapsed() >= Duration::from_secs(1) {
-            let mut line = String::new();
-            self.counts_line(dir, &c, &mut line);
-            emit(out, &line);
+            out.events(&[Event::Input { time_us: now_us(), dir, counts: c }]);
             *last = c;
             *at = Instant::now();
         }
-    }
-}
-
-/// Writes verdict lines and flushes (a reader sees each verdict as it happens).
-fn emit(out: &Mutex<Box<dyn Write + Send>>, lines: &str) {
-    if let Ok(mut w) = out.lock() {
-        let _ = w.write_all(lines.as_bytes());
-        let _ = w.flush();
     }
 }
 

@@ -2,11 +2,10 @@
 //! too), violations dropped or only reported, garbage and floods.
 
 use super::*;
-use crate::monitor::Automaton;
+use crate::monitor::{Automaton, Kind};
 use mavlink::dialects::common::{MavMessage, PARAM_SET_DATA};
 use mavlink::{MavHeader, MavlinkVersion, SigningConfig, SigningData};
 use std::net::UdpSocket;
-use std::sync::Arc;
 
 /// A protocol small enough to read at a glance: the GCS sets a value of at most 10, the
 /// vehicle echoes it.
@@ -48,30 +47,24 @@ fn heartbeat() -> MavMessage {
     MavMessage::HEARTBEAT(mavlink::dialects::common::HEARTBEAT_DATA::default())
 }
 
-/// Verdict lines, shared with the test.
-#[derive(Clone, Default)]
-struct Lines(Arc<Mutex<Vec<u8>>>);
+/// The events, kept for the test.
+#[derive(Default)]
+struct Events(Mutex<Vec<Event>>);
 
-impl Write for Lines {
-    fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
-        if let Ok(mut v) = self.0.lock() {
-            v.extend_from_slice(b);
-        }
-        Ok(b.len())
-    }
-    fn flush(&mut self) -> std::io::Result<()> {
-        Ok(())
+impl Sink for Events {
+    fn events(&self, events: &[Event]) {
+        self.0.lock().unwrap().extend_from_slice(events);
     }
 }
 
-impl Lines {
-    fn text(&self) -> String {
-        String::from_utf8_lossy(&self.0.lock().unwrap()).into_owned()
+impl Events {
+    fn all(&self) -> Vec<Event> {
+        self.0.lock().unwrap().clone()
     }
 }
 
 /// A proxy between a GCS socket and a vehicle socket, run in `body`.
-fn with_proxy(monitored: bool, mode: Mode, body: impl FnOnce(&UdpSocket, &UdpSocket, &Lines, &Totals)) {
+fn with_proxy(monitored: bool, mode: Mode, body: impl FnOnce(&UdpSocket, &UdpSocket, &Events, &Totals)) {
     let mut db = SourceDb::new();
     let protocols = if monitored { vec![automaton(&mut db)] } else { Vec::new() };
     let vehicle = UdpSocket::bind("127.0.0.1:0").unwrap();
@@ -81,8 +74,7 @@ fn with_proxy(monitored: bool, mode: Mode, body: impl FnOnce(&UdpSocket, &UdpSoc
     let gcs = UdpSocket::bind("127.0.0.1:0").unwrap();
     gcs.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
     gcs.connect(gcs_end.local_addr().unwrap()).unwrap();
-    let lines = Lines::default();
-    let out: Mutex<Box<dyn Write + Send>> = Mutex::new(Box::new(lines.clone()));
+    let lines = Events::default();
     let stop = AtomicBool::new(false);
     let totals = Totals::default();
     let proxy = Proxy { protocols, db: Some(&db), mode, config: Config::default(), steps: true };
@@ -94,7 +86,7 @@ fn with_proxy(monitored: bool, mode: Mode, body: impl FnOnce(&UdpSocket, &UdpSoc
         }
     }
     std::thread::scope(|s| {
-        s.spawn(|| proxy.run(&*gcs_end, &*veh_end, &out, &stop, &totals));
+        s.spawn(|| proxy.run(&*gcs_end, &*veh_end, &lines, &stop, &totals));
         let _stop = Stop(&stop);
         body(&gcs, &vehicle, &lines, &totals);
     });
@@ -136,14 +128,17 @@ fn a_violating_message_is_dropped_and_reported() {
         assert_eq!(recv(vehicle), ok);
         std::thread::sleep(Duration::from_millis(50));
         assert_eq!(totals.dropped.load(Ordering::Relaxed), 1);
-        let text = lines.text();
-        let v: Vec<serde_json::Value> = text.lines().map(|l| serde_json::from_str(l).expect(l)).collect();
-        let violation = v.iter().find(|l| l["event"] == "violation").expect(&text);
-        assert_eq!(violation["action"], "drop");
-        assert_eq!(violation["kind"], "refinement");
-        assert_eq!(violation["dir"], "gcs->vehicle");
-        assert!(violation["detail"].as_str().unwrap().contains("set.chor:4:"), "{text}");
-        assert!(v.iter().any(|l| l["event"] == "step"), "{text}");
+        let all = lines.all();
+        let Some(Event::Violation { at, kind, detail, forwarded, .. }) =
+            all.iter().find(|e| matches!(e, Event::Violation { .. }))
+        else {
+            panic!("no violation: {all:?}")
+        };
+        assert!(!forwarded);
+        assert_eq!(*kind, Kind::Refinement);
+        assert_eq!(at.dir, Dir::GcsToVehicle);
+        assert!(detail.as_deref().unwrap_or("").contains("set.chor:4:"), "{detail:?}");
+        assert!(all.iter().any(|e| matches!(e, Event::Step { .. })), "{all:?}");
     });
 }
 
@@ -154,7 +149,8 @@ fn alert_only_forwards_the_violation_and_reports_it() {
         gcs.send(&bad).unwrap();
         assert_eq!(recv(vehicle), bad);
         std::thread::sleep(Duration::from_millis(50));
-        assert!(lines.text().contains("\"action\":\"alert\""), "{}", lines.text());
+        let all = lines.all();
+        assert!(all.iter().any(|e| matches!(e, Event::Violation { forwarded: true, .. })), "{all:?}");
     });
 }
 
@@ -199,10 +195,8 @@ fn garbage_and_floods_neither_stop_it_nor_grow_its_record() {
         assert_eq!(got.as_deref(), Some(&ok[..]), "the proxy forwards after the flood");
         assert!(totals.violations.load(Ordering::Relaxed) > REPORT_CAP as u64);
         // The record of violations was cleared on the way (no session open: no session lost).
-        let text = lines.text();
         assert!(totals.resets.load(Ordering::Relaxed) == 0, "no lossy reset without open sessions");
-        assert!(text.contains("\"event\":\"violation\""));
-        assert!(text.contains("\"event\":\"input\"") || totals.bytes_in.load(Ordering::Relaxed) > 0);
+        assert!(lines.all().iter().any(|e| matches!(e, Event::Violation { .. })));
     });
 }
 
@@ -216,6 +210,11 @@ fn a_flood_of_session_openings_is_bounded() {
         }
         std::thread::sleep(Duration::from_millis(50));
         assert!(totals.resets.load(Ordering::Relaxed) >= 1);
-        assert!(lines.text().contains("too many open sessions"), "{}", lines.text());
+        let all = lines.all();
+        assert!(
+            all.iter().any(|e| matches!(e, Event::Reset { reason: "too many open sessions", .. })),
+            "{:?}",
+            all.iter().filter(|e| matches!(e, Event::Reset { .. })).collect::<Vec<_>>()
+        );
     });
 }
