@@ -64,7 +64,12 @@ enum Command {
     /// Check MAVLink logs (.tlog, raw streams, .pcapng) against verified protocols: each
     /// session conformant, incomplete, or its violations, with coverage
     Monitor(MonitorArgs),
+    /// Stand between a ground station and a vehicle: forward MAVLink both ways and drop (or
+    /// only report) every message that breaks a verified protocol; one JSON line per verdict
+    Proxy(proxy_cmd::ProxyArgs),
 }
+
+mod proxy_cmd;
 
 #[derive(Args)]
 struct MonitorArgs {
@@ -227,6 +232,7 @@ fn run(cli: Cli) -> u8 {
         Command::Explain(args) => explain(&args),
         Command::Simulate(args) => simulate(&args, cli.color).exit_code(),
         Command::Monitor(args) => monitor(&args, cli.color).exit_code(),
+        Command::Proxy(args) => proxy_cmd::proxy(&args, cli.color, Box::new(std::io::stdout())).exit_code(),
     }
 }
 

@@ -1,0 +1,146 @@
+//! `mochi proxy`: the monitor between a ground station and a vehicle (docs/proxy.md).
+
+use super::{eprint_safe, eprintln_safe, ColorChoice, Outcome};
+use clap::Args;
+use mochi::driver::{Config, Verdict};
+use mochi::fsload;
+use mochi::proxy::{Endpoint, Event, Mode, Proxy, Sink, Totals};
+use mochi::render;
+use mochi::source::SourceDb;
+use std::io::Write;
+use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+use std::sync::Mutex;
+
+/// Events rendered as JSON lines, written and flushed per batch.
+struct Lines<'a> {
+    out: Mutex<Box<dyn Write + Send>>,
+    protocols: &'a [String],
+}
+
+impl Sink for Lines<'_> {
+    fn events(&self, events: &[Event]) {
+        let mut text = String::new();
+        for e in events {
+            text += &render::proxy_event_json(e, self.protocols);
+            text.push('\n');
+        }
+        if let Ok(mut w) = self.out.lock() {
+            let _ = w.write_all(text.as_bytes());
+            let _ = w.flush();
+        }
+    }
+}
+
+#[derive(Args)]
+pub(crate) struct ProxyArgs {
+    /// A verified MAVLink protocol (`.chor` with a `dialect`); repeat for several, enforced
+    /// together. Without one, frames are only checked (checksum) and forwarded
+    #[arg(long = "protocol", short = 'p', value_name = "FILE")]
+    protocols: Vec<PathBuf>,
+    /// The ground station's end: udpin:HOST:PORT, udpout:HOST:PORT, tcp:HOST:PORT,
+    /// tcpin:HOST:PORT (serial ports are refused: bridge them to UDP)
+    #[arg(long, value_name = "ENDPOINT", value_parser = Endpoint::parse)]
+    gcs: Endpoint,
+    /// The vehicle's end, in the same notation
+    #[arg(long, value_name = "ENDPOINT", value_parser = Endpoint::parse)]
+    vehicle: Endpoint,
+    /// Forward violating messages too (only report them); by default they are dropped
+    #[arg(long)]
+    alert_only: bool,
+    /// Print only violations, resets, input counts and errors (no line per protocol step)
+    #[arg(long)]
+    violations_only: bool,
+}
+
+/// Runs until killed, writing the events to `out` (stdout). Exit 1 when a protocol is not
+/// verified or cannot be monitored, or an end cannot be opened.
+pub(crate) fn proxy(args: &ProxyArgs, color: ColorChoice, out: Box<dyn Write + Send>) -> Outcome {
+    let mut db = SourceDb::new();
+    let mut automata = Vec::new();
+    for p in &args.protocols {
+        let report = match fsload::check_file(&mut db, p, &Config::default()) {
+            Ok(r) => r,
+            Err(e) => {
+                eprintln_safe(&format!("error: cannot read {}: {e}", p.display()));
+                return Outcome::Invalid;
+            }
+        };
+        if report.verdict != Verdict::Verified {
+            let color = color.for_stream(false);
+            let shown: String =
+                report.diagnostics.iter().filter(|d| d.is_error()).map(|d| render::text(&db, d, color)).collect();
+            eprint_safe(&shown);
+            eprintln_safe(&format!(
+                "error: {} is {}, not verified: mochi enforces only verified protocols (the monitor enforces what the static checks assume); run `mochi check {}`",
+                p.display(),
+                format!("{:?}", report.verdict).to_lowercase(),
+                p.display()
+            ));
+            return Outcome::Invalid;
+        }
+        let root = match fsload::load_root(&mut db, p) {
+            Ok(r) => r,
+            Err(e) => {
+                eprintln_safe(&format!("error: cannot read {}: {e}", p.display()));
+                return Outcome::Invalid;
+            }
+        };
+        let prog = match mochi::driver::prepare(&mut db, root, &mut fsload::read_bytes, mochi::driver::Stage::Names) {
+            Ok(prog) => prog,
+            Err(diags) => {
+                let color = color.for_stream(false);
+                eprint_safe(&diags.iter().map(|d| render::text(&db, d, color)).collect::<String>());
+                return Outcome::Invalid;
+            }
+        };
+        match mochi::monitor::Automaton::compile(&prog) {
+            Ok(a) => automata.push(a),
+            Err(e) => {
+                let at = e
+                    .span
+                    .map(|s| {
+                        let (f, l, c) = db.location(s);
+                        format!("{f}:{l}:{c}: ")
+                    })
+                    .unwrap_or_default();
+                eprintln_safe(&format!("error: {at}{} cannot be monitored: {}", p.display(), e.message));
+                return Outcome::Invalid;
+            }
+        }
+    }
+    let open = |which: &str, e: &Endpoint| match e.open() {
+        Ok(p) => Some(p),
+        Err(err) => {
+            eprintln_safe(&format!("error: cannot open the {which} end `{e}`: {err}"));
+            None
+        }
+    };
+    let Some(gcs) = open("ground station", &args.gcs) else { return Outcome::Invalid };
+    let Some(vehicle) = open("vehicle", &args.vehicle) else { return Outcome::Invalid };
+    let names: Vec<String> = automata.iter().map(|a| a.name.clone()).collect();
+    let mode = if args.alert_only { Mode::AlertOnly } else { Mode::Enforce };
+    let start = render::proxy_start_json(
+        &args.gcs.to_string(),
+        gcs.local_addr().map(|a| a.to_string()),
+        &args.vehicle.to_string(),
+        vehicle.local_addr().map(|a| a.to_string()),
+        &names,
+        args.alert_only,
+    );
+    let sink = Lines { out: Mutex::new(out), protocols: &names };
+    if let Ok(mut w) = sink.out.lock() {
+        let _ = writeln!(w, "{start}");
+        let _ = w.flush();
+    }
+    let proxy = Proxy {
+        protocols: automata,
+        db: Some(&db),
+        mode,
+        config: mochi::mavio::parse::Config::default(),
+        steps: !args.violations_only,
+    };
+    let stop = AtomicBool::new(false);
+    proxy.run(&*gcs, &*vehicle, &sink, &stop, &Totals::default());
+    Outcome::Verified
+}
