@@ -151,7 +151,8 @@ fn verified_files_are_clean(filter: &dyn Fn(&str) -> bool) {
     assert!(!verified.is_empty(), "no verified file was simulated");
     let bad: Vec<String> = par_map(&verified, |_, (k, path)| {
         let r = simulate_path(path, &cfg(2, 12, 100 + *k as u64));
-        if STREAMS.contains(&path.as_str()) {
+        // A timeout branch is refused the same way (not simulated yet).
+        if STREAMS.contains(&path.as_str()) || path.as_str() == "choreographies/mavlink/param-list.chor" {
             if r.failures().next().is_none()
                 && r.undecided().count() == 1
                 && r.undecided().all(|f| f.message.starts_with("not supported yet"))
@@ -218,6 +219,13 @@ const NOT_FOUND: &[(&str, &str)] = &[
     ("mavlink/rejected/E0419-parachute-vz-sign-as-printed.chor", "the system declares streams (observed state), which the simulator does not draw yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
     ("mavlink/rejected/E0419-parachute-ack-trusts-the-gcs-reading.chor", "the system declares streams (observed state), which the simulator does not draw yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
     ("mavlink/rejected/E0316-choice-trusts-an-earlier-altitude-reading.chor", "the system declares streams (observed state), which the simulator does not draw yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
+    ("mavlink/rejected/E0320-timeout-bound-zero.chor", "a choice has a timeout branch, which the simulator does not run yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
+    ("mavlink/rejected/E0321-timeout-after-a-step.chor", "a choice has a timeout branch, which the simulator does not run yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
+    ("mavlink/rejected/E0322-two-timeouts-in-one-choice.chor", "a choice has a timeout branch, which the simulator does not run yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
+    ("mavlink/rejected/E0323-the-sender-times-out.chor", "a choice has a timeout branch, which the simulator does not run yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
+    ("mavlink/rejected/E0324-vehicle-not-told-of-the-timeout.chor", "a choice has a timeout branch, which the simulator does not run yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
+    ("mavlink/rejected/E0325-process-typed-against-a-timeout.chor", "a choice has a timeout branch, which the simulator does not run yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
+    ("mavlink/rejected/E0417-re-request-timeout-spends-no-retry.chor", "a choice has a timeout branch, which the simulator does not run yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
     ("mavlink/rejected/E0715-process-typed-against-an-observed-guard.chor", "the system declares streams (observed state), which the simulator does not draw yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
     ("rejected/E0301-self-message.chor", "a message to oneself runs like any other: the rule is about the type's form (Def 4.1), not an event of a run"),
     ("rejected/E0302-command-with-and-without-its-command.chor", "two branches with one label are ambiguous to the receiver's projection, which a motion choreography's run (the global type) does not consult"),
