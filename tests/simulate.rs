@@ -146,6 +146,16 @@ fn verified_files_are_clean(filter: &dyn Fn(&str) -> bool) {
     assert!(!verified.is_empty(), "no verified file was simulated");
     let bad: Vec<String> = par_map(&verified, |_, (k, path)| {
         let r = simulate_path(path, &cfg(2, 12, 100 + *k as u64));
+        // A timeout branch is refused as undecided (not simulated yet), never a clean run.
+        if path.as_str() == "choreographies/mavlink/param-list.chor" {
+            if r.failures().next().is_none()
+                && r.undecided().count() == 1
+                && r.undecided().all(|f| f.message.starts_with("not supported yet"))
+            {
+                return Vec::new();
+            }
+            return vec![format!("{path}: a program with a timeout branch is reported not supported: {:?}", r.findings)];
+        }
         let mut bad: Vec<String> = r
             .findings
             .iter()
@@ -200,6 +210,13 @@ const NOT_FOUND: &[(&str, &str)] = &[
     ("mavlink/rejected/E0417-retries-never-spent.chor", "a termination measure: a defect of infinitely many steps, beyond a bounded run"),
     ("mavlink/rejected/E0419-param-pass-index-out-of-range.chor", "stuck only at the 14th choice's second answer, 27 messages in, beyond the 16 steps of a run"),
     ("mavlink/rejected/E0419-float-window-holds-no-float32.chor", "a refinement with real solutions and no float32 one: the simulator draws real payloads and rounds them, so it reports the run undecided, not stuck"),
+    ("mavlink/rejected/E0320-timeout-bound-zero.chor", "a choice has a timeout branch, which the simulator does not run yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
+    ("mavlink/rejected/E0321-timeout-after-a-step.chor", "a choice has a timeout branch, which the simulator does not run yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
+    ("mavlink/rejected/E0322-two-timeouts-in-one-choice.chor", "a choice has a timeout branch, which the simulator does not run yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
+    ("mavlink/rejected/E0323-the-sender-times-out.chor", "a choice has a timeout branch, which the simulator does not run yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
+    ("mavlink/rejected/E0324-vehicle-not-told-of-the-timeout.chor", "a choice has a timeout branch, which the simulator does not run yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
+    ("mavlink/rejected/E0325-process-typed-against-a-timeout.chor", "a choice has a timeout branch, which the simulator does not run yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
+    ("mavlink/rejected/E0417-re-request-timeout-spends-no-retry.chor", "a choice has a timeout branch, which the simulator does not run yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
     ("rejected/E0301-self-message.chor", "a message to oneself runs like any other: the rule is about the type's form (Def 4.1), not an event of a run"),
     ("rejected/E0302-command-with-and-without-its-command.chor", "two branches with one label are ambiguous to the receiver's projection, which a motion choreography's run (the global type) does not consult"),
     ("rejected/E0302-duplicate-label.chor", "two branches with one label are ambiguous to the receiver's projection, which a motion choreography's run (the global type) does not consult"),

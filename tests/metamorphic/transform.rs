@@ -187,6 +187,10 @@ impl Names {
                 args.iter().for_each(|a| self.expr(a));
             }
             Global::End(_) => {}
+            Global::After { bound, by, .. } => {
+                self.expr(bound);
+                self.use_(by);
+            }
         }
     }
     fn local(&mut self, l: &Local) {

@@ -435,6 +435,43 @@ codes! {
          on forever: its duration needs no upper bound, and if its assumption reads inputs, its \
          partners in the dt must run on too. Send the message in the burst that ends the motion, or \
          change the primitive.";
+    TimeoutBound = "E0320", "a timeout's bound is not a positive integer constant",
+        "The bound `T` of a timeout branch `after T ms by R. G` is a number of milliseconds that a \
+         monitor compares with the log's or the clock's time, so it must be known before the \
+         session starts: an integer constant expression (literals, `const`s, `+ - *`) whose value is \
+         positive. A bound that reads a message's value or a recursion parameter has no one value \
+         for the monitor, and a bound of 0 or less would let `R` give up before any message could \
+         arrive. Write the bound as a positive integer, or a `const` holding one (`after 1500 ms by \
+         GCS`).";
+    TimeoutNotInChoice = "E0321", "a timeout branch outside a choice",
+        "`after T ms by R. G` is the timeout branch of a choice: `R` waits for the first message of \
+         one of the choice's other branches and takes `G` when none came within `T`. It must start \
+         a branch of `+` whose other branches start with messages to `R`. Alone, or after another \
+         step of a branch, there is nothing to wait for. Make it a branch of the choice it ends: \
+         `(p -> R: item. t + after 1000 ms by R. end)`.";
+    TwoTimeouts = "E0322", "two timeout branches in one choice",
+        "A choice has at most one timeout branch: when no message came within the bound, `R` \
+         must know which branch to take, and of two timeout branches the one with the smaller \
+         bound would always be taken first. Keep one `after T ms by R` branch per choice.";
+    TimeoutNotWaiting = "E0323", "a timeout is taken by a participant that does not wait in the choice",
+        "Only the receiver of a choice can time out: in `p -> R: a. G1 + after T ms by R. G2`, `R` \
+         waits for `p`'s decision and decides itself, by silence, when it does not come. `p` decides \
+         the other branches and cannot observe `R`'s clock, and a third participant is not part of \
+         the choice. Name the choice's receiver after `by`, or send the other branches to the \
+         participant that waits.";
+    TimeoutUnheard = "E0324", "the sender of a choice does not learn that its peer timed out",
+        "When `R` takes the timeout branch `after T ms by R. G` of a choice whose messages `p` \
+         sends, `p` has not decided anything: it must learn of `R`'s decision in `G` before it acts \
+         again. So `G`'s first step is a message from `R` to `p` (a re-request, an error \
+         acknowledgement: the first message of a choice sent by `R` to `p`), or `G` is `end` (the \
+         session is over for both). Start the timeout branch with `R -> p`, or end it.";
+    TimeoutInProcess = "E0325", "a process typed against a protocol with a timeout: not supported yet",
+        "Processes are typed against their local types (Table 1), but the process language has no \
+         timeout: the waiting role's process cannot give up, and the sender's process would have \
+         to expect the waiting role's message after a timeout at every point of the branch it \
+         chose. The protocol is still checked as a protocol (well-formedness, total choice, \
+         progress, termination and knowledge). Remove the `process` items to check the protocol \
+         alone.";
     PreconditionAtMotion = "E0402", "a primitive's precondition may not hold when the joint motion starts",
         "[AGCOMP] composes primitives from their preconditions (Sec 3.4, \"compatible from Pre\"): \
          at the `dt<...>` each participant's precondition must follow from what is known there \

@@ -232,13 +232,31 @@ impl Sub<'_> {
         if !self.assumed.insert((Arc::as_ptr(&s) as usize, Arc::as_ptr(&t) as usize, key)) {
             return Ok(());
         }
+        // A timeout alternative (LANGUAGE.md, Timeouts) is related only to the same timeout:
+        // the same bound, the same waiting role, and related continuations. No process can
+        // write one, so a sub type with a timeout comes from projection only.
+        let timeout_of = |l: &Local| match l {
+            Local::Send { timeout, .. } | Local::Recv { timeout, .. } => timeout.clone(),
+            _ => None,
+        };
+        match (timeout_of(&s), timeout_of(&t)) {
+            (None, None) => {}
+            (Some(x), Some(y)) if x.after.ms == y.after.ms && x.after.by == y.after.by => {
+                self.check(&x.cont, &mut senv.clone(), &y.cont, &mut tenv.clone(), ren)?;
+            }
+            _ => {
+                return Err(self
+                    .mismatch(&s, &t)
+                    .with_note("a timeout alternative `after T` is related only to the same timeout, with the same bound and waiting role"))
+            }
+        }
         match (&*s, &*t) {
             (Local::End(_), Local::End(_)) => Ok(()),
             (Local::Motion { prims: sp, cont: sc, loc: sl }, Local::Motion { prims: tp, cont: tc, loc: tl }) => {
                 self.motion(sp, *sl, tp, *tl, ren)?;
                 self.check(sc, senv, tc, tenv, ren)
             }
-            (Local::Send { branches: sb, .. }, Local::Send { branches: tb, loc: tloc }) => {
+            (Local::Send { branches: sb, .. }, Local::Send { branches: tb, loc: tloc, .. }) => {
                 for x in sb {
                     let Some(y) = tb.iter().find(|y| y.to == x.to && y.label == x.label) else {
                         let allowed: Vec<String> =
@@ -275,8 +293,8 @@ impl Sub<'_> {
                 Ok(())
             }
             (
-                Local::Recv { branches: sb, default: sd, loc: sloc },
-                Local::Recv { branches: tb, default: td, loc: tloc },
+                Local::Recv { branches: sb, default: sd, loc: sloc, .. },
+                Local::Recv { branches: tb, default: td, loc: tloc, .. },
             ) => {
                 if let (Some(x), Some(y)) = (sb.first(), tb.first()) {
                     if x.from != y.from {

@@ -25,6 +25,33 @@ pub enum Global {
     },
     Var(RecVar),
     End(Loc),
+    /// `after T ms by R`: the head of the timeout branch of the choice it starts (lowering
+    /// admits it nowhere else, E0320). Nothing is sent and nothing is learnt: `R` takes
+    /// the branch when no message of the other branches reached it within `T`.
+    After(After),
+}
+
+/// The head of a timeout branch, `after T ms by R` (LANGUAGE.md, Timeouts).
+#[derive(Clone, Debug, PartialEq)]
+pub struct After {
+    /// The bound in milliseconds, positive (E0247 otherwise).
+    pub ms: i64,
+    /// The bound as written (an integer constant expression).
+    pub bound: Expr,
+    /// The waiting participant: the receiver of the choice's other branches (E0322).
+    pub by: RoleId,
+    pub loc: Loc,
+}
+
+impl Global {
+    /// The head of a timeout branch: `after` alone or first in a sequence.
+    pub fn timeout_head(&self) -> Option<&After> {
+        match self {
+            Global::After(a) => Some(a),
+            Global::Seq(items, _) => items.first().and_then(Global::timeout_head),
+            _ => None,
+        }
+    }
 }
 
 impl Global {
@@ -35,6 +62,7 @@ impl Global {
             Global::Seq(_, l) | Global::Choice(_, l) | Global::Par(_, l) | Global::End(l) => *l,
             Global::Rec { loc, .. } => *loc,
             Global::Var(v) => v.loc,
+            Global::After(a) => a.loc,
         }
     }
 
@@ -51,7 +79,7 @@ impl Global {
                 }
                 None => false,
             },
-            Global::Msg(_) | Global::Var(_) | Global::End(_) => false,
+            Global::Msg(_) | Global::Var(_) | Global::End(_) | Global::After(_) => false,
             Global::Seq(items, _) => items.iter().any(|i| i.first_primitives(r, out)),
             Global::Choice(bs, _) => {
                 // Every branch is visited (no short circuit): each may contribute.
@@ -86,6 +114,7 @@ impl Global {
                 add(m.to, out);
             }
             Global::Motion(m) => m.parts.iter().for_each(|(r, _)| add(*r, out)),
+            Global::After(a) => add(a.by, out),
             Global::Seq(gs, _) | Global::Choice(gs, _) | Global::Par(gs, _) => {
                 gs.iter().for_each(|g| g.participants(out))
             }

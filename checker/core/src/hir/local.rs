@@ -18,11 +18,16 @@ pub enum Local {
     },
     Send {
         branches: Vec<SendBranch>,
+        /// `after T by R. T_p`: the waiting peer `R` may give up instead of receiving; this
+        /// role learns it from `T_p`'s first reception (or `T_p` is `end`).
+        timeout: Option<Timeout>,
         loc: Loc,
     },
     Recv {
         branches: Vec<RecvBranch>,
         default: Option<(Vec<PrimApp>, LocalArc)>,
+        /// `after T. T_R`: this role gives up waiting after `T` and continues as `T_R`.
+        timeout: Option<Timeout>,
         loc: Loc,
     },
     Rec {
@@ -49,6 +54,14 @@ pub struct SendBranch {
     pub payload: Vec<Field>,
     pub cont: LocalArc,
     pub loc: Loc,
+}
+
+/// The timeout alternative of a choice in a local type: the choice's `after T ms by R`
+/// and the role's continuation in the timeout branch.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Timeout {
+    pub after: super::global::After,
+    pub cont: LocalArc,
 }
 
 #[derive(Clone, Debug, PartialEq)]

@@ -15,8 +15,8 @@ pub mod print;
 pub mod process;
 
 pub use expr::{Builtin, Expr, ExprKind, Slot, Sort, Var};
-pub use global::{labels_overlap, EnumCheck, Field, Global, MavField, Motion, Msg, PrimApp, RecParam, RecVar};
-pub use local::{Local, LocalArc, RecvBranch, SendBranch};
+pub use global::{labels_overlap, After, EnumCheck, Field, Global, MavField, Motion, Msg, PrimApp, RecParam, RecVar};
+pub use local::{Local, LocalArc, RecvBranch, SendBranch, Timeout};
 pub use process::{Process, RecvArm};
 
 use crate::source::Span;

@@ -104,8 +104,8 @@ impl Printer<'_> {
                 self.out.push('.');
                 self.local(cont);
             }
-            Local::Send { branches, .. } if branches.len() == 1 => self.send(&branches[0]),
-            Local::Send { branches, .. } => {
+            Local::Send { branches, timeout: None, .. } if branches.len() == 1 => self.send(&branches[0]),
+            Local::Send { branches, timeout, .. } => {
                 self.out.push_str("+{");
                 self.indent += 2;
                 for (i, b) in branches.iter().enumerate() {
@@ -115,12 +115,17 @@ impl Printer<'_> {
                     self.newline();
                     self.send(b);
                 }
+                if let Some(t) = timeout {
+                    self.timeout(t, true, !branches.is_empty());
+                }
                 self.indent -= 2;
                 self.newline();
                 self.out.push('}');
             }
-            Local::Recv { branches, default: None, .. } if branches.len() == 1 => self.recv(&branches[0]),
-            Local::Recv { branches, default, .. } => {
+            Local::Recv { branches, default: None, timeout: None, .. } if branches.len() == 1 => {
+                self.recv(&branches[0])
+            }
+            Local::Recv { branches, default, timeout, .. } => {
                 self.out.push_str("&{");
                 self.indent += 2;
                 for (i, b) in branches.iter().enumerate() {
@@ -129,6 +134,9 @@ impl Printer<'_> {
                     }
                     self.newline();
                     self.recv(b);
+                }
+                if let Some(t) = timeout {
+                    self.timeout(t, false, !branches.is_empty());
                 }
                 self.indent -= 2;
                 self.newline();
@@ -330,6 +338,11 @@ impl Printer<'_> {
                     }
                     self.global_atom(g);
                 }
+            }
+            Global::After(a) => {
+                self.out.push_str("after ");
+                self.expr(&a.bound, 0);
+                let _ = write!(self.out, " ms by {}", self.prog.role_name(a.by));
             }
             Global::Choice(gs, _) | Global::Par(gs, _) => {
                 let op = if matches!(g, Global::Choice(..)) { "+ " } else { "* " };
@@ -541,22 +554,48 @@ impl Printer<'_> {
     }
 }
 
+impl Printer<'_> {
+    /// The timeout alternative of a choice: `after T ms. T_R` in the waiting role's
+    /// external choice, `after T ms by R. T_p` in the sender's internal choice.
+    fn timeout(&mut self, t: &crate::hir::Timeout, by: bool, comma: bool) {
+        if comma {
+            self.out.push(',');
+        }
+        self.newline();
+        self.out.push_str("after ");
+        self.expr(&t.after.bound, 0);
+        self.out.push_str(" ms");
+        if by {
+            let _ = write!(self.out, " by {}", self.prog.role_name(t.after.by));
+        }
+        self.out.push_str(". ");
+        self.local(&t.cont);
+    }
+}
+
 /// A short description of the first action of a local type, for messages:
 /// `GRobot!ready`, `&{Cart?ok, Cart?ko} & dt<m_idle>`, `dt<a /\ b>`, `end`.
 pub fn describe(prog: &Program, t: &Local) -> String {
     match t {
         Local::Motion { prims, .. } => motion_text(prog, prims),
-        Local::Send { branches, .. } => {
-            let items: Vec<String> = branches.iter().map(|b| format!("{}!{}", prog.role_name(b.to), b.label)).collect();
+        Local::Send { branches, timeout, .. } => {
+            let mut items: Vec<String> =
+                branches.iter().map(|b| format!("{}!{}", prog.role_name(b.to), b.label)).collect();
+            if let Some(t) = timeout {
+                items.push(format!("after {} ms by {}", t.after.ms, prog.role_name(t.after.by)));
+            }
             if items.len() == 1 {
                 items.join("")
             } else {
                 format!("+{{{}}}", items.join(", "))
             }
         }
-        Local::Recv { branches, default, .. } => {
-            let items: Vec<String> =
+        Local::Recv { branches, default, timeout, .. } => {
+            let mut items: Vec<String> =
                 branches.iter().map(|b| format!("{}?{}", prog.role_name(b.from), b.label)).collect();
+            if let Some(t) = timeout {
+                items.push(format!("after {} ms", t.after.ms));
+            }
             let mut s = if items.len() == 1 && default.is_none() {
                 items.join("")
             } else {
@@ -605,9 +644,17 @@ fn tree_size<'t>(t: &'t LocalArc, cap: usize, memo: &mut HashMap<NodeRef<&'t Loc
         };
         match &**t {
             Local::Motion { cont, .. } => add(cont, memo),
-            Local::Send { branches, .. } => branches.iter().for_each(|b| add(&b.cont, memo)),
-            Local::Recv { branches, default, .. } => {
+            Local::Send { branches, timeout, .. } => {
                 branches.iter().for_each(|b| add(&b.cont, memo));
+                if let Some(t) = timeout {
+                    add(&t.cont, memo);
+                }
+            }
+            Local::Recv { branches, default, timeout, .. } => {
+                branches.iter().for_each(|b| add(&b.cont, memo));
+                if let Some(t) = timeout {
+                    add(&t.cont, memo);
+                }
                 if let Some((_, c)) = default {
                     add(c, memo);
                 }

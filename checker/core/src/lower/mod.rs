@@ -243,4 +243,7 @@ struct Scopes {
     /// The snapshot of observed values taken at a choice, for its branches' first messages
     /// (taken by the first message lowered; see `lower::observed`).
     choice_snapshot: Option<Vec<Observed>>,
+    /// Whether the node being lowered starts a branch of a choice: the one place a timeout
+    /// head `after T ms by R` may stand (E0321 elsewhere).
+    branch_head: bool,
 }

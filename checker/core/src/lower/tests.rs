@@ -152,3 +152,31 @@ fn a_binder_is_not_a_failed_expression() {
     let ExprKind::Binary(BinOp::Gt, a, _) = &cond.kind else { panic!("{cond:?}") };
     assert!(matches!(a.kind, ExprKind::Component(_, 0)), "{a:?}");
 }
+
+/// `after T ms by R` (LANGUAGE.md, Timeouts): a positive integer constant bound (E0320),
+/// at the head of a branch of a choice only (E0321); `after` stays a name elsewhere.
+#[test]
+fn a_timeout_is_placed_and_bounded() {
+    let lower = |chor: &str| {
+        let (p, d) = lower_src(&format!("{HEADER} const N: int = 250; choreography G = {chor};"));
+        (p, codes(&d))
+    };
+    let (p, d) = lower("C -> A: go. end + after 2 * N ms by A. A -> C: again. end");
+    assert_eq!(d, vec![]);
+    let Some(Global::Choice(bs, _)) = p.choreography.as_ref().map(|c| &c.body) else { panic!("a choice") };
+    let a = bs[1].timeout_head().expect("the second branch times out");
+    assert_eq!((a.ms, p.role_name(a.by)), (500, "A"));
+    assert_eq!(lower("(C -> A: go. end + after 0 ms by A. end)").1, vec![Code::TimeoutBound]);
+    assert_eq!(lower("(C -> A: go. end + after N - 300 ms by A. end)").1, vec![Code::TimeoutBound]);
+    assert_eq!(lower("(C -> A: go(n: int). end + after n ms by A. end)").1, vec![Code::UnknownVariable]);
+    assert_eq!(lower("C -> A: go(n: int). (A -> C: x. end + after n ms by C. end)").1, vec![Code::TimeoutBound]);
+    assert_eq!(lower("C -> A: go. after 10 ms by A. end").1, vec![Code::TimeoutNotInChoice]);
+    assert_eq!(lower("after 10 ms by A. end").1, vec![Code::TimeoutNotInChoice]);
+    assert_eq!(lower("mu t. (after 10 ms by A. end + C -> A: go. t)").1, vec![]);
+    assert_eq!(
+        lower("(C -> A: go. end + (after 10 ms by A. end) * (C -> A: x. end))").1,
+        vec![Code::TimeoutNotInChoice]
+    );
+    // `after` followed by no bound is a recursion variable's name.
+    assert_eq!(lower("mu after. C -> A: go. after").1, vec![]);
+}

@@ -37,6 +37,7 @@ impl Lowerer {
     pub(super) fn global_inner(&mut self, g: &ast::Global, cx: &mut Scopes) -> Global {
         // A choice's snapshot is for the first message of each branch only.
         let pending = cx.choice_snapshot.take();
+        let head = std::mem::take(&mut cx.branch_head);
         match g {
             ast::Global::Msg(m) => {
                 let from = self.role(&m.from);
@@ -81,11 +82,13 @@ impl Lowerer {
             }
             ast::Global::Seq(items, span) => {
                 let mut pending = pending;
+                let mut head = head;
                 Global::Seq(
                     items
                         .iter()
                         .map(|g| {
                             cx.choice_snapshot = pending.take();
+                            cx.branch_head = std::mem::take(&mut head);
                             self.global(g, cx)
                         })
                         .collect(),
@@ -97,7 +100,8 @@ impl Lowerer {
                 // One decision, one snapshot: the sender of the first branch's first message
                 // reads its observed values once for all branches (a choice whose branches
                 // have different senders is E0303).
-                let snap = match (g, items.first().and_then(first_sender)) {
+                let is_choice = matches!(g, ast::Global::Choice(..));
+                let snap = match (g, items.iter().find_map(first_sender)) {
                     (ast::Global::Choice(..), Some(who)) => self.prog.role_by_name(&who.name).map(|r| self.snapshot(r)),
                     _ => None,
                 };
@@ -106,6 +110,7 @@ impl Lowerer {
                     .map(|g| {
                         cx.values.truncate(mark);
                         cx.choice_snapshot = snap.clone();
+                        cx.branch_head = is_choice;
                         self.global(g, cx)
                     })
                     .collect();
@@ -141,7 +146,37 @@ impl Lowerer {
                 Global::Var(RecVar { var: var.name.clone(), args, loc: Loc(*span) })
             }
             ast::Global::End(span) => Global::End(Loc(*span)),
+            ast::Global::After { bound, by, span } => self.after(bound, by, *span, head, cx),
         }
+    }
+
+    /// `after T ms by R` (LANGUAGE.md, Timeouts): `T` a positive integer constant
+    /// expression (E0320), the node the head of a branch of a choice (E0321). Whether `R`
+    /// waits in the choice, and what follows, is checked with the choice (`wf::side`).
+    fn after(&mut self, bound: &ast::Expr, by: &ast::Ident, span: Span, head: bool, cx: &Scopes) -> Global {
+        if !head {
+            self.diags.push(
+                Diagnostic::error(Code::TimeoutNotInChoice, span, "`after` does not start a branch of a choice")
+                    .with_note("a timeout branch is the alternative of a choice's messages: its receiver takes it when none of them came in time")
+                    .with_help("make it a branch of the choice whose messages it waits for: `(p -> R: a. G1 + after T ms by R. G2)`"),
+            );
+        }
+        let env = Env { values: &cx.values.clone(), ..Env::consts_only() };
+        let e = self.expr(bound, &env);
+        let ms = crate::hir::expr::const_int(&self.prog, &e);
+        if !matches!(ms, Some(v) if v > 0) && !e.is_error() {
+            let found = match ms {
+                Some(v) => format!("its value is {v}"),
+                None => "it is not an integer constant expression".to_string(),
+            };
+            self.diags.push(
+                Diagnostic::error(Code::TimeoutBound, bound.span, format!("the bound of this timeout is not a positive integer constant: {found}"))
+                    .with_note("the bound is a number of milliseconds known before the session starts, compared with the log's or the clock's time")
+                    .with_help("write a positive integer (`after 1500 ms by R`) or a `const` holding one"),
+            );
+        }
+        let Some(r) = self.role(by) else { return Global::End(Loc(span)) };
+        Global::After(crate::hir::After { ms: ms.unwrap_or(1).max(1), bound: e, by: r, loc: Loc(span) })
     }
 
     /// Lowers payload fields, pushing their value variables onto `values` (each field's
@@ -306,7 +341,7 @@ impl Lowerer {
                         loc: Loc(b.span),
                     });
                 }
-                Local::Send { branches: out, loc: Loc(*span) }
+                Local::Send { branches: out, timeout: None, loc: Loc(*span) }
             }
             ast::Local::Recv { branches, default, span } => {
                 let mut out = Vec::new();
@@ -324,7 +359,7 @@ impl Lowerer {
                         prims.iter().filter_map(|c| self.prim_app(me, c, &cx.values.clone())).collect();
                     (prims, self.local(cont, me, cx))
                 });
-                Local::Recv { branches: out, default, loc: Loc(*span) }
+                Local::Recv { branches: out, default, timeout: None, loc: Loc(*span) }
             }
             ast::Local::Rec { var, params, body, span } => {
                 let params = self.rec_params(params, ValueOrigin::RecParam, Who::Role(me), &mut cx.values);

@@ -184,6 +184,26 @@ impl<'t> Differ<'t> {
     pub(super) fn diff_inner(&mut self, a: &'t LocalArc, b: &'t LocalArc) -> Option<(Loc, Loc)> {
         let here = Some((a.loc(), b.loc()));
         let mark = self.ren.len();
+        // The timeout alternatives: the same bound and waiting role, equal continuations.
+        fn timeout_of(l: &Local) -> Option<&Timeout> {
+            match l {
+                Local::Send { timeout, .. } | Local::Recv { timeout, .. } => timeout.as_ref(),
+                _ => None,
+            }
+        }
+        match (timeout_of(a), timeout_of(b)) {
+            (None, None) => {}
+            (Some(x), Some(y)) if x.after.ms == y.after.ms && x.after.by == y.after.by => {
+                if let Some(d) = self.diff(&x.cont, &y.cont) {
+                    return Some(d);
+                }
+            }
+            (x, y) => {
+                let l = x.map(|t| t.after.loc).unwrap_or(a.loc());
+                let r = y.map(|t| t.after.loc).unwrap_or(b.loc());
+                return Some((l, r));
+            }
+        }
         match (&**a, &**b) {
             (Local::Motion { prims: p1, cont: c1, .. }, Local::Motion { prims: p2, cont: c2, .. }) => {
                 if !self.prims(p1, p2) {

@@ -144,6 +144,9 @@ fn visit_local_exprs(t: &Local, f: &mut dyn FnMut(&Expr), seen: &mut HashSet<*co
     if !seen.insert(t as *const Local) {
         return;
     }
+    if let Local::Send { timeout: Some(to), .. } | Local::Recv { timeout: Some(to), .. } = t {
+        visit_local_exprs(&to.cont, f, seen);
+    }
     crate::stack::deep(|| match t {
         Local::Send { branches, .. } => {
             for b in branches {

@@ -65,28 +65,55 @@ impl Projector<'_> {
             return Ok(a.clone());
         }
         match (&**a, &**b) {
-            (Local::Recv { branches: b1, default: d1, loc }, Local::Recv { branches: b2, default: d2, .. }) => {
+            (
+                Local::Recv { branches: b1, default: d1, timeout: t1, loc },
+                Local::Recv { branches: b2, default: d2, timeout: t2, .. },
+            ) => {
+                // A timeout merges only with the same timeout: a role that gives up after
+                // one branch and waits on after the other could not tell which it is in.
+                let timeout = match (t1, t2) {
+                    (None, None) => None,
+                    (Some(x), Some(y))
+                        if x.after.ms == y.after.ms && x.after.by == y.after.by && equal(&x.cont, &y.cont) =>
+                    {
+                        Some(x.clone())
+                    }
+                    _ => {
+                        let why = "a timeout merges only with the same timeout and continuation (Def 4.7 extended to timeouts)".to_string();
+                        return Err(self.clash(a, b, Some(why)));
+                    }
+                };
                 let branches = self.union(b1, b2)?;
                 let default = match (d1, d2) {
                     (None, None) => None,
                     (Some(d), None) | (None, Some(d)) => Some(d.clone()),
                     (Some((p1, c1)), Some((p2, c2))) => Some(self.merge_default(p1, c1, p2, c2)?),
                 };
-                Ok(Arc::new(Local::Recv { branches, default, loc: *loc }))
+                Ok(Arc::new(Local::Recv { branches, default, timeout, loc: *loc }))
             }
-            (Local::Motion { prims, cont, .. }, Local::Recv { branches, default, loc }) => {
+            (Local::Motion { prims, cont, .. }, Local::Recv { branches, default, timeout: None, loc }) => {
                 let default = match default {
                     None => (prims.clone(), cont.clone()),
                     Some((p2, c2)) => self.merge_default(prims, cont, p2, c2)?,
                 };
-                Ok(Arc::new(Local::Recv { branches: branches.clone(), default: Some(default), loc: *loc }))
+                Ok(Arc::new(Local::Recv {
+                    branches: branches.clone(),
+                    default: Some(default),
+                    timeout: None,
+                    loc: *loc,
+                }))
             }
-            (Local::Recv { branches, default, loc }, Local::Motion { prims, cont, .. }) => {
+            (Local::Recv { branches, default, timeout: None, loc }, Local::Motion { prims, cont, .. }) => {
                 let default = match default {
                     None => (prims.clone(), cont.clone()),
                     Some((p1, c1)) => self.merge_default(p1, c1, prims, cont)?,
                 };
-                Ok(Arc::new(Local::Recv { branches: branches.clone(), default: Some(default), loc: *loc }))
+                Ok(Arc::new(Local::Recv {
+                    branches: branches.clone(),
+                    default: Some(default),
+                    timeout: None,
+                    loc: *loc,
+                }))
             }
             _ => Err(self.clash(a, b, None)),
         }
@@ -282,7 +309,7 @@ fn rename_local<'t>(
         Local::Motion { prims, cont, loc } => {
             Local::Motion { prims: prims.iter().map(app).collect(), cont: rename_local(cont, map, memo), loc: *loc }
         }
-        Local::Send { branches, loc } => Local::Send {
+        Local::Send { branches, timeout, loc } => Local::Send {
             branches: branches
                 .iter()
                 .map(|b| SendBranch {
@@ -297,9 +324,12 @@ fn rename_local<'t>(
                     ..b.clone()
                 })
                 .collect(),
+            timeout: timeout
+                .as_ref()
+                .map(|t| Timeout { after: t.after.clone(), cont: rename_local(&t.cont, map, memo) }),
             loc: *loc,
         },
-        Local::Recv { branches, default, loc } => Local::Recv {
+        Local::Recv { branches, default, timeout, loc } => Local::Recv {
             branches: branches
                 .iter()
                 .map(|b| RecvBranch {
@@ -309,6 +339,9 @@ fn rename_local<'t>(
                 })
                 .collect(),
             default: default.as_ref().map(|(ps, c)| (ps.iter().map(app).collect(), rename_local(c, map, memo))),
+            timeout: timeout
+                .as_ref()
+                .map(|t| Timeout { after: t.after.clone(), cont: rename_local(&t.cont, map, memo) }),
             loc: *loc,
         },
         Local::Rec { var, params, body, loc } => Local::Rec {

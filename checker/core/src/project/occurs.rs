@@ -33,6 +33,7 @@ impl<'g> Occurs<'g> {
                 self.fields.extend(m.payload.iter().map(|f| (f.value, f)));
             }
             Global::Motion(m) => m.parts.iter().for_each(|(r, _)| set.insert(r.idx())),
+            Global::After(a) => set.insert(a.by.idx()),
             Global::Seq(gs, _) | Global::Choice(gs, _) => gs.iter().for_each(|c| set.union_with(&self.fill(c, n))),
             Global::Par(gs, _) => {
                 let mut side_of: HashMap<RoleId, Vec<usize>> = HashMap::new();

@@ -60,6 +60,11 @@ impl Projector<'_> {
             }
             Global::Var(v) => Ok(Arc::new(Local::Var { var: v.var.clone(), args: v.args.clone(), loc: v.loc })),
             Global::End(loc) => Ok(Arc::new(Local::End(*loc))),
+            // Lowering admits `after` only at the head of a branch of a choice, which
+            // `choice` splits off; anywhere else it is E0321, reported already.
+            Global::After(a) => {
+                Err(Diagnostic::error(Code::TimeoutNotInChoice, a.loc.0, "`after` does not start a branch of a choice"))
+            }
         }
     }
 
@@ -83,7 +88,22 @@ impl Projector<'_> {
     /// Def 4.8 (1)-(3): a choice whose branches each start with a message `p -> q`.
     pub(super) fn choice(&self, branches: &[Global], loc: Loc, tail: LocalArc) -> Result<LocalArc, Diagnostic> {
         let mut split: Vec<(&Msg, Vec<&Global>)> = Vec::new();
+        // The timeout branch `after T ms by R. G`: its head and what follows it.
+        let mut timeout: Option<(&After, Vec<&Global>)> = None;
         for b in branches {
+            let mut items = Vec::new();
+            flatten_seq(b, &mut items);
+            if let Some((Global::After(a), rest)) = items.split_first() {
+                if timeout.is_some() {
+                    return Err(Diagnostic::error(
+                        Code::TwoTimeouts,
+                        a.loc.0,
+                        "a second timeout branch in this choice",
+                    ));
+                }
+                timeout = Some((a, rest.to_vec()));
+                continue;
+            }
             split_branch(b, &[], &mut split).map_err(not_a_choice)?;
         }
         let Some(&(first, _)) = split.first() else {
@@ -92,6 +112,20 @@ impl Projector<'_> {
         if let Some((m, _)) = split.iter().find(|(m, _)| m.from != first.from || m.to != first.to) {
             return Err(not_a_choice(m.loc));
         }
+        if let Some((a, _)) = &timeout {
+            if a.by != first.to {
+                return Err(Diagnostic::error(
+                    Code::TimeoutNotWaiting,
+                    a.loc.0,
+                    "the timeout is taken by a participant that does not wait in this choice",
+                ));
+            }
+        }
+        // The role's part of the timeout branch: `G` followed by what follows the choice.
+        let timeout = match timeout {
+            Some((a, rest)) => Some(Timeout { after: a.clone(), cont: self.seq(&rest, tail.clone())? }),
+            None => None,
+        };
         if self.role == first.from {
             let mut out = Vec::new();
             for (m, rest) in &split {
@@ -105,7 +139,7 @@ impl Projector<'_> {
                     loc: m.loc,
                 });
             }
-            return Ok(Arc::new(Local::Send { branches: out, loc: first.loc }));
+            return Ok(Arc::new(Local::Send { branches: out, timeout, loc: first.loc }));
         }
         if self.role == first.to {
             let mut out = Vec::new();
@@ -118,10 +152,12 @@ impl Projector<'_> {
                     loc: m.loc,
                 });
             }
-            return Ok(Arc::new(Local::Recv { branches: out, default: None, loc: first.loc }));
+            return Ok(Arc::new(Local::Recv { branches: out, default: None, timeout, loc: first.loc }));
         }
-        // Def 4.8 (3) with the merge of Def 4.7.
-        let mut acc: Option<(LocalArc, Vec<&str>)> = None;
+        // Def 4.8 (3) with the merge of Def 4.7; the timeout branch's part is merged like
+        // any other branch's (the role takes no part in the choice, so it learns which
+        // branch was taken only from a later message).
+        let mut acc: Option<(LocalArc, Vec<&str>)> = timeout.map(|t| (t.cont, vec!["after"]));
         for (m, rest) in &split {
             let t = self.seq(rest, tail.clone())?;
             acc = Some(match acc {

@@ -336,3 +336,38 @@ fn a_receiver_learns_what_a_relay_can_tell_it() {
         assert_eq!(unheld_reads(&prog, *r, t), Vec::<String>::new(), "{}", prog.role_name(*r));
     }
 }
+
+/// A timeout branch (LANGUAGE.md, Timeouts): the waiting role's external choice gains
+/// `after T ms. T_R`, the sender's internal choice `after T ms by R. T_p`, and a third role
+/// merges its part of the timeout branch with the others'.
+#[test]
+fn a_timeout_branch_is_in_both_roles_local_types() {
+    let src = format!(
+        "{ABC} choreography G = ( A -> B: a. B -> C: x. end + after 500 ms by B. B -> A: again. B -> C: x. end );"
+    );
+    let (prog, map, diags) = projections(&src);
+    assert!(diags.is_empty(), "{diags:?}");
+    assert_eq!(printed(&prog, &map, "B"), "&{\n  A?a.C!x.end,\n  after 500 ms. A!again.C!x.end\n}");
+    assert_eq!(printed(&prog, &map, "A"), "+{\n  B!a.end,\n  after 500 ms by B. B?again.end\n}");
+    assert_eq!(printed(&prog, &map, "C"), "B?x.end");
+}
+
+/// Two external choices with different timeouts do not merge: the third role could not tell
+/// whether to give up.
+#[test]
+fn different_timeouts_do_not_merge() {
+    let src = format!(
+        "{ABC} choreography G =
+            ( A -> B: a. ( C -> A: p. end + after 100 ms by A. end )
+            + A -> B: b. ( C -> A: p. end + after 200 ms by A. end ) );"
+    );
+    let (_, _, diags) = projections(&src);
+    assert!(diags.iter().any(|d| d.code == Code::Unmergeable), "{diags:?}");
+    let same = format!(
+        "{ABC} choreography G =
+            ( A -> B: a. ( C -> A: p. end + after 100 ms by A. end )
+            + A -> B: b. ( C -> A: p. end + after 100 ms by A. end ) );"
+    );
+    let (_, _, diags) = projections(&same);
+    assert!(diags.is_empty(), "{diags:?}");
+}

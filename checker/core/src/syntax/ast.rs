@@ -331,6 +331,14 @@ pub enum Global {
         span: Span,
     },
     End(Span),
+    /// `after T ms by R`: the head of a choice's timeout branch (LANGUAGE.md, Timeouts).
+    /// `R` takes the branch when no message of the other branches has reached it within
+    /// `T` milliseconds of the choice being entered.
+    After {
+        bound: Expr,
+        by: Ident,
+        span: Span,
+    },
 }
 
 #[derive(Clone, Debug)]
@@ -355,6 +363,7 @@ impl Global {
             | Global::Par(_, span)
             | Global::Rec { span, .. }
             | Global::Var { span, .. }
+            | Global::After { span, .. }
             | Global::End(span) => *span,
         }
     }

@@ -334,6 +334,12 @@ impl Builder<'_> {
                 Ok(self.state(StateKind::Assign { assigns, checks, next: head, span: v.loc.0 }))
             }
             Global::End(_) => Ok(0),
+            // docs/observed-and-timeouts.md says what a monitor must check of a timeout; it
+            // is refused, never monitored as if the branch were not there.
+            Global::After(a) => err(
+                format!("a timeout branch (`after {} ms`): the monitor does not enforce timeouts yet", a.ms),
+                Some(a.loc.0),
+            ),
             Global::Motion(m) => err("a motion: the monitor runs MAVLink protocols only", Some(m.loc.0)),
             Global::Par(_, loc) => err("a `*`: the monitor runs MAVLink protocols only", Some(loc.0)),
         }

@@ -64,6 +64,6 @@ fn reads_an_unheld_value_on_receipt(prog: &Program, g: &Global) -> bool {
             gs.iter().any(|c| reads_an_unheld_value_on_receipt(prog, c))
         }
         Global::Rec { body, .. } => reads_an_unheld_value_on_receipt(prog, body),
-        Global::Motion(_) | Global::Var(_) | Global::End(_) => false,
+        Global::Motion(_) | Global::Var(_) | Global::End(_) | Global::After(_) => false,
     }
 }

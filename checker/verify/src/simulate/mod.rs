@@ -94,6 +94,23 @@ pub fn simulate(prog: &Program, cfg: &SimConfig) -> SimReport {
         });
         return report;
     }
+    // Timeout branches are not simulated yet: a run would need a clock for the waiting
+    // role. Refused as undecided, never a clean run.
+    if let Some(a) = crate::typeck::first_timeout(&chor.body) {
+        report.findings.push(report::Finding {
+            kind: report::Kind::Undecided,
+            run: 0,
+            step: 0,
+            time: "0".to_string(),
+            message: format!(
+                "not supported yet: a choice has a timeout branch (`after {} ms by {}`), which the simulator does not run; `mochi check` checks the protocol",
+                a.ms,
+                prog.role_name(a.by)
+            ),
+            trace: Vec::new(),
+        });
+        return report;
+    }
     witness::session(cfg.timeout, |sess| {
         for run in 0..cfg.runs {
             let mut r = run::Runner::new(prog, sess, cfg, run);

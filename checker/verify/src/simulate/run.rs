@@ -230,6 +230,12 @@ impl<'a, 'p> Runner<'a, 'p> {
         }
         match g {
             Global::End(_) => Flow::Stop,
+            // `simulate` refuses a program with a timeout before running it.
+            Global::After(_) => {
+                let now = self.now();
+                self.report(Kind::Undecided, &now, "not supported yet: a timeout branch".to_string());
+                Flow::Stop
+            }
             Global::Var(v) => {
                 self.jump_known = v.args.iter().map(|a| self.knowers(a)).collect();
                 let args: Result<Vec<Value>, String> = v.args.iter().map(|a| self.eval(a)).collect();

@@ -39,7 +39,7 @@ pub(super) fn applies(g: &Global) -> bool {
             Global::Motion(_) | Global::Par(..) => false,
             Global::Seq(items, _) | Global::Choice(items, _) => items.iter().all(motion_free),
             Global::Rec { body, .. } => motion_free(body),
-            Global::Msg(_) | Global::Var(_) | Global::End(_) => true,
+            Global::Msg(_) | Global::Var(_) | Global::End(_) | Global::After(_) => true,
         }
     }
     motion_free(g)

@@ -72,7 +72,7 @@ pub fn check_processes_hinted(
     let mut hints = Hints::new();
     let mut diags = Vec::new();
     let mut obligations = Vec::new();
-    if let Some(d) = observed_in_process(prog) {
+    if let Some(d) = observed_in_process(prog).or_else(|| timeout_in_process(prog)) {
         return (obligations, vec![d], hints);
     }
     for role in prog.role_ids() {
@@ -182,13 +182,44 @@ fn observed_in_process(prog: &Program) -> Option<Diagnostic> {
     )
 }
 
+/// E0325: processes typed against a protocol with a timeout branch (LANGUAGE.md,
+/// Timeouts). The process language has no timeout, and a process of the choice's sender
+/// would have to expect the waiting role's message after the timeout at every point of
+/// the branch it chose: such a program is refused rather than typed without the timeout.
+fn timeout_in_process(prog: &Program) -> Option<Diagnostic> {
+    if prog.processes.is_empty() {
+        return None;
+    }
+    let a = first_timeout(&prog.choreography.as_ref()?.body)?;
+    Some(
+        Diagnostic::error(
+            Code::TimeoutInProcess,
+            a.loc.0,
+            "not supported yet: this choice has a timeout branch, and processes are typed against this protocol",
+        )
+        .with_label(prog.role(a.by).span, "a process is typed for this participant")
+        .with_note("the process language has no timeout; the protocol alone is checked (well-formedness, total choice, progress, termination)")
+        .with_help("remove the `process` items to check the protocol alone"),
+    )
+}
+
+/// The first timeout head, in the order of the type.
+pub(crate) fn first_timeout(g: &Global) -> Option<&After> {
+    match g {
+        Global::After(a) => Some(a),
+        Global::Seq(gs, _) | Global::Choice(gs, _) | Global::Par(gs, _) => gs.iter().find_map(first_timeout),
+        Global::Rec { body, .. } => crate::stack::deep(|| first_timeout(body)),
+        Global::Msg(_) | Global::Motion(_) | Global::Var(_) | Global::End(_) => None,
+    }
+}
+
 /// The first message, in the order of the type, that reads an observed value.
 fn first_observing(g: &Global) -> Option<&Msg> {
     match g {
         Global::Msg(m) => (!m.observed.is_empty()).then_some(m),
         Global::Seq(gs, _) | Global::Choice(gs, _) | Global::Par(gs, _) => gs.iter().find_map(first_observing),
         Global::Rec { body, .. } => crate::stack::deep(|| first_observing(body)),
-        Global::Motion(_) | Global::Var(_) | Global::End(_) => None,
+        Global::Motion(_) | Global::Var(_) | Global::End(_) | Global::After(_) => None,
     }
 }
 

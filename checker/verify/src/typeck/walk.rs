@@ -132,7 +132,7 @@ impl<'a> Checker<'a> {
             }
             match (p, &*t) {
                 (Process::End(_), Local::End(_)) => return,
-                (Process::Send { to, label, args, cont, loc }, Local::Send { branches, loc: tloc }) => {
+                (Process::Send { to, label, args, cont, loc }, Local::Send { branches, loc: tloc, .. }) => {
                     let Some(b) = branches.iter().find(|b| b.to == *to && b.label == *label) else {
                         return self.unexpected_send(*to, label, *loc, branches, *tloc);
                     };
@@ -144,7 +144,7 @@ impl<'a> Checker<'a> {
                 }
                 (
                     Process::Recv { from, branches, default, loc },
-                    Local::Recv { branches: tb, default: td, loc: tloc },
+                    Local::Recv { branches: tb, default: td, loc: tloc, .. },
                 ) => {
                     if let Some(b) = tb.first().filter(|b| b.from != *from) {
                         return self.diags.push(

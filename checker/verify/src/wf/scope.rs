@@ -103,6 +103,7 @@ fn participants(g: &Global) -> Vec<RoleId> {
                 add(m.to);
             }
             Global::Motion(m) => m.parts.iter().for_each(|(r, _)| add(*r)),
+            Global::After(a) => add(a.by),
             Global::Seq(gs, _) | Global::Choice(gs, _) | Global::Par(gs, _) => {
                 gs.iter().for_each(|g| crate::stack::deep(|| go(g, seen, out)))
             }
@@ -169,6 +170,11 @@ impl<'a> Scope<'a> {
             Global::Motion(m) => {
                 if original {
                     self.motion(m, scope);
+                }
+            }
+            Global::After(a) => {
+                if original {
+                    self.out_of_scope(&[a.by], scope, a.loc, "this timeout");
                 }
             }
             Global::Seq(items, _) => items.iter().for_each(|i| self.walk(i, scope, original)),
@@ -511,6 +517,9 @@ impl<'a> Contexts<'a> {
                 None
             }
             Global::End(_) => None,
+            // A timeout teaches nothing about values (docs/observed-and-timeouts.md): Σ
+            // after it is Σ at the choice.
+            Global::After(_) => Some(sigma),
         }
     }
 
@@ -764,6 +773,13 @@ impl<'a> Contexts<'a> {
     /// one this is total choice itself.
     fn progress(&mut self, branches: &[Global], sigma: &Sigma) {
         let firsts: Vec<&Msg> = branches.iter().filter_map(super::side::first_message).collect();
+        if branches.iter().any(|b| b.timeout_head().is_some()) {
+            // The timeout branch is always enabled: time passes, and its waiting role takes
+            // it when no other branch's message came. The choice cannot get stuck, and no
+            // message branch needs to be enabled on its own.
+            self.choice_firsts.extend(firsts.iter().map(|m| m.loc.0));
+            return;
+        }
         if firsts.len() != branches.len() {
             return; // a branch without a first message: E0303, reported by `side`
         }
@@ -1039,7 +1055,7 @@ fn collect_motions<'g>(g: &'g Global, out: &mut Vec<&'g Motion>) {
             gs.iter().for_each(|g| collect_motions(g, out))
         }
         Global::Rec { body, .. } => collect_motions(body, out),
-        Global::Msg(_) | Global::Var(_) | Global::End(_) => {}
+        Global::Msg(_) | Global::Var(_) | Global::End(_) | Global::After(_) => {}
     }
 }
 
@@ -1664,5 +1680,38 @@ mod observed_tests {
                        + P -> Q: [h <= 50] d. end )";
         assert_eq!(failing(&stable(g)), vec![]);
         assert_eq!(failing(&observed(g)), vec![Rule::TotalChoice]);
+    }
+
+    /// A timeout branch counts as unguarded for total choice and makes the choice always
+    /// able to progress; Σ is unchanged by it.
+    #[test]
+    fn a_timeout_branch_is_always_enabled() {
+        let partial = "( P -> Q: [h > 50] a. end + P -> Q: [h < 10] b. end )";
+        assert_eq!(failing(&stable(partial)), vec![Rule::TotalChoice]);
+        let waited = "( P -> Q: [h > 50] a. end + P -> Q: [h < 10] b. end + after 100 ms by Q. end )";
+        assert_eq!(failing(&stable(waited)), vec![]);
+        let stuck = "P -> Q: a(y: int {y > h && y < h}). end";
+        assert_eq!(failing(&stable(stuck)), vec![Rule::Progress]);
+        let left = "( P -> Q: a(y: int {y > h && y < h}). end + after 100 ms by Q. end )";
+        assert_eq!(failing(&stable(left)), vec![]);
+        // What follows the timeout knows what held before the choice (`h <= 100`), no more.
+        let after = "( P -> Q: a. end + after 100 ms by Q. Q -> P: b(y: int {y == h && y <= 100}). end )";
+        assert_eq!(failing(&stable(after)), vec![]);
+        let more = "( P -> Q: a. end + after 100 ms by Q. Q -> P: b(y: int {y == h && y > 100}). end )";
+        assert_eq!(failing(&stable(more)), vec![Rule::Progress]);
+    }
+
+    /// A loop re-entered through a timeout branch decreases its measure there too.
+    #[test]
+    fn a_jump_through_a_timeout_decreases_the_measure() {
+        let g = |jump: &str| {
+            format!(
+                "mu t(n: int {{0 <= n}} = 3) decreases n.
+                   ( P -> Q: [n > 0] ask. ( Q -> P: ok. end + after 10 ms by P. {jump} )
+                   + P -> Q: [n == 0] stop. end )"
+            )
+        };
+        assert_eq!(failing(&stable(&g("t(n - 1)"))), vec![]);
+        assert_eq!(failing(&stable(&g("t(n)"))), vec![Rule::MeasureDecrease]);
     }
 }

@@ -11,7 +11,7 @@ use crate::hir::*;
 use std::collections::{HashMap, HashSet};
 
 pub fn check(prog: &Program, g: &Global) -> Vec<Diagnostic> {
-    let mut c = Side { prog, diags: Vec::new(), loops: Vec::new(), holders: HashMap::new() };
+    let mut c = Side { prog, diags: Vec::new(), loops: Vec::new(), bodies: Vec::new(), holders: HashMap::new() };
     c.walk(g, true, false);
     c.diags
 }
@@ -27,6 +27,9 @@ struct Side<'a> {
     /// type of the loop), so each must know the initial value and every jump argument:
     /// then each knows the parameter, and a guard of theirs may read it.
     holders: HashMap<ValueId, Vec<RoleId>>,
+    /// The bodies of the loops around the node being walked, innermost last: where a
+    /// timeout branch's jump goes (E0324).
+    bodies: Vec<(&'a str, &'a Global)>,
 }
 
 /// The first message of a branch, if it starts with one.
@@ -83,6 +86,7 @@ impl<'a> Side<'a> {
                     }
                 }
                 self.loops.push((var.as_str(), params.as_slice(), pt));
+                self.bodies.push((var.as_str(), body));
                 if let (Some(m), false) = (decreases, has_exit(body, var)) {
                     self.diags.push(
                         Diagnostic::error(
@@ -110,6 +114,7 @@ impl<'a> Side<'a> {
                 }
                 self.walk(body, true, false);
                 self.loops.pop();
+                self.bodies.pop();
             }
             Global::Var(v) => {
                 self.jump(v);
@@ -120,6 +125,8 @@ impl<'a> Side<'a> {
                 }
             }
             Global::End(loc) => self.closes(tail, *loc, "`end`"),
+            // Checked with its choice (`timeouts`); lowering placed it (E0321).
+            Global::After(_) => {}
         }
     }
 
@@ -155,6 +162,95 @@ impl<'a> Side<'a> {
         }
     }
 
+    /// The timeout branches of a choice whose first message is `head` (`p -> R`): at most
+    /// one (E0322), taken by `R`, the role that waits (E0323), and `p` learns of it
+    /// (E0324): the branch goes on with a message from `R` to `p`, or ends. A jump goes on
+    /// as its loop's body begins.
+    fn timeouts(&mut self, timeouts: &[&'a Global], head: &Msg) {
+        let (p, r) = (self.prog.role_name(head.from), self.prog.role_name(head.to));
+        for (i, b) in timeouts.iter().enumerate() {
+            let Some(a) = b.timeout_head() else { continue };
+            if i > 0 {
+                let first = timeouts[0].loc();
+                self.diags.push(
+                    Diagnostic::error(Code::TwoTimeouts, a.loc.0, "a second timeout branch in this choice")
+                        .with_label(first.0, "the first timeout branch")
+                        .with_note("when no message came in time, the waiting role must know which branch to take")
+                        .with_help("keep one `after T ms by R` branch per choice"),
+                );
+                continue;
+            }
+            if a.by != head.to {
+                self.diags.push(
+                    Diagnostic::error(
+                        Code::TimeoutNotWaiting,
+                        a.loc.0,
+                        format!("`{}` times out in a choice where `{r}` waits for `{p}`", self.prog.role_name(a.by)),
+                    )
+                    .with_label(head.loc.0, format!("`{r}` receives the choice's messages"))
+                    .with_note("only the receiver of a choice can decide by silence that no message came")
+                    .with_help(format!("write `after {} ms by {r}`", a.ms)),
+                );
+                continue;
+            }
+            let mut items = Vec::new();
+            flatten(b, &mut items);
+            let rest = &items[1..];
+            if !self.heard(rest, head.to, head.from, 0) {
+                let at = rest.first().map(|g| g.loc()).unwrap_or(a.loc);
+                self.diags.push(
+                    Diagnostic::error(
+                        Code::TimeoutUnheard,
+                        at.0,
+                        format!(
+                            "after `{r}` times out, `{p}` is not told: the branch must go on with `{r} -> {p}` or end"
+                        ),
+                    )
+                    .with_label(a.loc.0, format!("`{r}` gives up waiting here"))
+                    .with_note(format!(
+                        "`{p}` cannot observe `{r}`'s clock: it learns of the timeout only from `{r}`'s next message"
+                    ))
+                    .with_help(format!(
+                        "start the branch with a message `{r} -> {p}` (a re-request, an error), or end it with `end`"
+                    )),
+                );
+            }
+        }
+    }
+
+    /// Whether every path of `items` (a sequence) starts with a message from `r` to `p`,
+    /// or is `end`. A jump is followed into its loop's body once (`depth`).
+    fn heard(&self, items: &[&'a Global], r: RoleId, p: RoleId, depth: usize) -> bool {
+        let Some(first) = items.first() else { return false };
+        match first {
+            Global::Msg(m) => m.from == r && m.to == p,
+            Global::End(_) => true,
+            Global::Seq(..) => {
+                let mut inner = Vec::new();
+                flatten(first, &mut inner);
+                inner.extend_from_slice(&items[1..]);
+                self.heard(&inner, r, p, depth)
+            }
+            // A nested choice in which `p` waits for `r` (its timeout branch, if any, is
+            // `p`'s: E0323 holds it to the nested choice's receiver) tells `p` either way.
+            Global::Choice(bs, _) => bs.iter().all(|b| {
+                if b.timeout_head().is_some() {
+                    return true;
+                }
+                let mut inner = Vec::new();
+                flatten(b, &mut inner);
+                inner.extend_from_slice(&items[1..]);
+                self.heard(&inner, r, p, depth)
+            }),
+            Global::Rec { body, .. } => self.heard(&[&**body], r, p, depth),
+            Global::Var(v) if depth < 8 => match self.bodies.iter().rev().find(|(n, _)| *n == v.var) {
+                Some((_, body)) => self.heard(&[*body], r, p, depth + 1),
+                None => false,
+            },
+            _ => false,
+        }
+    }
+
     fn motion(&mut self, m: &Motion) {
         let mut seen: Vec<(RoleId, Loc)> = Vec::new();
         for (r, app) in &m.parts {
@@ -177,8 +273,12 @@ impl<'a> Side<'a> {
         }
     }
 
-    fn choice(&mut self, branches: &[Global], loc: Loc) {
-        let firsts: Vec<Option<&Msg>> = branches.iter().map(first_message).collect();
+    fn choice(&mut self, branches: &'a [Global], loc: Loc) {
+        // The timeout branch (LANGUAGE.md, Timeouts) starts with no message; its own rules
+        // are checked once the choice's sender and receiver are known.
+        let timeouts: Vec<&'a Global> = branches.iter().filter(|b| b.timeout_head().is_some()).collect();
+        let branches: Vec<&'a Global> = branches.iter().filter(|b| b.timeout_head().is_none()).collect();
+        let firsts: Vec<Option<&Msg>> = branches.iter().map(|b| first_message(b)).collect();
         let Some(head) = firsts.iter().flatten().next().copied() else {
             self.diags.push(
                 Diagnostic::error(Code::ChoiceMismatch, loc.0, "no branch of this choice starts with a message")
@@ -189,6 +289,7 @@ impl<'a> Side<'a> {
             );
             return;
         };
+        self.timeouts(&timeouts, head);
         let mut labels: Vec<(&str, Loc)> = Vec::new();
         for (b, first) in branches.iter().zip(&firsts) {
             let Some(m) = first else {
@@ -373,6 +474,14 @@ impl<'a> Side<'a> {
     }
 }
 
+/// The items of a (possibly nested) sequence, in order.
+fn flatten<'g>(g: &'g Global, out: &mut Vec<&'g Global>) {
+    match g {
+        Global::Seq(items, _) => items.iter().for_each(|i| flatten(i, out)),
+        other => out.push(other),
+    }
+}
+
 /// Whether some path of `g`, the body of `mu var`, leaves the loop: reaches `end` or a jump
 /// to an enclosing loop (a variable not bound inside `g`, other than `var`). Syntactic:
 /// each node of a global type is on some path (E0314 rejects what follows a jump).
@@ -380,6 +489,7 @@ fn has_exit(g: &Global, var: &str) -> bool {
     fn go<'g>(g: &'g Global, var: &str, inner: &mut Vec<&'g str>) -> bool {
         match g {
             Global::End(_) => true,
+            Global::After(_) => false,
             Global::Var(v) => v.var != var && !inner.contains(&v.var.as_str()),
             Global::Msg(_) | Global::Motion(_) => false,
             Global::Seq(gs, _) | Global::Choice(gs, _) | Global::Par(gs, _) => {
@@ -399,7 +509,7 @@ fn has_exit(g: &Global, var: &str) -> bool {
 /// Recursion variables reachable from the start of `g` without a message or motion.
 fn unguarded(g: &Global) -> HashSet<&str> {
     match g {
-        Global::Msg(_) | Global::Motion(_) | Global::End(_) => HashSet::new(),
+        Global::Msg(_) | Global::Motion(_) | Global::End(_) | Global::After(_) => HashSet::new(),
         Global::Var(v) => HashSet::from([v.var.as_str()]),
         Global::Seq(items, _) => items.first().map(unguarded).unwrap_or_default(),
         Global::Choice(bs, _) | Global::Par(bs, _) => bs.iter().flat_map(unguarded).collect(),
@@ -439,6 +549,24 @@ mod tests {
         assert_eq!(codes("dt<C: idle, C: idle>. end"), vec![Code::DuplicateMotionParticipant]);
         assert_eq!(codes("end. C -> A : go. end"), vec![Code::NotTailPosition]);
         assert_eq!(codes("(C -> A : go. end) * dt<A: work>"), vec![Code::NotTailPosition]);
+    }
+
+    /// The timeout rules (LANGUAGE.md, Timeouts): one per choice (E0322), taken by the
+    /// choice's receiver (E0323), after which the sender is told first or the session ends
+    /// (E0324); a jump is followed into its loop.
+    #[test]
+    fn timeout_branches_have_their_codes() {
+        assert_eq!(codes("C -> A: go. end + after 10 ms by A. end"), vec![]);
+        assert_eq!(codes("C -> A: go. end + after 10 ms by A. A -> C: again. end"), vec![]);
+        assert_eq!(codes("C -> A: go. end + after 10 ms by A. end + after 20 ms by A. end"), vec![Code::TwoTimeouts]);
+        assert_eq!(codes("C -> A: go. end + after 10 ms by C. end"), vec![Code::TimeoutNotWaiting]);
+        assert_eq!(codes("C -> A: go. end + after 10 ms by A. C -> A: late. end"), vec![Code::TimeoutUnheard]);
+        assert_eq!(codes("C -> A: go. end + after 10 ms by A. dt<C: idle, A: work>. end"), vec![Code::TimeoutUnheard]);
+        assert_eq!(codes("mu t. A -> C: ask. (C -> A: go. end + after 10 ms by A. t)"), vec![]);
+        assert_eq!(codes("mu t. C -> A: ask. (C -> A: go. end + after 10 ms by A. t)"), vec![Code::TimeoutUnheard]);
+        // The sender waits in a nested choice, with its own timeout: told either way.
+        assert_eq!(codes("C -> A: go. end + after 10 ms by A. (A -> C: again. end + after 30 ms by C. end)"), vec![]);
+        assert_eq!(codes("(after 10 ms by A. end + after 20 ms by A. end)"), vec![Code::ChoiceMismatch]);
     }
 
     /// [`HEADER`] with a third participant, `B`, an arm like `A`.

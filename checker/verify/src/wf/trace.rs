@@ -44,7 +44,7 @@ fn find<'g>(g: &'g Global, span: Span, branch: Option<(usize, usize)>, out: &mut
         return false;
     }
     match g {
-        Global::Msg(_) | Global::Motion(_) | Global::Var(_) | Global::End(_) => true,
+        Global::Msg(_) | Global::Motion(_) | Global::Var(_) | Global::End(_) | Global::After(_) => true,
         Global::Seq(items, _) => {
             let mut branch = branch;
             for it in items {

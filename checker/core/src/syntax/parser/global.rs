@@ -113,6 +113,20 @@ impl Parser {
         if self.eat_kw("end") {
             return Ok(Global::End(start));
         }
+        // `after` is a keyword only where a bound follows it (a number or a name that does
+        // not start a message): elsewhere it stays a name (`after -> q: l`, `after(n)`).
+        if self.is_kw("after") && matches!(self.peek_at(1), Tok::Int(_) | Tok::Real(_) | Tok::Ident(_)) {
+            self.bump();
+            let bound = self.expr()?;
+            if !self.eat_kw("ms") {
+                return self.error_expected("`ms` after the bound of `after` (the bound is in milliseconds)");
+            }
+            if !self.eat_kw("by") {
+                return self.error_expected("`by R` after `after T ms`, naming the waiting participant");
+            }
+            let by = self.ident("the participant that waits and takes the timeout branch")?;
+            return Ok(Global::After { bound, by, span: start.to(self.prev_span()) });
+        }
         let from = self.ident("a message `p -> q : l`, a motion `dt<...>`, `mu`, `end` or `(`")?;
         if !self.eat_punct("->") {
             let args = self.opt_args()?;

@@ -299,6 +299,9 @@ impl<'g> Builder<'g> {
                     }
                 }
             }
+            // A timeout head is no event: the waiting role's next message, the first of the
+            // branch, is ordered after what came before the choice.
+            Global::After(_) => {}
             Global::End(_) => {
                 self.first_end = self.first_end.min(self.events.len());
                 self.ends.push(path.clone());

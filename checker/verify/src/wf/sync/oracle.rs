@@ -215,6 +215,7 @@ impl<'g> Builder<'g> {
                 }
             }
             Global::End(_) => self.ends.push(path.clone()),
+            Global::After(_) => {}
         }
         start..self.events.len()
     }
