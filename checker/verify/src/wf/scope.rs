@@ -75,6 +75,7 @@ pub fn check(prog: &Program, g: &Global) -> (Vec<Obligation>, Vec<Diagnostic>) {
         exact_entry: Default::default(),
     };
     let start = c.initial();
+    c.streams();
     c.walk(g, start);
     (c.obligations, s.diags)
 }
@@ -555,6 +556,30 @@ impl<'a> Contexts<'a> {
             hyps: sigma.facts().to_vec(),
             goal: Goal::Valid(defined_and(cmp(BinOp::Lt, next, e.clone()))),
         });
+    }
+
+    /// The streams' assumption, checked: every reading of a stream satisfies its fields'
+    /// refinements (wire range, enum, the invariant), so some message of the stream must
+    /// exist. An invariant no value of the field's type satisfies would make every step that
+    /// reads the stream hold vacuously (a protocol whose first step can never be taken would
+    /// verify with a warning): it is E0410 at the stream, as an `init` no state satisfies is.
+    /// One query per stream: a stream's refinements read its own template values and
+    /// constants only (E0211), so streams are independent of each other and of Σ.
+    fn streams(&mut self) {
+        for s in &self.prog.streams {
+            let facts: Vec<Expr> = s.fields.iter().filter_map(|f| f.refinement.clone()).collect();
+            if facts.is_empty() {
+                continue;
+            }
+            let to: Vec<&str> = s.to.iter().map(|&r| self.prog.role_name(r)).collect();
+            let what = format!(
+                "the invariant of the stream `{} -> {}: {}`",
+                self.prog.role_name(s.from),
+                to.join(", "),
+                s.label
+            );
+            self.reachable(s.loc.0, what, &Sigma::from_facts(&facts), Vec::new(), false);
+        }
     }
 
     /// [T-SESS]'s assumption, checked: each participant's `init` is satisfiable and
