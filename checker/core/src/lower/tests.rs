@@ -179,4 +179,11 @@ fn a_timeout_is_placed_and_bounded() {
     );
     // `after` followed by no bound is a recursion variable's name.
     assert_eq!(lower("mu after. C -> A: go. after").1, vec![]);
+    // A bracketed bound is a bound (the constants relation of the metamorphic tests writes
+    // `1000` as `(999 + 1)`), and a bracket without `ms` after it is a jump.
+    let (p, d) = lower("C -> A: go. end + after (2 * N + 1) ms by A. A -> C: again. end");
+    assert_eq!(d, vec![]);
+    let Some(Global::Choice(bs, _)) = p.choreography.as_ref().map(|c| &c.body) else { panic!("a choice") };
+    assert_eq!(bs[1].timeout_head().map(|a| a.ms), Some(501));
+    assert_eq!(lower("mu after(k: int = 0). C -> A: go. after(k + 1)").1, vec![]);
 }

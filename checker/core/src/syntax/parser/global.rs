@@ -113,9 +113,10 @@ impl Parser {
         if self.eat_kw("end") {
             return Ok(Global::End(start));
         }
-        // `after` is a keyword only where a bound follows it (a number or a name that does
-        // not start a message): elsewhere it stays a name (`after -> q: l`, `after(n)`).
-        if self.is_kw("after") && matches!(self.peek_at(1), Tok::Int(_) | Tok::Real(_) | Tok::Ident(_)) {
+        // `after` is a keyword only where a bound follows it (a number, a name that does
+        // not start a message, or a bracketed expression followed by `ms`): elsewhere it
+        // stays a name (`after -> q: l`, the jump `after(n)`).
+        if self.is_kw("after") && self.timeout_follows() {
             self.bump();
             let bound = self.expr()?;
             if !self.eat_kw("ms") {
@@ -150,6 +151,34 @@ impl Parser {
             Vec::new()
         };
         Ok(Global::Msg(Msg { from, to, guard, label, payload, span: start.to(self.prev_span()) }))
+    }
+
+    /// Whether the `after` at the cursor starts a timeout branch: a bound follows it, that
+    /// is a number, a name, or a bracketed expression whose closing bracket is followed by
+    /// `ms` (`after (2 * N) ms by R`; without `ms` it is the jump `after(n)`).
+    fn timeout_follows(&self) -> bool {
+        match self.peek_at(1) {
+            Tok::Int(_) | Tok::Real(_) | Tok::Ident(_) => true,
+            Tok::Punct("(") => {
+                let mut depth = 0usize;
+                let mut k = 1;
+                loop {
+                    match self.peek_at(k) {
+                        Tok::Punct("(") => depth += 1,
+                        Tok::Punct(")") => {
+                            depth -= 1;
+                            if depth == 0 {
+                                return matches!(self.peek_at(k + 1), Tok::Ident(s) if s == "ms");
+                            }
+                        }
+                        Tok::Eof => return false,
+                        _ => {}
+                    }
+                    k += 1;
+                }
+            }
+            _ => false,
+        }
     }
 
     /// The measure of `mu t(...) decreases E. G`. It ends at the first `.` outside
