@@ -204,7 +204,7 @@ fn timeout_in_process(prog: &Program) -> Option<Diagnostic> {
 }
 
 /// The first timeout head, in the order of the type.
-pub(crate) fn first_timeout(g: &Global) -> Option<&After> {
+pub fn first_timeout(g: &Global) -> Option<&After> {
     match g {
         Global::After(a) => Some(a),
         Global::Seq(gs, _) | Global::Choice(gs, _) | Global::Par(gs, _) => gs.iter().find_map(first_timeout),
