@@ -681,6 +681,27 @@ fn the_map_check_finds_what_does_not_exist() {
 /// test fails when a listed folder has none, so the list cannot go stale.
 const CYCLES_ALLOWED_FOR_NOW: &[&str] = &["geometry", "simulate"];
 
+/// Top-level cycles still allowed, each by the set of modules on it: the SMT worker hands the
+/// questions its encoding cannot represent to `collision`, which asks Z3 for witnesses back
+/// through `smt::goals::geo` (to break it, the worker would take the geometric procedure as a
+/// callback, or `collision` the witness questions as a trait object). The test fails when a
+/// listed cycle is gone.
+const ROOT_CYCLES_ALLOWED_FOR_NOW: &[&[&str]] = &[&["collision", "smt"]];
+
+/// The modules on a reported cycle (`(crate root): a → b → a` gives `{a, b}`), when it is a
+/// top-level one.
+fn root_cycle_modules(text: &str) -> Option<Vec<String>> {
+    let ring = text.lines().next()?.strip_prefix("(crate root): ")?;
+    let mut m: Vec<String> = ring.split(" → ").map(str::to_string).collect();
+    m.sort();
+    m.dedup();
+    Some(m)
+}
+
+fn root_cycle_allowed(text: &str) -> bool {
+    root_cycle_modules(text).is_some_and(|m| ROOT_CYCLES_ALLOWED_FOR_NOW.iter().any(|a| a.iter().eq(m.iter())))
+}
+
 /// The module path of a source file of a crate whose sources are under `src`
 /// (`smt/goals/query.rs` is `smt::goals::query`; `smt/mod.rs` is `smt`; `lib.rs` the root).
 fn module_of(src: &str, file: &str) -> Option<Vec<String>> {
@@ -812,8 +833,11 @@ fn the_verifier_modules_import_each_other_without_cycles() {
     let src = "checker/verify/src";
     let files: Vec<(String, String)> = code_sources().into_iter().filter(|(f, _)| f.starts_with(src)).collect();
     let cycles = sibling_cycles(src, &files);
-    let bad: Vec<&String> =
-        cycles.iter().filter(|(p, _)| !CYCLES_ALLOWED_FOR_NOW.contains(&p.as_str())).map(|(_, t)| t).collect();
+    let bad: Vec<&String> = cycles
+        .iter()
+        .filter(|(p, t)| !CYCLES_ALLOWED_FOR_NOW.contains(&p.as_str()) && !root_cycle_allowed(t))
+        .map(|(_, t)| t)
+        .collect();
     assert!(
         bad.is_empty(),
         "the modules of mochi-verify import each other in a cycle; move what both sides need into a module \
@@ -822,6 +846,14 @@ fn the_verifier_modules_import_each_other_without_cycles() {
     );
     let stale: Vec<&&str> = CYCLES_ALLOWED_FOR_NOW.iter().filter(|a| !cycles.iter().any(|(p, _)| p == *a)).collect();
     assert!(stale.is_empty(), "{stale:?} have no cycle any more: remove them from CYCLES_ALLOWED_FOR_NOW");
+    let stale_root: Vec<&&[&str]> = ROOT_CYCLES_ALLOWED_FOR_NOW
+        .iter()
+        .filter(|a| !cycles.iter().any(|(_, t)| root_cycle_modules(t).is_some_and(|m| a.iter().eq(m.iter()))))
+        .collect();
+    assert!(
+        stale_root.is_empty(),
+        "{stale_root:?} are no cycle any more: remove them from ROOT_CYCLES_ALLOWED_FOR_NOW"
+    );
 }
 
 /// The cycle check finds a cycle between two files of a folder and between two top-level

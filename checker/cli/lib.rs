@@ -35,7 +35,7 @@ pub use mochi_core::{
     bounds, diag, dialect, exact, hir, lower, obligation, project, sigma, source, stack, subtype, syntax, xmlscan,
 };
 pub use mochi_monitor::{mavio, monitor, proxy};
-pub use mochi_verify::{driver, fsload, geometry, library, simulate, smt, space, typeck, wf};
+pub use mochi_verify::{collision, driver, fsload, geometry, library, simulate, smt, space, typeck, wf};
 
 pub mod io;
 pub mod render;

@@ -217,7 +217,7 @@ pub fn diagnostic_json(db: &SourceDb, d: &Diagnostic) -> Value {
 }
 
 /// `--clearance`: one line per pair, the certified least distance and where it is attained.
-pub fn clearance_text(db: &SourceDb, pairs: &[crate::geometry::search::checks::PairClearance]) -> String {
+pub fn clearance_text(db: &SourceDb, pairs: &[crate::collision::PairClearance]) -> String {
     let mut out = String::from("clearance (least distance between bodies, m):\n");
     if pairs.is_empty() {
         out.push_str("  no pair of participants with bodies moves together\n");
@@ -261,7 +261,7 @@ pub fn clearance_text(db: &SourceDb, pairs: &[crate::geometry::search::checks::P
 }
 
 /// `--clearance` in `--format json`.
-pub fn clearance_json(db: &SourceDb, pairs: &[crate::geometry::search::checks::PairClearance]) -> Value {
+pub fn clearance_json(db: &SourceDb, pairs: &[crate::collision::PairClearance]) -> Value {
     let num = |v: f64| if v.is_finite() { serde_json::json!(v) } else { Value::Null };
     Value::Array(
         pairs

@@ -6,8 +6,8 @@
 //! **Architecture invariant:** the verdict is `Verified` only when every check ran and
 //! passed; any undecided obligation makes it `Unknown`, any error `Rejected`.
 
+use crate::collision::PairClearance;
 use crate::diag::{self, Code, Counterexample, Diagnostic};
-use crate::geometry::search::checks::PairClearance;
 use crate::hir::print;
 use crate::obligation::{Goal, Obligation, Rule};
 use crate::smt::{self, goals::Part, Decision, SmtConfig};
@@ -232,8 +232,7 @@ pub fn unreadable_root(d: Diagnostic) -> Report {
 pub fn check_loaded(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut syntax::ByteLoader<'_>) -> Report {
     let mut report = checks(db, root, cfg, load);
     if let (Some(tolerance), Some(p)) = (cfg.clearance, &report.planned) {
-        report.clearances =
-            crate::geometry::search::checks::clearances(&p.program, &p.obligations, tolerance, cfg.smt.timeout);
+        report.clearances = crate::collision::clearances(&p.program, &p.obligations, tolerance, cfg.smt.timeout);
     }
     report
 }

@@ -35,6 +35,7 @@ pub mod project {
     }
 }
 
+pub mod collision;
 pub mod driver;
 pub mod fsload;
 pub mod geometry;

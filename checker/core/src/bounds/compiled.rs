@@ -1,5 +1,5 @@
 //! Expressions compiled once for many interval evaluations: the hot loop of the geometric
-//! branch and bound (`geometry/search/checks/`) contracts every box by reading bounds off the same
+//! branch and bound (`collision/`) contracts every box by reading bounds off the same
 //! guarantees and invariants, tens of thousands of times per question. [`super::eval`]
 //! walks the tree each time, parses every decimal literal into a [`BigRational`], looks
 //! each variable up through a closure and each constant up in a hash map; here the walk,

@@ -43,6 +43,7 @@ use num_traits::{One, Signed, ToPrimitive, Zero};
 use std::collections::HashMap;
 
 pub mod compiled;
+pub mod truth;
 
 /// A closed interval `[lo, hi]`, possibly with infinite ends.
 #[derive(Clone, Copy, Debug, PartialEq)]

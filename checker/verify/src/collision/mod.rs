@@ -8,7 +8,7 @@
 //! placed by (a cart's `x` and heading, a robot's joints, its carrier's state). A box of
 //! configurations is
 //! - **infeasible** when some guarantee, invariant or the context cannot hold anywhere in
-//!   it (three-valued interval truth, [`crate::space::truth`]), or
+//!   it (three-valued interval truth, [`crate::bounds::truth`]), or
 //! - **apart** when parry's certified distance between the two sides placed at the box's
 //!   centre exceeds how far any of their points can move within the box (the pose
 //!   chains' bounds, [`crate::geometry::placement`], and forward kinematics' displacement
@@ -26,6 +26,7 @@ mod pose;
 mod scene;
 mod squares;
 
+use crate::bounds::truth::truth;
 use crate::bounds::{self, Interval};
 use crate::diag::{Assignment, Overlap};
 use crate::geometry::placement::{chain_motion_bound, ArgBounds, FrameBound};
@@ -36,7 +37,6 @@ use crate::hir::{Expr, PrimApp, Program, RoleId, Slot, Var};
 use crate::obligation::{Goal, Obligation};
 use crate::smt::goals::geo::{self as ask, Configs, Exists};
 use crate::smt::goals::Part;
-use crate::space::truth::truth;
 use crate::space::world::{Piece, World};
 use std::collections::HashMap;
 use std::time::{Duration, Instant};

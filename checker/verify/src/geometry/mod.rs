@@ -10,8 +10,8 @@
 //! - [`kinematics`]: forward kinematics and sound displacement bounds;
 //! - [`placement`]: bounds on how far a point placed by a chain of poses moves over a box;
 //! - [`search`]: the geometric search: the branch and bound over boxes of configurations
-//!   (clearance, first contact, [`search::bnb`]) and the checks' collision questions posed
-//!   to it ([`search::checks`]).
+//!   (clearance, first contact, [`search::bnb`]); the checks' collision questions posed to
+//!   it are `crate::collision`, a layer above (it reads the HIR's bodies through `space`).
 //!
 //! Everything is f64: parry is its f64 build (`parry3d-f64`, imported under the name
 //! `parry3d`), so no f32 rounding enters a clearance proof.

@@ -125,7 +125,7 @@ pub enum Why {
     /// query makes it hard, where that was read.
     Incomplete(String, Hard),
     /// The geometric procedure (parry's distances and contacts under interval branch
-    /// and bound, [`crate::geometry::search::checks`]) stopped without deciding: why.
+    /// and bound, [`crate::collision`]) stopped without deciding: why.
     Search(String),
     /// A construct the encoding does not support.
     Unsupported(String),

@@ -290,7 +290,7 @@ impl Worker<'_> {
                     // A counterexample is shown only if, evaluated exactly, it falsifies
                     // the part's own goal; one that does not is unknown, never a failure
                     // (the geometric procedure's contact is parry's, replayed there).
-                    let geometric = crate::geometry::search::checks::applies(self.prog, ob, part);
+                    let geometric = crate::collision::applies(self.prog, ob, part);
                     let mut replayed =
                         if geometric { replay::Replay::Falsifies } else { replay::replay(self.prog, ob, part, &exact) };
                     // A hypothesis `float32(v)` is weakened to `true` in the encoding, so a
@@ -531,14 +531,14 @@ impl Worker<'_> {
         }
         // Bodies the solver cannot represent (URDF links, meshes, a participant riding on
         // another): the geometric procedure, Z3 asked only for witnesses.
-        if crate::geometry::search::checks::applies(self.prog, ob, part) {
+        if crate::collision::applies(self.prog, ob, part) {
             stats.geometric += 1;
-            return match crate::geometry::search::checks::decide(self.prog, ob, part, self.timeout) {
-                crate::geometry::search::checks::GeoAnswer::Apart => Answer::Unsat,
-                crate::geometry::search::checks::GeoAnswer::Contact { values, overlap } => {
+            return match crate::collision::decide(self.prog, ob, part, self.timeout) {
+                crate::collision::GeoAnswer::Apart => Answer::Unsat,
+                crate::collision::GeoAnswer::Contact { values, overlap } => {
                     Answer::Sat { values, overlap: Some(overlap), bound: Vec::new(), exact: Default::default() }
                 }
-                crate::geometry::search::checks::GeoAnswer::Unknown(why) => Answer::Unknown(Why::Search(why)),
+                crate::collision::GeoAnswer::Unknown(why) => Answer::Unknown(Why::Search(why)),
             };
         }
         // A payload float chosen by the progress check: first with integer witnesses

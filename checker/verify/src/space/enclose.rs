@@ -43,9 +43,10 @@ use crate::bounds::{self, Interval};
 use crate::hir::body::{Body, BodyPart, Pose, Shape};
 use crate::hir::expr::{BinOp, Builtin, ExprKind, Sort, UnOp};
 use crate::hir::{Expr, Footprint, Loc, PrimId, Program, Slot, Var};
+pub(crate) use crate::space::literal::exact_double;
 use num_bigint::BigInt;
 use num_rational::BigRational;
-use num_traits::{One, Signed, ToPrimitive, Zero};
+use num_traits::{One, Signed, Zero};
 
 mod affine;
 mod normalise;
@@ -498,14 +499,6 @@ pub fn turns(prog: &Program, prim: PrimId) -> bool {
         })
     });
     fp || body
-}
-
-/// The double `v` as an exact rational term (a quotient of integer literals); `None` for
-/// an infinite or NaN value.
-pub(crate) fn exact_double(v: f64, loc: Loc) -> Option<Expr> {
-    let q = BigRational::from_float(v)?;
-    let e = rational(&q);
-    Some(e.map(&mut |n| Expr { loc, ..n }))
 }
 
 #[cfg(test)]

@@ -7,8 +7,9 @@
 
 pub mod contain;
 pub mod enclose;
+pub mod literal;
 pub mod region;
-pub mod truth;
+
 pub mod world;
 
 use crate::bounds;

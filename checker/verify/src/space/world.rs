@@ -308,7 +308,7 @@ pub fn add_joint_limits(prog: &mut Program) {
                 continue;
             };
             let var = Expr { kind: ExprKind::Var(Var::Own(slot)), sort: sort.1.clone(), loc };
-            let (Some(lo), Some(hi)) = (super::enclose::exact_double(lo, loc), super::enclose::exact_double(hi, loc))
+            let (Some(lo), Some(hi)) = (super::literal::exact_double(lo, loc), super::literal::exact_double(hi, loc))
             else {
                 continue;
             };
@@ -329,7 +329,7 @@ pub fn add_joint_limits(prog: &mut Program) {
             if !sort.is_numeric() {
                 continue;
             }
-            let Some(v) = super::enclose::exact_double(v, loc) else { continue };
+            let Some(v) = super::literal::exact_double(v, loc) else { continue };
             let var = Expr { kind: ExprKind::Var(Var::Own(slot)), sort: sort.clone(), loc };
             let old = Expr { kind: ExprKind::Var(Var::Old(i)), sort: sort.clone(), loc };
             let clock = Expr { kind: ExprKind::Var(Var::Clock), sort: Sort::Real, loc };

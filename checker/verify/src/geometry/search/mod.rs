@@ -6,4 +6,3 @@
 //! `smt::goals::geo`. docs/soundness-geometry.md has the arguments.
 
 pub mod bnb;
-pub mod checks;

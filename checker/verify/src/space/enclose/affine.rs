@@ -86,7 +86,7 @@ impl ATree {
                         *c = x.eval(env, work)?;
                     }
                 }
-                crate::space::truth::compare(*op, support.range(coef, b), Interval::point(0.0))
+                crate::bounds::truth::compare(*op, support.range(coef, b), Interval::point(0.0))
             }
         }
     }

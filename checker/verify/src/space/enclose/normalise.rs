@@ -141,20 +141,7 @@ impl Lin {
     }
 }
 
-/// The exact rational `q` as a term (a quotient of two integer literals).
-pub(super) fn rational(q: &BigRational) -> Expr {
-    let lit = |n: &BigInt| match n.to_i64() {
-        Some(i) => int(i),
-        None => Expr { kind: ExprKind::Real(n.to_string()), sort: Sort::Real, loc: Loc::default() },
-    };
-    let num = lit(&q.numer().abs());
-    let e = if q.denom().is_one() { num } else { bin(BinOp::Div, num, lit(q.denom())) };
-    if q.is_negative() {
-        Expr { kind: ExprKind::Unary(UnOp::Neg, Box::new(e)), sort: Sort::Real, loc: Loc::default() }
-    } else {
-        e
-    }
-}
+pub(super) use crate::space::literal::rational;
 
 pub(super) fn lin(prog: &Program, e: &Expr) -> Lin {
     crate::stack::deep(|| lin_inner(prog, e))

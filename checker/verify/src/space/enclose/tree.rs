@@ -4,7 +4,7 @@
 use super::*;
 
 /// A predicate compiled for many three-valued evaluations (the rules of
-/// [`crate::space::truth`], on [`Compiled`] terms).
+/// [`crate::bounds::truth`], on [`Compiled`] terms).
 pub(super) enum Tree {
     Const(bool),
     Not(Box<Tree>),
@@ -75,7 +75,7 @@ impl Tree {
             },
             Tree::Cmp(op, a, b) => {
                 let (x, y) = (a.eval(env, work)?, b.eval(env, work)?);
-                crate::space::truth::compare(*op, x, y)
+                crate::bounds::truth::compare(*op, x, y)
             }
         }
     }

@@ -8,8 +8,8 @@
 use super::motion::Inst;
 use super::query::{hyps, seeds_of, slice};
 use super::Query;
+use crate::collision::{Dim, Run};
 use crate::diag::Assignment;
-use crate::geometry::search::checks::{Dim, Run};
 use crate::hir::{Expr, Program};
 use crate::smt::encode::{real_of_f64, Encoder};
 use z3::ast::{Bool, Real};
