@@ -69,6 +69,20 @@ impl Default for SimConfig {
     }
 }
 
+/// `report` with one undecided finding saying why the program is not run: a refusal is
+/// never a clean run.
+fn refused(mut report: SimReport, message: String) -> SimReport {
+    report.findings.push(report::Finding {
+        kind: report::Kind::Undecided,
+        run: 0,
+        step: 0,
+        time: "0".to_string(),
+        message,
+        trace: Vec::new(),
+    });
+    report
+}
+
 /// Simulates `prog`'s choreography `cfg.runs` times. `prog` is the program after the
 /// geometry stage ([`crate::driver::prepare`]); without it, bodies that are solids are
 /// not known and a comparison that needs them is undecided.
@@ -80,36 +94,20 @@ pub fn simulate(prog: &Program, cfg: &SimConfig) -> SimReport {
     // (`session`: a fresh reading at each send that reads one); a choreography with motion
     // that declares streams is refused as undecided, never a clean run.
     if let Some(s) = prog.streams.first().filter(|_| !sessions) {
-        report.findings.push(report::Finding {
-            kind: report::Kind::Undecided,
-            run: 0,
-            step: 0,
-            time: "0".to_string(),
-            message: format!(
-                "not supported yet: a choreography with motion declares streams (`stream {} -> ...: {}`), whose observed values the simulator draws only in protocols without motion; `mochi check` checks the protocol over fresh readings",
-                prog.role_name(s.from),
-                s.label
-            ),
-            trace: Vec::new(),
-        });
-        return report;
+        return refused(report, format!(
+            "not supported yet: a choreography with motion declares streams (`stream {} -> ...: {}`), whose observed values the simulator draws only in protocols without motion; `mochi check` checks the protocol over fresh readings",
+            prog.role_name(s.from),
+            s.label
+        ));
     }
     // Timeout branches are not simulated yet: a run would need a clock for the waiting
     // role. Refused as undecided, never a clean run.
     if let Some(a) = crate::typeck::first_timeout(&chor.body) {
-        report.findings.push(report::Finding {
-            kind: report::Kind::Undecided,
-            run: 0,
-            step: 0,
-            time: "0".to_string(),
-            message: format!(
-                "not supported yet: a choice has a timeout branch (`after {} ms by {}`), which the simulator does not run; `mochi check` checks the protocol",
-                a.ms,
-                prog.role_name(a.by)
-            ),
-            trace: Vec::new(),
-        });
-        return report;
+        return refused(report, format!(
+            "not supported yet: a choice has a timeout branch (`after {} ms by {}`), which the simulator does not run; `mochi check` checks the protocol",
+            a.ms,
+            prog.role_name(a.by)
+        ));
     }
     witness::session(cfg.timeout, |sess| {
         for run in 0..cfg.runs {
