@@ -237,46 +237,52 @@ fn run(cli: Cli) -> u8 {
 }
 
 /// `mochi monitor`: 0 when no log breaks a protocol, 1 for a violation (or invalid input).
-/// Only verified protocols are monitored: the monitor enforces what the static checks
-/// assumed, which is worth nothing for a protocol they did not prove.
-fn monitor(args: &MonitorArgs, color: ColorChoice) -> Outcome {
-    use mochi::monitor::{Automaton, Monitor};
-    let mut db = SourceDb::new();
+/// The automata of `protocols`, each checked first: only a verified protocol is monitored
+/// (the monitor enforces what the static checks assumed, worth nothing for a protocol they
+/// did not prove). An error is printed and its exit code returned. Shared by `monitor` and
+/// `proxy` (`verb` says which: "monitors", "enforces").
+pub(crate) fn verified_automata(
+    db: &mut SourceDb,
+    protocols: &[std::path::PathBuf],
+    color: ColorChoice,
+    verb: &str,
+) -> Result<Vec<mochi::monitor::Automaton>, Outcome> {
+    use mochi::monitor::Automaton;
     let mut automata = Vec::new();
-    for p in &args.protocols {
-        let report = match fsload::check_file(&mut db, p, &Config::default()) {
+    for p in protocols {
+        let report = match fsload::check_file(db, p, &Config::default()) {
             Ok(r) => r,
             Err(e) => {
                 eprintln_safe(&format!("error: cannot read {}: {e}", p.display()));
-                return Outcome::Invalid;
+                return Err(Outcome::Invalid);
             }
         };
         if report.verdict != Verdict::Verified {
             let color = color.for_stream(false);
             let shown: String =
-                report.diagnostics.iter().filter(|d| d.is_error()).map(|d| render::text(&db, d, color)).collect();
+                report.diagnostics.iter().filter(|d| d.is_error()).map(|d| render::text(db, d, color)).collect();
             eprint_safe(&shown);
             eprintln_safe(&format!(
-                "error: {} is {}, not verified: mochi monitors only verified protocols (the monitor enforces what the static checks assume); run `mochi check {}`",
+                "error: {} is {}, not verified: mochi {verb} only verified protocols (the monitor enforces what the static checks assume); run `mochi check {}`",
                 p.display(),
                 format!("{:?}", report.verdict).to_lowercase(),
                 p.display()
             ));
-            return Outcome::Invalid;
+            return Err(Outcome::Invalid);
         }
-        let root = match fsload::load_root(&mut db, p) {
+        let root = match fsload::load_root(db, p) {
             Ok(r) => r,
             Err(e) => {
                 eprintln_safe(&format!("error: cannot read {}: {e}", p.display()));
-                return Outcome::Invalid;
+                return Err(Outcome::Invalid);
             }
         };
-        let prog = match mochi::driver::prepare(&mut db, root, &mut fsload::read_bytes, mochi::driver::Stage::Names) {
+        let prog = match mochi::driver::prepare(db, root, &mut fsload::read_bytes, mochi::driver::Stage::Names) {
             Ok(prog) => prog,
             Err(diags) => {
                 let color = color.for_stream(false);
-                eprint_safe(&diags.iter().map(|d| render::text(&db, d, color)).collect::<String>());
-                return Outcome::Invalid;
+                eprint_safe(&diags.iter().map(|d| render::text(db, d, color)).collect::<String>());
+                return Err(Outcome::Invalid);
             }
         };
         match Automaton::compile(&prog) {
@@ -290,10 +296,22 @@ fn monitor(args: &MonitorArgs, color: ColorChoice) -> Outcome {
                     })
                     .unwrap_or_default();
                 eprintln_safe(&format!("error: {at}{} cannot be monitored: {}", p.display(), e.message));
-                return Outcome::Invalid;
+                return Err(Outcome::Invalid);
             }
         }
     }
+    Ok(automata)
+}
+
+/// Only verified protocols are monitored: the monitor enforces what the static checks
+/// assumed, which is worth nothing for a protocol they did not prove.
+fn monitor(args: &MonitorArgs, color: ColorChoice) -> Outcome {
+    use mochi::monitor::Monitor;
+    let mut db = SourceDb::new();
+    let automata = match verified_automata(&mut db, &args.protocols, color, "monitors") {
+        Ok(a) => a,
+        Err(o) => return o,
+    };
     let mut files = Vec::new();
     for l in &args.logs {
         if l.is_dir() {

@@ -1,9 +1,7 @@
 //! `mochi proxy`: the monitor between a ground station and a vehicle (docs/proxy.md).
 
-use super::{eprint_safe, eprintln_safe, ColorChoice, Outcome};
+use super::{eprintln_safe, ColorChoice, Outcome};
 use clap::Args;
-use mochi::driver::{Config, Verdict};
-use mochi::fsload;
 use mochi::proxy::{Endpoint, Event, Mode, Proxy, Sink, Totals};
 use mochi::render;
 use mochi::source::SourceDb;
@@ -57,58 +55,10 @@ pub(crate) struct ProxyArgs {
 /// verified or cannot be monitored, or an end cannot be opened.
 pub(crate) fn proxy(args: &ProxyArgs, color: ColorChoice, out: Box<dyn Write + Send>) -> Outcome {
     let mut db = SourceDb::new();
-    let mut automata = Vec::new();
-    for p in &args.protocols {
-        let report = match fsload::check_file(&mut db, p, &Config::default()) {
-            Ok(r) => r,
-            Err(e) => {
-                eprintln_safe(&format!("error: cannot read {}: {e}", p.display()));
-                return Outcome::Invalid;
-            }
-        };
-        if report.verdict != Verdict::Verified {
-            let color = color.for_stream(false);
-            let shown: String =
-                report.diagnostics.iter().filter(|d| d.is_error()).map(|d| render::text(&db, d, color)).collect();
-            eprint_safe(&shown);
-            eprintln_safe(&format!(
-                "error: {} is {}, not verified: mochi enforces only verified protocols (the monitor enforces what the static checks assume); run `mochi check {}`",
-                p.display(),
-                format!("{:?}", report.verdict).to_lowercase(),
-                p.display()
-            ));
-            return Outcome::Invalid;
-        }
-        let root = match fsload::load_root(&mut db, p) {
-            Ok(r) => r,
-            Err(e) => {
-                eprintln_safe(&format!("error: cannot read {}: {e}", p.display()));
-                return Outcome::Invalid;
-            }
-        };
-        let prog = match mochi::driver::prepare(&mut db, root, &mut fsload::read_bytes, mochi::driver::Stage::Names) {
-            Ok(prog) => prog,
-            Err(diags) => {
-                let color = color.for_stream(false);
-                eprint_safe(&diags.iter().map(|d| render::text(&db, d, color)).collect::<String>());
-                return Outcome::Invalid;
-            }
-        };
-        match mochi::monitor::Automaton::compile(&prog) {
-            Ok(a) => automata.push(a),
-            Err(e) => {
-                let at = e
-                    .span
-                    .map(|s| {
-                        let (f, l, c) = db.location(s);
-                        format!("{f}:{l}:{c}: ")
-                    })
-                    .unwrap_or_default();
-                eprintln_safe(&format!("error: {at}{} cannot be monitored: {}", p.display(), e.message));
-                return Outcome::Invalid;
-            }
-        }
-    }
+    let automata = match crate::verified_automata(&mut db, &args.protocols, color, "enforces") {
+        Ok(a) => a,
+        Err(o) => return o,
+    };
     let open = |which: &str, e: &Endpoint| match e.open() {
         Ok(p) => Some(p),
         Err(err) => {
