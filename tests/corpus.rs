@@ -267,11 +267,6 @@ fn printed_projections_parse_back_to_the_same_type(path: &Path) -> Result<usize,
         return Ok(0);
     }
     for (role, t) in &locals {
-        // A local type with a timeout alternative has no written form yet (LANGUAGE.md,
-        // Timeouts: `local` items cannot write one), so it cannot be read back.
-        if has_timeout(t, &mut std::collections::HashSet::new()) {
-            continue;
-        }
         let text = print::local(&prog, t);
         let who = format!("{}: the printed type of {}", path.display(), prog.role_name(*role));
         let file = db.add("printed", text.clone());
@@ -982,23 +977,4 @@ fn main() {
         }
     }
     conclusion.exit()
-}
-
-/// Whether a local type has a timeout alternative anywhere (each shared node visited once).
-fn has_timeout(t: &mochi::hir::Local, seen: &mut std::collections::HashSet<*const mochi::hir::Local>) -> bool {
-    use mochi::hir::Local;
-    if !seen.insert(t as *const Local) {
-        return false;
-    }
-    match t {
-        Local::Send { timeout: Some(_), .. } | Local::Recv { timeout: Some(_), .. } => true,
-        Local::Send { branches, .. } => branches.iter().any(|b| has_timeout(&b.cont, seen)),
-        Local::Recv { branches, default, .. } => {
-            branches.iter().any(|b| has_timeout(&b.cont, seen))
-                || default.as_ref().is_some_and(|(_, c)| has_timeout(c, seen))
-        }
-        Local::Motion { cont, .. } => has_timeout(cont, seen),
-        Local::Rec { body, .. } => has_timeout(body, seen),
-        Local::Var { .. } | Local::End(_) => false,
-    }
 }

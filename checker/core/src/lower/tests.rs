@@ -187,3 +187,70 @@ fn a_timeout_is_placed_and_bounded() {
     assert_eq!(bs[1].timeout_head().map(|a| a.ms), Some(501));
     assert_eq!(lower("mu after(k: int = 0). C -> A: go. after(k + 1)").1, vec![]);
 }
+
+/// Written local types have the timeout alternative the printer writes (LANGUAGE.md,
+/// Timeouts): `after T ms. T'` in the waiting role's external choice, `after T ms by R. T'`
+/// in the sender's internal choice. A projection with timeouts prints, reads back and
+/// lowers to the same type; a misplaced, doubled, unnamed or non-positive timeout is an
+/// error.
+#[test]
+fn written_local_types_have_timeouts() {
+    let src = format!(
+        "{HEADER} const N: int = 500;
+         choreography G = mu t. (C -> A: go. t + after 2 * N ms by A. (A -> C: again. end + after 30 ms by C. end));"
+    );
+    let (p, d) = lower_src(&src);
+    assert!(d.is_empty(), "{d:?}");
+    let (locals, d) = crate::project::project_all(&p);
+    assert!(d.is_empty(), "{d:?}");
+    let mut texts = Vec::new();
+    for (role, t) in &locals {
+        let text = crate::hir::print::local(&p, t);
+        let mut db = SourceDb::new();
+        let file = db.add("printed", text.clone());
+        let (ast, d) = crate::syntax::parser::parse_local(file, &text);
+        assert!(d.is_empty(), "{text}: {d:?}");
+        let (back, d) = lower_local(&p, *role, &ast.expect("parsed"));
+        assert!(d.is_empty(), "{text}: {d:?}");
+        assert!(crate::project::alpha_equal(&back, t), "{text}");
+        assert_eq!(crate::hir::print::local(&p, &back), text);
+        texts.push(text);
+    }
+    assert!(texts.iter().any(|t| t.contains("after 2 * N ms by A.")), "{texts:?}");
+    assert!(texts.iter().any(|t| t.contains("after 2 * N ms. ")), "{texts:?}");
+
+    // Another bound, another waiting role: not the same type.
+    let c = p.role_by_name("C").expect("C");
+    let written = |text: &str| {
+        let mut db = SourceDb::new();
+        let file = db.add("written", text.to_string());
+        let (ast, d) = crate::syntax::parser::parse_local(file, text);
+        if !d.is_empty() {
+            return Err(d.iter().map(|d| d.code).collect::<Vec<_>>());
+        }
+        let (back, d) = lower_local(&p, c, &ast.expect("parsed"));
+        if d.is_empty() {
+            Ok(back)
+        } else {
+            Err(codes(&d))
+        }
+    };
+    let projected = &locals[&c];
+    let same = written("mu t. +{ A!go.t, after 1000 ms by A. &{ A?again.end, after 30 ms. end } }").expect("lowers");
+    assert!(crate::project::alpha_equal(&same, projected), "{}", crate::hir::print::local(&p, projected));
+    let longer = written("mu t. +{ A!go.t, after 1001 ms by A. &{ A?again.end, after 30 ms. end } }").expect("lowers");
+    assert!(!crate::project::alpha_equal(&longer, projected));
+    let mine = written("mu t. +{ A!go.t, after 1000 ms by C. &{ A?again.end, after 30 ms. end } }").expect("lowers");
+    assert!(!crate::project::alpha_equal(&mine, projected));
+    // Errors: no `by` in an internal choice, two timeouts, a timeout outside a choice, a
+    // bound that is not a positive constant.
+    assert_eq!(written("+{ A!go.end, after 10 ms. end }").map(|_| ()), Err(vec![Code::UnexpectedToken]));
+    assert_eq!(
+        written("&{ A?go.end, after 10 ms. end, after 20 ms. end }").map(|_| ()),
+        Err(vec![Code::UnexpectedToken])
+    );
+    assert_eq!(written("after 10 ms. end").map(|_| ()), Err(vec![Code::UnexpectedToken]));
+    assert_eq!(written("&{ A?go.end, after 0 ms. end }").map(|_| ()), Err(vec![Code::TimeoutBound]));
+    // `after` with no bound after it is still a name.
+    assert!(written("mu after. A!go.after").is_ok());
+}

@@ -161,6 +161,14 @@ impl Lowerer {
                     .with_help("make it a branch of the choice whose messages it waits for: `(p -> R: a. G1 + after T ms by R. G2)`"),
             );
         }
+        let (e, ms) = self.timeout_bound(bound, cx);
+        let Some(r) = self.role(by) else { return Global::End(Loc(span)) };
+        Global::After(crate::hir::After { ms, bound: e, by: r, loc: Loc(span) })
+    }
+
+    /// The bound `T` of `after T ms`, in a global or a local type: a positive integer
+    /// constant expression (E0320). An erroneous bound counts as 1 ms, after its error.
+    fn timeout_bound(&mut self, bound: &ast::Expr, cx: &Scopes) -> (Expr, i64) {
         let env = Env { values: &cx.values.clone(), ..Env::consts_only() };
         let e = self.expr(bound, &env);
         let ms = crate::hir::expr::const_int(&self.prog, &e);
@@ -175,8 +183,21 @@ impl Lowerer {
                     .with_help("write a positive integer (`after 1500 ms by R`) or a `const` holding one"),
             );
         }
-        let Some(r) = self.role(by) else { return Global::End(Loc(span)) };
-        Global::After(crate::hir::After { ms: ms.unwrap_or(1).max(1), bound: e, by: r, loc: Loc(span) })
+        (e, ms.unwrap_or(1).max(1))
+    }
+
+    /// The timeout alternative of a written local choice (LANGUAGE.md, Timeouts): in `me`'s
+    /// external choice the waiting role is `me`; in its internal choice, the peer named
+    /// after `by`. The continuation sees what the choice's start sees (the timeout reads
+    /// and binds nothing).
+    fn local_timeout(&mut self, t: &ast::LocalTimeout, me: RoleId, cx: &mut Scopes) -> Option<crate::hir::Timeout> {
+        let (bound, ms) = self.timeout_bound(&t.bound, cx);
+        let by = match &t.by {
+            Some(r) => self.role(r)?,
+            None => me,
+        };
+        let cont = self.local(&t.cont, me, cx);
+        Some(crate::hir::Timeout { after: crate::hir::After { ms, bound, by, loc: Loc(t.span) }, cont })
     }
 
     /// Lowers payload fields, pushing their value variables onto `values` (each field's
@@ -310,7 +331,7 @@ impl Lowerer {
                 let cont = self.local(cont, me, cx);
                 Local::Motion { prims, cont, loc: Loc(*span) }
             }
-            ast::Local::Send { branches, span } => {
+            ast::Local::Send { branches, timeout, span } => {
                 let mut out = Vec::new();
                 // One decision, one snapshot of what `me` observes, for every branch.
                 let snap = self.snapshot(me);
@@ -341,9 +362,11 @@ impl Lowerer {
                         loc: Loc(b.span),
                     });
                 }
-                Local::Send { branches: out, timeout: None, loc: Loc(*span) }
+                cx.values.truncate(mark);
+                let timeout = timeout.as_ref().and_then(|t| self.local_timeout(t, me, cx));
+                Local::Send { branches: out, timeout, loc: Loc(*span) }
             }
-            ast::Local::Recv { branches, default, span } => {
+            ast::Local::Recv { branches, default, timeout, span } => {
                 let mut out = Vec::new();
                 for b in branches {
                     cx.values.truncate(mark);
@@ -359,7 +382,9 @@ impl Lowerer {
                         prims.iter().filter_map(|c| self.prim_app(me, c, &cx.values.clone())).collect();
                     (prims, self.local(cont, me, cx))
                 });
-                Local::Recv { branches: out, default, timeout: None, loc: Loc(*span) }
+                cx.values.truncate(mark);
+                let timeout = timeout.as_ref().and_then(|t| self.local_timeout(t, me, cx));
+                Local::Recv { branches: out, default, timeout, loc: Loc(*span) }
             }
             ast::Local::Rec { var, params, body, span } => {
                 let params = self.rec_params(params, ValueOrigin::RecParam, Who::Role(me), &mut cx.values);

@@ -378,15 +378,19 @@ pub enum Local {
         cont: Box<Local>,
         span: Span,
     },
-    /// `+{ [g] q!l(fields).T, ... }` or a single `[g] q!l(fields).T`.
+    /// `+{ [g] q!l(fields).T, ... }` or a single `[g] q!l(fields).T`; the choice may end
+    /// with the peer's timeout alternative `after T ms by R. T'`.
     Send {
         branches: Vec<LocalSend>,
+        timeout: Option<Box<LocalTimeout>>,
         span: Span,
     },
-    /// `&{ p?l(fields).T, ... }` optionally `& dt<a>.T`.
+    /// `&{ p?l(fields).T, ... }` optionally `& dt<a>.T`; the choice may end with this
+    /// role's own timeout alternative `after T ms. T'`.
     Recv {
         branches: Vec<LocalRecv>,
         default: Option<(Vec<PrimCall>, Box<Local>)>,
+        timeout: Option<Box<LocalTimeout>>,
         span: Span,
     },
     Rec {
@@ -409,6 +413,17 @@ pub struct LocalSend {
     pub to: Ident,
     pub label: Ident,
     pub payload: Vec<Field>,
+    pub cont: Local,
+    pub span: Span,
+}
+
+/// The timeout alternative of a local choice (LANGUAGE.md, Timeouts): `after T ms. T'` in
+/// the waiting role's external choice (`by` is `None`: the role itself), `after T ms by R. T'`
+/// in the sender's internal choice.
+#[derive(Clone, Debug)]
+pub struct LocalTimeout {
+    pub bound: Expr,
+    pub by: Option<Ident>,
     pub cont: Local,
     pub span: Span,
 }

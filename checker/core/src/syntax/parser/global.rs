@@ -156,7 +156,7 @@ impl Parser {
     /// Whether the `after` at the cursor starts a timeout branch: a bound follows it, that
     /// is a number, a name, or a bracketed expression whose closing bracket is followed by
     /// `ms` (`after (2 * N) ms by R`; without `ms` it is the jump `after(n)`).
-    fn timeout_follows(&self) -> bool {
+    pub(super) fn timeout_follows(&self) -> bool {
         match self.peek_at(1) {
             Tok::Int(_) | Tok::Real(_) | Tok::Ident(_) => true,
             Tok::Punct("(") => {

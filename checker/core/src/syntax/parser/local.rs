@@ -25,12 +25,17 @@ impl Parser {
             let single = !(self.is_punct("+") || self.is_punct("&") || self.is_punct("("));
             if single && (self.is_punct("[") || matches!(self.peek_at(1), Tok::Punct("!"))) {
                 let b = self.local_send_head()?;
-                heads.push(Local::Send { branches: vec![b], span: start.to(self.prev_span()) });
+                heads.push(Local::Send { branches: vec![b], timeout: None, span: start.to(self.prev_span()) });
                 continue;
             }
             if single && matches!(self.peek_at(1), Tok::Punct("?")) {
                 let b = self.local_recv_head()?;
-                heads.push(Local::Recv { branches: vec![b], default: None, span: start.to(self.prev_span()) });
+                heads.push(Local::Recv {
+                    branches: vec![b],
+                    default: None,
+                    timeout: None,
+                    span: start.to(self.prev_span()),
+                });
                 continue;
             }
             break self.local_atom()?;
@@ -44,7 +49,7 @@ impl Parser {
                     **cont = acc;
                     *span = span.to(end);
                 }
-                Local::Send { branches, span } => {
+                Local::Send { branches, span, .. } => {
                     if let Some(b) = branches.first_mut() {
                         b.cont = acc;
                     }
@@ -73,19 +78,31 @@ impl Parser {
         if self.is_punct("+") && matches!(self.peek_at(1), Tok::Punct("{")) {
             self.bump();
             self.bump();
-            let mut branches = vec![self.local_send()?];
-            while self.eat_punct(",") {
-                branches.push(self.local_send()?);
+            let mut branches = Vec::new();
+            let mut timeout = None;
+            loop {
+                if !self.timeout_alternative(&mut timeout, true)? {
+                    branches.push(self.local_send()?);
+                }
+                if !self.eat_punct(",") {
+                    break;
+                }
             }
             self.expect_punct("}")?;
-            return Ok(Local::Send { branches, span: start.to(self.prev_span()) });
+            return Ok(Local::Send { branches, timeout, span: start.to(self.prev_span()) });
         }
         if self.is_punct("&") && matches!(self.peek_at(1), Tok::Punct("{")) {
             self.bump();
             self.bump();
-            let mut branches = vec![self.local_recv()?];
-            while self.eat_punct(",") {
-                branches.push(self.local_recv()?);
+            let mut branches = Vec::new();
+            let mut timeout = None;
+            loop {
+                if !self.timeout_alternative(&mut timeout, false)? {
+                    branches.push(self.local_recv()?);
+                }
+                if !self.eat_punct(",") {
+                    break;
+                }
             }
             self.expect_punct("}")?;
             let mut default = None;
@@ -96,7 +113,7 @@ impl Parser {
                 let cont = self.local()?;
                 default = Some((prims, Box::new(cont)));
             }
-            return Ok(Local::Recv { branches, default, span: start.to(self.prev_span()) });
+            return Ok(Local::Recv { branches, default, timeout, span: start.to(self.prev_span()) });
         }
         if self.eat_kw("mu") {
             let var = self.ident("a recursion variable")?;
@@ -108,10 +125,49 @@ impl Parser {
         if self.eat_kw("end") {
             return Ok(Local::End(start));
         }
+        if self.is_kw("after") && self.timeout_follows() {
+            return self.error_expected(
+                "a local type: a timeout alternative is written inside a choice, `&{ p?l.T, after N ms. T' }` or `+{ q!l.T, after N ms by q. T' }`",
+            );
+        }
         let var =
             self.ident("a local type (`dt<a>.T`, `q!l.T`, `p?l.T`, `+{...}`, `&{...}`, `mu t.T`, `t` or `end`)")?;
         let args = self.opt_args()?;
         Ok(Local::Var { var, args, span: start.to(self.prev_span()) })
+    }
+
+    /// The timeout alternative of a local choice, if the cursor is at one: `after T ms. T'`
+    /// in an external choice (`by_peer` false: the role itself waits), `after T ms by R. T'`
+    /// in an internal choice (the peer `R` waits). At most one per choice. Returns whether
+    /// one was read.
+    fn timeout_alternative(&mut self, slot: &mut Option<Box<LocalTimeout>>, by_peer: bool) -> PResult<bool> {
+        if !(self.is_kw("after") && self.timeout_follows()) {
+            return Ok(false);
+        }
+        if slot.is_some() {
+            return self.error_expected("a branch: a choice has at most one timeout alternative `after N ms`");
+        }
+        let start = self.span();
+        self.bump();
+        let bound = self.expr()?;
+        if !self.eat_kw("ms") {
+            return self.error_expected("`ms` after the bound of `after` (the bound is in milliseconds)");
+        }
+        let by = if by_peer {
+            if !self.eat_kw("by") {
+                return self.error_expected(
+                    "`by R` after `after T ms`: in an internal choice the timeout is the waiting peer's",
+                );
+            }
+            Some(self.ident("the participant that waits and takes the timeout branch")?)
+        } else {
+            None
+        };
+        let span = start.to(self.prev_span());
+        self.expect_punct(".")?;
+        let cont = self.local()?;
+        *slot = Some(Box::new(LocalTimeout { bound, by, cont, span }));
+        Ok(true)
     }
 
     pub(super) fn local_prims(&mut self) -> PResult<Vec<PrimCall>> {
