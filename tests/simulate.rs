@@ -213,6 +213,7 @@ const NOT_FOUND: &[(&str, &str)] = &[
     ("mavlink/rejected/E0417-retries-never-spent.chor", "a termination measure: a defect of infinitely many steps, beyond a bounded run"),
     ("mavlink/rejected/E0419-param-pass-index-out-of-range.chor", "stuck only at the 14th choice's second answer, 27 messages in, beyond the 16 steps of a run"),
     ("mavlink/rejected/E0419-float-window-holds-no-float32.chor", "a refinement with real solutions and no float32 one: the simulator draws real payloads and rounds them, so it reports the run undecided, not stuck"),
+    ("mavlink/rejected/E0602-declared-ground-station-never-gives-up.chor", "a written local type that is no subtype of the projection (Fig 5): the run follows the choreography, never the written type; the program has a timeout branch, which the simulator does not run yet"),
     ("mavlink/rejected/E0320-timeout-bound-zero.chor", "a choice has a timeout branch, which the simulator does not run yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
     ("mavlink/rejected/E0321-timeout-after-a-step.chor", "a choice has a timeout branch, which the simulator does not run yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
     ("mavlink/rejected/E0322-two-timeouts-in-one-choice.chor", "a choice has a timeout branch, which the simulator does not run yet: it reports the program undecided (\"not supported yet\"), never a clean run"),
