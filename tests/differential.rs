@@ -9,8 +9,14 @@
 //!   asked first (a shared answer read before it is written, an order-dependent shortcut)
 //!   shows up as a difference.
 //!
-//! The heavy geometric files (tests/metamorphic/common.rs, `HEAVY`) run only in the long
-//! mode (`MOCHI_META_CASES=N`, any N).
+//! Each file is compared with its reference outcome: for a file of `choreographies/`, the one
+//! its golden snapshot records (the corpus harness checks it with the cache on and one SMT
+//! worker per core, and fails unless its report is the snapshot's), so this binary runs only
+//! the second mode (cache off with one worker; four workers); for a file of `tests/data/`,
+//! its check with one worker and the cache on. A run compares the day's quarter of the
+//! corpus in each mode (the slices of tests/metamorphic/common.rs, cut per comparison),
+//! every file with `MOCHI_META_SLICE=all`. The heavy geometric files (tests/metamorphic/common.rs,
+//! `HEAVY`) run only in the long mode (`MOCHI_META_CASES=N`, any N; every slice).
 //!
 //! Both comparisons run over mutants of the corpus too (the operators of
 //! tests/mutation/ops.rs): a fixed sample of 24, all three modes each;
@@ -19,15 +25,23 @@
 #[path = "metamorphic/common.rs"]
 mod common;
 
-use common::{baseline, check, config, corpus, par_map, timed, Outcome, Program};
+use common::{baseline, check, config, corpus, fnv, in_slice, par_map, timed, Outcome, Program};
 use std::path::PathBuf;
 
-/// Each file's outcome under the reference configuration (one worker, the answer cache on:
-/// `config(1, false)`, [`baseline`], computed once per file and shared by both tests) and
-/// under `b`; the files where they differ.
-fn differences(files: &[PathBuf], b: &mochi::driver::Config) -> Vec<String> {
-    let rows: Vec<(PathBuf, Outcome, Outcome)> = par_map(files, 2, |p| {
-        let x = timed(&format!("{} (-j 1, cache)", p.display()), || baseline(p));
+/// Each file's outcome under the reference configuration and under `b`; the files where
+/// they differ. The reference is [`baseline`]: for a file of `choreographies/`, its golden
+/// snapshot's outcome, which the corpus harness checks with the answer cache on and one SMT
+/// worker per core; for a file of `tests/data/`, its check with one worker, the cache on
+/// (`config(1, false)`), computed once and shared by both tests. The files are those of the
+/// run's slice of `what` ([`in_slice`]: the day's quarter, every file with
+/// `MOCHI_META_SLICE=all`).
+fn differences(what: &str, b: &mochi::driver::Config) -> Vec<String> {
+    let files = corpus();
+    assert!(files.len() > 100, "the corpus was found ({} files)", files.len());
+    let files: Vec<PathBuf> = files.into_iter().filter(|p| in_slice(what, p)).collect();
+    assert!(files.len() > 10, "{what}: the slice holds files ({})", files.len());
+    let rows: Vec<(PathBuf, Outcome, Outcome)> = par_map(&files, 2, |p| {
+        let x = timed(&format!("{} (reference)", p.display()), || baseline(p));
         let y = timed(&format!("{} (second)", p.display()), || check(&Program::on_disk(p), b));
         (p.clone(), x, y)
     });
@@ -36,17 +50,14 @@ fn differences(files: &[PathBuf], b: &mochi::driver::Config) -> Vec<String> {
 
 #[test]
 fn the_answer_cache_changes_no_verdict() {
-    let files = corpus();
-    assert!(files.len() > 100, "the corpus was found ({} files)", files.len());
-    let diff = differences(&files, &config(1, true));
+    let diff = differences("cache off", &config(1, true));
     assert!(diff.is_empty(), "cache on vs off differ on {} file(s):\n{}", diff.len(), diff.join("\n"));
 }
 
 #[test]
 fn the_number_of_workers_changes_no_verdict() {
-    let files = corpus();
-    let diff = differences(&files, &config(4, false));
-    assert!(diff.is_empty(), "-j 1 vs -j 4 differ on {} file(s):\n{}", diff.len(), diff.join("\n"));
+    let diff = differences("four workers", &config(4, false));
+    assert!(diff.is_empty(), "the reference vs -j 4 differ on {} file(s):\n{}", diff.len(), diff.join("\n"));
 }
 
 // ---------------------------------------------------------------------------------------
@@ -57,11 +68,6 @@ fn the_number_of_workers_changes_no_verdict() {
 #[path = "mutation/ops.rs"]
 #[allow(dead_code)]
 mod ops;
-
-/// A stable hash (FNV-1a) of a mutant's id, for a sample that is the same every run.
-fn fnv(s: &str) -> u64 {
-    s.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3))
-}
 
 /// How many mutants the comparison runs: `MOCHI_DIFF_MUTANTS` (the long mode), else 24.
 fn mutant_budget() -> usize {

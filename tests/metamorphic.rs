@@ -15,16 +15,19 @@
 //!   error (the name is taken, or reserved).
 //!
 //! A failure prints the minimal case: the file, the rewriting, both outcomes, and the
-//! rewritten texts. Budget: the sweeps cover the corpus without the heavy geometric files
-//! (common.rs, `HEAVY`), the properties run a few cases; `MOCHI_META_CASES=N` runs N cases
-//! per property and the heavy files too.
+//! rewritten texts. Budget: a run sweeps one slice of the corpus per relation (the day's
+//! quarter, cut by a hash of the relation and the file: common.rs, `slice`; every file over
+//! four days, `MOCHI_META_SLICE=all` every file now), without the heavy geometric files
+//! (common.rs, `HEAVY`), and the properties run a few cases; `MOCHI_META_CASES=N` runs N cases
+//! per property, every slice and the heavy files too. A file of `choreographies/` is
+//! compared with the outcome its golden snapshot records (common.rs, `baseline`).
 
 #[path = "metamorphic/common.rs"]
 mod common;
 #[path = "metamorphic/transform.rs"]
 mod transform;
 
-use common::{baseline, cases, check, config, corpus, par_map, Outcome, Program};
+use common::{baseline, cases, check, config, corpus, in_slice, par_map, Outcome, Program};
 use mochi::driver::Verdict;
 use proptest::prelude::*;
 use std::path::{Path, PathBuf};
@@ -89,10 +92,15 @@ fn refused(before: &Outcome, after: &Outcome) -> bool {
     (after.verdict == before.verdict || after.verdict == Verdict::Unknown) && extra.iter().all(|c| c.starts_with('U'))
 }
 
-/// Runs `one` on every corpus file (two at a time) and fails with every violation found.
+/// Runs `one` on the corpus files of this run's slice (two at a time; [`common::slice`]:
+/// the day's quarter, every file with `MOCHI_META_SLICE=all`) and fails with every violation
+/// found. A file's index, which draws the rewriting's parameters, is its index in the whole
+/// corpus, so a slice rewrites each file as the whole sweep does.
 fn sweep(name: &str, one: impl Fn(usize, &Path) -> Result<(), String> + Sync) {
     let files: Vec<(usize, PathBuf)> = corpus().into_iter().enumerate().collect();
     assert!(files.len() > 100, "the corpus was found ({} files)", files.len());
+    let files: Vec<(usize, PathBuf)> = files.into_iter().filter(|(_, p)| in_slice(name, p)).collect();
+    assert!(files.len() > 10, "{name}: the slice holds files ({})", files.len());
     let bad: Vec<String> = par_map(&files, 2, |(i, p)| one(*i, p)).into_iter().filter_map(Result::err).collect();
     assert!(bad.is_empty(), "{name}: {} violation(s)\n\n{}", bad.len(), bad.join("\n\n"));
 }
@@ -476,6 +484,24 @@ fn the_generator_makes_verified_and_rejected_lanes() {
     }
     let _ = std::fs::remove_dir_all(&dir);
     assert_eq!(got, vec![Verdict::Verified, Verdict::Rejected]);
+}
+
+/// The sweeps' `before` of a file of `choreographies/` is its golden snapshot's outcome
+/// ([`common::baseline`]): the reading of a snapshot gives what a fresh check gives, on
+/// files with an import, warnings, notes, several errors, and none.
+#[test]
+fn the_golden_snapshots_are_the_checks_outcomes() {
+    for f in [
+        "choreographies/countdown.chor",
+        "choreographies/mavlink/mission-download.chor",
+        "choreographies/mavlink/arm-command.chor",
+        "choreographies/rejected/E0312-motion-after-motion.chor",
+        "choreographies/rejected/E0406-two-carts-one-lane.chor",
+    ] {
+        let golden = common::golden_outcome(Path::new(f)).unwrap_or_else(|| panic!("{f} has a snapshot"));
+        assert_eq!(golden, check(&Program::on_disk(Path::new(f)), &config(1, false)), "{f}");
+    }
+    assert!(common::golden_outcome(Path::new("tests/data/countdown-init-as-fraction.chor")).is_none());
 }
 
 /// The rewritings reach the imported files and the pipeline reads them: a renaming of

@@ -154,15 +154,108 @@ pub fn corpus() -> Vec<PathBuf> {
     out
 }
 
-/// The outcome of each corpus file as it is on disk under `config(1, false)`, computed once
-/// per test binary and shared by its tests: a test that asks for a file another is checking
-/// waits for that check rather than running its own.
+/// The outcome of each corpus file as it is on disk: for a file of `choreographies/`, the
+/// one its golden snapshot records ([`golden_outcome`]); for another (`tests/data/`), its
+/// check under `config(1, false)`, computed once per test binary and shared by its tests (a
+/// test that asks for a file another is checking waits for that check rather than running
+/// its own).
+///
+/// Reading the snapshot is reading a check: the corpus harness (tests/corpus.rs, run by the
+/// same `cargo test`) checks every file of `choreographies/` with the same 60 s limit
+/// (`Config::patient`, one SMT worker per core) and fails unless its report is the
+/// snapshot's. A relation is then checked against that check rather than a second one of
+/// the same text; [`golden_outcome`]'s reading is itself tested against fresh checks
+/// (tests/metamorphic.rs, `the_golden_snapshots_are_the_checks_outcomes`).
 pub fn baseline(p: &Path) -> Outcome {
     type Cell = Arc<OnceLock<Outcome>>;
     static BASE: OnceLock<Mutex<BTreeMap<PathBuf, Cell>>> = OnceLock::new();
     let base = BASE.get_or_init(|| Mutex::new(BTreeMap::new()));
     let cell: Cell = Arc::clone(base.lock().unwrap_or_else(|e| e.into_inner()).entry(p.to_path_buf()).or_default());
-    cell.get_or_init(|| check(&Program::on_disk(p), &config(1, false))).clone()
+    cell.get_or_init(|| golden_outcome(p).unwrap_or_else(|| check(&Program::on_disk(p), &config(1, false)))).clone()
+}
+
+/// The golden snapshot of a file of `choreographies/` (tests/corpus.rs names it), or `None`
+/// for a file elsewhere or without one.
+pub fn golden_snapshot(p: &Path) -> Option<String> {
+    let below = p.strip_prefix("choreographies").ok()?;
+    let below = below.components().map(|c| c.as_os_str().to_string_lossy()).collect::<Vec<_>>().join("__");
+    let snap = format!("tests/snapshots/golden__every_choreography_matches_its_golden_file@{below}.snap");
+    std::fs::read_to_string(snap).ok()
+}
+
+/// The outcome a file's golden snapshot records: the verdict line, and the code of every
+/// diagnostic (each rendered starting `error[CODE]:`, `warning[CODE]:` or `note[CODE]:` at
+/// the start of a line), sorted. `None` when there is no snapshot; a snapshot without a
+/// verdict line is a broken golden file and panics.
+pub fn golden_outcome(p: &Path) -> Option<Outcome> {
+    let text = golden_snapshot(p)?;
+    let verdict = text.split("==== VERDICT ====\n").nth(1).and_then(|r| r.lines().next()).map(str::trim);
+    let verdict = match verdict {
+        Some("Verified") => Verdict::Verified,
+        Some("Rejected") => Verdict::Rejected,
+        Some("Unknown") => Verdict::Unknown,
+        other => panic!("{}: the golden snapshot has no verdict line ({other:?})", p.display()),
+    };
+    let diags = text.split("==== DIAGNOSTICS ====\n").nth(1).unwrap_or("");
+    let diags = diags.split("==== PROJECTIONS ====\n").next().unwrap_or("");
+    let mut codes: Vec<String> = diags
+        .lines()
+        .filter_map(|l| {
+            let rest = ["error[", "warning[", "note["].iter().find_map(|s| l.strip_prefix(s))?;
+            let (code, after) = rest.split_once(']')?;
+            after.starts_with(':').then(|| code.to_string())
+        })
+        .collect();
+    codes.sort();
+    Some(Outcome { verdict, codes })
+}
+
+/// How many slices the corpus sweeps are cut into: a run checks one slice of each sweep (the
+/// day's), so that the sweeps fit in a `cargo test` of a few minutes and every file is swept
+/// by every relation every [`SLICES`] days.
+pub const SLICES: u64 = 4;
+
+/// A stable hash (FNV-1a), for slices that are the same every run.
+pub fn fnv(s: &str) -> u64 {
+    s.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3))
+}
+
+/// Which slice of the sweeps this run checks: every slice with `MOCHI_META_SLICE=all` or in
+/// the long mode (`MOCHI_META_CASES` set), slice `k` with `MOCHI_META_SLICE=k`, otherwise
+/// the day's (days since 1970 modulo [`SLICES`]), as the mutation test's sample. Printed once
+/// per binary with how to run it again.
+pub fn slice() -> Option<u64> {
+    static SLICE: OnceLock<Option<u64>> = OnceLock::new();
+    *SLICE.get_or_init(|| {
+        let s = match std::env::var("MOCHI_META_SLICE").ok().as_deref().map(str::trim) {
+            Some("all") => None,
+            Some(k) => Some(
+                k.parse::<u64>().unwrap_or_else(|_| panic!("MOCHI_META_SLICE={k}: a number or `all`")) % SLICES,
+            ),
+            None if long_mode() => None,
+            None => {
+                let days = std::time::SystemTime::now()
+                    .duration_since(std::time::UNIX_EPOCH)
+                    .map_or(0, |d| d.as_secs() / 86_400);
+                Some(days % SLICES)
+            }
+        };
+        match s {
+            Some(k) => eprintln!(
+                "corpus sweeps: slice {k} of {SLICES} (MOCHI_META_SLICE={k} runs it again, MOCHI_META_SLICE=all every file)"
+            ),
+            None => eprintln!("corpus sweeps: every file (MOCHI_META_SLICE=all or the long mode)"),
+        }
+        s
+    })
+}
+
+/// Whether the sweep `what` checks `p` in this run ([`slice`]): each sweep's slices are cut
+/// by a hash of its name and the file, so one day's run sweeps most files with some
+/// relation (about three in four with five relations), and each relation every file over
+/// [`SLICES`] days.
+pub fn in_slice(what: &str, p: &Path) -> bool {
+    slice().is_none_or(|k| (fnv(&format!("{what}:{}", p.display())) % SLICES) == k)
 }
 
 /// Runs `f` on every item of `items` on `threads` threads, results in the items' order,
