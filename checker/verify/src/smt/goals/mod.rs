@@ -184,19 +184,25 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
                             p.name
                         ))),
                         Some((Solids::Holds(note), others)) if others.is_empty() => Plan::Holds(Some(note)),
-                        Some((Solids::Holds(_), others)) => Plan::Parts(others.into_iter().map(Part::Contains).collect()),
+                        Some((Solids::Holds(_), others)) => {
+                            Plan::Parts(others.into_iter().map(Part::Contains).collect())
+                        }
                     }
                 }
                 // No predicate: decided by the solids when each part of the body lies in a
                 // part of the footprint placed the same way, else unknown.
-                crate::hir::Footprint::Solid { .. } => match crate::space::contain::body_within_footprint(prog, *prim) {
-                    crate::space::contain::Contained::Yes(note) => Plan::Holds(Some(note)),
-                    crate::space::contain::Contained::No(why) => Plan::Fails(why),
-                    crate::space::contain::Contained::Unknown(why) => Plan::Undecided(super::Why::Interval(format!(
+                crate::hir::Footprint::Solid { .. } => {
+                    match crate::space::contain::body_within_footprint(prog, *prim) {
+                        crate::space::contain::Contained::Yes(note) => Plan::Holds(Some(note)),
+                        crate::space::contain::Contained::No(why) => Plan::Fails(why),
+                        crate::space::contain::Contained::Unknown(why) => {
+                            Plan::Undecided(super::Why::Interval(format!(
                         "a footprint with a URDF or mesh part (that of `{}`) as a container of the robot's body: {why}",
                         p.name
-                    ))),
-                },
+                    )))
+                        }
+                    }
+                }
             }
         }
     }

@@ -40,8 +40,14 @@ pub fn body_outside(prog: &Program, prim: PrimId) -> Option<String> {
     };
     let body = prog.kind(p.kind).body.as_ref()?;
     let facts = Facts::of(prog, prim);
+    let kind = prog.kind(p.kind);
+    let name = |v: &Var| match v {
+        Var::Own(Slot::State(i)) if *i < kind.state.len() => format!("`{}`", kind.state[*i].0),
+        Var::Old(i) if *i < kind.state.len() => format!("`old({})`", kind.state[*i].0),
+        v => describe(v),
+    };
     for (k, part) in body.parts.iter().enumerate() {
-        if let Some(found) = part_outside(prog, part, fp, &facts) {
+        if let Some(found) = part_outside(prog, part, fp, &facts, &name) {
             return Some(format!(
                 "the footprint contains the robot's body, but part {} of `geometry:` (its {}) sticks out of it at every state the contract allows (interval subdivision over {}, {} pieces): e.g. at {}, its point ({:.4}, {:.4}, {:.4}) m (in the part's own frame) is outside the footprint",
                 k + 1,
@@ -112,15 +118,17 @@ fn candidates(exact: &[(BigRational, BigRational); 3]) -> Vec<[f64; 3]> {
         }
     }
     // Kept only within the box, exactly.
-    out.retain(|q| {
-        (0..3).all(|i| {
-            BigRational::from_float(q[i]).is_some_and(|v| v >= exact[i].0 && v <= exact[i].1)
-        })
-    });
+    out.retain(|q| (0..3).all(|i| BigRational::from_float(q[i]).is_some_and(|v| v >= exact[i].0 && v <= exact[i].1)));
     out
 }
 
-fn part_outside(prog: &Program, part: &BodyPart, fp: &Expr, facts: &Facts) -> Option<Outside> {
+fn part_outside(
+    prog: &Program,
+    part: &BodyPart,
+    fp: &Expr,
+    facts: &Facts,
+    name: &dyn Fn(&Var) -> String,
+) -> Option<Outside> {
     let loc = Loc::default();
     let q: [Expr; 3] = [0, 1, 2].map(|k| Expr { kind: ExprKind::Var(Var::Point(k)), sort: Sort::Real, loc });
     let unplaced = Body { parts: vec![BodyPart { place: None, ..part.clone() }], span: part.span };
@@ -178,7 +186,7 @@ fn part_outside(prog: &Program, part: &BodyPart, fp: &Expr, facts: &Facts) -> Op
             env[k] = facts.ranges.get(v).copied().filter(|r| r.lo <= r.hi);
         }
     }
-    let names: Vec<String> = reads.iter().map(|&k| describe(&vars[k])).collect();
+    let names: Vec<String> = reads.iter().map(|&k| name(&vars[k])).collect();
     let widths: Vec<f64> = lo.iter().zip(&hi).map(|(l, h)| (h - l).max(f64::MIN_POSITIVE)).collect();
     let n = reads.len();
     let mut stack = vec![(lo, hi)];
@@ -208,9 +216,8 @@ fn part_outside(prog: &Program, part: &BodyPart, fp: &Expr, facts: &Facts) -> Op
                 last = i;
                 settled = true;
                 if example.is_none() {
-                    let at: Vec<String> = (0..n)
-                        .map(|j| format!("{} in [{:.4}, {:.4}]", names[j], lo[j], hi[j]))
-                        .collect();
+                    let at: Vec<String> =
+                        (0..n).map(|j| format!("{} in [{:.4}, {:.4}]", names[j], lo[j], hi[j])).collect();
                     let at = if at.is_empty() { "every state".to_string() } else { at.join(", ") };
                     example = Some((at, points[i]));
                 }
