@@ -1013,14 +1013,16 @@ fn processes_of_a_mavlink_protocol_are_typed_against_their_projections() {
 fn a_footprint_turned_with_the_heading_contains_a_round_body_or_is_never_passed() {
     // E0512 with a footprint written in the cart's heading frame (cos/sin of theta) around
     // a cylinder body: decided by the interval search of `space::enclose` (Z3 timed out on
-    // it), and its twin 5 mm too small is not verified (the search finds no proof; Z3
-    // rejects it or leaves it open).
+    // it), and its twin 5 mm too small is rejected by the search's refutation (a rim point
+    // outside the footprint at every heading), within the first second.
     let o = mochi(&["check", "choreographies/pgcd/underpass.chor", "--format", "json"]);
     let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
     assert_eq!(v["verdict"], "verified", "{}", stdout(&o));
-    let o = mochi(&["check", "tests/data/underpass-footprint-too-small.chor", "--timeout", "1", "--format", "json"]);
+    let twin = "choreographies/rejected/geometry/E0512-underpass-footprint-too-small.chor";
+    let o = mochi(&["check", twin, "--timeout", "1", "--format", "json"]);
     let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("json");
-    assert_ne!(v["verdict"], "verified", "{}", stdout(&o));
+    assert_eq!(v["verdict"], "rejected", "{}", stdout(&o));
+    assert!(v["diagnostics"].as_array().is_some_and(|ds| ds.iter().any(|d| d["code"] == "E0512")), "{v}");
     assert_ne!(o.status.code(), Some(0));
 }
 

@@ -486,13 +486,27 @@ impl<'a> Geo<'a> {
                     .enumerate()
                     .filter_map(|(i, d)| matches!(d, Dim::Clock(_)).then_some(c.q[i]))
                     .collect();
-                let values = self.assignments(&c.q).unwrap_or_default();
+                let values = match self.assignments(&c.q) {
+                    Some(v) if !v.is_empty() => v,
+                    _ => self.dim_values(&c.q),
+                };
+                // The earliest contact: the refinement pass proved every configuration
+                // that satisfies the constraints with a time below `clear_before` apart;
+                // `Overlap::not_before` claims "at or before", so the largest double below
+                // it. Only for one clock (a joint motion; the sides of `*` have two), and
+                // only when it says something (above the motion's start).
+                let one_clock = times.len() == 1 && !self.initial;
+                let not_before = c
+                    .clear_before
+                    .filter(|cb| one_clock && cb.is_finite() && *cb > 0.0)
+                    .map(f64::next_down)
+                    .filter(|nb| *nb >= 0.0 && times.first().is_some_and(|t| nb <= t));
                 GeoAnswer::Contact {
                     values,
                     overlap: Overlap {
                         point: c.point,
                         times: if self.initial { Vec::new() } else { times },
-                        not_before: None,
+                        not_before,
                     },
                 }
             }
@@ -629,6 +643,29 @@ impl<'a> Geo<'a> {
                 GeoAnswer::Unknown(format!("{what}, and the constraints could not be put to Z3 to confirm it"))
             }
         }
+    }
+
+    /// The configuration `q` itself as the counterexample's values, when Z3 gives no model
+    /// with the dimensions pinned to it (the witness the search confirmed was a Z3 model
+    /// rounded to doubles, which may miss an equality by an ulp): each participant's
+    /// state at the contact (`Cart.x(t)`, or `Cart.x` at the start, [T-SESS]), marked
+    /// approximate (`≈`); the time is the overlap's.
+    pub(super) fn dim_values(&self, q: &[f64]) -> Vec<Assignment> {
+        let mut out: Vec<Assignment> = self
+            .dims
+            .iter()
+            .zip(q)
+            .filter(|(d, _)| matches!(d, Dim::Now(..)))
+            .map(|(d, v)| {
+                let name = match d {
+                    Dim::Now(..) if !self.initial => format!("{}(t)", self.dim_name(*d)),
+                    _ => self.dim_name(*d),
+                };
+                Assignment { name, value: format!("≈{v}") }
+            })
+            .collect();
+        out.sort_by(|a, b| a.name.cmp(&b.name));
+        out
     }
 
     /// The counterexample's values at the configuration `q` (a model of the constraints

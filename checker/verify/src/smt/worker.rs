@@ -123,6 +123,8 @@ impl Worker<'_> {
     /// [`QUICK`] per query (most other such questions are linear once the heading is fixed,
     /// and answered in milliseconds); then, if the first search only ran out of pieces, the
     /// search with its full budget (about a second); then Z3 again with the full limit.
+    /// Between the first search and Z3, the refutation of `space::enclose::body_outside`
+    /// (a point of the body outside the footprint at every allowed state).
     /// Every answer is one of the procedures', each sound on its own.
     fn contains_turning(&self, index: usize, ob: &Obligation, prim: crate::hir::PrimId) -> (Decision, Stats) {
         use crate::space::enclose::{body_in_predicate, BUDGET, QUICK_BUDGET};
@@ -135,6 +137,13 @@ impl Worker<'_> {
             }
             Err(u) => u.ran_out,
         };
+        // The other direction, by the same interval truth: a point of the body outside the
+        // footprint at every state the contract allows.
+        if let Some(why) = crate::space::enclose::body_outside(self.prog, prim) {
+            stats.geometric += 1;
+            let failure = Failure { part: why, which: None, values: Vec::new(), overlap: None, bound: Vec::new() };
+            return (Decision::Fails(failure), stats);
+        }
         let quick = Worker { timeout: self.timeout.min(QUICK), ..*self };
         let (d, more) = quick.decide_parts(index, ob);
         stats.add(&more);
@@ -181,6 +190,7 @@ impl Worker<'_> {
             Plan::Unknown(Unsupported(what)) => {
                 return (Decision::Unknown { part: String::new(), why: Why::Unsupported(what) }, stats);
             }
+            Plan::Undecided(why) => return (Decision::Unknown { part: String::new(), why }, stats),
             Plan::Parts(parts) => parts,
         };
         let mut unknown = None;

@@ -35,7 +35,9 @@
 //! search that runs out of pieces, or a predicate reading a variable with no finite range,
 //! leaves the question undecided: the caller asks Z3 (never a pass).
 
+mod refute;
 mod solid;
+pub use refute::body_outside;
 pub use solid::{solid_parts_in_predicate, Solids};
 
 use crate::bounds::compiled::{Compiled, VarTable};

@@ -276,8 +276,10 @@ pub struct Stats {
     pub elapsed: Duration,
 }
 
+/// What [`decide`] found about a box of configurations, with the search's statistics (an
+/// obligation's answer is `smt::Decision`; this is the search's own).
 #[derive(Clone, Debug, PartialEq)]
-pub struct Decision {
+pub struct Verdict {
     pub outcome: Outcome,
     pub stats: Stats,
 }
@@ -463,12 +465,12 @@ fn pass(scene: &dyn Scene, root: &QBox, opts: &Options, earliest: bool, max_node
 /// second pass over the part of the box with time ≤ `t1` searches earliest first (boxes
 /// in order of their time lower bound) with the nodes left; [`Contact::clear_before`]
 /// says how far that pass proved the feasible configurations apart.
-pub fn decide(scene: &dyn Scene, root: &QBox, opts: &Options) -> Decision {
+pub fn decide(scene: &dyn Scene, root: &QBox, opts: &Options) -> Verdict {
     let start = Instant::now();
     let mut stats = Stats::default();
     let finish = |outcome: Outcome, mut stats: Stats| {
         stats.elapsed = start.elapsed();
-        Decision { outcome, stats }
+        Verdict { outcome, stats }
     };
     if !root.well_formed(scene.dims()) || opts.resolution.len() != scene.dims() {
         return finish(Outcome::Unknown { why: UnknownWhy::BadBox, qbox: root.clone(), unresolved: 1 }, stats);

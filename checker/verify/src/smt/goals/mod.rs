@@ -128,6 +128,9 @@ pub enum Plan {
     /// Fails without a query, with the reason.
     Fails(String),
     Unknown(Unsupported),
+    /// Undecided by a procedure other than the SMT encoding (the interval search of
+    /// `space::enclose` or `space::contain`), with its reason.
+    Undecided(super::Why),
 }
 
 pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
@@ -176,24 +179,30 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
                     match solid_parts_in_predicate(prog, *prim) {
                         None => Plan::Parts((0..n).map(Part::Contains).collect()),
                         Some((Solids::Fails(why), _)) => Plan::Fails(why),
-                        Some((Solids::Unknown(why), _)) => Plan::Unknown(Unsupported(format!(
-                            "a URDF or mesh body in the predicate footprint of `{}`: {why}; widen the footprint, or write it as `footprint: geometry;`",
+                        Some((Solids::Unknown(why), _)) => Plan::Undecided(super::Why::Interval(format!(
+                            "a URDF or mesh body in the predicate footprint of `{}`: {why}",
                             p.name
                         ))),
                         Some((Solids::Holds(note), others)) if others.is_empty() => Plan::Holds(Some(note)),
-                        Some((Solids::Holds(_), others)) => Plan::Parts(others.into_iter().map(Part::Contains).collect()),
+                        Some((Solids::Holds(_), others)) => {
+                            Plan::Parts(others.into_iter().map(Part::Contains).collect())
+                        }
                     }
                 }
                 // No predicate: decided by the solids when each part of the body lies in a
                 // part of the footprint placed the same way, else unknown.
-                crate::hir::Footprint::Solid { .. } => match crate::space::contain::body_within_footprint(prog, *prim) {
-                    crate::space::contain::Contained::Yes(note) => Plan::Holds(Some(note)),
-                    crate::space::contain::Contained::No(why) => Plan::Fails(why),
-                    crate::space::contain::Contained::Unknown(why) => Plan::Unknown(Unsupported(format!(
-                        "a footprint with a URDF or mesh part (that of `{}`) as a container of the robot's body: {why}; write it as `footprint: geometry;`, with shapes, or as a predicate",
+                crate::hir::Footprint::Solid { .. } => {
+                    match crate::space::contain::body_within_footprint(prog, *prim) {
+                        crate::space::contain::Contained::Yes(note) => Plan::Holds(Some(note)),
+                        crate::space::contain::Contained::No(why) => Plan::Fails(why),
+                        crate::space::contain::Contained::Unknown(why) => {
+                            Plan::Undecided(super::Why::Interval(format!(
+                        "a footprint with a URDF or mesh part (that of `{}`) as a container of the robot's body: {why}",
                         p.name
-                    ))),
-                },
+                    )))
+                        }
+                    }
+                }
             }
         }
     }
@@ -240,6 +249,7 @@ pub(crate) mod tests {
             Plan::Holds(n) => Err(format!("holds ({n:?})")),
             Plan::Fails(why) => Err(format!("fails: {why}")),
             Plan::Unknown(u) => Err(format!("unknown: {}", u.0)),
+            Plan::Undecided(why) => Err(format!("unknown: {why}")),
         }
     }
 

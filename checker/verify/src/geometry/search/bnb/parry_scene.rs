@@ -21,21 +21,23 @@ impl Placer for Vec<AffinePose> {
     }
 }
 
-/// One solid: a parry shape in its innermost frame, with a bound on the distance of its
-/// points from that frame's origin.
-pub struct Solid {
+/// One solid of the search's own scene ([`ParryScene`]): a parry shape in its innermost
+/// frame, placed by a [`Placer`], with a bound on the distance of its points from that
+/// frame's origin (the checks' solids, read from URDFs, meshes and shapes, are
+/// `geometry::Solid`).
+pub struct SearchSolid {
     pub name: String,
     pub shape: SharedShape,
     pub radius: f64,
     pub place: Box<dyn Placer + Send + Sync>,
 }
 
-impl Solid {
+impl SearchSolid {
     /// `radius` is computed from the shape's bounding sphere (padded for f32).
-    pub fn new(name: &str, shape: SharedShape, place: Box<dyn Placer + Send + Sync>) -> Solid {
+    pub fn new(name: &str, shape: SharedShape, place: Box<dyn Placer + Send + Sync>) -> SearchSolid {
         let s = shape.compute_local_bounding_sphere();
         let radius = s.center().coords.norm() + s.radius();
-        Solid { name: name.to_string(), shape, radius: radius * (1.0 + 1e-5) + 1e-9, place }
+        SearchSolid { name: name.to_string(), shape, radius: radius * (1.0 + 1e-5) + 1e-9, place }
     }
 }
 
@@ -61,7 +63,7 @@ impl Constraints for Unconstrained {
 /// empty side.
 pub struct ParryScene {
     pub dims: usize,
-    pub sides: [Vec<Solid>; 2],
+    pub sides: [Vec<SearchSolid>; 2],
     pub constraints: Box<dyn Constraints + Send + Sync>,
 }
 
@@ -160,7 +162,7 @@ pub fn parry_closest(
 }
 
 impl ParryScene {
-    pub fn new(dims: usize, sides: [Vec<Solid>; 2]) -> ParryScene {
+    pub fn new(dims: usize, sides: [Vec<SearchSolid>; 2]) -> ParryScene {
         ParryScene { dims, sides, constraints: Box::new(Unconstrained) }
     }
 }
@@ -171,7 +173,7 @@ impl Scene for ParryScene {
     }
 
     fn distance(&self, q: &[f64]) -> Closest {
-        let place = |s: &Solid| crate::geometry::placement::compose(&s.place.frames(q));
+        let place = |s: &SearchSolid| crate::geometry::placement::compose(&s.place.frames(q));
         let a: Vec<Isometry3<f64>> = self.sides[0].iter().map(place).collect();
         let b: Vec<Isometry3<f64>> = self.sides[1].iter().map(place).collect();
         let mut best = Closest { distance: f64::INFINITY, lower: f64::INFINITY, points: [[0.0; 3]; 2], solids: [0, 0] };
@@ -191,7 +193,7 @@ impl Scene for ParryScene {
     }
 
     fn motion_bound(&self, lo: &[f64], hi: &[f64], centre: &[f64]) -> f64 {
-        let side = |s: &Vec<Solid>| {
+        let side = |s: &Vec<SearchSolid>| {
             s.iter().map(|x| chain_motion_bound(&x.place.bounds(lo, hi, centre), x.radius)).fold(0.0, f64::max)
         };
         // Each side's points move by at most the largest of its solids' bounds.

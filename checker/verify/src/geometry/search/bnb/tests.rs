@@ -7,8 +7,8 @@ use parry3d::shape::SharedShape;
 const T: usize = 0;
 
 /// A solid placed by one affine pose.
-fn solid(name: &str, shape: SharedShape, pose: AffinePose) -> Solid {
-    Solid::new(name, shape, Box::new(vec![pose]))
+fn solid(name: &str, shape: SharedShape, pose: AffinePose) -> SearchSolid {
+    SearchSolid::new(name, shape, Box::new(vec![pose]))
 }
 
 fn ball(r: f64) -> SharedShape {
@@ -33,7 +33,7 @@ fn root1() -> QBox {
     QBox::new(vec![0.0], vec![10.0])
 }
 
-fn report(name: &str, d: &Decision) {
+fn report(name: &str, d: &Verdict) {
     eprintln!(
         "{name}: {} nodes, {} distance calls, {} witness calls, {:?}",
         d.stats.nodes, d.stats.distance_calls, d.stats.witness_calls, d.stats.elapsed
@@ -360,11 +360,11 @@ fn random_scenes_agree_with_sampling() {
             }
             p
         };
-        let side = |rng: &mut Rng, tag: &str| -> Vec<Solid> {
+        let side = |rng: &mut Rng, tag: &str| -> Vec<SearchSolid> {
             (0..1 + (rng.next() * 2.0) as usize)
                 .map(|k| {
                     let chain: Vec<AffinePose> = (0..1 + (rng.next() * 2.0) as usize).map(|_| pose(rng)).collect();
-                    Solid::new(&format!("{tag}{k}"), shape(rng), Box::new(chain))
+                    SearchSolid::new(&format!("{tag}{k}"), shape(rng), Box::new(chain))
                 })
                 .collect()
         };
@@ -409,12 +409,16 @@ fn mounted_arm(pillar_y: f64) -> ParryScene {
     // A link: a capsule from its joint's origin up its z axis, `len` long.
     let link = |len: f64| AffinePose::fixed([0.0, 0.0, len / 2.0, 0.0, 0.0, 0.0]);
     let side0 = vec![
-        Solid::new("cart", SharedShape::cuboid(0.3, 0.2, 0.1), Box::new(vec![cart()])),
-        Solid::new("base", SharedShape::ball(0.08), Box::new(vec![cart(), j1()])),
-        Solid::new("upper", SharedShape::capsule_z(0.2, 0.05), Box::new(vec![cart(), j1(), j2(), link(0.4)])),
-        Solid::new("fore", SharedShape::capsule_z(0.2, 0.04), Box::new(vec![cart(), j1(), j2(), j3(), link(0.4)])),
+        SearchSolid::new("cart", SharedShape::cuboid(0.3, 0.2, 0.1), Box::new(vec![cart()])),
+        SearchSolid::new("base", SharedShape::ball(0.08), Box::new(vec![cart(), j1()])),
+        SearchSolid::new("upper", SharedShape::capsule_z(0.2, 0.05), Box::new(vec![cart(), j1(), j2(), link(0.4)])),
+        SearchSolid::new(
+            "fore",
+            SharedShape::capsule_z(0.2, 0.04),
+            Box::new(vec![cart(), j1(), j2(), j3(), link(0.4)]),
+        ),
     ];
-    let pillar = Solid::new(
+    let pillar = SearchSolid::new(
         "pillar",
         // parry's cylinder stands on y; roll 90° stands it on z.
         SharedShape::cylinder(1.0, 0.15),
