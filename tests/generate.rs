@@ -550,6 +550,12 @@ enum Msg {
 #[derive(Clone, Debug)]
 struct Protocol {
     msgs: Vec<(bool, Msg)>,
+    /// A timeout branch beside the message at this index: `( p -> q: msg. rest + after
+    /// 1000 ms by q. q -> p: HEARTBEAT. end )`. The receiver may always give up there (time
+    /// passes), so that message having no admissible payload is a dead branch, not a stuck
+    /// protocol; every other message, before it or after it on the message branch, must
+    /// still have one.
+    timeout: Option<usize>,
 }
 
 /// The smallest float32 above `v` (finite `v`).
@@ -566,6 +572,11 @@ impl Protocol {
     /// Integer fields range over their wire range; a float field over the finite float32
     /// values (LANGUAGE.md's model of MAVLink values).
     fn stuck(&self) -> Option<usize> {
+        self.first_stuck().filter(|&k| Some(k) != self.timeout)
+    }
+
+    /// The first message no admissible payload fits, on the path through every message.
+    fn first_stuck(&self) -> Option<usize> {
         let mut reach: Option<(i128, i128)> = None;
         for (k, (_, msg)) in self.msgs.iter().enumerate() {
             match msg {
@@ -651,9 +662,19 @@ fn render_protocol(p: &Protocol, binders: &[String]) -> String {
                 format!("PARAM_SET(param_value as {v} {{{l} {lo_op} {v} && {v} {hi_op} {h}}})")
             }
         };
-        let _ = writeln!(s, "  {a} -> {b}: {text}.");
+        if p.timeout == Some(k) {
+            let _ = writeln!(s, "  ( {a} -> {b}: {text}.");
+        } else {
+            let _ = writeln!(s, "  {a} -> {b}: {text}.");
+        }
     }
-    s.push_str("  end;\n");
+    match p.timeout.and_then(|k| p.msgs.get(k)) {
+        Some((from_gcs, _)) => {
+            let (a, b) = if *from_gcs { ("GCS", "UAV") } else { ("UAV", "GCS") };
+            let _ = writeln!(s, "  end\n  + after 1000 ms by {b}. {b} -> {a}: HEARTBEAT. end );");
+        }
+        None => s.push_str("  end;\n"),
+    }
     s
 }
 
@@ -710,7 +731,11 @@ fn protocol() -> impl Strategy<Value = Protocol> {
         tie,
     });
     let msg = prop_oneof![4 => int, 1 => float_pair()];
-    prop::collection::vec((any::<bool>(), msg), 1..=4).prop_map(|msgs| Protocol { msgs }.normalised())
+    let timeout = prop_oneof![2 => Just(None), 1 => (0usize..4).prop_map(Some)];
+    (prop::collection::vec((any::<bool>(), msg), 1..=4), timeout).prop_map(|(msgs, timeout)| {
+        let timeout = timeout.filter(|&k| k < msgs.len());
+        Protocol { msgs, timeout }.normalised()
+    })
 }
 
 /// Binder names a user may pick: plain, a field's own name, a name other dialect items
@@ -735,6 +760,11 @@ fn generated_protocols_agree_with_their_ground_truth() {
                 base.verdict != Verdict::Verified,
                 "FALSE VERIFIED: no admissible payload fits message {k} on some path, yet verified\n{src}"
             ),
+            // Behind a dead branch (the message beside the timeout has no admissible
+            // payload) the rest of that branch is never reached, and mochi may still find a
+            // later message without a payload of its own (E0419 at an unreachable point: a
+            // false alarm, not a soundness question): no completeness claim there.
+            None if p.timeout.is_some() && p.first_stuck() == p.timeout => {}
             None => prop_assert!(
                 base.verdict == Verdict::Verified,
                 "false alarm: every message has an admissible payload, yet {said}\n{:#?}\n{src}",
@@ -771,6 +801,7 @@ fn the_float_oracle_sees_the_gap_between_neighbours() {
     let lo = 0.1f32;
     let p = |lo_strict, hi_strict| Protocol {
         msgs: vec![(true, Msg::Float { lo, lo_strict, hi: next_up(lo), hi_strict })],
+        timeout: None,
     };
     assert_eq!(p(true, true).stuck(), Some(0));
     assert_eq!(p(false, true).stuck(), None);
@@ -785,8 +816,34 @@ fn the_float_oracle_sees_the_gap_between_neighbours() {
             (true, Msg::Int { f: 5, lo: 250, hi: 300, tie: Tie::None }),
             (false, Msg::Int { f: 5, lo: 0, hi: 300, tie: Tie::AtLeast(1) }),
         ],
+        timeout: None,
     };
     assert_eq!(q.stuck(), Some(1), "255 + 1 is beyond a uint8");
+    // A timeout beside the stuck message makes it a dead branch; beside an earlier one, the
+    // message branch still gets stuck after it.
+    assert_eq!(Protocol { timeout: Some(1), ..q.clone() }.stuck(), None);
+    assert_eq!(Protocol { timeout: Some(0), ..q.clone() }.stuck(), Some(1));
+}
+
+/// The timeout oracle against mochi: a timeout beside the first message does not hide that
+/// the second has no admissible payload after it (the receiver's giving up is one branch; the
+/// message branch must still progress), and beside the second it does.
+#[test]
+fn a_timeout_beside_an_earlier_message_keeps_a_later_defect() {
+    let q = Protocol {
+        msgs: vec![
+            (true, Msg::Int { f: 5, lo: 250, hi: 300, tie: Tie::None }),
+            (false, Msg::Int { f: 5, lo: 0, hi: 300, tie: Tie::AtLeast(1) }),
+        ],
+        timeout: None,
+    };
+    let names: Vec<String> = vec!["v0".into(), "v1".into()];
+    for (timeout, verified) in [(Some(0), false), (Some(1), true), (None, false)] {
+        let p = Protocol { timeout, ..q.clone() };
+        let src = render_protocol(&p, &names);
+        let r = check(&src);
+        assert_eq!(r.verdict == Verdict::Verified, verified, "{:?} {:?}\n{src}", r.verdict, codes(&r));
+    }
 }
 
 // ---------------------------------------------------------------------------------------

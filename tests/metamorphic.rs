@@ -343,6 +343,86 @@ fn a_box_written_as_a_mesh_keeps_the_verdict() {
     sweep("box as mesh", |_, f| mesh_case(f));
 }
 
+// ---------------------------------------------------------------- an inadmissible stream
+
+/// Invariants no reading satisfies, of a `uint16` field named `hunt_vb`, each for another
+/// reason: out of the wire range, below an unsigned type, a division by zero, a square
+/// root of a negative, a square below zero, a contradiction between two conjuncts.
+const INADMISSIBLE: &[&str] = &[
+    "hunt_vb > 70000",
+    "hunt_vb < 0",
+    "hunt_vb / 0 >= 0",
+    "sqrt(0 - 1 - hunt_vb) >= 0",
+    "hunt_vb * hunt_vb < 0",
+    "hunt_vb > 10 && 10 / (hunt_vb - hunt_vb) == 1",
+];
+
+/// The root file with one more stream in its system, from its first participant to its
+/// second: `SYS_STATUS(voltage_battery as hunt_vb {inv})`. `None` for a file that is no
+/// MAVLink protocol with two participants.
+fn with_stream(file: &Path, inv: &str) -> Option<Program> {
+    let text = std::fs::read_to_string(file).ok()?;
+    if !text.lines().any(|l| l.trim_start().starts_with("dialect ")) {
+        return None;
+    }
+    let start = text.find("system ")?;
+    let open = start + text[start..].find('{')?;
+    // The system's closing brace: the invariants of its streams have braces of their own.
+    let mut depth = 0usize;
+    let close = open
+        + text[open..].char_indices().find_map(|(i, c)| {
+            match c {
+                '{' => depth += 1,
+                '}' => depth -= 1,
+                _ => {}
+            }
+            (depth == 0).then_some(i)
+        })?;
+    let body = &text[open + 1..close];
+    let roles: Vec<&str> = body
+        .split(';')
+        .filter_map(|d| d.trim().strip_prefix("participant "))
+        .map(|r| r.split(|c: char| !c.is_alphanumeric() && c != '_').next().unwrap_or(""))
+        .filter(|r| !r.is_empty())
+        .collect();
+    let [a, b, ..] = roles[..] else { return None };
+    let line = format!("\n  stream {a} -> {b}: SYS_STATUS(voltage_battery as hunt_vb {{{inv}}});\n");
+    let mut out = text.clone();
+    out.insert_str(close, &line);
+    let mut p = Program::on_disk(file);
+    p.texts.insert(file.display().to_string(), out);
+    Some(p)
+}
+
+/// Adding a stream whose invariant admits no reading never turns a protocol verified, and
+/// turns a verified one rejected with E0410 (the stream's own satisfiability check), or
+/// with E0246 where the protocol has a step of the same label between the same two roles.
+fn stream_case(file: &Path, k: usize) -> Result<(), String> {
+    let inv = INADMISSIBLE[k % INADMISSIBLE.len()];
+    let Some(p) = with_stream(file, inv) else { return Ok(()) };
+    let before = baseline(file);
+    let after = check(&p, &config(1, false));
+    let codes = after.error_codes();
+    let ok = after.verdict != Verdict::Verified
+        && (before.verdict != Verdict::Verified
+            || (after.verdict == Verdict::Rejected
+                && (codes.iter().any(|c| c == "E0410") || codes.iter().any(|c| c == "E0246"))));
+    if ok {
+        return Ok(());
+    }
+    Err(format!(
+        "{}: a stream `{{{inv}}}` added\n  before: {before}\n  after:  {after}{}\n{}",
+        file.display(),
+        if after.verdict == Verdict::Verified { "   <== FALSE VERIFIED" } else { "" },
+        p.texts.values().next().cloned().unwrap_or_default()
+    ))
+}
+
+#[test]
+fn a_stream_that_admits_no_reading_is_e0410() {
+    sweep("inadmissible stream", |i, f| stream_case(f, i));
+}
+
 // ---------------------------------------------------------------- properties
 
 fn pick_file() -> impl Strategy<Value = PathBuf> {
@@ -370,6 +450,11 @@ proptest! {
     #[test]
     fn prop_constants(file in pick_file(), seed in any::<u64>()) {
         constants_case(&file, seed).map_err(TestCaseError::fail)?;
+    }
+
+    #[test]
+    fn prop_inadmissible_stream(file in pick_file(), k in any::<usize>()) {
+        stream_case(&file, k).map_err(TestCaseError::fail)?;
     }
 
     #[test]

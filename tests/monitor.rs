@@ -427,6 +427,54 @@ fn parachute_is_monitored_with_its_readings() {
     assert_eq!(stats.readings, 3);
 }
 
+/// A frame from an end no session has bound, whose label is a stream's and a step's, and
+/// which is both a valid reading and a valid first step, starts the session: taken as a
+/// reading, the session's start is missed, and a later step that breaks the protocol is
+/// checked as the start of another session, where it is allowed.
+#[test]
+fn a_heartbeat_that_could_start_a_session_starts_it() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/monitor-heartbeat-step-and-stream.chor");
+    let (db, prog, verdict) = load(&path);
+    assert_eq!(verdict, Verdict::Verified);
+    let a = Automaton::compile(&prog).expect("a protocol with a stream is monitored");
+    let (gcs, uav) = (RoleId(0), RoleId(1));
+    assert_eq!(prog.role_name(gcs), "GCS");
+    // MAV_TYPE_GCS 6, MAV_TYPE_QUADROTOR 2, MAV_STATE_ACTIVE 4; COMPONENT_ARM_DISARM 400.
+    let announce = payload(&prog, "HEARTBEAT", uav, &[("type", 6), ("system_status", 4)]);
+    let vehicle = payload(&prog, "HEARTBEAT", gcs, &[("type", 2), ("system_status", 4)]);
+    let command = |arm: i128| payload(&prog, "COMMAND_LONG[MAV_CMD_COMPONENT_ARM_DISARM]", uav, &[("param1", arm)]);
+    let ack = payload(&prog, "COMMAND_ACK", gcs, &[("command", 400)]);
+    let (g, u) = (end_of(gcs), end_of(uav));
+    let run = |frames: &[Sent<'_>]| {
+        let mut m = Monitor::new(vec![a.clone()]);
+        let out: Vec<Outcome> = frames.iter().map(|(from, p)| m.on_frame(&frame(*from, p))).collect();
+        let kinds: Vec<Option<Kind>> = out
+            .iter()
+            .map(|o| match o {
+                Outcome::Violation(v) => m.violation(*v).map(|v| v.kind),
+                _ => None,
+            })
+            .collect();
+        let described: Vec<String> = (0..m.violations().len()).map(|v| m.describe(&db, v)).collect();
+        (out, kinds, described, m.stats)
+    };
+    // Conforming: the vehicle's heartbeat is a reading (as a step it breaks `type ==
+    // MAV_TYPE_GCS`); the announcement starts the session, the arm follows.
+    let (out, kinds, d, stats) = run(&[(u, &vehicle), (g, &announce), (u, &vehicle), (g, &command(1)), (u, &ack)]);
+    assert!(kinds.iter().all(Option::is_none), "{d:?}");
+    assert!(matches!(out[4], Outcome::Ended { .. }), "{out:?}");
+    assert_eq!(stats.readings, 2);
+    assert_eq!(stats.sessions_started, 1);
+    // Conforming: a disarm without the announcement.
+    let (out, kinds, d, _) = run(&[(u, &vehicle), (g, &command(0)), (u, &ack)]);
+    assert!(kinds.iter().all(Option::is_none), "{d:?}");
+    assert!(matches!(out[2], Outcome::Ended { .. }), "{out:?}");
+    // Violating: after the announcement only an arm may follow. Taking the announcement for
+    // a reading would start the session at the disarm, and pass it.
+    let (out, kinds, d, _) = run(&[(u, &vehicle), (g, &announce), (g, &command(0)), (u, &ack)]);
+    assert_eq!(kinds[2], Some(Kind::Refinement), "{out:?} {d:?}");
+}
+
 // ---- the decoder against the mavlink crate ---------------------------------------------
 
 /// A small deterministic generator (SplitMix64).

@@ -40,7 +40,19 @@ impl Lowerer {
             let idx = self.prog.streams.len() as u32;
             let mut values = Vec::new();
             let origin = ValueOrigin::Stream { stream: idx };
-            let fields = self.message(&st.label, &st.payload, from, origin, &mut values);
+            let mut fields = self.message(&st.label, &st.payload, from, origin, &mut values);
+            // A reading satisfies the invariant and can evaluate it: a partial operator
+            // (`/`, `sqrt`) is applied within its domain (`hir::expr::definedness`). The
+            // template's refinement says so itself, so that every reader of it (the
+            // streams' satisfiability check, E0410; each snapshot; the monitor) asks the
+            // same thing: an invariant `roll == 1.0 / 0.0` admits no reading, rather than
+            // one with an arbitrary quotient that the steps' contexts (which conjoin the
+            // definedness) then contradict.
+            for f in &mut fields {
+                if let Some(r) = f.refinement.take() {
+                    f.refinement = Some(crate::hir::expr::defined_and(r));
+                }
+            }
             // The invariant is what every value of the stream satisfies: it reads the fields
             // of the stream's message and constants only.
             for f in &fields {

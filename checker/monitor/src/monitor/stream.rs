@@ -69,8 +69,9 @@ impl Monitor {
     /// session's stream sender is never used by the session (readings are kept per end).
     pub(super) fn on_stream(&mut self, p: usize, f: &Frame, index: u64) -> Class {
         let src = (f.sysid, f.compid);
-        let a = &self.protos[p];
-        for (si, st) in a.streams.iter().enumerate() {
+        for si in 0..self.protos[p].streams.len() {
+            let a = &self.protos[p];
+            let st = &a.streams[si];
             if st.msgid != f.msgid || !command_fits(st, f) {
                 continue;
             }
@@ -94,8 +95,18 @@ impl Monitor {
             if could_step && as_other && !as_sender {
                 continue;
             }
-            match check(a, st, f, &mut self.scratch, &mut self.stats.fallbacks) {
+            let checked = check(a, st, f, &mut self.scratch, &mut self.stats.fallbacks);
+            match checked {
+                // From an end no session has bound, a frame that is a valid reading and
+                // also a valid first step of a session is ambiguous: taken as a reading,
+                // the session it starts would go unmonitored, and every later step of it
+                // would be checked (if at all) as the start of another session. It starts
+                // the session: a missed start could hide a violation, a spurious one
+                // cannot (the stream's invariant tells the two apart where the protocol
+                // writes one).
+                Ok(()) if could_step && !as_sender && self.starts_cleanly(p, f, index) => return Class::NotStream,
                 Ok(()) => {
+                    let st = &self.protos[p].streams[si];
                     let target = match targets_of(st.target, f) {
                         (Some(s), Some(c)) => (s, c),
                         (Some(s), None) => (s, 0),
@@ -126,6 +137,7 @@ impl Monitor {
                     return Class::Reading;
                 }
                 Err(fail) if as_sender || !could_step => {
+                    let st = &self.protos[p].streams[si];
                     self.stats.violations += 1;
                     let field = fail.field.and_then(|i| st.fields.get(i as usize)).map(|fr| fr.name.clone());
                     self.violations.push(Violation {
@@ -151,6 +163,24 @@ impl Monitor {
             }
         }
         Class::NotStream
+    }
+
+    /// Whether the frame would start a session of protocol `p` whose first step it passes
+    /// (label, ends, guard, refinements), tried on a session that is then discarded: no
+    /// session, violation or statistic is left of the trial.
+    fn starts_cleanly(&mut self, p: usize, f: &Frame, index: u64) -> bool {
+        if !super::session::vec_fresh_check(&self.protos[p], f) {
+            return false;
+        }
+        let (id, started) = (self.next_id, self.stats.sessions_started);
+        let slot = self.start(p, index);
+        self.undo.clear();
+        self.undo_strs.clear();
+        let ok = self.take(slot, f).is_ok();
+        self.close(slot, false, false);
+        self.next_id = id;
+        self.stats.sessions_started = started;
+        ok
     }
 }
 
