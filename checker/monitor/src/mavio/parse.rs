@@ -262,8 +262,8 @@ pub enum Item<'a> {
 /// Whether a start byte inside `frame` (a prefix of `rest`) begins a checked frame; `None`
 /// while a candidate inside runs past the end of `rest` (more input decides).
 fn inner_frame(frame: &[u8], rest: &[u8], cfg: &Config, eof: bool) -> Option<bool> {
-    for i in 1..frame.len() {
-        if frame[i] == STX_V1 || frame[i] == STX_V2 {
+    for (i, &b) in frame.iter().enumerate().skip(1) {
+        if b == STX_V1 || b == STX_V2 {
             match look(&rest[i..], cfg, eof, 0) {
                 Look::Frame(_) => return Some(true),
                 Look::NeedMore => return None,

@@ -143,10 +143,7 @@ impl Monitor {
         self.undo.clear();
         self.undo_strs.clear();
         let fired = if hops > 0 { self.fire(slot, f, hops) } else { Ok(None) };
-        let taken = match fired {
-            Ok(fired) => self.take(slot, f).map(|(next, e)| (next, e, fired)),
-            Err(fail) => Err(fail),
-        };
+        let taken = fired.and_then(|fired| self.take(slot, f).map(|(next, e)| (next, e, fired)));
         match taken {
             Ok((next, e, fired)) => {
                 let s = &mut self.slots[slot];
