@@ -321,3 +321,85 @@ fn enforcing_a_protocol_that_names_heartbeat_hides_the_vehicle_from_mavsdk() {
     let v = violations(&p);
     assert!(!v.is_empty() && v.iter().all(|l| l["msgid"] == 0 && l["action"] == "drop"), "{v:?}");
 }
+
+// ---- the parachute: observed state through the proxy ----------------------------------
+
+/// A MAVLink 2 frame of `m` from `from` (common dialect; the proxy checks with
+/// ardupilotmega, which includes it).
+fn mav(from: (u8, u8), seq: u8, m: &mavlink::dialects::common::MavMessage) -> Vec<u8> {
+    let h = mavlink::MavHeader { system_id: from.0.into(), component_id: from.1, sequence: seq };
+    let mut f = Vec::new();
+    mavlink::write_versioned_msg(&mut f, mavlink::MavlinkVersion::V2, h, m).expect("encodes");
+    f
+}
+
+/// The vehicle's state as it streams it: HEARTBEAT of an ArduPilot quadrotor (armed or
+/// not, in LOITER) and its position (50 m above home, not descending).
+fn vehicle_state(armed: bool) -> [mavlink::dialects::common::MavMessage; 2] {
+    use mavlink::dialects::common::*;
+    [
+        MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+            custom_mode: 5,
+            mavtype: MavType::MAV_TYPE_QUADROTOR,
+            autopilot: MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA,
+            base_mode: if armed { MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED } else { MavModeFlag::empty() },
+            system_status: MavState::MAV_STATE_ACTIVE,
+            mavlink_version: 3,
+        }),
+        MavMessage::GLOBAL_POSITION_INT(GLOBAL_POSITION_INT_DATA { relative_alt: 50_000, vz: 0, ..Default::default() }),
+    ]
+}
+
+fn parachute_release() -> mavlink::dialects::common::MavMessage {
+    use mavlink::dialects::common::*;
+    MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
+        param1: 2.0, // PARACHUTE_RELEASE
+        command: MavCmd::MAV_CMD_DO_PARACHUTE,
+        target_system: 1,
+        target_component: 1,
+        ..Default::default()
+    })
+}
+
+/// `parachute.chor` through the proxy: a DO_PARACHUTE release while the vehicle streams that
+/// it is disarmed is dropped (the guard reads the observed `base_mode`); once it streams that
+/// it is armed, 50 m up and not descending, the same command goes through.
+#[test]
+fn a_parachute_release_in_a_wrong_vehicle_state_is_dropped() {
+    use mavlink::dialects::common::*;
+    let (p, g, v) = proxy(&["parachute.chor"], &[]);
+    let vehicle = UdpSocket::bind(("127.0.0.1", v)).expect("the vehicle's port");
+    vehicle.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+    let gcs = UdpSocket::bind("127.0.0.1:0").unwrap();
+    gcs.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+    gcs.connect(("127.0.0.1", g)).unwrap();
+    let mut b = [0u8; 2048];
+    // A message outside the protocol's alphabet opens the path to the vehicle.
+    let ping = MavMessage::PARAM_REQUEST_LIST(PARAM_REQUEST_LIST_DATA { target_system: 1, target_component: 1 });
+    gcs.send(&mav((255, 190), 0, &ping)).unwrap();
+    let (_, at) = vehicle.recv_from(&mut b).expect("the proxy forwards outside the alphabet");
+    let mut seq = 1;
+    let mut stream = |armed: bool| {
+        for m in vehicle_state(armed) {
+            vehicle.send_to(&mav((1, 1), seq, &m), at).unwrap();
+            seq += 1;
+            let mut b = [0u8; 2048];
+            gcs.recv(&mut b).expect("the vehicle's stream reaches the ground station");
+        }
+    };
+    stream(false);
+    let release = mav((255, 190), 1, &parachute_release());
+    gcs.send(&release).unwrap();
+    gcs.send(&mav((255, 190), 2, &ping)).unwrap();
+    let (n, _) = vehicle.recv_from(&mut b).unwrap();
+    assert_eq!(&b[..n], &mav((255, 190), 2, &ping)[..], "the release was forwarded while disarmed");
+    let dropped = p.wait_for(Duration::from_secs(5), |l| l["event"] == "violation").expect("a violation line");
+    assert_eq!(
+        (dropped["kind"].as_str(), dropped["action"].as_str(), dropped["msgid"].as_u64()),
+        (Some("guard"), Some("drop"), Some(76))
+    );
+    stream(true);
+    gcs.send(&release).unwrap();
+    let (n, _) = vehicle.recv_from(&mut b).unwrap();
+    assert_eq!(&b[..n], &release[..], "the release in the right state is forwarded");
+}

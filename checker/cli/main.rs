@@ -247,7 +247,6 @@ pub(crate) fn verified_automata(
     color: ColorChoice,
     verb: &str,
 ) -> Result<Vec<mochi::monitor::Automaton>, Outcome> {
-    use mochi::monitor::Automaton;
     let mut automata = Vec::new();
     for p in protocols {
         let report = match fsload::check_file(db, p, &Config::default()) {
@@ -270,37 +269,46 @@ pub(crate) fn verified_automata(
             ));
             return Err(Outcome::Invalid);
         }
-        let root = match fsload::load_root(db, p) {
-            Ok(r) => r,
-            Err(e) => {
-                eprintln_safe(&format!("error: cannot read {}: {e}", p.display()));
-                return Err(Outcome::Invalid);
-            }
-        };
-        let prog = match mochi::driver::prepare(db, root, &mut fsload::read_bytes, mochi::driver::Stage::Names) {
-            Ok(prog) => prog,
-            Err(diags) => {
-                let color = color.for_stream(false);
-                eprint_safe(&diags.iter().map(|d| render::text(db, d, color)).collect::<String>());
-                return Err(Outcome::Invalid);
-            }
-        };
-        match Automaton::compile(&prog) {
-            Ok(a) => automata.push(a),
-            Err(e) => {
-                let at = e
-                    .span
-                    .map(|s| {
-                        let (f, l, c) = db.location(s);
-                        format!("{f}:{l}:{c}: ")
-                    })
-                    .unwrap_or_default();
-                eprintln_safe(&format!("error: {at}{} cannot be monitored: {}", p.display(), e.message));
-                return Err(Outcome::Invalid);
-            }
-        }
+        automata.push(monitorable(db, p, color)?);
     }
     Ok(automata)
+}
+
+/// A protocol lowered and compiled for the monitor (no Z3: the caller has had it verified).
+pub(crate) fn monitorable(
+    db: &mut SourceDb,
+    p: &std::path::Path,
+    color: ColorChoice,
+) -> Result<mochi::monitor::Automaton, Outcome> {
+    let root = match fsload::load_root(db, p) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln_safe(&format!("error: cannot read {}: {e}", p.display()));
+            return Err(Outcome::Invalid);
+        }
+    };
+    let prog = match mochi::driver::prepare(db, root, &mut fsload::read_bytes, mochi::driver::Stage::Names) {
+        Ok(prog) => prog,
+        Err(diags) => {
+            let color = color.for_stream(false);
+            eprint_safe(&diags.iter().map(|d| render::text(db, d, color)).collect::<String>());
+            return Err(Outcome::Invalid);
+        }
+    };
+    match mochi::monitor::Automaton::compile(&prog) {
+        Ok(a) => Ok(a),
+        Err(e) => {
+            let at = e
+                .span
+                .map(|s| {
+                    let (f, l, c) = db.location(s);
+                    format!("{f}:{l}:{c}: ")
+                })
+                .unwrap_or_default();
+            eprintln_safe(&format!("error: {at}{} cannot be monitored: {}", p.display(), e.message));
+            Err(Outcome::Invalid)
+        }
+    }
 }
 
 /// Only verified protocols are monitored: the monitor enforces what the static checks

@@ -51,11 +51,53 @@ pub(crate) struct ProxyArgs {
     violations_only: bool,
 }
 
+/// The automata of `protocols`, each verified by `mochi check` in a child process first, so
+/// that this long-running process never runs Z3: the solver's memory (tens of MB, kept by
+/// the allocator after the check) would stay resident for the proxy's lifetime. Only
+/// lowering and the monitor's compilation run here. A protocol the child does not verify is
+/// refused with the child's diagnostics.
+fn verified_in_children(
+    db: &mut SourceDb,
+    protocols: &[PathBuf],
+    color: ColorChoice,
+) -> Result<Vec<mochi::monitor::Automaton>, Outcome> {
+    let exe = match std::env::current_exe() {
+        Ok(e) => e,
+        Err(e) => {
+            eprintln_safe(&format!("error: cannot find the mochi executable to verify the protocols with: {e}"));
+            return Err(Outcome::Crashed);
+        }
+    };
+    let mut automata = Vec::new();
+    for p in protocols {
+        let out = std::process::Command::new(&exe).arg("check").arg(p).stdin(std::process::Stdio::null()).output();
+        let out = match out {
+            Ok(o) => o,
+            Err(e) => {
+                eprintln_safe(&format!("error: cannot run `mochi check {}`: {e}", p.display()));
+                return Err(Outcome::Crashed);
+            }
+        };
+        if !out.status.success() {
+            eprintln_safe(&String::from_utf8_lossy(&out.stdout));
+            eprintln_safe(&String::from_utf8_lossy(&out.stderr));
+            eprintln_safe(&format!(
+                "error: {} is not verified (`mochi check` exits with {}): mochi enforces only verified protocols (the monitor enforces what the static checks assume)",
+                p.display(),
+                out.status.code().map_or("a signal".to_string(), |c| c.to_string())
+            ));
+            return Err(Outcome::Invalid);
+        }
+        automata.push(crate::monitorable(db, p, color)?);
+    }
+    Ok(automata)
+}
+
 /// Runs until killed, writing the events to `out` (stdout). Exit 1 when a protocol is not
 /// verified or cannot be monitored, or an end cannot be opened.
 pub(crate) fn proxy(args: &ProxyArgs, color: ColorChoice, out: Box<dyn Write + Send>) -> Outcome {
     let mut db = SourceDb::new();
-    let automata = match crate::verified_automata(&mut db, &args.protocols, color, "enforces") {
+    let automata = match verified_in_children(&mut db, &args.protocols, color) {
         Ok(a) => a,
         Err(o) => return o,
     };

@@ -148,7 +148,7 @@ impl<'a> Iterator for TlogReader<'a> {
                 self.framer.count_frame(&f);
                 Some(self.timed(at, f))
             }
-            Look::Unknown => {
+            Look::Unknown(_) => {
                 self.framer.counts.unknown_id += 1;
                 self.resync(at)
             }

@@ -172,8 +172,8 @@ pub(crate) enum Look<'a> {
     Frame(Frame<'a>),
     /// Not a frame: skip the start byte. The reason is counted by the caller.
     Bad(Reject),
-    /// A consistently framed message the dialect does not know.
-    Unknown,
+    /// A consistently framed message the dialect does not know, of this many bytes.
+    Unknown(usize),
     /// The input ends before the candidate does (or before the byte after an unknown message).
     NeedMore,
 }
@@ -219,9 +219,9 @@ pub(crate) fn look<'a>(buf: &'a [u8], cfg: &Config, eof: bool, gap: usize) -> Lo
     }
     let Some(extra) = crc_extra(cfg.dialect, msgid) else {
         return match buf.get(total + gap) {
-            Some(&b) if b == STX_V1 || b == STX_V2 => Look::Unknown,
+            Some(&b) if b == STX_V1 || b == STX_V2 => Look::Unknown(total),
             Some(_) => Look::Bad(Reject::Garbage),
-            None if eof => Look::Unknown,
+            None if eof => Look::Unknown(total),
             None => Look::NeedMore,
         };
     };
@@ -251,6 +251,29 @@ fn signature_ok(raw: &[u8], key: &[u8; 32]) -> bool {
     raw[raw.len() - 6..] == sig
 }
 
+/// What a framer yields: a checked frame, or (when asked for) the bytes of a consistently
+/// framed message of an id the dialect does not know.
+#[derive(Debug)]
+pub enum Item<'a> {
+    Frame(Frame<'a>),
+    Unknown(&'a [u8]),
+}
+
+/// Whether a start byte inside `frame` (a prefix of `rest`) begins a checked frame; `None`
+/// while a candidate inside runs past the end of `rest` (more input decides).
+fn inner_frame(frame: &[u8], rest: &[u8], cfg: &Config, eof: bool) -> Option<bool> {
+    for (i, &b) in frame.iter().enumerate().skip(1) {
+        if b == STX_V1 || b == STX_V2 {
+            match look(&rest[i..], cfg, eof, 0) {
+                Look::Frame(_) => return Some(true),
+                Look::NeedMore => return None,
+                _ => {}
+            }
+        }
+    }
+    Some(false)
+}
+
 /// The framing state shared by the readers: the configuration and the counts.
 #[derive(Clone, Debug, Default)]
 pub struct Framer {
@@ -276,6 +299,20 @@ impl Framer {
     /// failed candidate, and the last of them counts as one truncated frame if no checked
     /// frame follows it; its bytes are garbage.
     pub fn next<'b>(&mut self, buf: &'b [u8], pos: &mut usize, eof: bool) -> Option<Frame<'b>> {
+        match self.next_item(buf, pos, eof, false) {
+            Some(Item::Frame(f)) => Some(f),
+            _ => None,
+        }
+    }
+
+    /// As [`Framer::next`]; with `unknown`, a consistently framed message of an id the
+    /// dialect does not know is yielded whole ([`Item::Unknown`], counted in `unknown_id`)
+    /// instead of costing its start byte, provided no start byte inside it begins a checked
+    /// frame: an unknown frame is never a way to carry a checked frame past the caller (a
+    /// receiver that resynchronises byte by byte would find it). Until the input decides
+    /// that (a candidate inside runs past the end), it waits, as for any candidate. The
+    /// proxy forwards such frames as mavlink-router does.
+    pub fn next_item<'b>(&mut self, buf: &'b [u8], pos: &mut usize, eof: bool, unknown: bool) -> Option<Item<'b>> {
         loop {
             let rest = buf.get(*pos..).unwrap_or(&[]);
             // Skip to the next start byte in one pass.
@@ -295,9 +332,22 @@ impl Framer {
                     *pos += f.raw.len();
                     self.pending_truncated = false;
                     self.count_frame(&f);
-                    return Some(f);
+                    return Some(Item::Frame(f));
                 }
-                Look::Unknown => {
+                Look::Unknown(total) if unknown => match inner_frame(&rest[..total], rest, &self.config, eof) {
+                    Some(false) => {
+                        self.counts.unknown_id += 1;
+                        *pos += total;
+                        self.pending_truncated = false;
+                        return Some(Item::Unknown(&rest[..total]));
+                    }
+                    Some(true) => {
+                        self.reject(Reject::Unknown);
+                        *pos += 1;
+                    }
+                    None => return None,
+                },
+                Look::Unknown(_) => {
                     self.reject(Reject::Unknown);
                     *pos += 1;
                 }
@@ -404,6 +454,17 @@ impl Stream {
         }
         self.buf.extend_from_slice(chunk);
         self.time_us = time_us;
+    }
+
+    /// The next complete frame or, when the dialect does not know its id, the bytes of a
+    /// consistently framed message ([`Framer::next_item`]); `None` until more bytes are
+    /// pushed.
+    pub fn next_item(&mut self) -> Option<Item<'_>> {
+        let t = self.time_us;
+        match self.framer.next_item(&self.buf, &mut self.pos, false, true)? {
+            Item::Frame(f) => Some(Item::Frame(Frame { time_us: t, ..f })),
+            u => Some(u),
+        }
     }
 
     /// The next complete frame, or `None` until more bytes are pushed.

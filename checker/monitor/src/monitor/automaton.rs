@@ -86,6 +86,17 @@ pub struct StreamDef {
     pub span: Span,
 }
 
+/// The timeout branch of a branch state, `after T ms by R. G`: when `ms` milliseconds
+/// passed since the state was entered and no edge of it was taken, `by` (the waiting role)
+/// may go on at `next` (the state from which `G` runs, before its assignments).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Timeout {
+    pub ms: u64,
+    pub by: RoleId,
+    pub next: u32,
+    pub span: Span,
+}
+
 /// A state of the automaton.
 #[derive(Clone, Debug)]
 pub enum StateKind {
@@ -111,6 +122,8 @@ pub struct Automaton {
     pub edges: Vec<Edge>,
     pub arena: Arena,
     pub start: u32,
+    /// The timeout branch of each state (indexed by state; `None` for most).
+    pub timeouts: Vec<Option<Timeout>>,
     /// The message ids of every edge (sorted, deduplicated).
     pub alphabet: Vec<u32>,
     /// The system's streams, and their message ids (sorted, deduplicated).
@@ -198,6 +211,7 @@ impl Automaton {
                 edges: Vec::new(),
                 arena,
                 start: 0,
+                timeouts: Vec::new(),
                 alphabet: Vec::new(),
                 streams: Vec::new(),
                 stream_alphabet: Vec::new(),
@@ -211,6 +225,7 @@ impl Automaton {
         }
         let start = b.compile(&chor.body, 0)?;
         b.a.start = start;
+        b.a.timeouts.resize(b.a.states.len(), None);
         b.check_guarded()?;
         let mut alphabet: Vec<u32> = b.a.edges.iter().map(|e| e.msgid).collect();
         alphabet.sort_unstable();
@@ -243,6 +258,12 @@ impl Automaton {
         }
     }
 
+    /// The timeout branch of `state`, if it has one.
+    #[inline]
+    pub fn timeout(&self, state: u32) -> Option<&Timeout> {
+        self.timeouts.get(state as usize).and_then(Option::as_ref)
+    }
+
     /// The states reached from `s` by assignments only: the branch or end a step lands on.
     pub fn settle(&self, mut s: u32) -> u32 {
         for _ in 0..=self.states.len() {
@@ -252,6 +273,14 @@ impl Automaton {
             }
         }
         s
+    }
+}
+
+/// The items of a sequence, nested sequences spliced in.
+fn flatten<'g>(g: &'g Global, out: &mut Vec<&'g Global>) {
+    match g {
+        Global::Seq(items, _) => items.iter().for_each(|i| flatten(i, out)),
+        _ => out.push(g),
     }
 }
 
@@ -283,14 +312,38 @@ impl Builder<'_> {
             }
             Global::Choice(bs, loc) => {
                 let mut edges = Vec::new();
+                let mut timeout = None;
                 for b in bs {
+                    if let Some(after) = b.timeout_head() {
+                        // `after T ms by R. G`: `G` compiled as any branch; the branch
+                        // state keeps where it goes and after how long.
+                        let mut items = Vec::new();
+                        flatten(b, &mut items);
+                        let mut next = k;
+                        for item in items.iter().skip(1).rev() {
+                            next = self.compile(item, next)?;
+                        }
+                        if timeout.is_some() {
+                            return err("a second timeout branch in one choice", Some(after.loc.0));
+                        }
+                        let Ok(ms) = u64::try_from(after.ms) else {
+                            return err("a timeout bound that is not positive", Some(after.loc.0));
+                        };
+                        timeout = Some(Timeout { ms, by: after.by, next, span: after.loc.0 });
+                        continue;
+                    }
                     let s = self.compile(b, k)?;
                     match &self.a.states[s as usize] {
                         StateKind::Branch(es) => edges.extend(es.iter().copied()),
                         _ => return err("a branch of a choice that does not start with a message", Some(loc.0)),
                     }
                 }
-                Ok(self.state(StateKind::Branch(edges)))
+                let s = self.state(StateKind::Branch(edges));
+                if let Some(t) = timeout {
+                    self.a.timeouts.resize(self.a.states.len(), None);
+                    self.a.timeouts[s as usize] = Some(t);
+                }
+                Ok(s)
             }
             Global::Rec { var, params, body, loc, .. } => {
                 let head = self.state(StateKind::End);
@@ -334,12 +387,9 @@ impl Builder<'_> {
                 Ok(self.state(StateKind::Assign { assigns, checks, next: head, span: v.loc.0 }))
             }
             Global::End(_) => Ok(0),
-            // docs/observed-and-timeouts.md says what a monitor must check of a timeout; it
-            // is refused, never monitored as if the branch were not there.
-            Global::After(a) => err(
-                format!("a timeout branch (`after {} ms`): the monitor does not enforce timeouts yet", a.ms),
-                Some(a.loc.0),
-            ),
+            // Lowering admits `after` only at the head of a branch of a choice (E0321),
+            // which the choice above splits off.
+            Global::After(a) => err("`after` that does not start a branch of a choice", Some(a.loc.0)),
             Global::Motion(m) => err("a motion: the monitor runs MAVLink protocols only", Some(m.loc.0)),
             Global::Par(_, loc) => err("a `*`: the monitor runs MAVLink protocols only", Some(loc.0)),
         }

@@ -103,6 +103,9 @@ pub enum Kind {
     /// A step whose guard or refinements read an observed value of which its sender has no
     /// reading yet (or readings from several ends, none of them the session's).
     NoReading,
+    /// The waiting role acted as after a timeout before the timeout's bound had passed
+    /// since the choice was entered (a re-request too early).
+    Early,
 }
 
 impl Kind {
@@ -119,6 +122,7 @@ impl Kind {
             Kind::OutsideSession => "outside any session",
             Kind::Stream => "stream refinement",
             Kind::NoReading => "no reading",
+            Kind::Early => "before its timeout",
         }
     }
 }
@@ -185,6 +189,11 @@ pub struct Stats {
     pub readings: u64,
     /// Predicates evaluated over big rationals because the fixed width did not suffice.
     pub fallbacks: u64,
+    /// Timeout branches taken.
+    pub timeouts: u64,
+    /// Late messages: a first message of a branch its receiver abandoned by a timeout,
+    /// ignored (each also counted in `passed`).
+    pub late: u64,
 }
 
 struct Session {
@@ -200,6 +209,12 @@ struct Session {
     visited: Vec<bool>,
     taken: Vec<u32>,
     evaluated: Vec<u32>,
+    /// When the current state was entered (the time of the frame that reached it, or, after
+    /// a timeout, the earliest instant the timeout could fire), in µs of the frames' time.
+    entered_us: Option<u64>,
+    /// The state whose timeout its waiting role took last, while late messages of its
+    /// abandoned branches are ignored (until that role's next step after the timeout).
+    late: Option<u32>,
 }
 
 /// The monitor: protocols, their open sessions, and what it found.
@@ -222,6 +237,8 @@ pub struct Monitor {
     readings: Vec<Reading>,
     scratch: Vec<Val>,
     inferred: Vec<(usize, (u8, u8))>,
+    /// The latest frame time seen (the log's or the proxy's clock).
+    clock: Option<u64>,
     pub stats: Stats,
 }
 
@@ -254,6 +271,7 @@ impl Monitor {
             readings: Vec::with_capacity(16),
             scratch: vec![Val::Unset; undo],
             inferred: Vec::with_capacity(8),
+            clock: None,
             stats: Stats::default(),
         }
     }
@@ -280,6 +298,9 @@ impl Monitor {
     pub fn on_frame(&mut self, f: &Frame) -> Outcome {
         let index = self.stats.frames;
         self.stats.frames += 1;
+        if let Some(t) = f.time_us {
+            self.clock = Some(self.clock.map_or(t, |c| c.max(t)));
+        }
         let mut result = None;
         let mut in_alphabet = false;
         for p in 0..self.protos.len() {
@@ -329,12 +350,19 @@ impl Monitor {
         }
     }
 
-    /// Ends the stream: every open session is reported incomplete. Returns all summaries.
+    /// Ends the stream: every open session is reported incomplete, unless its state can
+    /// end by timeouts alone and their bounds passed before the stream's last time (then it
+    /// ended by time, conformant). Returns all summaries.
     pub fn finish(&mut self) -> &[SessionSummary] {
         let mut open = std::mem::take(&mut self.open);
         open.sort_by_key(|&i| self.slots[i].id);
         for slot in open {
-            self.summaries.push(summary(&self.slots[slot], false));
+            let s = &self.slots[slot];
+            let timed_out = session::ends_by_time(&self.protos[s.proto], s.state, s.entered_us, self.clock);
+            if timed_out {
+                self.stats.sessions_ended += 1;
+            }
+            self.summaries.push(summary(&self.slots[slot], timed_out));
             self.free[self.slots[slot].proto].push(slot);
         }
         &self.summaries

@@ -28,7 +28,25 @@ impl Monitor {
                 }
             }
             if found {
-                return Some(self.step(slot, f, index));
+                return Some(self.step(slot, f, index, 0));
+            }
+            if a.timeout(s.state).is_some() {
+                if let Some((hops, _)) = timeout_chain(a, s.state, &s.roles, f) {
+                    return Some(self.step(slot, f, index, hops));
+                }
+            }
+            if let Some(late) = s.late {
+                if a.edges_of(late)
+                    .iter()
+                    .any(|&e| label_fits(&a.edges[e as usize], f) && ends_fit(&a.edges[e as usize], &s.roles, f))
+                {
+                    // A message of a branch its receiver abandoned by a timeout, arriving
+                    // after: real peers ignore it (docs/observed-and-timeouts.md, "Late
+                    // messages"); not a step, not a violation.
+                    self.stats.late += 1;
+                    self.stats.passed += 1;
+                    return Some(Outcome::Passed);
+                }
             }
             if between_ends.is_none() && s.roles.iter().any(|b| b.sys == Some(f.sysid) && b.comp == Some(f.compid)) {
                 between_ends = Some(slot);
@@ -38,7 +56,7 @@ impl Monitor {
         let fresh = vec_fresh_check(a, f);
         if fresh {
             let slot = self.start(p, index);
-            let o = self.step(slot, f, index);
+            let o = self.step(slot, f, index, 0);
             if let Outcome::Violation(_) = o {
                 // A message that would start a session and breaks its first step starts
                 // nothing.
@@ -80,6 +98,8 @@ impl Monitor {
                     visited: Vec::new(),
                     taken: Vec::new(),
                     evaluated: Vec::new(),
+                    entered_us: None,
+                    late: None,
                 });
                 self.slots.len() - 1
             }
@@ -98,6 +118,8 @@ impl Monitor {
         s.first_frame = index;
         s.last_frame = index;
         s.violations = 0;
+        s.entered_us = None;
+        s.late = None;
         self.open.push(slot);
         self.stats.sessions_started += 1;
         // The initial assignments (a protocol that starts with a loop).
@@ -110,17 +132,36 @@ impl Monitor {
     }
 
     /// Takes the frame in session `slot`: the edge, its checks, the registers, the jumps.
-    pub(super) fn step(&mut self, slot: usize, f: &Frame, index: u64) -> Outcome {
+    /// With `hops > 0`, the frame is the waiting role acting after that many timeouts
+    /// (`timeout_chain`): each must have passed, in the frames' time, since the state it
+    /// leaves was entered; they are taken (their assignments too), then the frame's edge.
+    pub(super) fn step(&mut self, slot: usize, f: &Frame, index: u64, hops: u32) -> Outcome {
         let p = self.slots[slot].proto;
         let state = self.slots[slot].state;
+        let entered = self.slots[slot].entered_us;
+        let late = self.slots[slot].late;
         self.undo.clear();
         self.undo_strs.clear();
-        match self.take(slot, f) {
-            Ok(next) => {
+        let fired = if hops > 0 { self.fire(slot, f, hops) } else { Ok(None) };
+        let taken = fired.and_then(|fired| self.take(slot, f).map(|(next, e)| (next, e, fired)));
+        match taken {
+            Ok((next, e, fired)) => {
                 let s = &mut self.slots[slot];
                 s.state = next;
                 s.last_frame = index;
                 s.visited[next as usize] = true;
+                s.entered_us = f.time_us;
+                let a = &self.protos[p];
+                match fired {
+                    Some(abandoned) => s.late = Some(abandoned),
+                    None => {
+                        // The role that timed out acted again: late messages are over.
+                        let by = s.late.and_then(|l| a.timeout(l)).map(|t| t.by);
+                        if by == Some(a.edges[e as usize].from) {
+                            s.late = None;
+                        }
+                    }
+                }
                 self.stats.steps += 1;
                 if matches!(self.protos[p].states[next as usize], StateKind::End) {
                     let id = s.id;
@@ -131,15 +172,21 @@ impl Monitor {
                 }
             }
             Err(fail) => {
+                // The strings were saved from the edges of the state the frame was taken
+                // in (after the timeouts, if any fired).
+                let took_in = self.slots[slot].state;
                 let v = self.record(Some(slot), Some(state), f, index, fail);
                 // Not delivered: the session stays where it was.
                 let s = &mut self.slots[slot];
+                s.state = state;
+                s.entered_us = entered;
+                s.late = late;
                 while let Some((r, v)) = self.undo.pop() {
                     s.regs[r as usize] = v;
                 }
                 let a = &self.protos[p];
                 let mut at = 0;
-                for fr in a.edges_of(state).iter().flat_map(|&e| a.edges[e as usize].fields.iter()) {
+                for fr in a.edges_of(took_in).iter().flat_map(|&e| a.edges[e as usize].fields.iter()) {
                     if fr.kind == FieldKind::Str {
                         let info = &a.arena.regs[fr.reg as usize];
                         let (o, n) = (info.str_at as usize, info.str_cap as usize);
@@ -156,8 +203,59 @@ impl Monitor {
         }
     }
 
+    /// Takes `hops` timeouts from the session's state, after checking that their bounds
+    /// passed: the frame's time is at least the state's entry time plus the bounds (µs of
+    /// the frames' clock; docs/monitor.md, "Timeouts"). Returns the first state abandoned.
+    /// On failure the caller restores the state, its entry time and the registers.
+    fn fire(&mut self, slot: usize, f: &Frame, hops: u32) -> Result<Option<u32>, Fail> {
+        let s = &self.slots[slot];
+        let a = &self.protos[s.proto];
+        let first = s.state;
+        let mut total_ms: u64 = 0;
+        let mut at = first;
+        for _ in 0..hops {
+            let Some(t) = a.timeout(at) else { break };
+            total_ms = total_ms.saturating_add(t.ms);
+            at = a.settle(t.next);
+        }
+        let due = s.entered_us.map(|e| e.saturating_add(total_ms.saturating_mul(1000)));
+        match (f.time_us, due) {
+            (Some(t), Some(due)) if t >= due => {}
+            (Some(_), Some(_)) => {
+                return Err(Fail {
+                    kind: Kind::Early,
+                    edge: None,
+                    pred: None,
+                    field: None,
+                    why: Some("its sender acted as after the timeout, but the timeout's bound has not passed since the choice was entered"),
+                })
+            }
+            _ => {
+                return Err(Fail {
+                    kind: Kind::Undecided,
+                    edge: None,
+                    pred: None,
+                    field: None,
+                    why: Some("a timeout branch, and the log has no time to check its bound against"),
+                })
+            }
+        }
+        let mut at = first;
+        let mut entered = self.slots[slot].entered_us;
+        for _ in 0..hops {
+            let Some(t) = self.protos[self.slots[slot].proto].timeout(at).copied() else { break };
+            at = self.settle(slot, t.next)?;
+            entered = entered.map(|e| e.saturating_add(t.ms.saturating_mul(1000)));
+            self.stats.timeouts += 1;
+        }
+        let s = &mut self.slots[slot];
+        s.state = at;
+        s.entered_us = entered;
+        Ok(Some(first))
+    }
+
     /// The checks of a step, writing registers (old values in the undo log).
-    pub(super) fn take(&mut self, slot: usize, f: &Frame) -> Result<u32, Fail> {
+    pub(super) fn take(&mut self, slot: usize, f: &Frame) -> Result<(u32, u32), Fail> {
         let s = &mut self.slots[slot];
         let a = &self.protos[s.proto];
         // Strings of every field of the state's edges are saved once, in edge order (the
@@ -305,10 +403,11 @@ impl Monitor {
             }
         }
         let target = edge.target_state;
-        self.settle(slot, target).map_err(|mut fail| {
+        let next = self.settle(slot, target).map_err(|mut fail| {
             fail.edge = Some(e);
             fail
-        })
+        })?;
+        Ok((next, e))
     }
 
     /// Follows the assignments from `s` to the branch or end they lead to.
@@ -367,6 +466,44 @@ impl Monitor {
         }
         self.free[self.slots[slot].proto].push(slot);
     }
+}
+
+/// Whether the frame is a first message after timeouts from `state`: the number of
+/// timeouts taken in a row (each the waiting role giving up on the state it leaves) and
+/// their bounds' sum in milliseconds, when an edge of the state they lead to fits the frame.
+pub(super) fn timeout_chain(a: &Automaton, state: u32, roles: &[Binding], f: &Frame) -> Option<(u32, u64)> {
+    let mut at = state;
+    let mut ms: u64 = 0;
+    for hop in 1..=a.states.len() as u32 {
+        let t = a.timeout(at)?;
+        ms = ms.saturating_add(t.ms);
+        at = a.settle(t.next);
+        let fits = a
+            .edges_of(at)
+            .iter()
+            .any(|&e| label_fits(&a.edges[e as usize], f) && ends_fit(&a.edges[e as usize], roles, f));
+        if fits {
+            return Some((hop, ms));
+        }
+    }
+    None
+}
+
+/// Whether a session in `state`, entered at `entered`, ended by time before `clock`: a
+/// chain of timeouts from `state` reaches `end`, and their bounds' sum passed.
+pub(super) fn ends_by_time(a: &Automaton, state: u32, entered: Option<u64>, clock: Option<u64>) -> bool {
+    let (Some(entered), Some(clock)) = (entered, clock) else { return false };
+    let mut at = state;
+    let mut ms: u64 = 0;
+    for _ in 0..a.states.len() {
+        let Some(t) = a.timeout(at) else { return false };
+        ms = ms.saturating_add(t.ms);
+        at = a.settle(t.next);
+        if matches!(a.states[at as usize], StateKind::End) {
+            return clock >= entered.saturating_add(ms.saturating_mul(1000));
+        }
+    }
+    false
 }
 
 /// Whether the frame is the edge's message (and command, for `COMMAND_LONG[MAV_CMD_X]`).

@@ -28,7 +28,7 @@ pub mod endpoint;
 
 pub use endpoint::{Endpoint, Port};
 
-use crate::mavio::parse::{Config, Counts, Stream};
+use crate::mavio::parse::{Config, Counts, Item, Stream};
 use crate::monitor::{Automaton, Kind, Monitor, Outcome};
 use crate::source::SourceDb;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -209,7 +209,18 @@ impl Proxy<'_> {
             totals.bytes_in.fetch_add(n as u64, Ordering::Relaxed);
             fwd.clear();
             events.clear();
-            while let Some(f) = stream.next_frame() {
+            while let Some(item) = stream.next_item() {
+                let f = match item {
+                    // A message the dialect does not know is outside every protocol's
+                    // alphabet: forwarded whole, unchecked (its CRC_EXTRA is unknown), as
+                    // mavlink-router does; the receiver checks its checksum.
+                    Item::Unknown(raw) => {
+                        fwd.extend_from_slice(raw);
+                        totals.forwarded.fetch_add(1, Ordering::Relaxed);
+                        continue;
+                    }
+                    Item::Frame(f) => f,
+                };
                 totals.frames.fetch_add(1, Ordering::Relaxed);
                 let forward = match shared {
                     None => true,
