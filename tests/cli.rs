@@ -1188,3 +1188,133 @@ fn monitor_reads_logs_against_a_verified_protocol() {
     let o = mochi(&["monitor", "-p", "choreographies/mavlink/parachute.chor", attack_path.to_str().expect("utf-8")]);
     assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+/// `mochi mission`: a list that breaks the protocol's refinements is rejected at the file's
+/// line of the item (text and JSON), exit 1; a list that follows it is accepted, exit 0; a
+/// malformed file is an error at its line.
+#[test]
+fn mission_vets_a_file_against_an_upload_protocol() {
+    let dir = TempDir::new("mission");
+    let rally = "choreographies/mavlink/rally-upload.chor";
+    // Rally points: the second lies at latitude 95 degrees, outside rally-upload.chor's range.
+    let bad = dir.write(
+        "bad-rally.txt",
+        "QGC WPL 110\n0\t0\t0\t5100\t0\t0\t0\t0\t-35.36\t149.16\t60\t1\n1\t0\t0\t5100\t0\t0\t0\t0\t95.0\t149.16\t60\t1\n",
+    );
+    let o = mochi(&["mission", "-p", rally, path_arg(&bad)]);
+    let out = stdout(&o);
+    assert_eq!(o.status.code(), Some(1), "{out}{}", stderr(&o));
+    assert!(out.contains(&format!("{}:3: error: the rally upload breaks", bad.display())), "{out}");
+    assert!(out.contains("MISSION_ITEM_INT 1") && out.contains("rejected"), "{out}");
+    let o = mochi(&["mission", "-p", rally, "--format", "json", path_arg(&bad)]);
+    let v: Value = serde_json::from_slice(&o.stdout).expect("one JSON line");
+    assert_eq!(v["verdict"], "rejected", "{v}");
+    assert_eq!(v["lists"][0]["violations"][0]["line"], 3, "{v}");
+    assert_eq!(v["lists"][0]["violations"][0]["field"], "x", "{v}");
+
+    let good = dir.write("good-rally.txt", "QGC WPL 110\n0\t0\t0\t5100\t0\t0\t0\t0\t-35.36\t149.16\t60\t1\n");
+    let o = mochi(&["mission", "-p", rally, path_arg(&good)]);
+    assert_eq!(o.status.code(), Some(0), "{}{}", stdout(&o), stderr(&o));
+    assert!(stdout(&o).contains("accepted (rally 1 items)"), "{}", stdout(&o));
+
+    let broken = dir.write("broken.txt", "QGC WPL 110\n0\t0\t0\t16\t0\n");
+    let o = mochi(&["mission", "-p", rally, path_arg(&broken)]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stdout(&o).contains(&format!("error: {}:2:", broken.display())), "{}", stdout(&o));
+
+    let o = mochi(&[
+        "mission",
+        "-p",
+        "choreographies/mavlink/rejected/E0316-rally-count-beyond-storage.chor",
+        path_arg(&good),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("not verified"), "{}", stderr(&o));
+}
+
+/// The upload protocols `mochi mission` is checked with in docs/missions.md.
+const MISSION_PROTOCOLS: [&str; 4] = [
+    "choreographies/mavlink/mission-upload.chor",
+    "choreographies/mavlink/mission-upload-tolerant.chor",
+    "choreographies/mavlink/fence-upload.chor",
+    "choreographies/mavlink/rally-upload.chor",
+];
+
+/// docs/missions.md's "Verdicts" table is what `mochi mission` finds on every file of
+/// ../shared/data/missions/: one row per file, its lists and each protocol's verdict.
+/// `MISSIONS_BLESS=1` prints the rows to paste.
+#[test]
+fn the_missions_table_is_what_mochi_mission_finds() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let base = root.join("../shared/data/missions");
+    let mut files = Vec::new();
+    let mut stack = vec![base.clone()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).expect("../shared/data/missions") {
+            let p = e.expect("entry").path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_none_or(|x| x != "md") {
+                files.push(p);
+            }
+        }
+    }
+    files.sort();
+    let mut args: Vec<String> = vec!["mission".into(), "--format".into(), "json".into()];
+    for p in MISSION_PROTOCOLS {
+        args.push("-p".into());
+        args.push(p.into());
+    }
+    args.extend(files.iter().map(|p| p.display().to_string()));
+    let o = Command::new(env!("CARGO_BIN_EXE_mochi")).args(&args).current_dir(root).output().expect("run mochi");
+    let mut found = Vec::new();
+    for line in String::from_utf8_lossy(&o.stdout).lines() {
+        let v: Value = serde_json::from_str(line).expect("a JSON line per file");
+        let file = v["file"].as_str().expect("file");
+        let rel = Path::new(file).strip_prefix(&base).map_or(file.to_string(), |p| p.display().to_string());
+        let lists = v["lists"].as_array().cloned().unwrap_or_default();
+        let mut kinds: Vec<String> = Vec::new();
+        for l in &lists {
+            let k = format!("{} {}", l["mission_type"].as_str().unwrap_or("?"), l["items"]);
+            if !kinds.contains(&k) {
+                kinds.push(k);
+            }
+        }
+        let cell = |proto: &str| {
+            let name = Path::new(proto).file_name().and_then(|n| n.to_str()).unwrap_or(proto);
+            let vs: Vec<&str> =
+                lists.iter().filter(|l| l["protocol"] == name).map(|l| l["verdict"].as_str().unwrap_or("?")).collect();
+            if vs.is_empty() {
+                "-".to_string()
+            } else {
+                vs.join(", ")
+            }
+        };
+        let mut row = format!("| `{rel}` | {} |", if kinds.is_empty() { "-".into() } else { kinds.join(", ") });
+        for p in MISSION_PROTOCOLS {
+            row += &format!(" {} |", cell(p));
+        }
+        row += &format!(" {} |", v["verdict"].as_str().unwrap_or("?"));
+        found.push(row);
+    }
+    assert_eq!(found.len(), files.len(), "one line per file: {}", String::from_utf8_lossy(&o.stderr));
+    if std::env::var_os("MISSIONS_BLESS").is_some() {
+        println!("{}", found.join("\n"));
+    }
+    let doc = std::fs::read_to_string(root.join("docs/missions.md")).expect("docs/missions.md");
+    let table = doc.split("## Verdicts").nth(1).expect("a `## Verdicts` section");
+    let rows: Vec<String> = table
+        .lines()
+        .skip_while(|l| !l.starts_with("| file"))
+        .skip(2)
+        .take_while(|l| l.starts_with('|'))
+        .map(|l| {
+            // The last cell (why) is prose: compared are the cells before it.
+            let cells: Vec<&str> = l.trim_matches('|').split('|').map(str::trim).collect();
+            format!("| {} |", cells[..cells.len().saturating_sub(1)].join(" | "))
+        })
+        .collect();
+    assert_eq!(rows, found, "docs/missions.md is not what `mochi mission` finds");
+    let rejected = found.iter().filter(|r| !r.ends_with("| accepted |")).count();
+    assert_eq!(o.status.code(), Some(if rejected > 0 { 1 } else { 0 }), "{}", String::from_utf8_lossy(&o.stderr));
+}

@@ -276,43 +276,38 @@ fn mavsdk_param_sets_a_parameter_on_param_server_through_the_proxy() {
     assert!(violations(&p).is_empty(), "{:?}", violations(&p));
 }
 
-/// Enforced, `arm-command.chor` cannot carry MAVSDK's arming, for three reasons the alerts
-/// show (findings about the protocol and the monitor, not the proxy):
-/// - it ends with the vehicle's HEARTBEAT, so it claims every HEARTBEAT on the link: those
-///   outside an arming session are "outside any session", and MAVSDK, which discovers the
-///   autopilot by its heartbeats, never sees it (the next test);
-/// - the monitor's alphabet is by message id: MAVSDK's other COMMAND_LONGs (MAV_CMD_REQUEST_MESSAGE
-///   at connection) are in it and fit no session;
-/// - MAVSDK's arm sends `param2` (force) as NaN, "unset", where the protocol asks `force == 0`:
-///   a non-finite float, outside the static model, so a violation.
-///
-/// With `--alert-only` the arming goes through and those alerts are what is reported.
+/// Enforced, `arm-command.chor` carries MAVSDK's arming: the vehicle's HEARTBEAT is a stream
+/// (so MAVSDK discovers the autopilot through the proxy), the acknowledgement is labelled
+/// `COMMAND_ACK[MAV_CMD_COMPONENT_ARM_DISARM]` (MAVSDK's other commands and their
+/// acknowledgements are not the protocol's), and `param2` (force), which MAVSDK sends as NaN
+/// ("unset", as common.xml's MAV_CMD allows), is not listed. No violation, nothing dropped,
+/// and the session ends conformant.
 #[test]
 fn mavsdk_action_arms_action_server_through_the_proxy() {
     if !have("mavsdk") {
         return;
     }
-    let (p, g, v) = proxy(&["arm-command.chor"], &["--alert-only"]);
+    let (p, g, v) = proxy(&["arm-command.chor"], &[]);
     let vehicle = peer(&["mavsdk-vehicle", &format!("udpin:127.0.0.1:{v}"), "60"]);
     std::thread::sleep(Duration::from_millis(1000));
     let gcs = peer(&["mavsdk-gcs", &format!("udpout:127.0.0.1:{g}"), "arm"]);
     let d = done(&gcs, 60);
     assert_eq!(d["result"], "ok", "{d}");
     assert!(vehicle.wait_for(Duration::from_secs(5), |l| l["event"] == "arm").is_some());
-    let v = violations(&p);
-    assert!(v.iter().all(|l| l["action"] == "alert"), "{v:?}");
-    assert!(
-        v.iter().any(|l| l["msgid"] == 76 && l["kind"] == "non-finite float" && l["field"] == "force"),
-        "MAVSDK's NaN force: {v:?}"
-    );
+    assert!(violations(&p).is_empty(), "{:?}", violations(&p));
+    assert!(p.wait_for(Duration::from_secs(5), |l| l["event"] == "end" && l["conformant"] == true).is_some());
 }
 
+/// A protocol that names the vehicle's HEARTBEAT as a step (`compass-calibration.chor` ends a
+/// refused calibration with it) claims every HEARTBEAT on the link: enforced, those outside a
+/// session are dropped, and MAVSDK, which discovers the autopilot by its heartbeats, never
+/// sees it. Why such a protocol cannot yet use a stream: docs/captures.md.
 #[test]
 fn enforcing_a_protocol_that_names_heartbeat_hides_the_vehicle_from_mavsdk() {
     if !have("mavsdk") {
         return;
     }
-    let (p, g, v) = proxy(&["arm-command.chor"], &[]);
+    let (p, g, v) = proxy(&["compass-calibration.chor"], &[]);
     let _vehicle = peer(&["mavsdk-vehicle", &format!("udpin:127.0.0.1:{v}"), "30"]);
     std::thread::sleep(Duration::from_millis(1000));
     let gcs = peer(&["mavsdk-gcs", &format!("udpout:127.0.0.1:{g}"), "arm"]);

@@ -67,8 +67,12 @@ enum Command {
     /// Stand between a ground station and a vehicle: forward MAVLink both ways and drop (or
     /// only report) every message that breaks a verified protocol; one JSON line per verdict
     Proxy(proxy_cmd::ProxyArgs),
+    /// Vet a mission file (.plan, .waypoints, Mission Planner .txt) against verified upload
+    /// protocols: the upload it implies, item by item
+    Mission(mission_cmd::MissionArgs),
 }
 
+mod mission_cmd;
 mod proxy_cmd;
 
 #[derive(Args)]
@@ -233,6 +237,7 @@ fn run(cli: Cli) -> u8 {
         Command::Simulate(args) => simulate(&args, cli.color).exit_code(),
         Command::Monitor(args) => monitor(&args, cli.color).exit_code(),
         Command::Proxy(args) => proxy_cmd::proxy(&args, cli.color, Box::new(std::io::stdout())).exit_code(),
+        Command::Mission(args) => mission_cmd::mission(&args, cli.color).exit_code(),
     }
 }
 

@@ -8,3 +8,4 @@ pub mod log;
 pub mod mission;
 pub mod parse;
 pub mod pcap;
+pub mod upload;
