@@ -1,8 +1,18 @@
+//! Enum-typed MAVLink fields (E0243): a user refinement of an enum-typed field leaves it
+//! some entry of the enum.
+
+use super::Contexts;
+use crate::hir::expr::BinOp;
+use crate::hir::*;
+use crate::obligation::{Goal, Obligation, Rule};
+use crate::sigma::Sigma;
+use std::collections::HashMap;
+
 impl<'a> Contexts<'a> {
     /// The fields of `m` that E0243 asks about: enum-typed, with a user refinement that does
     /// not settle the question by itself ([`pins_entry`]). Records the enum of every
     /// enum-typed field of `m` on the way.
-    fn enum_fields(&mut self, m: &Msg) -> Vec<usize> {
+    pub(super) fn enum_fields(&mut self, m: &Msg) -> Vec<usize> {
         let mut asked = Vec::new();
         for (i, f) in m.payload.iter().enumerate() {
             let Some(mav) = &f.mav else { continue };
@@ -33,7 +43,7 @@ impl<'a> Contexts<'a> {
     /// cut to the field's cone of influence: the facts that share no variable with it,
     /// directly or through others, cannot make the difference (and E0243 only rejects: no
     /// proof rests on it).
-    fn enum_entries(&mut self, m: &Msg, assumed: &Msg, asked: &[usize], before: &Sigma) {
+    pub(super) fn enum_entries(&mut self, m: &Msg, assumed: &Msg, asked: &[usize], before: &Sigma) {
         for &i in asked {
             let f = &m.payload[i];
             let Some(check) = f.mav.as_ref().and_then(|mav| mav.entry.as_ref()) else { continue };

@@ -1,8 +1,18 @@
+//! [T-SESS]'s assumption, checked: each participant's `init` admits a state within its
+//! kind's invariant (E0411, or E0410 without an invariant), and the `init`s are jointly
+//! satisfiable; the initial context Σ.
+
+use super::Contexts;
+use crate::hir::*;
+use crate::obligation::{Goal, Obligation, Rule};
+use crate::sigma::Sigma;
+use std::collections::HashMap;
+
 impl<'a> Contexts<'a> {
     /// [T-SESS]'s assumption, checked: each participant's `init` is satisfiable and
     /// implies its kind's invariant, and all of them are jointly satisfiable. The
     /// initial context Σ (every `init` and invariant) is returned.
-    fn initial(&mut self) -> Sigma {
+    pub(super) fn initial(&mut self) -> Sigma {
         let prog = self.prog;
         let mut each = Vec::new();
         for r in prog.role_ids() {

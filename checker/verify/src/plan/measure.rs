@@ -1,10 +1,18 @@
+//! Termination (`mu t(params) decreases E`, E0416/E0417): the measure at each jump.
+
+use super::Contexts;
+use crate::hir::expr::{defined_and, BinOp};
+use crate::hir::*;
+use crate::obligation::{Goal, Obligation, Rule};
+use crate::sigma::Sigma;
+
 impl<'a> Contexts<'a> {
     /// Termination (`mu t(params) decreases E`): at the jump `t(a)` (`v`), under Σ there
     /// (the path's messages and guards, the parameters' refinements, the loop invariant),
     /// `E >= 0` (E0416) and `E[a/params] < E` (E0417). E reads only the parameters, values
     /// bound before the loop and constants (lowering), none of which changes between the
     /// loop head and a jump back to it: E here is E of the iteration that jumps.
-    fn measure(&mut self, var: &str, e: &Expr, params: &[RecParam], v: &RecVar, sigma: &Sigma) {
+    pub(super) fn measure(&mut self, var: &str, e: &Expr, params: &[RecParam], v: &RecVar, sigma: &Sigma) {
         let text = print::expr(self.prog, None, e);
         let zero = Expr { kind: ExprKind::Int(0), sort: Sort::Int, loc: e.loc };
         let cmp = |op, a: Expr, b: Expr| Expr {

@@ -1,8 +1,15 @@
-//! Predicates are not decided here; each joint motion yields an [AGCOMP] obligation,
-//! each `*` a full-separation obligation and each guarded choice a total-choice one.
-//! They are made by a second walk, [`Contexts`], which threads the logical context Σ
-//! ([`Sigma`]) through the type (not unfolded: loops get an invariant instead) and gives
-//! each obligation the Σ of its point as hypotheses:
+//! Obligation planning for the global type: the walk [`Contexts`] threads the logical
+//! context Σ ([`Sigma`]) through the type (not unfolded: loops get an invariant instead)
+//! and makes every predicate met on the way an obligation, with the Σ of its point as
+//! hypotheses. Nothing is decided here (the SMT stage decides). One file a rule:
+//! [T-SESS]'s `init` (`initial.rs`, E0410/E0411), the streams' invariants (`streams.rs`,
+//! E0410), [AGCOMP] of each joint motion (`motion.rs`), total choice (`total_choice.rs`,
+//! Def 4.4 (1)), enum entries (`enum_entry.rs`, E0243), progress (`progress.rs`, E0419),
+//! termination measures (`measure.rs`, E0416/E0417), recursion parameters and loop
+//! invariants (`rec.rs`, E0414/E0415), full separation of `*` (`par.rs`); this file walks
+//! and dispatches, and holds the vacuity guard of a step (`reachable`).
+//!
+//! How Σ evolves:
 //!
 //! - the root starts from every participant's `init` and its kind's invariant ([T-SESS]);
 //! - after `p -> q : [P] l(v: S {P'})`, Σ ∧ P ∧ P' (payload fields are value variables;
@@ -19,39 +26,32 @@
 //!   fixpoint: the candidate is Σ at entry; the body is walked under it (and R), and the
 //!   next candidate is its join ([`Sigma::join`]: common facts, and the weaker of two
 //!   literal bounds on a term) with the context at every `t` reached, until it is the
-//!   candidate again. After [`WEAKEN_WALKS`] walks only facts every `t` holds literally
+//!   candidate again. After [`rec::WEAKEN_WALKS`] walks only facts every `t` holds literally
 //!   are kept (widening), so the candidate shrinks and this ends. Only the last walk's
 //!   obligations are kept. Recursion parameters are forgotten at entry and at each `t`.
 //!
 //! Every step only keeps or weakens what holds, so every obligation's hypotheses hold
 //! whenever the choreography reaches its point.
 
+mod enum_entry;
+mod initial;
+mod measure;
+mod motion;
+mod par;
+mod progress;
+mod rec;
+mod streams;
+mod total_choice;
 
-use crate::diag::{Code, Diagnostic};
-use crate::hir::expr::{and_all, defined_and, definedness, BinOp};
+use crate::hir::expr::defined_and;
 use crate::hir::*;
-use crate::obligation::{Enabled, Goal, Obligation, RoleMotion, Rule, Side};
+use crate::obligation::{Goal, Obligation, RoleMotion, Rule};
 use crate::sigma::Sigma;
 use std::collections::HashMap;
 
-pub fn check(prog: &Program, g: &Global) -> (Vec<Obligation>, Vec<Diagnostic>) {
-    let mut s = Scope { prog, diags: Vec::new(), recs: HashMap::new(), unfolding: Vec::new() };
-    let used = participants(g);
-    let all: Vec<RoleId> = prog.role_ids().collect();
-    for r in not_in(&all, &used) {
-        s.diags.push(
-            Diagnostic::error(
-                Code::ParticipantUnused,
-                prog.role(r).span,
-                format!("participant `{}` takes no part in the choreography", prog.role_name(r)),
-            )
-            .with_note("[T-SESS] requires pt{G} = P")
-            .with_help("give it a role in the choreography or remove it from the system"),
-        );
-    }
-    // The root scope is P; an unused participant was reported above (E0313), so scope
-    // with pt{G} to avoid reporting it again at every motion.
-    s.walk(g, &used, true);
+/// The obligations of the global type `g` (its predicates, with their contexts), in the
+/// order of the type.
+pub fn obligations(prog: &Program, g: &Global) -> Vec<Obligation> {
     let mut c = Contexts {
         prog,
         obligations: Vec::new(),
@@ -67,7 +67,7 @@ pub fn check(prog: &Program, g: &Global) -> (Vec<Obligation>, Vec<Diagnostic>) {
     let start = c.initial();
     c.streams();
     c.walk(g, start);
-    (c.obligations, s.diags)
+    c.obligations
 }
 
 /// The walk that threads Σ through the type and makes the predicate obligations (see
@@ -116,7 +116,7 @@ impl<'a> Contexts<'a> {
                 // processes at all).
                 if !self.choice_firsts.contains(&m.loc.0) {
                     observe(&mut sigma, &m.observed);
-                    let e = enabled(self.prog, m);
+                    let e = progress::enabled(self.prog, m);
                     if e.guard.is_some() || !e.refinement.is_true() {
                         self.obligations.push(Obligation {
                             rule: Rule::Progress,
@@ -162,7 +162,7 @@ impl<'a> Contexts<'a> {
             Global::Choice(branches, _) => {
                 // The deciding participant's snapshot, shared by the branches' first messages.
                 let mut snap: Vec<Observed> = Vec::new();
-                for m in branches.iter().filter_map(super::side::first_message) {
+                for m in branches.iter().filter_map(crate::wf::side::first_message) {
                     for o in &m.observed {
                         if !snap.iter().any(|x| x.value == o.value) {
                             snap.push(o.clone());
@@ -175,7 +175,7 @@ impl<'a> Contexts<'a> {
                 let mut out: Option<Sigma> = None;
                 for b in branches {
                     let mut s = sigma.clone();
-                    let first = super::side::first_message(b);
+                    let first = crate::wf::side::first_message(b);
                     if let Some(guard) = first.and_then(|m| m.guard.as_ref()) {
                         s.assume(&defined_and(guard.clone()));
                     }
@@ -215,7 +215,6 @@ impl<'a> Contexts<'a> {
             Global::After(_) => Some(sigma),
         }
     }
-
 
     /// The vacuity guard at a step: Σ after it (`sigma`) is satisfiable, or the step is
     /// where the protocol gets stuck (when every context in `before` is satisfiable).
@@ -276,3 +275,6 @@ fn observe(sigma: &mut Sigma, snap: &[Observed]) {
         sigma.assume(&defined_and(r.clone()));
     }
 }
+
+#[cfg(test)]
+mod tests;

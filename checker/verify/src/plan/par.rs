@@ -1,7 +1,15 @@
+//! Full separation (Sec 4.1): one obligation per `*` listing what each side may run, each
+//! side walked from the facts of Σ over its own participants.
+
+use super::Contexts;
+use crate::hir::*;
+use crate::obligation::{Goal, Obligation, Rule, Side};
+use crate::sigma::Sigma;
+
 impl<'a> Contexts<'a> {
     /// `g1 * ... * gn`: each side from the facts over its own participants; one
     /// separation obligation listing what each side may run.
-    fn par(&mut self, sides: &'a [Global], loc: Loc, sigma: Sigma) -> Option<Sigma> {
+    pub(super) fn par(&mut self, sides: &'a [Global], loc: Loc, sigma: Sigma) -> Option<Sigma> {
         let pts: Vec<Vec<RoleId>> = sides.iter().map(Global::participant_list).collect();
         // Pushed now so that obligations keep the order of the type; the sides are
         // filled in once they have been walked.

@@ -1,10 +1,21 @@
+//! Progress (E0419, seed 000 Sec 3.1): at a message or a choice, under Σ, some branch
+//! has a true guard and a payload its refinements admit; [`enabled`], when a message can
+//! be sent.
+
+use super::Contexts;
+use crate::hir::expr::{and_all, defined_and, definedness, BinOp};
+use crate::hir::*;
+use crate::obligation::{Enabled, Goal, Obligation, Rule};
+use crate::sigma::Sigma;
+use std::collections::HashMap;
+
 impl<'a> Contexts<'a> {
     /// Progress at a choice (E0419): under Σ and the guards' disjunction (whose validity
     /// is total choice's, E0316), some branch has a true guard and a payload its
     /// refinements admit. Asked only when some first message has a refinement: without
     /// one this is total choice itself.
-    fn progress(&mut self, branches: &[Global], sigma: &Sigma) {
-        let firsts: Vec<&Msg> = branches.iter().filter_map(super::side::first_message).collect();
+    pub(super) fn progress(&mut self, branches: &[Global], sigma: &Sigma) {
+        let firsts: Vec<&Msg> = branches.iter().filter_map(crate::wf::side::first_message).collect();
         if branches.iter().any(|b| b.timeout_head().is_some()) {
             // The timeout branch is always enabled: time passes, and its waiting role takes
             // it when no other branch's message came. The choice cannot get stuck, and no
@@ -55,7 +66,7 @@ fn or(a: Expr, b: Expr) -> Expr {
 /// admitted. The condition is added before a field is replaced by its definition, so that
 /// `speed == sqrt(e)` leaves `e >= 0` behind (the encoding alone would let `sqrt` of a
 /// negative be any value, and some `speed` would equal it).
-fn enabled(prog: &Program, m: &Msg) -> Enabled {
+pub(super) fn enabled(prog: &Program, m: &Msg) -> Enabled {
     let written = and_all(m.payload.iter().filter_map(|f| f.refinement.clone()), m.loc);
     let mut conj: Vec<Expr> = Vec::new();
     crate::hir::expr::conjuncts(&definedness(&written), &mut conj);

@@ -1,3 +1,13 @@
+//! Recursion (`mu t(n: S {R} = e). G` and `t(a)`): the parameters' refinements at entry
+//! (E0414) and at each jump (E0415), and the loop invariant's fixpoint (see the module
+//! documentation of [`super`]).
+
+use super::Contexts;
+use crate::hir::expr::defined_and;
+use crate::hir::*;
+use crate::obligation::{Goal, Obligation, Rule};
+use crate::sigma::Sigma;
+
 /// After this many walks of one loop body its candidate invariant is given up for
 /// `true` (which is always an invariant), and so once the whole walk has taken
 /// [`STEP_BUDGET`] steps: nested loops would otherwise multiply their walks.
@@ -7,14 +17,14 @@ const MAX_LOOP_WALKS: usize = 32;
 /// after them only facts every jump holds literally are kept (the widening: a bound
 /// that keeps weakening goes to ±∞), so the candidate can only shrink and the
 /// fixpoint ends.
-const WEAKEN_WALKS: usize = 4;
+pub(super) const WEAKEN_WALKS: usize = 4;
 const STEP_BUDGET: usize = 1 << 20;
 
 impl<'a> Contexts<'a> {
     /// `mu t(n: S {R} = e). G`: the refinement `R` must hold of `e` at entry (and of
     /// the arguments at each jump, see `walk`), so the body assumes it; the rest of the
     /// loop invariant is the fixpoint of the module documentation.
-    fn rec(
+    pub(super) fn rec(
         &mut self,
         var: &'a str,
         params: &'a [RecParam],
@@ -81,8 +91,9 @@ impl<'a> Contexts<'a> {
         }
     }
 
-    /// A jump `t(a)` (`v`) under Σ (`sigma`): the measure, the parameters' refinements of the arguments, and the context kept for the loop invariant.
-    fn jump(&mut self, v: &'a RecVar, mut sigma: Sigma) {
+    /// A jump `t(a)` (`v`) under Σ (`sigma`): the measure, the parameters' refinements of
+    /// the arguments, and the context kept for the loop invariant.
+    pub(super) fn jump(&mut self, v: &RecVar, mut sigma: Sigma) {
         if let Some(i) = self.loops.iter().rposition(|(n, _, _)| *n == v.var) {
             let (_, params, measure) = self.loops[i];
             if let (Some(e), true) = (measure, params.len() == v.args.len()) {

@@ -1,3 +1,9 @@
+//! The streams' assumption, checked: a stream's invariant admits some reading (E0410).
+
+use super::Contexts;
+use crate::hir::*;
+use crate::sigma::Sigma;
+
 impl<'a> Contexts<'a> {
     /// The streams' assumption, checked: every reading of a stream satisfies its fields'
     /// refinements (wire range, enum, the invariant), so some message of the stream must
@@ -6,7 +12,7 @@ impl<'a> Contexts<'a> {
     /// verify with a warning): it is E0410 at the stream, as an `init` no state satisfies is.
     /// One query per stream: a stream's refinements read its own template values and
     /// constants only (E0211), so streams are independent of each other and of Σ.
-    fn streams(&mut self) {
+    pub(super) fn streams(&mut self) {
         for s in &self.prog.streams {
             let facts: Vec<Expr> = s.fields.iter().filter_map(|f| f.refinement.clone()).collect();
             if facts.is_empty() {

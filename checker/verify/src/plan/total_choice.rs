@@ -1,12 +1,20 @@
+//! Total choice (Def 4.4 (1), E0316): under Σ, some guard of a choice holds.
+
+use super::Contexts;
+use crate::hir::expr::{defined_and, BinOp};
+use crate::hir::*;
+use crate::obligation::{Goal, Obligation, Rule};
+use crate::sigma::Sigma;
+
 impl<'a> Contexts<'a> {
     /// Def 4.4 (1): under Σ, some guard holds.
-    fn total_choice(&mut self, branches: &[Global], sigma: &Sigma) {
+    pub(super) fn total_choice(&mut self, branches: &[Global], sigma: &Sigma) {
         let guards: Vec<Option<&Expr>> =
-            branches.iter().map(|b| super::side::first_message(b).and_then(|m| m.guard.as_ref())).collect();
+            branches.iter().map(|b| crate::wf::side::first_message(b).and_then(|m| m.guard.as_ref())).collect();
         if guards.iter().any(|g| g.is_none_or(Expr::is_true)) {
             return; // an unguarded branch: the disjunction is trivially valid
         }
-        let Some(m) = branches.first().and_then(super::side::first_message) else { return };
+        let Some(m) = branches.first().and_then(crate::wf::side::first_message) else { return };
         // A guard that cannot be evaluated does not hold: each disjunct is defined too.
         let mut disj: Option<Expr> = None;
         for g in guards.into_iter().flatten().map(|g| defined_and(g.clone())) {

@@ -1,23 +1,20 @@
 //! Well-scopedness (Sec 4.1, labelling rules (1)-(6)) on the once-unfolded type, with
 //! the participant half of full separation (E0307), total motion (Def 4.4 (3), E0309),
-//! `pt{G} = P` of [T-SESS] (E0313), the coupling half of full separation (E0315) and the
-//! [AGCOMP] obligation of each joint motion (whose joint-end part decides E0401, several
-//! non-interruptible primitives, in the SMT stage).
+//! `pt{G} = P` of [T-SESS] (E0313) and the coupling half of full separation (E0315).
+//! The predicates of the type (its [AGCOMP], separation, total-choice and other
+//! obligations) are planned by [`crate::plan`]; this walk decides only what is structural.
 //!
 //! The labelling is deterministic: the root gets every participant, `.` and `+` pass
 //! their label down, and `g1 * ... * gn` gives each side exactly `pt{g_i}`. That choice
 //! loses nothing: any valid labelling must give side i at least `pt{g_i}`, and a
 //! participant given to no side has no motion there, which total motion forbids.
-//!
 
 use crate::diag::{Code, Diagnostic};
-use crate::hir::expr::{and_all, defined_and, definedness, BinOp};
 use crate::hir::*;
-use crate::obligation::{Enabled, Goal, Obligation, RoleMotion, Rule, Side};
-use crate::sigma::Sigma;
 use std::collections::HashMap;
 
-pub fn check(prog: &Program, g: &Global) -> (Vec<Obligation>, Vec<Diagnostic>) {
+/// The scoping errors of the global type `g`.
+pub fn check(prog: &Program, g: &Global) -> Vec<Diagnostic> {
     let mut s = Scope { prog, diags: Vec::new(), recs: HashMap::new(), unfolding: Vec::new() };
     let used = participants(g);
     let all: Vec<RoleId> = prog.role_ids().collect();
@@ -35,22 +32,7 @@ pub fn check(prog: &Program, g: &Global) -> (Vec<Obligation>, Vec<Diagnostic>) {
     // The root scope is P; an unused participant was reported above (E0313), so scope
     // with pt{G} to avoid reporting it again at every motion.
     s.walk(g, &used, true);
-    let mut c = Contexts {
-        prog,
-        obligations: Vec::new(),
-        loops: Vec::new(),
-        jumps: Vec::new(),
-        runs: Vec::new(),
-        in_par: 0,
-        steps: 0,
-        choice_firsts: Default::default(),
-        enum_of: Default::default(),
-        exact_entry: Default::default(),
-    };
-    let start = c.initial();
-    c.streams();
-    c.walk(g, start);
-    (c.obligations, s.diags)
+    s.diags
 }
 
 struct Scope<'a> {
@@ -102,7 +84,7 @@ fn not_in(rs: &[RoleId], of: &[RoleId]) -> Vec<RoleId> {
     }
 }
 
-fn names(prog: &Program, rs: &[RoleId]) -> String {
+pub(crate) fn names(prog: &Program, rs: &[RoleId]) -> String {
     let v: Vec<_> = rs.iter().map(|r| format!("`{}`", prog.role_name(*r))).collect();
     v.join(", ")
 }
@@ -341,7 +323,7 @@ mod tests {
         let (p, d) = lower_src(&format!("{SYS} choreography G = {chor};"));
         assert!(d.is_empty(), "{d:?}");
         let c = p.choreography.as_ref().expect("choreography");
-        let (o, d) = super::check(&p, &c.body);
+        let (o, d) = (crate::plan::obligations(&p, &c.body), super::check(&p, &c.body));
         (d.into_iter().map(|d| d.code).collect(), o.into_iter().map(|o| o.rule).collect())
     }
 
@@ -388,7 +370,7 @@ mod tests {
             choreography G = dt<P: go> * dt<O: watch>. end;";
         let (p, d) = lower_src(src);
         assert!(d.is_empty(), "{d:?}");
-        let (_, d) = super::check(&p, &p.choreography.as_ref().unwrap().body);
+        let d = super::check(&p, &p.choreography.as_ref().unwrap().body);
         assert_eq!(d.iter().map(|d| d.code).collect::<Vec<_>>(), vec![Code::CoupledAcrossSeparation]);
     }
 
@@ -425,7 +407,7 @@ mod scale_tests {
             let mut best = std::time::Duration::MAX;
             for _ in 0..3 {
                 let t = std::time::Instant::now();
-                let (o, d) = super::check(&p, g);
+                let (o, d) = (crate::plan::obligations(&p, g), super::check(&p, g));
                 best = best.min(t.elapsed());
                 assert!(d.is_empty(), "{d:?}");
                 assert_eq!(o.len(), 1, "one [AGCOMP] obligation");
