@@ -291,7 +291,9 @@ fn shapes() {
                 let t = Instant::now();
                 let body = &prog.choreography.as_ref().expect("a choreography").body;
                 let side = mochi::wf::side::check(&prog, body);
-                let (_, scope) = mochi::wf::scope::check(&prog, body);
+                let scope = mochi::wf::scope::check(&prog, body);
+                // The well-scoped stage also plans the obligations (as the driver times it).
+                let _ = mochi::plan::obligations(&prog, body);
                 let sync = mochi::wf::sync::check(&prog, body);
                 let ms = t.elapsed().as_secs_f64() * 1000.0;
                 let errors = side.iter().chain(&scope).chain(&sync).filter(|d| d.is_error()).count();

@@ -257,7 +257,7 @@ fn printed_projections_parse_back_to_the_same_type(path: &Path) -> Result<usize,
     // as a different one).
     let Some(body) = prog.choreography.as_ref().map(|c| c.body.clone()) else { return Ok(0) };
     let ill_formed = !mochi::wf::side::check(&prog, &body).is_empty()
-        || !mochi::wf::scope::check(&prog, &body).1.is_empty()
+        || !mochi::wf::scope::check(&prog, &body).is_empty()
         || !mochi::wf::sync::check(&prog, &body).is_empty();
     if ill_formed {
         return Ok(0);

@@ -2,7 +2,7 @@
 //! (`decreases`, E0416-E0418), progress (E0419, dead branches) and counterexample traces
 //! in text and JSON. The files are under `tests/data/refined/` and
 //! `choreographies/rejected/E041[6-8]-*.chor`; the decision procedures themselves are
-//! unit-tested in `wf::scope::refined_tests` (global types with no processes).
+//! unit-tested in `plan::tests::refined` (global types with no processes).
 
 use serde_json::Value;
 use std::process::{Command, Output};

@@ -880,3 +880,62 @@ fn the_cycle_check_finds_cycles() {
     let cycles = sibling_cycles(src, &files);
     assert_eq!(cycles.iter().map(|(p, _)| p.as_str()).collect::<Vec<_>>(), ["a"], "{cycles:#?}");
 }
+
+/// Files of code longer than this hold more than one concept: split them by concept (tests
+/// beside them may be in their own file, which does not count).
+const MAX_FILE_LINES: usize = 800;
+
+/// Files still over [`MAX_FILE_LINES`], each with its length when listed: they must shrink.
+/// The test fails when a listed file is no longer over the limit, so the list cannot go
+/// stale.
+const LONG_FILES_ALLOWED_FOR_NOW: &[&str] = &["checker/core/src/diag.rs", "checker/cli/main.rs"];
+
+/// How many lines of code `text` has: up to its first `#[cfg(test)]` line (its unit tests,
+/// last in the file, do not count), as the other rules read it.
+fn code_length(text: &str) -> usize {
+    text.lines().take_while(|l| l.trim() != "#[cfg(test)]").count()
+}
+
+/// No file of code is longer than [`MAX_FILE_LINES`] lines (test code aside).
+#[test]
+fn no_file_of_code_is_over_800_lines() {
+    let lengths: Vec<(String, usize)> = code_sources().into_iter().map(|(f, t)| (f, code_length(&t))).collect();
+    let long: Vec<String> = lengths
+        .iter()
+        .filter(|(f, n)| *n > MAX_FILE_LINES && !LONG_FILES_ALLOWED_FOR_NOW.contains(&f.as_str()))
+        .map(|(f, n)| format!("{f}: {n} lines"))
+        .collect();
+    assert!(long.is_empty(), "files of code over {MAX_FILE_LINES} lines; split them by concept:\n{}", long.join("\n"));
+    let stale: Vec<&&str> = LONG_FILES_ALLOWED_FOR_NOW
+        .iter()
+        .filter(|a| !lengths.iter().any(|(f, n)| f == *a && *n > MAX_FILE_LINES))
+        .collect();
+    assert!(
+        stale.is_empty(),
+        "{stale:?} are not over {MAX_FILE_LINES} lines any more: remove them from LONG_FILES_ALLOWED_FOR_NOW"
+    );
+}
+
+/// The length rule counts code only: a file's unit tests and test-only files do not count.
+#[test]
+fn the_length_rule_counts_code_not_tests() {
+    let text = format!("{}#[cfg(test)]\n{}", "fn f() {}\n".repeat(3), "fn g() {}\n".repeat(900));
+    assert_eq!(code_length(&text), 3);
+    assert_eq!(code_length(&"x\n".repeat(801)), 801);
+}
+
+/// The top-level modules of mochi-core import each other without a cycle (`exact` uses the
+/// float formats of `float`, not of `lower`, which evaluates constants with `exact`).
+#[test]
+fn the_core_modules_import_each_other_without_cycles() {
+    let src = "checker/core/src";
+    let files: Vec<(String, String)> = code_sources().into_iter().filter(|(f, _)| f.starts_with(src)).collect();
+    let cycles: Vec<String> =
+        sibling_cycles(src, &files).into_iter().filter(|(p, _)| p.is_empty()).map(|(_, t)| t).collect();
+    assert!(
+        cycles.is_empty(),
+        "the top-level modules of mochi-core import each other in a cycle; move what both sides need into a \
+         module of its own:\n{}",
+        cycles.join("\n")
+    );
+}

@@ -5,7 +5,8 @@
 //! The pipeline, stage by stage, which is also the order to read the modules in (the
 //! `pub mod` list below is alphabetical; ARCHITECTURE.md tells the whole story):
 //! source text → [`syntax`] (tokens, AST) → [`lower`] (names resolved, [`hir`]) →
-//! [`wf`] (Def 4.1 side conditions, well-scopedness, synchronisability) →
+//! [`wf`] (Def 4.1 side conditions, well-scopedness, synchronisability), with [`plan`] (the
+//! global type's obligations, Σ threaded through it) →
 //! [`project`] (local types, Defs 4.7-4.8) → [`typeck`] (processes, Table 1) →
 //! [`smt`] (every predicate met on the way is an [`obligation`]: Z3 decides it, with the
 //! vacuity guard; [`bounds`] settles what intervals can) → [`driver`] (the verdict).
@@ -35,7 +36,7 @@ pub use mochi_core::{
     bounds, diag, dialect, exact, hir, lower, obligation, project, sigma, source, stack, subtype, syntax, xmlscan,
 };
 pub use mochi_monitor::{mavio, monitor, proxy};
-pub use mochi_verify::{collision, driver, fsload, geometry, library, simulate, smt, space, typeck, wf};
+pub use mochi_verify::{collision, driver, fsload, geometry, library, plan, simulate, smt, space, typeck, wf};
 
 pub mod io;
 pub mod render;

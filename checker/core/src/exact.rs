@@ -338,11 +338,11 @@ fn eval_inner(prog: &Program, e: &Expr, env: &dyn Env, depth: usize) -> Result<V
                 Builtin::Float32 | Builtin::Float64 => {
                     // Decided on an exact value; an enclosure wider than a point is undecided.
                     let x = num(arg(0)?)?;
-                    let format = crate::lower::float_format(*f).ok_or("a float format")?;
+                    let format = crate::float::float_format(*f).ok_or("a float format")?;
                     if x.lo != x.hi {
                         return Ok(Value::Bool(Tri::Unknown));
                     }
-                    Value::Bool(Tri::of(crate::lower::is_float(&x.lo, format)))
+                    Value::Bool(Tri::of(crate::float::is_float(&x.lo, format)))
                 }
                 Builtin::HasFlag => {
                     let flag = crate::hir::expr::const_int(prog, arg(1)?).ok_or("a flag that is not a constant")?;

@@ -15,6 +15,7 @@ pub mod bounds;
 pub mod diag;
 pub mod dialect;
 pub mod exact;
+pub mod float;
 pub mod hir;
 pub mod lower;
 pub mod obligation;

@@ -12,7 +12,7 @@ use crate::hir::print;
 use crate::obligation::{Goal, Obligation, Rule};
 use crate::smt::{self, goals::Part, Decision, SmtConfig};
 use crate::source::{FileId, SourceDb};
-use crate::{library, lower, project, space, subtype, syntax, typeck, wf};
+use crate::{library, lower, plan, project, space, subtype, syntax, typeck, wf};
 use serde::Serialize;
 use std::collections::{BTreeMap, HashSet};
 use std::time::Instant;
@@ -302,7 +302,8 @@ fn checks(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut syntax::Byte
     // on the other two.
     let diags = run.stage(|| wf::side::check(&prog, &chor.body));
     let side_ok = run.record("side-conditions", diags);
-    let (mut obligations, diags) = run.stage(|| wf::scope::check(&prog, &chor.body));
+    let (mut obligations, diags) =
+        run.stage(|| (plan::obligations(&prog, &chor.body), wf::scope::check(&prog, &chor.body)));
     let scope_ok = run.record("well-scoped", diags);
     if !(side_ok && scope_ok) {
         return run.finish();

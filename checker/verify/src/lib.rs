@@ -3,7 +3,8 @@
 //! [`driver`] is the one place the stages are wired, in order: the core's parse and lower,
 //! the geometry stage ([`space`] turns bodies and footprints into predicates where Z3 can
 //! decide them, and into the [`geometry`] engine's solids where it cannot), [`wf`] (Def 4.1
-//! side conditions, well-scopedness, synchronisability), the core's projection, [`typeck`]
+//! side conditions, well-scopedness, synchronisability) with [`plan`] (the obligations of the
+//! global type, each with the logical context Σ of its point), the core's projection, [`typeck`]
 //! (processes, Table 1), then [`smt`] (every predicate met on the way is an obligation: Z3
 //! decides it, with the vacuity guard, or the geometric search does) and the verdict.
 //! [`library`] checks a `.mochi` library on its own; [`simulate`] runs a choreography on
@@ -40,6 +41,7 @@ pub mod driver;
 pub mod fsload;
 pub mod geometry;
 pub mod library;
+pub mod plan;
 pub mod simulate;
 pub mod smt;
 pub mod space;

@@ -24,11 +24,9 @@ mod contract;
 mod decl;
 mod expr;
 mod mav;
+pub use crate::float::{dyadic_decimal, float_format, is_float, pow2, round_to_float, FloatFormat, BINARY32, BINARY64};
 pub use mav::{approximate_entries, entry_allows, entry_predicate, float_definition_decided, refinement_without_entry};
-pub use mav::{
-    dyadic_decimal, exact_constant, float_format, is_float, pow2, round_to_float, wire_value, FloatFormat, BINARY32,
-    BINARY64,
-};
+pub use mav::{exact_constant, wire_value};
 #[cfg(test)]
 mod mav_tests;
 mod names;

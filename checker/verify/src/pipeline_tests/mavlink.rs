@@ -108,7 +108,7 @@ fn pinned_enum_fields_ask_nothing() {
         let (p, d) = lower_mav(chor);
         assert!(d.is_empty(), "{d:?}");
         let body = &p.choreography.as_ref().expect("choreography").body;
-        let (obs, d) = crate::wf::scope::check(&p, body);
+        let (obs, d) = (crate::plan::obligations(&p, body), crate::wf::scope::check(&p, body));
         assert!(d.is_empty(), "{d:?}");
         obs.iter().filter(|o| o.rule == crate::obligation::Rule::EnumEntry).count()
     };

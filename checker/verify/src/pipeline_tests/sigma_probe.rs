@@ -17,7 +17,7 @@ fn example_obligations(path: &str) -> (Program, Vec<Obligation>) {
     let (prog, d) = crate::lower::lower(&parsed);
     assert!(d.is_empty(), "{d:?}");
     let body = prog.choreography.as_ref().map(|c| c.body.clone()).expect("a choreography");
-    let (mut obs, d) = crate::wf::scope::check(&prog, &body);
+    let (mut obs, d) = (crate::plan::obligations(&prog, &body), crate::wf::scope::check(&prog, &body));
     assert!(d.is_empty(), "{d:?}");
     let (locals, d) = crate::project::project_all(&prog);
     assert!(d.is_empty(), "{d:?}");

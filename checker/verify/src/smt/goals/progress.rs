@@ -8,7 +8,7 @@
 //! default solver (MBQI), never nlsat; undecided is unknown, never a pass.
 //!
 //! The guard and the refinement arrive with their definedness conjoined
-//! (`wf::scope::enabled`, [`crate::hir::expr::definedness`]): the encoder makes `sqrt` of a
+//! (`plan::progress::enabled`, [`crate::hir::expr::definedness`]): the encoder makes `sqrt` of a
 //! negative and a quotient by zero unconstrained values, which some payload would equal, so
 //! without it "some payload exists" held where no value on the wire satisfies the refinement.
 

@@ -21,7 +21,7 @@ fn codes_in(sys: &str, chor: &str) -> Vec<Code> {
     let (p, d) = lower_src(&format!("{sys} choreography G = {chor};"));
     assert!(d.is_empty(), "{d:?}");
     let c = p.choreography.as_ref().expect("choreography");
-    let (side, (_, scope)) = (super::super::side::check(&p, &c.body), super::super::scope::check(&p, &c.body));
+    let (side, scope) = (super::super::side::check(&p, &c.body), super::super::scope::check(&p, &c.body));
     assert!(side.is_empty() && scope.is_empty(), "{side:?} {scope:?}");
     super::check(&p, &c.body).into_iter().map(|d| d.code).collect()
 }
@@ -503,7 +503,7 @@ fn both(chor: &str) -> Option<(Vec<String>, Vec<String>, bool)> {
         return None;
     }
     let c = p.choreography.as_ref()?;
-    let (side, (_, scope)) = (super::super::side::check(&p, &c.body), super::super::scope::check(&p, &c.body));
+    let (side, scope) = (super::super::side::check(&p, &c.body), super::super::scope::check(&p, &c.body));
     let clean = !side.iter().chain(&scope).any(crate::diag::Diagnostic::is_error);
     let show = |v: Vec<crate::diag::Diagnostic>| v.iter().map(|d| format!("{d:?}")).collect::<Vec<_>>();
     Some((show(super::check(&p, &c.body)), show(super::oracle::check(&p, &c.body)), clean))
