@@ -201,11 +201,9 @@ const NOT_FOUND: &[(&str, &str)] = &[
     ("rejected/E0317-stacker-outlasts-the-press.chor", "a run starts a joint motion for all its participants at one time (the global type's step), so the early release E0317 finds does not happen in it"),
     ("rejected/E0318-tray-turns-by-timing-alone.chor", "a rule of synchronisation (Def 4.10): it is about an order in which participants disagree on what happens, and a run of the global type shows every participant every step"),
     ("rejected/E0408-joint-faster-than-its-urdf-velocity.chor", "the URDF's velocity limits are not part of the simulator's trajectories (it draws them from the contracts), so the swing it draws ends in time; the limit is only in mochi's can-end question"),
-    ("rejected/E0709-loop-parameter-without-the-types-refinement.chor", "what only a process gets wrong, in a choreography with motions: processes run (in lockstep with their projections) only in protocols without motion; a motion choreography runs its global type"),
     ("mavlink/rejected/E0316-command-range-skips-conditions.chor", "no branch covers the entries between the ranges; a run shows it only when it draws such a command (the counterexample is cmd = 159), which the runs' payloads did not"),
     ("mavlink/rejected/E0419-clock-past-the-wire-range.chor", "the payload is stuck only when the received clock is at the top of the uint64 range (the counterexample is last = 2^64 - 1 before the step), far beyond the values the runs draw"),
     ("mavlink/rejected/E0419-set-current-number-not-an-item.chor", "stuck only for a received number that is no whole item index (the counterexample is s = 1.75); the runs did not draw one"),
-    ("rejected/E0407-turned-footprint-refines.chor", "primitive refinement of a process against its type (Def 3.4): the simulator runs the choreography's primitives, not the process's"),
     ("mavlink/rejected/E0316-ack-branch-never-taken.chor", "a branch no state can take: a run shows what happens, never that a branch is dead"),
     ("mavlink/rejected/E0415-in-progress-for-ever.chor", "the loop breaks its invariant only after MAX_IN_PROGRESS answers IN_PROGRESS in a row, a path the random choices do not take in 2 runs of 16 steps"),
     ("mavlink/rejected/E0417-counter-never-incremented.chor", "a termination measure: a defect of infinitely many steps, beyond a bounded run"),
@@ -247,10 +245,6 @@ const NOT_FOUND: &[(&str, &str)] = &[
     ("rejected/E0401-joint-end-not-a-singleton.chor", "the durations disagree only when q's s > 0 and the witness ends p's exact 1 s at the same time as q's brake, which the witness may choose"),
     ("rejected/E0406-pose-offset-sum-rounds-to-zero.chor", "an overlap 1e-400 m deep near the end of the motion: the sampled times and the doubles of placement do not reach it"),
     ("rejected/E0406-tiny-pose-offset.chor", "an overlap 1e-400 m deep near the end of the motion: the sampled times and the doubles of placement do not reach it"),
-    ("rejected/E0407-abstract-precondition-read-with-concrete-arguments.chor", "what only a process gets wrong, in a choreography with motions: processes run (in lockstep with their projections) only in protocols without motion; a motion choreography runs its global type"),
-    ("rejected/E0407-empty-duration-refines.chor", "what only a process gets wrong, in a choreography with motions: processes run (in lockstep with their projections) only in protocols without motion; a motion choreography runs its global type"),
-    ("rejected/E0407-process-moves-to-shadowing-value.chor", "what only a process gets wrong, in a choreography with motions: processes run (in lockstep with their projections) only in protocols without motion; a motion choreography runs its global type"),
-    ("rejected/E0407-waves-instead-of-holding.chor", "what only a process gets wrong, in a choreography with motions: processes run (in lockstep with their projections) only in protocols without motion; a motion choreography runs its global type"),
     ("rejected/E0410-inits-contradict-through-input.chor", "initial states are drawn one participant at a time, so a contradiction only through an input connection is not joined (a gap of the simulator)"),
     ("rejected/E0415-countdown-below-zero.chor", "the jump from n = 0 needs the run to count down to 0 and then choose `more`, a path the random choices do not take in 2 runs of 16 steps"),
     ("rejected/E0416-measure-below-zero.chor", "a termination measure: a defect of infinitely many steps, beyond a bounded run"),
@@ -260,34 +254,22 @@ const NOT_FOUND: &[(&str, &str)] = &[
     ("rejected/E0601-merged-command-with-and-without-its-command.chor", "the projections cannot be merged (the defect itself): the run stops undecided and says so"),
     ("rejected/E0601-same-text-different-values.chor", "merging projections: a motion choreography runs as the global type, not as projections"),
     ("rejected/E0601-told-by-different-senders.chor", "merging projections: a motion choreography runs as the global type, not as projections"),
-    ("rejected/E0602-forgotten-loop.chor", "what only a process gets wrong, in a choreography with motions: processes run (in lockstep with their projections) only in protocols without motion; a motion choreography runs its global type"),
-    ("rejected/E0701-missing-process.chor", "what only a process gets wrong, in a choreography with motions: processes run (in lockstep with their projections) only in protocols without motion; a motion choreography runs its global type"),
-    ("rejected/E0702-motion-instead-of-send.chor", "what only a process gets wrong, in a choreography with motions: processes run (in lockstep with their projections) only in protocols without motion; a motion choreography runs its global type"),
-    ("rejected/E0702-receive-instead-of-send.chor", "what only a process gets wrong, in a choreography with motions: processes run (in lockstep with their projections) only in protocols without motion; a motion choreography runs its global type"),
-    ("rejected/E0703-missing-branch.chor", "what only a process gets wrong, in a choreography with motions: processes run (in lockstep with their projections) only in protocols without motion; a motion choreography runs its global type"),
-    ("rejected/E0704-wrong-label.chor", "what only a process gets wrong, in a choreography with motions: processes run (in lockstep with their projections) only in protocols without motion; a motion choreography runs its global type"),
-    ("rejected/E0704-wrong-receiver.chor", "what only a process gets wrong, in a choreography with motions: processes run (in lockstep with their projections) only in protocols without motion; a motion choreography runs its global type"),
-    ("rejected/E0705-work-instead-of-pick.chor", "what only a process gets wrong, in a choreography with motions: processes run (in lockstep with their projections) only in protocols without motion; a motion choreography runs its global type"),
-    ("rejected/E0706-exits-loop.chor", "what only a process gets wrong, in a choreography with motions: processes run (in lockstep with their projections) only in protocols without motion; a motion choreography runs its global type"),
-    ("rejected/E0706-loops-to-wrong-point.chor", "what only a process gets wrong, in a choreography with motions: processes run (in lockstep with their projections) only in protocols without motion; a motion choreography runs its global type"),
-    ("rejected/E0707-send-arity.chor", "what only a process gets wrong, in a choreography with motions: processes run (in lockstep with their projections) only in protocols without motion; a motion choreography runs its global type"),
     ("rejected/E0318-parked-cart-run-over.chor", "a participant standing still after its primitive ended is not placed by the simulator (it has no footprint then), so the cart that runs on meets nothing"),
-    ("rejected/E0407-no-footprint-refines-a-mesh.chor", "refinement of the type's primitive by the process's: processes are not run (the global type is)"),
-    ("rejected/E0709-rise-time-too-short.chor", "what only a process gets wrong, in a choreography with motions: processes run (in lockstep with their projections) only in protocols without motion; a motion choreography runs its global type"),
-    ("rejected/E0711-declared-receive-assumes-more.chor", "a declared local type weaker than the projection: declared types are not run, and processes only in protocols without motion"),
-    ("rejected/E0711-declared-send-promises-less.chor", "a declared local type weaker than the projection: declared types are not run, and processes only in protocols without motion"),
-    ("rejected/E0712-process-counter-starts-below-its-bound.chor", "what only a process gets wrong, in a choreography with motions: processes run (in lockstep with their projections) only in protocols without motion; a motion choreography runs its global type"),
-    ("rejected/E0713-process-countdown-below-zero.chor", "what only a process gets wrong, in a choreography with motions: processes run (in lockstep with their projections) only in protocols without motion; a motion choreography runs its global type"),
-    ("rejected/E0714-process-loop-disagrees-with-type.chor", "what only a process gets wrong, in a choreography with motions: processes run (in lockstep with their projections) only in protocols without motion; a motion choreography runs its global type"),
+    ("rejected/E0316-guards-about-shadowed-value.chor", "the choreography's gap needs a payload v in [0, 0.5], but q's process sends 0.75 and the runs follow the processes, so no run reaches it"),
+    ("rejected/E0407-abstract-precondition-read-with-concrete-arguments.chor", "the refinement fails only from a start the abstract precondition allows and the run does not reach (s in [0.1, 0.3)); the runs start where the choreography puts the participant"),
+    ("rejected/E0407-careful-pick-needs-more.chor", "the concrete precondition is stronger only in a band of states the runs do not reach (the arm is higher when the pick starts)"),
+    ("rejected/E0407-careful-pick-promises-less.chor", "the concrete guarantee allows a lower gripper, but Z3's witnesses of it stay within the type's guarantee in 2 runs"),
+    ("rejected/E0407-no-footprint-refines-a-mesh.chor", "a footprint larger than the type's is not compared point by point: the process's footprint (all space) meets nothing in the run"),
+    ("rejected/E0407-turned-footprint-refines.chor", "a footprint larger than the type's is not compared point by point: the process's 1 cm longer footprint meets nothing in the run"),
+    ("rejected/E0602-forgotten-loop.chor", "a declared local type that stops after one round: declared local types are not run, and the processes, run in lockstep with the global type, loop as it does"),
+    ("rejected/E0701-missing-process.chor", "a participant without a process runs its part of the global type: nothing wrong happens in a run"),
+    ("rejected/E0709-loop-parameter-without-the-types-refinement.chor", "the process's guard may fail only for a parameter below zero, which its loop never reaches (it counts down from a positive value and stops at 0)"),
+    ("rejected/E0711-declared-receive-assumes-more.chor", "a declared local type weaker than the projection: declared local types are not run, and the processes, run in lockstep with the global type, do what the projection says"),
+    ("rejected/E0711-declared-send-promises-less.chor", "a declared local type weaker than the projection: declared local types are not run, and the processes, run in lockstep with the global type, do what the projection says"),
     ("rejected/geometry/E0404-mounted-arm-orbit-too-small.chor", "the contact needs the Rover at one azimuth of its annulus with the Base turned to match, a state Z3's witnesses (which favour boundary values) do not pick at the 3 sampled times of 2 runs (nor in 8 runs)"),
     ("rejected/geometry/E0406-sorting-panda-reaches-into-cart-path.chor", "the Panda is low only while the carrier passes a few centimetres of its path, a time and state the sampled witnesses of the two sides of `*` do not pick together"),
-    ("rejected/E0707-receive-arity.chor", "what only a process gets wrong, in a choreography with motions: processes run (in lockstep with their projections) only in protocols without motion; a motion choreography runs its global type"),
     ("rejected/E0402-pendulum-round-ends-too-far-from-zero.chor", "the next round's precondition fails only when a round ends in the band 0.05 < |swing| <= 0.1, states Z3's witnesses (which favour boundary values such as 0) do not pick in 2 runs of 6 steps"),
     ("rejected/E0402-low-pick-below-the-next-pick.chor", "the next pick's precondition fails only when the low pick ends in the 5 mm band between hover_z and cart_h + grip_gap and `work` keeps it there, states Z3's witnesses (which favour boundary values) do not pick in 2 runs"),
-    ("rejected/E0407-careful-pick-needs-more.chor", "refinement of the type's primitive by the process's: processes are not run (the global type is)"),
-    ("rejected/E0407-careful-pick-promises-less.chor", "refinement of the type's primitive by the process's: processes are not run (the global type is)"),
-    ("rejected/E0407-careful-pick-sweeps-more.chor", "refinement of the type's primitive by the process's: processes are not run (the global type is)"),
-    ("rejected/E0407-careful-pick-takes-longer.chor", "refinement of the type's primitive by the process's: processes are not run (the global type is)"),
 ];
 
 /// Every rejected file with a program is found by the simulator (a collision, stuck state,
@@ -489,4 +471,162 @@ fn the_command_line_reports_findings_and_exit_codes() {
     let out = String::from_utf8_lossy(&bad.stdout);
     assert_eq!(bad.status.code(), Some(1), "{out}");
     assert!(out.contains("collision in run 0") && out.contains("t = 0: start"), "{out}");
+}
+
+// ---------------------------------------------------------------------------------------
+// The differential relation between process typing and the simulator: a process that
+// `mochi check` verifies runs in lockstep with its type without a finding. Processes are
+// mutated (a constant nudged, a comparison flipped, an action dropped or swapped, a binder
+// shadowed: the operators of tests/mutation/ops.rs whose edits lie in `process` items; and a
+// motion replaced by another of the file's process motions); a mutant check verifies and the
+// simulator finds wrong is a false `verified` of process typing.
+
+#[path = "mutation/ops.rs"]
+#[allow(dead_code)]
+mod ops;
+
+/// A stable hash (FNV-1a) of a mutant's id, for a sample that is the same every run.
+fn fnv(s: &str) -> u64 {
+    s.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3))
+}
+
+/// The byte ranges of the `process` items of `text` (each up to the next item or the end).
+fn process_regions(text: &str) -> Vec<(usize, usize)> {
+    const ITEMS: &[&str] =
+        &["import ", "const ", "robot ", "motion ", "system ", "choreography ", "process ", "local "];
+    let mut starts: Vec<(usize, bool)> = Vec::new();
+    let mut at = 0;
+    for line in text.split_inclusive('\n') {
+        if ITEMS.iter().any(|k| line.starts_with(k)) {
+            starts.push((at, line.starts_with("process ")));
+        }
+        at += line.len();
+    }
+    let mut out = Vec::new();
+    for (k, (s, is_process)) in starts.iter().enumerate() {
+        if *is_process {
+            out.push((*s, starts.get(k + 1).map_or(text.len(), |n| n.0)));
+        }
+    }
+    out
+}
+
+/// `dt<...>` of a process replaced by another motion written in the file's processes:
+/// (id, description, mutated text).
+fn motion_swaps(text: &str) -> Vec<(String, String, String)> {
+    let mut motions: Vec<(usize, usize)> = Vec::new();
+    for (s, e) in process_regions(text) {
+        let mut i = s;
+        while let Some(k) = text[i..e].find("dt<") {
+            let from = i + k + 3;
+            let Some(len) = text[from..e].find('>') else { break };
+            motions.push((from, from + len));
+            i = from + len;
+        }
+    }
+    let mut distinct: Vec<&str> = motions.iter().map(|(a, b)| &text[*a..*b]).collect();
+    distinct.sort();
+    distinct.dedup();
+    let mut out = Vec::new();
+    for (a, b) in &motions {
+        let here = &text[*a..*b];
+        // The next distinct motion in sorted order (a deterministic other one).
+        let Some(k) = distinct.iter().position(|d| *d == here) else { continue };
+        let other = distinct[(k + 1) % distinct.len()];
+        if other == here {
+            continue;
+        }
+        let mut t = text.to_string();
+        t.replace_range(*a..*b, other);
+        out.push((format!("@{a}:motion-swap"), format!("dt<{here}> -> dt<{other}>"), t));
+    }
+    out
+}
+
+/// Every process mutant of `text`: (id, description, mutated text).
+fn process_mutants(text: &str) -> Vec<(String, String, String)> {
+    let regions = process_regions(text);
+    let inside = |s: usize, e: usize| regions.iter().any(|(a, b)| *a <= s && e <= *b);
+    let (consts, states) = ops::declared_names(text);
+    let mut out: Vec<(String, String, String)> = ops::mutants(text, &states, &consts, None)
+        .into_iter()
+        .filter(|m| !m.edits.is_empty() && m.edits.iter().all(|(s, e, _)| inside(*s, *e)))
+        .map(|m| (m.id.clone(), m.desc.clone(), m.apply(text)))
+        .collect();
+    out.extend(motion_swaps(text));
+    out
+}
+
+/// How many process mutants the relation checks: `MOCHI_SIM_MUTANTS` (the long mode; `all`
+/// for every one), else 16.
+fn sim_mutant_budget() -> usize {
+    match std::env::var("MOCHI_SIM_MUTANTS").ok().as_deref() {
+        Some("all") => usize::MAX,
+        Some(n) => n.parse().unwrap_or(16),
+        None => 16,
+    }
+}
+
+/// `mochi check` verifies ⇒ `mochi simulate` finds nothing, over mutants of the processes
+/// of every verified motion choreography that has processes (a fixed sample: the ids of
+/// least hash). A mutant that is verified and found wrong is a false `verified`, printed
+/// with its text.
+#[test]
+fn process_mutants_that_check_verifies_simulate_clean() {
+    let mut files = Vec::new();
+    chor_files(Path::new("choreographies"), false, &mut files);
+    let mut all: Vec<(u64, String, String, String, String)> = Vec::new();
+    for path in files.iter().filter(|p| !p.contains("/mavlink/")) {
+        let text = std::fs::read_to_string(path).expect("readable");
+        if process_regions(&text).is_empty() || golden_verdict(path) != Verdict::Verified {
+            continue;
+        }
+        for (id, desc, mutated) in process_mutants(&text) {
+            let id = format!("{path}:{id}");
+            all.push((fnv(&id), id, desc, path.clone(), mutated));
+        }
+    }
+    assert!(all.len() >= 50, "too few process mutants were generated: {}", all.len());
+    all.sort_by(|a, b| (a.0, &a.1).cmp(&(b.0, &b.1)));
+    all.truncate(sim_mutant_budget());
+    let rows = par_map(&all, |k, (_, id, desc, path, text)| {
+        let mut db = SourceDb::new();
+        let v = check_source(&mut db, path, text, &Config::default()).verdict;
+        if v != Verdict::Verified {
+            return (v, None);
+        }
+        let mut db = SourceDb::new();
+        let root = db.add(path, text.clone());
+        let r = match simulate_loaded(&mut db, root, &cfg(2, 12, 500 + k as u64), &mut read_bytes) {
+            Ok(r) => r,
+            Err(d) => return (v, Some(format!("{id} ({desc}): verified, but it does not resolve: {d:?}"))),
+        };
+        let found: Vec<String> = r
+            .failures()
+            .filter(|f| f.kind != Kind::Replay)
+            .map(|f| format!("{:?}: {}\n    {}", f.kind, f.message, f.trace.join("\n    ")))
+            .collect();
+        if found.is_empty() {
+            return (v, None);
+        }
+        let procs: Vec<&str> = process_regions(text).into_iter().map(|(s, e)| text[s..e].trim()).collect();
+        (
+            v,
+            Some(format!(
+                "{id} ({desc}): verified, and the simulator finds:\n  {}\n  the processes:\n{}",
+                found.join("\n  "),
+                procs.join("\n")
+            )),
+        )
+    });
+    let false_verified: Vec<&String> = rows.iter().filter_map(|(_, f)| f.as_ref()).collect();
+    let rejected = rows.iter().filter(|(v, _)| *v == Verdict::Rejected).count();
+    let verified = rows.iter().filter(|(v, _)| *v == Verdict::Verified).count();
+    eprintln!("process mutants: {} checked, {verified} verified, {rejected} rejected", rows.len());
+    assert!(
+        false_verified.is_empty(),
+        "false `verified` of process typing (the mutant is verified, the simulator finds it wrong):\n{}",
+        false_verified.iter().map(|s| s.as_str()).collect::<Vec<_>>().join("\n")
+    );
+    assert!(rejected > 0, "no sampled mutant was rejected: the relation tested nothing");
 }

@@ -27,14 +27,21 @@
 //! - [`session`]: protocols without motion (MAVLink sessions) run as each participant's
 //!   projection, with only what that participant knows: a read of a value it does not
 //!   have is a finding.
+//! - [`lockstep`]: in choreographies with motion, each participant's `process` runs in
+//!   lockstep with the global type's run: its process decides the branch it chooses, the
+//!   payload it sends and the primitive it moves with (refinement, Def 3.4, checked on the
+//!   run); a process that does something else than its type is a violation. Both runners
+//!   step processes through [`process`].
 //!
 //! This is testing, not proof: it samples a few trajectories at a few times. A finding
 //! in a choreography mochi verified is a bug in mochi (or in the contracts' reading);
 //! no finding proves nothing. Participants that have finished a motion and wait for
 //! their next event are not placed (they have no footprint then).
 
+mod lockstep;
 mod motion;
 mod par;
+mod process;
 mod report;
 mod run;
 mod session;

@@ -3,6 +3,7 @@
 //! [M-PAR]) replayed exactly, its assumptions against the others' guarantees ([AGCOMP]),
 //! and the collision checks at each sampled time ([`super::space`]).
 
+use super::lockstep::Typed;
 use super::par::Segment;
 use super::report::Kind;
 use super::run::{Flow, Runner};
@@ -28,6 +29,7 @@ impl Runner<'_, '_> {
         let who = format!("dt<{}>", names.join(", "));
         // Arguments evaluated now, preconditions checked exactly ([TRAJ-BASE]).
         let mut movers = Vec::new();
+        let mut typed: Vec<Option<Typed>> = Vec::new();
         for (r, app) in &m.parts {
             let mut args = Vec::new();
             for a in &app.args {
@@ -83,7 +85,45 @@ impl Runner<'_, '_> {
                 self.lookup(&Var::Role(*r, Slot::Input(i)))
             });
             let inputs: Vec<Option<Value>> = inputs.collect();
-            let app = PrimApp { prim: app.prim, args: args.into_iter().map(|(_, e)| e).collect(), loc: app.loc };
+            let app_closed = PrimApp { prim: app.prim, args: args.into_iter().map(|(_, e)| e).collect(), loc: app.loc };
+            // A participant with a process moves with its process's primitive and
+            // arguments ([`super::lockstep`]); the type's is kept to check refinement.
+            let app = match self.process_moves(*r, app, &who) {
+                Err(()) => return Flow::Stop,
+                Ok(None) => {
+                    typed.push(None);
+                    app_closed
+                }
+                Ok(Some((papp, pvals))) => {
+                    let pp = prog.prim(papp.prim);
+                    let env = frame_env(&start, &start, &pvals, &zero, &now_inputs);
+                    match exact::holds(prog, &pp.pre, &env) {
+                        Tri::True => {}
+                        Tri::False => {
+                            let msg = format!(
+                                "{who}: the process of `{}` moves with `{}`, whose precondition is false where its type's `{}` holds (it does not refine it, Def 3.4); {}",
+                                prog.role_name(*r),
+                                crate::hir::print::prim_app(prog, &papp),
+                                prim.name,
+                                self.show_state(*r)
+                            );
+                            self.report(Kind::Violation, &t0, msg);
+                            return Flow::Stop;
+                        }
+                        Tri::Unknown => {
+                            let msg = format!(
+                                "{who}: the precondition of the process's `{}` ({}) cannot be decided",
+                                pp.name,
+                                prog.role_name(*r)
+                            );
+                            self.report(Kind::Undecided, &t0, msg);
+                            return Flow::Stop;
+                        }
+                    }
+                    typed.push(Some(Typed { app: app_closed, args: vals }));
+                    papp
+                }
+            };
             movers.push(Mover { role: *r, app, start, inputs });
         }
         let mut fracs: Vec<Rat> = (1..self.cfg.samples.max(1)).map(|_| self.rng.fraction()).collect();
@@ -119,6 +159,22 @@ impl Runner<'_, '_> {
                 return Flow::Stop;
             }
         };
+        // A process's primitive ends within its type's duration (Def 3.4).
+        for (mv, ty) in movers.iter().zip(&typed) {
+            let Some(ty) = ty else { continue };
+            if self.outside_type_duration(ty, &mv.start, &traj.end) {
+                let t = &t0 + traj.end.mid();
+                let msg = format!(
+                    "{who}: the process of `{}` moves with `{}`, which ends after {} s, outside the duration of its type's `{}` (it does not refine it, Def 3.4)",
+                    prog.role_name(mv.role),
+                    prog.prim(mv.app.prim).name,
+                    traj.end,
+                    prog.prim(ty.app.prim).name
+                );
+                self.report(Kind::Violation, &t, msg);
+                return Flow::Stop;
+            }
+        }
         // The others must be able to end when the non-interruptible part does.
         if let Some(n) = lead {
             for (j, mv) in movers.iter().enumerate() {
@@ -222,6 +278,22 @@ impl Runner<'_, '_> {
                         );
                         return Flow::Stop;
                     }
+                }
+                let last = std::ptr::eq(s, traj.samples.last().unwrap_or(s));
+                let ty = typed.get(i).and_then(Option::as_ref);
+                if let Some(what) =
+                    ty.and_then(|ty| self.type_contract_breaks(ty, &s.states[i], &mv.start, &s.time, &inputs, last))
+                {
+                    let t = &t0 + s.time.mid();
+                    let ty_name = ty.map(|ty| prog.prim(ty.app.prim).name.clone()).unwrap_or_default();
+                    let msg = format!(
+                        "{who}: the process of `{}` moves with `{}`, whose run breaks the {what} of its type's `{ty_name}` (it does not refine it, Def 3.4); {}",
+                        prog.role_name(mv.role),
+                        prim.name,
+                        show_values(prog, mv.role, &s.states[i])
+                    );
+                    self.report(Kind::Violation, &t, msg);
+                    return Flow::Stop;
                 }
             }
             let now: Vec<Occupant> = movers.iter().zip(&s.states).map(|(mv, st)| occupant(mv, st, &s.time)).collect();

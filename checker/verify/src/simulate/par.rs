@@ -42,7 +42,10 @@ impl Runner<'_, '_> {
         let mut stop = false;
         for &k in &order {
             let from = self.segments.len();
-            match self.walk(&sides[k]) {
+            self.par_depth += 1;
+            let flow = self.walk(&sides[k]);
+            self.par_depth -= 1;
+            match flow {
                 Flow::Next => {}
                 _ => stop = true,
             }

@@ -47,6 +47,13 @@ pub(super) struct Runner<'a, 'p> {
     pub(super) known: Vec<HashSet<ValueId>>,
     /// At a jump, per argument, which participants know its value.
     pub(super) jump_known: Vec<Vec<bool>>,
+    /// In a choreography with motion, per participant, its process as it runs in lockstep
+    /// with the global type ([`super::lockstep`]); empty in protocols without motion.
+    pub(super) actors: Vec<super::process::Actor<'p>>,
+    /// The walk reached the type's `end` (outside `*`): every process must have ended.
+    ended: bool,
+    /// How many sides of `*` the walk is in.
+    pub(super) par_depth: usize,
 }
 
 impl<'a, 'p> Runner<'a, 'p> {
@@ -68,6 +75,9 @@ impl<'a, 'p> Runner<'a, 'p> {
             over: false,
             known: vec![HashSet::new(); prog.roles.len()],
             jump_known: Vec::new(),
+            actors: Vec::new(),
+            ended: false,
+            par_depth: 0,
         }
     }
 
@@ -107,7 +117,11 @@ impl<'a, 'p> Runner<'a, 'p> {
         if !self.init() {
             return;
         }
+        self.start_processes();
         let _ = self.walk(g);
+        if self.ended && !self.over {
+            self.processes_end();
+        }
     }
 
     /// Initial states: a model of each participant's `init` and invariant.
@@ -193,7 +207,7 @@ impl<'a, 'p> Runner<'a, 'p> {
     /// violation. True when reported.
     pub(super) fn leaks(&mut self, role: RoleId, e: &Expr, keep: &[ValueId], what: &str) -> bool {
         let known = &self.known[role.idx()];
-        let Some(read) = super::session::unknown_read(self.prog, role, &|id| known.contains(&id), e, keep) else {
+        let Some(read) = super::process::unknown_read(self.prog, role, &|id| known.contains(&id), e, keep) else {
             return false;
         };
         let now = self.now();
@@ -208,7 +222,7 @@ impl<'a, 'p> Runner<'a, 'p> {
             .role_ids()
             .map(|r| {
                 let known = &self.known[r.idx()];
-                super::session::unknown_read(self.prog, r, &|id| known.contains(&id), e, &[]).is_none()
+                super::process::unknown_read(self.prog, r, &|id| known.contains(&id), e, &[]).is_none()
             })
             .collect()
     }
@@ -229,7 +243,10 @@ impl<'a, 'p> Runner<'a, 'p> {
             return Flow::Stop;
         }
         match g {
-            Global::End(_) => Flow::Stop,
+            Global::End(_) => {
+                self.ended = self.par_depth == 0;
+                Flow::Stop
+            }
             // `simulate` refuses a program with a timeout before running it.
             Global::After(_) => {
                 let now = self.now();
@@ -311,10 +328,10 @@ impl<'a, 'p> Runner<'a, 'p> {
             Global::Choice(branches, _) => {
                 let mut enabled = Vec::new();
                 let mut undecided = false;
-                for b in branches {
+                for (k, b) in branches.iter().enumerate() {
                     let guard = first_message(b).and_then(|m| m.guard.as_ref());
                     match guard.map_or(Tri::True, |e| self.holds(e)) {
-                        Tri::True => enabled.push(b),
+                        Tri::True => enabled.push(k),
                         Tri::Unknown => undecided = true,
                         Tri::False => {}
                     }
@@ -332,8 +349,10 @@ impl<'a, 'p> Runner<'a, 'p> {
                     }
                     return Flow::Stop;
                 }
-                let k = self.rng.below(enabled.len());
-                self.walk(enabled[k])
+                // The chooser's process decides among the branches it may take.
+                let Some(picks) = self.process_picks(branches, enabled) else { return Flow::Stop };
+                let k = self.rng.below(picks.len());
+                self.walk(&branches[picks[k]])
             }
             Global::Msg(m) => self.message(m),
             Global::Motion(m) => self.motion(m),
@@ -371,6 +390,14 @@ impl<'a, 'p> Runner<'a, 'p> {
         if let Some(g) = &m.guard {
             match self.holds(g) {
                 Tri::True => {}
+                Tri::False if self.has_process(m.from) => {
+                    let msg = format!(
+                        "the process of `{}` sends `{who}` although its guard is false",
+                        prog.role_name(m.from)
+                    );
+                    self.report(Kind::Violation, &t, msg);
+                    return Flow::Stop;
+                }
                 Tri::False => {
                     self.report(Kind::Stuck, &t, format!("`{who}`: its guard is false, and it is the only way on"));
                     return Flow::Stop;
@@ -383,7 +410,39 @@ impl<'a, 'p> Runner<'a, 'p> {
         }
         let mut shown = Vec::new();
         let mut rounded = false;
-        if !m.payload.is_empty() {
+        let sent = match self.process_sends(m, &who) {
+            Ok(sent) => sent,
+            Err(()) => return Flow::Stop,
+        };
+        if let Some(vals) = sent {
+            // The process's values, as the wire carries them; the type's refinements must
+            // hold of them ([T-OUT]), decided.
+            for (f, v) in m.payload.iter().zip(vals) {
+                let (v, _) = super::on_wire(prog, f.value, v);
+                shown.push(format!("{} = {v}", f.name));
+                self.values.insert(f.value, v);
+            }
+            for f in &m.payload {
+                let Some(r) = &f.refinement else { continue };
+                let holds = self.holds(r);
+                if holds == Tri::True {
+                    continue;
+                }
+                let shown = shown.join(", ");
+                if holds == Tri::False {
+                    let msg = format!(
+                        "the process of `{}` sends `{who}({shown})`, which breaks the refinement of `{}`",
+                        prog.role_name(m.from),
+                        f.name
+                    );
+                    self.report(Kind::Violation, &t, msg);
+                } else {
+                    let msg = format!("`{who}({shown})`: the refinement of `{}` cannot be evaluated exactly", f.name);
+                    self.report(Kind::Undecided, &t, msg);
+                }
+                return Flow::Stop;
+            }
+        } else if !m.payload.is_empty() {
             // The refinements, with everything but this message's fields made concrete.
             let facts: Vec<Expr> =
                 m.payload.iter().filter_map(|f| f.refinement.as_ref()).map(|e| self.close(e, &fields)).collect();
@@ -425,6 +484,10 @@ impl<'a, 'p> Runner<'a, 'p> {
                     }
                 }
             }
+        }
+        let vals: Vec<Value> = m.payload.iter().filter_map(|f| self.values.get(&f.value).cloned()).collect();
+        if !self.process_receives(m, &who, &vals) {
+            return Flow::Stop;
         }
         self.trace.push(format!("t = {}: {who}({})", exact::decimal(&t), shown.join(", ")));
         Flow::Next

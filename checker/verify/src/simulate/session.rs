@@ -23,13 +23,14 @@
 //! stops before) are **violations**. So a process typed `verified` that sends what its
 //! protocol forbids is found here, independently of the typing rules.
 
+use super::process::{Actor, UNFOLD_LIMIT};
 use super::report::Kind;
 use super::run::Runner;
 use super::var_expr;
 use crate::exact::{self, Tri, Value};
 use crate::hir::expr::map_vars;
 use crate::hir::local::{Local, LocalArc, RecvBranch, SendBranch};
-use crate::hir::{Expr, Global, Loc, Process, Program, RecParam, RoleId, Slot, ValueId, ValueOrigin, Var};
+use crate::hir::{Expr, Global, Loc, Process, RecParam, ValueId, Var};
 use std::collections::HashMap;
 
 /// Whether the global type has no motion and no `*`: it runs as projections.
@@ -47,144 +48,26 @@ pub(super) fn applies(g: &Global) -> bool {
 
 /// One participant running its local type (and its process, if it has one).
 struct Role<'p> {
-    id: RoleId,
+    me: Actor<'p>,
     at: LocalArc,
-    /// The values it has: payloads sent and received, its recursion parameters, and its
-    /// process's variables (other binding sites, so one map holds both).
-    known: HashMap<ValueId, Value>,
     /// Its loops by name: parameters and body.
     loops: HashMap<String, (Vec<RecParam>, LocalArc)>,
-    proc: Option<Proc<'p>>,
 }
 
-/// Where a participant's process is, and the process loops around it.
-struct Proc<'p> {
-    at: &'p Process,
-    loops: HashMap<&'p str, (&'p [RecParam], &'p Process)>,
+impl<'p> std::ops::Deref for Role<'p> {
+    type Target = Actor<'p>;
+    fn deref(&self) -> &Actor<'p> {
+        &self.me
+    }
 }
 
-/// Unfoldings of `mu`/jumps in a row without a message before a participant counts as
-/// looping for ever.
-const UNFOLD_LIMIT: usize = 64;
-
-/// What participant `role` does not know, read by `e`: `None` when it knows all. It
-/// knows its own state, the values `known` says it has, and the fields `keep` (those of
-/// the message it is sending).
-pub(super) fn unknown_read(
-    prog: &Program,
-    role: RoleId,
-    known: &dyn Fn(ValueId) -> bool,
-    e: &Expr,
-    keep: &[ValueId],
-) -> Option<String> {
-    let mut bad = None;
-    e.visit_vars(&mut |v, _| {
-        if bad.is_some() {
-            return;
-        }
-        // As E0305 reads it: a participant's own inputs are its own (sensed), not the
-        // state of their source.
-        match v.clone() {
-            Var::Role(r, slot) if r != role => {
-                bad = Some(format!(
-                    "`{}.{}`, the state of `{}`",
-                    prog.role_name(r),
-                    prog.slot_name(prog.role(r).kind, slot),
-                    prog.role_name(r)
-                ));
-            }
-            Var::Value(id, name) if !keep.contains(&id) && !known(id) => {
-                let how = match &prog.value(id).origin {
-                    ValueOrigin::Message { from, to } => {
-                        format!("sent by `{}` to `{}`", prog.role_name(*from), prog.role_name(*to))
-                    }
-                    ValueOrigin::RecParam => "a recursion parameter whose value it could not compute".to_string(),
-                    ValueOrigin::Bound { role } => format!("bound by `{}`", prog.role_name(*role)),
-                    ValueOrigin::Stream { .. } => "a stream's field as declared".to_string(),
-                    ValueOrigin::Observed { reader, .. } => {
-                        format!("observed by `{}` from a stream", prog.role_name(*reader))
-                    }
-                };
-                bad = Some(format!("`{name}` ({how})"));
-            }
-            _ => {}
-        }
-    });
-    bad
+impl std::ops::DerefMut for Role<'_> {
+    fn deref_mut(&mut self) -> &mut Self::Target {
+        &mut self.me
+    }
 }
 
 impl Runner<'_, '_> {
-    /// A value as `role` sees it: its own state, the values it has.
-    fn lookup_as(&self, role: &Role, v: &Var) -> Option<Value> {
-        match self.prog.source_of(v) {
-            Var::Role(r, Slot::State(i)) if r == role.id => self.state.get(r.idx())?.get(i).cloned(),
-            Var::Value(id, _) => role.known.get(&id).cloned(),
-            _ => None,
-        }
-    }
-
-    fn eval_as(&self, role: &Role, e: &Expr) -> Result<Value, String> {
-        exact::eval(self.prog, e, &|v: &Var| self.lookup_as(role, v))
-    }
-
-    fn holds_as(&self, role: &Role, e: &Expr) -> Tri {
-        exact::holds(self.prog, e, &|v: &Var| self.lookup_as(role, v))
-    }
-
-    /// `what` reads something `role` does not know: a finding. True when reported.
-    fn leak(&mut self, role: &Role, e: &Expr, keep: &[ValueId], what: &str) -> bool {
-        let Some(read) = unknown_read(self.prog, role.id, &|id| role.known.contains_key(&id), e, keep) else {
-            return false;
-        };
-        let now = self.now();
-        let msg = format!("`{}`: {what} reads {read}, which it does not know", self.prog.role_name(role.id));
-        self.report(Kind::Violation, &now, msg);
-        true
-    }
-
-    /// Binds `params` to `args` for `role`, checking their refinements. False when the run
-    /// must stop.
-    fn bind(&mut self, role: &mut Role, params: &[RecParam], args: Vec<Value>) -> bool {
-        for (p, v) in params.iter().zip(args) {
-            role.known.insert(p.value, v.clone());
-            if let Some(r) = &p.refinement {
-                if self.leak(role, r, &[], &format!("the refinement of `{}`", p.name)) {
-                    return false;
-                }
-                if self.holds_as(role, r) == Tri::False {
-                    let now = self.now();
-                    let msg = format!(
-                        "`{}`: the recursion parameter `{} = {v}` breaks its refinement",
-                        self.prog.role_name(role.id),
-                        p.name
-                    );
-                    self.report(Kind::Violation, &now, msg);
-                    return false;
-                }
-            }
-        }
-        true
-    }
-
-    /// Values of `exprs` as `role` evaluates them (`what` names them in findings).
-    fn values_as(&mut self, role: &Role, exprs: &[&Expr], what: &str) -> Option<Vec<Value>> {
-        let mut out = Vec::new();
-        for e in exprs {
-            if self.leak(role, e, &[], what) {
-                return None;
-            }
-            match self.eval_as(role, e) {
-                Ok(v) => out.push(v),
-                Err(err) => {
-                    let now = self.now();
-                    self.report(Kind::Undecided, &now, format!("{what} of `{}`: {err}", self.prog.role_name(role.id)));
-                    return None;
-                }
-            }
-        }
-        Some(out)
-    }
-
     /// Unfolds `mu` and jumps until `role` is at a send, a receive or the end. False when
     /// the run must stop.
     fn settle(&mut self, role: &mut Role) -> bool {
@@ -229,98 +112,6 @@ impl Runner<'_, '_> {
         let msg = format!("`{}` loops without a message", self.prog.role_name(role.id));
         self.report(Kind::Stuck, &now, msg);
         false
-    }
-
-    /// Runs `role`'s process up to its next message (or its end): `mu` and jumps bind the
-    /// process's parameters, `if` takes the branch its condition selects, evaluated
-    /// exactly. False when the run must stop.
-    fn settle_process(&mut self, role: &mut Role<'_>) -> bool {
-        let name = self.prog.role_name(role.id);
-        for _ in 0..UNFOLD_LIMIT {
-            let Some(proc) = role.proc.as_ref() else { return true };
-            let at = proc.at;
-            match at {
-                Process::Rec { var, params, body, .. } => {
-                    let inits: Vec<&Expr> = params.iter().map(|p| &p.init).collect();
-                    let what = format!("the initial values of the process loop `{var}`");
-                    let Some(args) = self.values_as(role, &inits, &what) else { return false };
-                    if !self.bind(role, params, args) {
-                        return false;
-                    }
-                    if let Some(proc) = role.proc.as_mut() {
-                        proc.loops.insert(var.as_str(), (params.as_slice(), &**body));
-                        proc.at = body;
-                    }
-                }
-                Process::Var { var, args, .. } => {
-                    let Some((params, body)) = role.proc.as_ref().and_then(|p| p.loops.get(var.as_str()).copied())
-                    else {
-                        let now = self.now();
-                        self.report(Kind::Undecided, &now, format!("`{name}`: `{var}` is not a loop of its process"));
-                        return false;
-                    };
-                    let exprs: Vec<&Expr> = args.iter().collect();
-                    let what = format!("the arguments of the process jump `{var}`");
-                    let Some(vals) = self.values_as(role, &exprs, &what) else { return false };
-                    if !self.bind(role, params, vals) {
-                        return false;
-                    }
-                    if let Some(proc) = role.proc.as_mut() {
-                        proc.at = body;
-                    }
-                }
-                Process::If { cond, then, els, .. } => {
-                    if self.leak(role, cond, &[], "an `if` condition of its process") {
-                        return false;
-                    }
-                    let next: &Process = match self.holds_as(role, cond) {
-                        Tri::True => then,
-                        Tri::False => els,
-                        Tri::Unknown => {
-                            let now = self.now();
-                            let msg = format!("`{name}`: an `if` condition of its process cannot be evaluated exactly");
-                            self.report(Kind::Undecided, &now, msg);
-                            return false;
-                        }
-                    };
-                    if let Some(proc) = role.proc.as_mut() {
-                        proc.at = next;
-                    }
-                }
-                Process::Motion { .. } => {
-                    let now = self.now();
-                    self.report(Kind::Undecided, &now, format!("`{name}`: a motion in a process run as a session"));
-                    return false;
-                }
-                Process::Send { .. } | Process::Choose { .. } | Process::Recv { .. } | Process::End(_) => return true,
-            }
-        }
-        let now = self.now();
-        self.report(Kind::Stuck, &now, format!("the process of `{name}` loops without a message"));
-        false
-    }
-
-    /// The sends `role`'s process may take now: (receiver, label, arguments, continuation).
-    fn offers<'p>(role: &Role<'p>) -> Vec<(RoleId, &'p str, &'p [Expr], &'p Process)> {
-        fn collect<'p>(p: &'p Process, out: &mut Vec<(RoleId, &'p str, &'p [Expr], &'p Process)>) {
-            match p {
-                Process::Send { to, label, args, cont, .. } => out.push((*to, label, args, cont)),
-                Process::Choose { branches, .. } => branches.iter().for_each(|b| collect(b, out)),
-                _ => {}
-            }
-        }
-        let mut out = Vec::new();
-        if let Some(p) = &role.proc {
-            collect(p.at, &mut out);
-        }
-        out
-    }
-
-    /// A finding: `role`'s process does not do what its local type says here.
-    fn off_type(&mut self, role: &Role<'_>, what: String) {
-        let now = self.now();
-        let msg = format!("the process of `{}` {what}", self.prog.role_name(role.id));
-        self.report(Kind::Violation, &now, msg);
     }
 
     /// The branches of a send of `role` whose guards hold (evaluated with its knowledge).
@@ -513,13 +304,7 @@ impl Runner<'_, '_> {
         }
         let mut roles: Vec<Role> = locals
             .iter()
-            .map(|(r, t)| Role {
-                id: *r,
-                at: t.clone(),
-                known: HashMap::new(),
-                loops: HashMap::new(),
-                proc: prog.processes.iter().find(|d| d.role == *r).map(|d| Proc { at: &d.body, loops: HashMap::new() }),
-            })
+            .map(|(r, t)| Role { me: Actor::new(prog, *r), at: t.clone(), loops: HashMap::new() })
             .collect();
         loop {
             for role in &mut roles {
@@ -771,7 +556,9 @@ fn receive(role: &mut Role, rb: &RecvBranch, vals: &[Value]) {
 
 #[cfg(test)]
 mod tests {
+    use super::super::process::unknown_read;
     use super::*;
+    use crate::hir::{Program, RoleId};
     use crate::lower::tests::lower_src;
 
     const SYSTEM: &str = "system S { participant A; participant B; participant C; }\n";
@@ -796,11 +583,9 @@ mod tests {
     fn a_value_another_participant_received_is_unknown() {
         let (prog, _) = chor("choreography P = A -> B: go(n: int {n == 1}). B -> C: back(m: int {m == n}). end;");
         let n = (0..prog.values.len()).map(|i| ValueId(i as u32)).find(|id| prog.value(*id).name == "n").expect("n");
-        let role = |r: u32, known: &[ValueId]| Role {
+        let role = |r: u32, known: &[ValueId]| Actor {
             id: RoleId(r),
-            at: std::sync::Arc::new(Local::End(Loc::default())),
             known: known.iter().map(|id| (*id, Value::Num(exact::Num::int(1)))).collect(),
-            loops: HashMap::new(),
             proc: None,
         };
         let read = var_expr(Var::Value(n, "n".into()), crate::hir::Sort::Int);
