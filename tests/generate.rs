@@ -571,8 +571,51 @@ impl Protocol {
     /// The first message no admissible payload fits on some path (`None`: progress holds).
     /// Integer fields range over their wire range; a float field over the finite float32
     /// values (LANGUAGE.md's model of MAVLink values).
+    ///
+    /// Beside a timeout, a message without a payload in *some* state is only a dead branch
+    /// there (the receiver may give up); one without a payload in *every* state the choice
+    /// is reached in leaves the receiver nothing but the timeout, which is an error too
+    /// (E0410: some message of a choice with a timeout can come).
     fn stuck(&self) -> Option<usize> {
-        self.first_stuck().filter(|&k| Some(k) != self.timeout)
+        match self.first_stuck() {
+            Some(k) if Some(k) == self.timeout => self.dead_everywhere(k).then_some(k),
+            s => s,
+        }
+    }
+
+    /// Whether message `k` has no admissible payload whatever the earlier messages carried
+    /// (on the path through every message; every earlier one has a payload).
+    fn dead_everywhere(&self, k: usize) -> bool {
+        let mut reach: Option<(i128, i128)> = None;
+        for (j, (_, msg)) in self.msgs.iter().enumerate() {
+            match msg {
+                Msg::Int { f, lo, hi, tie } => {
+                    let (l, h) = ((*lo).max(INT_FIELDS[*f].lo), (*hi).min(INT_FIELDS[*f].hi));
+                    if j == k {
+                        return match (tie, reach) {
+                            (Tie::AtLeast(c), Some((rl, _))) => l.max(rl + c) > h,
+                            (Tie::AtMost(c), Some((_, rh))) => h.min(rh + c) < l,
+                            _ => l > h,
+                        };
+                    }
+                    reach = match (tie, reach) {
+                        (Tie::AtLeast(c), Some((rl, rh))) => (l.max(rh + c) <= h).then(|| (l.max(rl + c), h)),
+                        (Tie::AtMost(c), Some((rl, rh))) => (h.min(rl + c) >= l).then(|| (l, h.min(rh + c))),
+                        _ => (l <= h).then_some((l, h)),
+                    };
+                }
+                Msg::Float { lo, lo_strict, hi, hi_strict } => {
+                    if j == k {
+                        // Over the reals: the rule asks whether the branch's context is
+                        // satisfiable, and a window with reals but no float32 in it is a
+                        // dead branch that rule does not see (no claim either way).
+                        return lo > hi || (lo == hi && (*lo_strict || *hi_strict));
+                    }
+                    reach = None;
+                }
+            }
+        }
+        false
     }
 
     /// The first message no admissible payload fits, on the path through every message.
@@ -823,6 +866,16 @@ fn the_float_oracle_sees_the_gap_between_neighbours() {
     // message branch still gets stuck after it.
     assert_eq!(Protocol { timeout: Some(1), ..q.clone() }.stuck(), None);
     assert_eq!(Protocol { timeout: Some(0), ..q.clone() }.stuck(), Some(1));
+    // Beside a message no earlier value lets through (`v1 >= v0 + 6` after `v0 >= 250` in a
+    // uint8), the timeout is all that is left: rejected.
+    let r = Protocol {
+        msgs: vec![
+            (true, Msg::Int { f: 5, lo: 250, hi: 300, tie: Tie::None }),
+            (false, Msg::Int { f: 5, lo: 0, hi: 300, tie: Tie::AtLeast(6) }),
+        ],
+        timeout: Some(1),
+    };
+    assert_eq!(r.stuck(), Some(1));
 }
 
 /// The timeout oracle against mochi: a timeout beside the first message does not hide that
@@ -844,6 +897,17 @@ fn a_timeout_beside_an_earlier_message_keeps_a_later_defect() {
         let r = check(&src);
         assert_eq!(r.verdict == Verdict::Verified, verified, "{:?} {:?}\n{src}", r.verdict, codes(&r));
     }
+    // The second message impossible whatever the first carried: only the timeout is left.
+    let mut dead = Protocol { timeout: Some(1), ..q.clone() };
+    dead.msgs[1].1 = Msg::Int { f: 5, lo: 0, hi: 300, tie: Tie::AtLeast(6) };
+    let src = render_protocol(&dead, &names);
+    let r = check(&src);
+    assert!(
+        r.verdict == Verdict::Rejected && codes(&r).contains(&"E0410".to_string()),
+        "{:?} {:?}\n{src}",
+        r.verdict,
+        codes(&r)
+    );
 }
 
 // ---------------------------------------------------------------------------------------

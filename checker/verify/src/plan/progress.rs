@@ -21,6 +21,7 @@ impl<'a> Contexts<'a> {
             // it when no other branch's message came. The choice cannot get stuck, and no
             // message branch needs to be enabled on its own.
             self.choice_firsts.extend(firsts.iter().map(|m| m.loc.0));
+            self.some_message_can_come(&firsts, sigma);
             return;
         }
         if firsts.len() != branches.len() {
@@ -48,6 +49,40 @@ impl<'a> Contexts<'a> {
             hyps: self.exact(hyps.facts()),
             goal: Goal::Progress { branches: each },
         });
+    }
+}
+
+impl Contexts<'_> {
+    /// At a choice with a timeout branch, some message branch can be taken in some state
+    /// the choice is reached in (E0410, an error): otherwise the waiting role can only ever
+    /// give up, and the choice's messages are dead text. Progress does not ask it (the
+    /// timeout is always enabled), and each branch alone is only a dead-branch warning, so
+    /// without this a choice whose every message is impossible (`got == want && got > 20`
+    /// after `want < 10`) verified with warnings. A satisfiability question: Σ with the
+    /// disjunction of the branches' guards and payload refinements (their values free),
+    /// each with its definedness, as [`Sigma::assume_message`] assumes a message.
+    fn some_message_can_come(&mut self, firsts: &[&Msg], sigma: &Sigma) {
+        let Some(m) = firsts.first() else { return };
+        let mut can: Vec<Expr> = Vec::new();
+        for f in firsts {
+            let parts: Vec<Expr> = f
+                .guard
+                .iter()
+                .chain(f.payload.iter().filter_map(|x| x.refinement.as_ref()))
+                .map(|e| defined_and(e.clone()))
+                .collect();
+            let conj = and_all(parts, f.loc);
+            if conj.is_true() {
+                return; // an unconstrained message can always come
+            }
+            can.push(conj);
+        }
+        let Some(any) = can.into_iter().reduce(or) else { return };
+        let mut taken = sigma.clone();
+        taken.assume(&any);
+        let waits = self.prog.role_name(m.to);
+        let what = format!("a message of this choice, which `{waits}` otherwise only ever leaves by its timeout");
+        self.reachable(m.loc.0, what, &taken, vec![sigma.facts().to_vec()], false);
     }
 }
 

@@ -110,8 +110,12 @@ fn a_timeout_branch_is_always_enabled() {
     assert_eq!(failing(&stable(waited)), vec![]);
     let stuck = "P -> Q: a(y: int {y > h && y < h}). end";
     assert_eq!(failing(&stable(stuck)), vec![Rule::Progress]);
+    // The timeout keeps the choice from getting stuck, but a choice whose only message can
+    // never come leaves nothing but the timeout: an error of its own (Reachable, E0410).
     let left = "( P -> Q: a(y: int {y > h && y < h}). end + after 100 ms by Q. end )";
-    assert_eq!(failing(&stable(left)), vec![]);
+    assert_eq!(failing(&stable(left)), vec![Rule::Reachable]);
+    let some = "( P -> Q: a(y: int {y > h && y < 100}). end + after 100 ms by Q. end )";
+    assert_eq!(failing(&stable(some)), vec![]);
     // What follows the timeout knows what held before the choice (`h <= 100`), no more.
     let after = "( P -> Q: a. end + after 100 ms by Q. Q -> P: b(y: int {y == h && y <= 100}). end )";
     assert_eq!(failing(&stable(after)), vec![]);
