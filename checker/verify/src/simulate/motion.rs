@@ -159,22 +159,6 @@ impl Runner<'_, '_> {
                 return Flow::Stop;
             }
         };
-        // A process's primitive ends within its type's duration (Def 3.4).
-        for (mv, ty) in movers.iter().zip(&typed) {
-            let Some(ty) = ty else { continue };
-            if self.outside_type_duration(ty, &mv.start, &traj.end) {
-                let t = &t0 + traj.end.mid();
-                let msg = format!(
-                    "{who}: the process of `{}` moves with `{}`, which ends after {} s, outside the duration of its type's `{}` (it does not refine it, Def 3.4)",
-                    prog.role_name(mv.role),
-                    prog.prim(mv.app.prim).name,
-                    traj.end,
-                    prog.prim(ty.app.prim).name
-                );
-                self.report(Kind::Violation, &t, msg);
-                return Flow::Stop;
-            }
-        }
         // The others must be able to end when the non-interruptible part does.
         if let Some(n) = lead {
             for (j, mv) in movers.iter().enumerate() {
@@ -206,6 +190,24 @@ impl Runner<'_, '_> {
                     );
                     return Flow::Stop;
                 }
+            }
+        }
+        // A process's primitive ends within its type's duration (Def 3.4). After the
+        // check above: where the type's own durations do not fit together, that is the
+        // type's defect (stuck), not the process's.
+        for (mv, ty) in movers.iter().zip(&typed) {
+            let Some(ty) = ty else { continue };
+            if self.outside_type_duration(ty, &mv.start, &traj.end) {
+                let t = &t0 + traj.end.mid();
+                let msg = format!(
+                    "{who}: the process of `{}` moves with `{}`, which ends after {} s, outside the duration of its type's `{}` (it does not refine it, Def 3.4)",
+                    prog.role_name(mv.role),
+                    prog.prim(mv.app.prim).name,
+                    traj.end,
+                    prog.prim(ty.app.prim).name
+                );
+                self.report(Kind::Violation, &t, msg);
+                return Flow::Stop;
             }
         }
         // Assumptions: could the others' guarantees break one at a sampled time?
