@@ -12,8 +12,8 @@ use super::{eprintln_safe, print_safe, ColorChoice, Format, Outcome};
 use clap::Args;
 use mochi::mavio::mission::{parse_mission, upload_trace, Ends, MissionType};
 use mochi::monitor::Monitor;
+use mochi::render::{mission_json, MissionFile, MissionList, MissionViolation};
 use mochi::source::SourceDb;
-use serde_json::json;
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -80,7 +80,7 @@ pub(crate) fn mission(args: &MissionArgs, color: ColorChoice) -> Outcome {
     let mut failed = false;
     for path in &args.files {
         let name = path.display().to_string();
-        let parsed = std::fs::read(path)
+        let parsed = mochi::fsload::read_bytes(path)
             .map_err(|e| format!("error: cannot read {name}: {e}"))
             .and_then(|b| String::from_utf8(b).map_err(|_| format!("error: {name}: not UTF-8 text")))
             .and_then(|t| parse_mission(&name, &t).map_err(|e| format!("error: {e}")));
@@ -89,7 +89,13 @@ pub(crate) fn mission(args: &MissionArgs, color: ColorChoice) -> Outcome {
             Err(msg) => {
                 failed = true;
                 text += &format!("{msg}\n{name}: unreadable\n");
-                reports.push(json!({"file": name, "verdict": "unreadable", "error": msg}));
+                reports.push(MissionFile {
+                    file: name,
+                    format: None,
+                    verdict: "unreadable",
+                    error: Some(msg),
+                    lists: Vec::new(),
+                });
                 continue;
             }
         };
@@ -116,11 +122,15 @@ pub(crate) fn mission(args: &MissionArgs, color: ColorChoice) -> Outcome {
                         type_name(mission.mission_type),
                         proto
                     );
-                    violations.push(json!({
-                        "frame": v.frame, "message": what, "item": item,
-                        "line": if line > 0 { Some(line) } else { None },
-                        "kind": v.kind.as_str(), "field": v.field, "detail": detail,
-                    }));
+                    violations.push(MissionViolation {
+                        frame: v.frame,
+                        message: what,
+                        item,
+                        line: (line > 0).then_some(line),
+                        kind: v.kind.as_str(),
+                        field: v.field.clone(),
+                        detail,
+                    });
                 }
                 // A trace that ends before the protocol does (no session reached `end`) is
                 // not an upload the protocol accepts either.
@@ -142,32 +152,33 @@ pub(crate) fn mission(args: &MissionArgs, color: ColorChoice) -> Outcome {
                         proto
                     );
                 }
-                lists.push(json!({
-                    "mission_type": type_name(mission.mission_type),
-                    "items": mission.items.len(),
-                    "protocol": proto,
-                    "verdict": verdict,
-                    "violations": violations,
-                }));
+                lists.push(MissionList {
+                    mission_type: type_name(mission.mission_type),
+                    items: mission.items.len(),
+                    protocol: proto,
+                    verdict,
+                    violations,
+                });
             }
         }
         failed |= !file_ok;
         let summary: Vec<String> =
             file.missions.iter().map(|m| format!("{} {} items", type_name(m.mission_type), m.items.len())).collect();
         text += &format!("{name}: {} ({})\n", if file_ok { "accepted" } else { "rejected" }, summary.join(", "));
-        reports.push(json!({
-            "file": name,
-            "format": format!("{:?}", file.format),
-            "verdict": if file_ok { "accepted" } else { "rejected" },
-            "lists": lists,
-        }));
+        reports.push(MissionFile {
+            file: name,
+            format: Some(format!("{:?}", file.format)),
+            verdict: if file_ok { "accepted" } else { "rejected" },
+            error: None,
+            lists,
+        });
     }
     match args.format {
         Format::Text => print_safe(&text),
         Format::Json => {
             let mut out = String::new();
             for r in &reports {
-                out += &r.to_string();
+                out += &mission_json(r);
                 out.push('\n');
             }
             print_safe(&out);
@@ -176,7 +187,7 @@ pub(crate) fn mission(args: &MissionArgs, color: ColorChoice) -> Outcome {
     if failed {
         eprintln_safe(&format!(
             "{} of {} mission files rejected or unreadable",
-            reports.iter().filter(|r| r["verdict"] != "accepted").count(),
+            reports.iter().filter(|r| r.verdict != "accepted").count(),
             reports.len()
         ));
         Outcome::Rejected
