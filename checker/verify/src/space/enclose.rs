@@ -180,17 +180,23 @@ impl Facts {
     }
 }
 
-/// The search for one part; `Ok(pieces examined)` when the part lies within `fp`.
-fn part_within(prog: &Program, part: &BodyPart, fp: &Expr, facts: &Facts, budget: usize) -> Result<usize, Undecided> {
+/// One body part against a footprint predicate, as both the proof ([`part_within`]) and the
+/// refutation (`refute.rs`) read it: the shape in its own frame (a predicate over the point
+/// `Var::Point`), its exact box, and the footprint's predicate at the placed point,
+/// normalised over that box.
+struct PartGoal {
+    shape: Expr,
+    exact: [(BigRational, BigRational); 3],
+    goal: Expr,
+}
+
+fn part_goal(prog: &Program, part: &BodyPart, fp: &Expr) -> Result<PartGoal, Undecided> {
     let loc = Loc::default();
     let q: [Expr; 3] = [0, 1, 2].map(|k| Expr { kind: ExprKind::Var(Var::Point(k)), sort: Sort::Real, loc });
-    // The shape in its own frame, and a box around it.
     let unplaced = Body { parts: vec![BodyPart { place: None, ..part.clone() }], span: part.span };
     let shape = crate::space::region::region(prog, &unplaced, &q).ok_or_else(|| undecided("a URDF or mesh part"))?;
     let exact =
         shape_box(prog, &part.shape).ok_or_else(|| undecided("a shape whose sizes are not rational constants"))?;
-    let extent = exact.clone().map(|(l, h)| Interval::new(Interval::of_rational(&l).lo, Interval::of_rational(&h).hi));
-    // The footprint's predicate at the placed point, normalised.
     let placed = match &part.place {
         Some(pose) => place(prog, pose, &q),
         None => q.clone(),
@@ -200,6 +206,13 @@ fn part_within(prog: &Program, part: &BodyPart, fp: &Expr, facts: &Facts, budget
         _ => None,
     });
     let goal = normalise_bool(prog, &split_abs(&strip(&goal)), &exact);
+    Ok(PartGoal { shape, exact, goal })
+}
+
+/// The search for one part; `Ok(pieces examined)` when the part lies within `fp`.
+fn part_within(prog: &Program, part: &BodyPart, fp: &Expr, facts: &Facts, budget: usize) -> Result<usize, Undecided> {
+    let PartGoal { shape, exact, goal } = part_goal(prog, part, fp)?;
+    let extent = exact.clone().map(|(l, h)| Interval::new(Interval::of_rational(&l).lo, Interval::of_rational(&h).hi));
     // Every comparison affine in the shape's point: its extremes over the shape are
     // bounded directly (the shape's support), and only the state is split.
     if let Some(support) = Support::of(&part.shape, &exact) {

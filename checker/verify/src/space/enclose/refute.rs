@@ -129,20 +129,7 @@ fn part_outside(
     facts: &Facts,
     name: &dyn Fn(&Var) -> String,
 ) -> Option<Outside> {
-    let loc = Loc::default();
-    let q: [Expr; 3] = [0, 1, 2].map(|k| Expr { kind: ExprKind::Var(Var::Point(k)), sort: Sort::Real, loc });
-    let unplaced = Body { parts: vec![BodyPart { place: None, ..part.clone() }], span: part.span };
-    let shape = crate::space::region::region(prog, &unplaced, &q)?;
-    let exact = shape_box(prog, &part.shape)?;
-    let placed = match &part.place {
-        Some(pose) => place(prog, pose, &q),
-        None => q.clone(),
-    };
-    let goal = crate::hir::expr::map_vars(fp, &mut |v, _| match v {
-        Var::Point(i) => placed.get(*i).cloned(),
-        _ => None,
-    });
-    let goal = normalise_bool(prog, &split_abs(&strip(&goal)), &exact);
+    let super::PartGoal { shape, exact, goal } = super::part_goal(prog, part, fp).ok()?;
     let mut table = VarTable::new();
     let goal = Tree::new(prog, &goal, &mut table);
     // The goal's variables are numbered first.
