@@ -16,7 +16,10 @@
 //! radius is [`crate::geometry::Robot::reach`]'s bound on the distance from the URDF's root
 //! of any point of the link's collision geometry over every configuration within the joint
 //! limits; the limits are part of the kind's invariant (E0513), so every state the
-//! contract allows is within them. Each radius, height and depth is enlarged by
+//! contract allows is within them. That holds only for limits that are a finite range
+//! (`lower < upper`, the ones the invariant receives): a link below a prismatic joint whose
+//! limits are not (a `<limit>` without positions, URDF's `0` and `0`) slides as far as the
+//! kind's own invariant lets it, beyond the reach, and has no stand-in (unknown). Each radius, height and depth is enlarged by
 //! `1e-9 + 1e-9 |value|` m against the rounding of the poses (not the floor of a solid with
 //! no pose of its own and no slack, whose box is its points' least and greatest coordinates,
 //! exactly). If the footprint's predicate
@@ -126,11 +129,15 @@ type Cylinder = (f64, f64, f64);
 
 /// The stand-ins of one solid, in its part's frame: a sphere of radius `r` about the
 /// origin, and `Some((r_xy, floor, top))` a cylinder about the z axis holding it.
-fn stand_ins(piece: &Piece) -> Option<(f64, Option<Cylinder>)> {
+fn stand_ins(piece: &Piece) -> Result<(f64, Option<Cylinder>), String> {
+    let infinite = || "its extent is not finite".to_string();
     if let Some(link) = &piece.link {
+        if !slides_bounded(&link.robot, link.link) {
+            return Err("a prismatic joint between the URDF's root and this link has no position limits (`lower` < `upper`), so the invariant does not bound how far the link slides".into());
+        }
         let reach = link.robot.reach();
-        let r = reach.get(link.link)?.1;
-        return (r.is_finite() && r >= 0.0).then(|| (out(r), None));
+        let r = reach.get(link.link).ok_or_else(infinite)?.1;
+        return (r.is_finite() && r >= 0.0).then(|| (out(r), None)).ok_or_else(infinite);
     }
     let b = piece.solid.local_aabb();
     let (lo, hi) = (b.mins, b.maxs);
@@ -145,7 +152,7 @@ fn stand_ins(piece: &Piece) -> Option<(f64, Option<Cylinder>)> {
         }
     }
     if !(r.is_finite() && rxy.is_finite()) {
-        return None;
+        return Err(infinite());
     }
     // The floor is padded downwards, the top upwards; a solid in its part's frame itself
     // (identity pose, no slack) has an exact box (the least and greatest coordinates of its
@@ -153,7 +160,46 @@ fn stand_ins(piece: &Piece) -> Option<(f64, Option<Cylinder>)> {
     let exact = piece.solid.pose == crate::geometry::identity() && piece.solid.slack == 0.0;
     let floor = if exact { lo.z } else { lo.z - 1e-9 - 1e-9 * lo.z.abs() };
     let cyl = (floor.is_finite() && hi.z.is_finite()).then(|| (out(rxy), floor, out(hi.z)));
-    Some((out(r), cyl))
+    Ok((out(r), cyl))
+}
+
+/// Whether every prismatic joint between the URDF's root and `link` is driven by a joint
+/// variable whose URDF limits are a finite range `lower < upper`: exactly the limits
+/// `space::world::add_joint_limits` adds to the kind's invariant. [`Robot::reach`] bounds a
+/// prismatic joint's travel by its variable's limits whatever they are, so where the
+/// invariant does not hold the variable to them (URDF's default `0` and `0` of a `<limit>`
+/// without positions, a `lower` above `upper`) the link slides beyond that reach and the
+/// sphere is no stand-in. Rotations preserve lengths: revolute and continuous joints need
+/// no limits.
+///
+/// [`Robot::reach`]: crate::geometry::Robot::reach
+fn slides_bounded(robot: &crate::geometry::Robot, link: usize) -> bool {
+    use crate::geometry::kinematics::JointKind;
+    let bounded = |j: usize| {
+        // The variable that drives `j`: its mimics followed to a joint that mimics none.
+        let mut k = j;
+        for _ in 0..=robot.joints.len() {
+            match robot.joints.get(k).and_then(|x| x.mimic) {
+                Some(m) => k = m.master,
+                None => break,
+            }
+        }
+        robot.joints.get(k).is_some_and(|v| {
+            v.mimic.is_none()
+                && v.kind.is_movable()
+                && v.limits.is_some_and(|(lo, hi)| lo.is_finite() && hi.is_finite() && lo < hi)
+        })
+    };
+    let mut at = link;
+    for _ in 0..=robot.links.len() {
+        let Some(j) = robot.parent_joint(at) else { return true };
+        let Some(joint) = robot.joints.get(j) else { return false };
+        if joint.kind == JointKind::Prismatic && !bounded(j) {
+            return false;
+        }
+        at = joint.parent;
+    }
+    false
 }
 
 fn literal(v: f64) -> Option<Expr> {
@@ -163,7 +209,7 @@ fn literal(v: f64) -> Option<Expr> {
 /// The search of [`part_within`] against each stand-in of the solid; the first that shows
 /// containment answers.
 fn piece_within(prog: &Program, piece: &Piece, fp: &Expr, facts: &Facts) -> Result<String, String> {
-    let (r, cyl) = stand_ins(piece).ok_or_else(|| "its extent is not finite".to_string())?;
+    let (r, cyl) = stand_ins(piece)?;
     let mut shapes = Vec::new();
     if let Some((rxy, floor, top)) = cyl {
         let place = lowered(prog, piece.place.as_ref(), floor);

@@ -173,3 +173,65 @@ fn a_turned_box_is_refuted_only_when_it_sticks_out_at_every_heading() {
     let square = "abs(px - x) <= 0.1 && abs(py - y) <= 0.1 && 0 <= pz <= 0.16";
     assert_eq!(refute(body, square), None);
 }
+
+/// A URDF slider (a box on a prismatic joint along x) as the body, a disc of radius `r`
+/// about the base as the footprint, the joint driven from 0 to `a`: the verdict of the
+/// whole check, the URDF's `<limit>` being `limit`.
+fn slider(limit: &str, a: &str, r: &str) -> crate::driver::Report {
+    let urdf = format!(
+        r#"<?xml version="1.0"?>
+<robot name="slider">
+  <link name="base"><collision><geometry><box size="0.2 0.2 0.1"/></geometry><origin xyz="0 0 0.05"/></collision></link>
+  <link name="carriage"><collision><geometry><box size="0.1 0.1 0.1"/></geometry><origin xyz="0 0 0.05"/></collision></link>
+  <joint name="slide" type="prismatic">
+    <parent link="base"/><child link="carriage"/><origin xyz="0 0 0.1"/><axis xyz="1 0 0"/>
+    {limit}
+  </joint>
+</robot>"#
+    );
+    let chor = format!(
+        "robot Slider {{ state slide: real; geometry: urdf(\"slider.urdf\"); invariant: -2 <= slide <= 2; }}
+         motion Slider.extend(a: real) {{ interruptible: false; pre: 0 <= a && a <= {a} && slide == 0;
+           guarantee: 0 <= slide && slide <= a; post: slide == a;
+           footprint(px, py, pz): px^2 + py^2 <= {r}^2 && -1 <= pz && pz <= 1; duration: [2, 2]; }}
+         system S {{ participant A: Slider {{ init: slide == 0; }} }}
+         choreography G = dt<A: extend({a})>. end;
+         process A = dt<extend({a})>.end;"
+    );
+    let mut memory = |p: &std::path::Path| {
+        if p == std::path::Path::new("virtual/slider.urdf") {
+            Ok(urdf.clone().into_bytes())
+        } else {
+            Err(std::io::Error::new(std::io::ErrorKind::NotFound, "not in memory"))
+        }
+    };
+    let mut db = crate::source::SourceDb::new();
+    let root = db.add("virtual/slider.chor", chor.as_str());
+    crate::driver::check_loaded(&mut db, root, &crate::driver::Config::default(), &mut memory)
+}
+
+/// A prismatic joint whose `<limit>` gives no positions (URDF's 0 and 0) or an empty range
+/// adds nothing to the invariant, so the link slides as far as the contract lets it: driven
+/// 1.5 m out of a disc of 0.5 m, the body is not shown within the footprint (it was
+/// verified when the sphere's reach read those limits as the joint's travel). With limits
+/// the invariant holds it to, the same footprint is shown to contain it.
+#[test]
+fn a_link_on_a_prismatic_joint_without_limits_has_no_stand_in() {
+    use crate::driver::Verdict;
+    for limit in
+        [r#"<limit effort="10" velocity="1"/>"#, r#"<limit lower="0.5" upper="-0.5" effort="10" velocity="1"/>"#]
+    {
+        let report = slider(limit, "1.5", "0.5");
+        assert_ne!(report.verdict, Verdict::Verified, "{limit}: {:?}", report.diagnostics);
+        assert!(
+            report
+                .diagnostics
+                .iter()
+                .any(|d| d.notes.iter().any(|n| n.contains("prismatic joint between the URDF's root"))),
+            "{limit}: {:?}",
+            report.diagnostics
+        );
+    }
+    let report = slider(r#"<limit lower="-0.5" upper="0.5" effort="10" velocity="1"/>"#, "0.4", "0.9");
+    assert_eq!(report.verdict, Verdict::Verified, "{:?}", report.diagnostics);
+}
