@@ -12,6 +12,11 @@
 //! capsule's segment ends) is inside `B` at depth at least the radius (the points of a
 //! convex `B` at depth at least `r` form a convex set, so the core's hull is in it too).
 //!
+//! A markedly concave mesh footprint (one `geometry::mesh::decompose` cuts into convex
+//! pieces) is read by the geometric checks as the union of its pieces, so there `B` is one
+//! of the pieces, never the hull: the hull also holds the mesh's hollows (a cradle's slot),
+//! which the footprint does not claim.
+//!
 //! Soundness of the arithmetic: `B` stands for the convex hull of the mesh's vertices
 //! only when every vertex of the hull parry built is one of them (parry's quickhull keeps
 //! input points, so its hull is then within the true one); a hull of thickened vertices
@@ -175,13 +180,23 @@ fn within(a: &Piece, b: &Piece) -> bool {
     if !exact(b) || points.is_empty() {
         return false;
     }
-    points.iter().all(|q| {
-        let local = b.solid.pose.inverse_transform_point(q);
-        let proj = b.solid.shape.project_local_point(&local, false);
-        let margin = 1e-9 + 1e-12 * q.coords.norm() + b.solid.slack;
-        let d = (proj.point - local).norm();
-        proj.is_inside && d.is_finite() && d >= depth + margin
-    })
+    let inside = |shape: &parry3d::shape::SharedShape| {
+        points.iter().all(|q| {
+            let local = b.solid.pose.inverse_transform_point(q);
+            let proj = shape.project_local_point(&local, false);
+            let margin = 1e-9 + 1e-12 * q.coords.norm() + b.solid.slack;
+            let d = (proj.point - local).norm();
+            proj.is_inside && d.is_finite() && d >= depth + margin
+        })
+    };
+    // A markedly concave mesh is read by the geometric checks as the union of its convex
+    // pieces (`geometry::solid_closest`), not as its hull: a body in the hull may lie in the
+    // mesh's hollow, where an obstacle the footprint clears can stand. Within one piece is
+    // within that union.
+    match b.solid.pieces() {
+        Some((pieces, _)) => pieces.iter().any(|piece| inside(&piece.shape)),
+        None => inside(&b.solid.shape),
+    }
 }
 
 #[cfg(test)]
@@ -216,5 +231,29 @@ mod tests {
         // The inner box's corners are sqrt(3) / 4 = 0.433 from its centre.
         assert!(within(&inner, &ball(0.44, 0.5)));
         assert!(!within(&inner, &ball(0.43, 0.5)));
+    }
+
+    /// The cradle (robots/meshes/cradle.obj, a U 0.3 m by 0.2 m by 0.1 m whose slot, 0.1 m
+    /// wide, has its floor at z = 0.03) lowered by 1 cm: a box standing on z = 0 in the
+    /// middle, 5 cm tall, is inside the cradle's hull with room to spare, but its top 3 cm
+    /// are in the slot, which the decomposed mesh does not claim (an obstacle can stand
+    /// there clear of the footprint): not within. A smaller box in a wall is within.
+    #[test]
+    fn a_body_in_the_hollow_of_a_concave_mesh_is_not_within_it() {
+        use crate::geometry::mesh::{hull_solid, parse, Format};
+        let text = std::fs::read_to_string(crate::testing::repo("robots/meshes/cradle.obj")).expect("cradle");
+        let mut d = parse(text.as_bytes(), Format::Obj).expect("obj");
+        for v in &mut d.vertices {
+            v.z -= 0.01;
+        }
+        let id = crate::geometry::identity();
+        let cradle = piece(hull_solid(&d, [1.0; 3], id, "cradle".into()).expect("hull"));
+        assert!(cradle.solid.pieces().is_some(), "the cradle is decomposed");
+        let in_slot = piece(Solid::mochi_box(0.08, 0.1, 0.05, id, "in slot").unwrap());
+        assert!(!within(&in_slot, &cradle));
+        // Within one piece of the wall (the pieces are a grid of a few centimetres).
+        let at = nalgebra::Isometry3::translation(0.11, -0.025, 0.0);
+        let in_wall = piece(Solid::mochi_box(0.04, 0.03, 0.05, at, "in wall").unwrap());
+        assert!(within(&in_wall, &cradle));
     }
 }
