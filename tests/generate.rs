@@ -30,7 +30,9 @@
 //! `cos(c)`, `sqrt(c)`, and decimals within 1e-9..1e-17 of them: the nearest double, its
 //! neighbours one ulp away, a truncation) in every position a predicate or a value is read,
 //! decided by a three-valued exact evaluator of their own (see "Partial operators in
-//! contracts" below).
+//! contracts" below), and bodies without a predicate in footprints (a URDF link on a
+//! prismatic joint with or without limits, a box in a concave mesh footprint; "Bodies
+//! without a predicate in footprints" below).
 //!
 //! Budget: `MOCHI_GEN_CASES` scenes (default 12, three times as many partial-operator
 //! scenes, which Z3 and the confirmation of irrational witnesses make slow: a debug build
@@ -2252,4 +2254,240 @@ fn the_oracle_tells_irrational_constants_from_their_decimals() {
         assert!((e.to_f64() - f).abs() < 1e-15, "{c:?}: {e:?} against {f}");
     }
     assert_eq!(dec_q("-1.25e-2"), q(-1, 80));
+}
+
+// ---------------------------------------------------------------------------------------
+// Bodies without a predicate in footprints (E0512): URDF links on prismatic joints and
+// concave meshes.
+//
+// E0512 for a URDF or mesh body, or a mesh footprint, is decided by stand-ins (a sphere
+// about a URDF link's root by its reach, the pieces of a decomposed concave mesh) that must
+// hold every point the other checks and the robot can reach. Two generated families with a
+// ground truth in integers (millimetres), shared with nothing in mochi:
+// - a URDF slider (a 0.2 m base box, a 0.1 m carriage box on a prismatic joint along x)
+//   driven from 0 to `a`, its `<limit>` a range, absent (URDF's 0 and 0) or inverted, in a
+//   disc of radius `r` about the base: the carriage's farthest point at travel `s` is
+//   `(s + 50)^2 + 50^2` from the axis (squared, mm), the base's corners `100^2 + 100^2`;
+//   out of the disc at some travel in [0, a] (or a travel beyond proper limits, which the
+//   motion cannot end within): never verified;
+// - a box body of width `w` and height `h` standing in a cradle footprint (a U 0.3 m wide
+//   whose slot, `2 s` wide, has its floor at `f`; the cradle's floor 1 cm below the box's),
+//   both placed by the same pose, and a pin (an obstacle 4 mm wide and 2 mm tall) standing
+//   in the slot 1 mm above its floor, clear of the cradle: the pin meets the box iff
+//   `h >= f + 1`, and then never verified. (The oracle is the pin, not the mesh: mochi may
+//   read a concave mesh as a union of convex pieces that holds a little more than the mesh,
+//   and a body within that union is safe against everything the checks keep out of it.)
+// ---------------------------------------------------------------------------------------
+
+/// One body-in-footprint scene of the two families above.
+#[derive(Clone, Debug)]
+enum BodyScene {
+    /// Limit kind (0: `lower < upper`, 1: none, 2: inverted), `(lo, hi)` in mm, travel `a`
+    /// and radius `r` in mm.
+    Slider { limit: u8, lo: i64, hi: i64, a: i64, r: i64 },
+    /// Box width and height, slot half-width and floor, in mm.
+    Cradle { w: i64, h: i64, s: i64, f: i64 },
+}
+
+fn mm(v: i64) -> String {
+    let sign = if v < 0 { "-" } else { "" };
+    format!("{sign}{}.{:03}", v.abs() / 1000, v.abs() % 1000)
+}
+
+impl BodyScene {
+    /// Whether the body can leave its footprint (or the motion cannot run), by the oracle.
+    fn broken(&self) -> bool {
+        match *self {
+            BodyScene::Slider { limit, lo, hi, a, r } => {
+                let outside = |d2: i64| d2 > r * r;
+                let beyond_limits = limit == 0 && (a > hi || 0 < lo);
+                beyond_limits || outside((a + 50) * (a + 50) + 50 * 50) || outside(100 * 100 + 100 * 100)
+            }
+            BodyScene::Cradle { h, f, .. } => h >= f + 1,
+        }
+    }
+
+    /// The choreography and the files it names.
+    fn render(&self) -> (String, Vec<(&'static str, String)>) {
+        match *self {
+            BodyScene::Slider { limit, lo, hi, a, r } => {
+                let limit = match limit {
+                    0 => format!(r#"<limit lower="{}" upper="{}" effort="10" velocity="1"/>"#, mm(lo), mm(hi)),
+                    1 => r#"<limit effort="10" velocity="1"/>"#.to_string(),
+                    _ => format!(r#"<limit lower="{}" upper="{}" effort="10" velocity="1"/>"#, mm(hi), mm(lo)),
+                };
+                let urdf = format!(
+                    r#"<?xml version="1.0"?>
+<robot name="slider">
+  <link name="base"><collision><geometry><box size="0.2 0.2 0.1"/></geometry><origin xyz="0 0 0.05"/></collision></link>
+  <link name="carriage"><collision><geometry><box size="0.1 0.1 0.1"/></geometry><origin xyz="0 0 0.05"/></collision></link>
+  <joint name="slide" type="prismatic">
+    <parent link="base"/><child link="carriage"/><origin xyz="0 0 0.1"/><axis xyz="1 0 0"/>
+    {limit}
+  </joint>
+</robot>
+"#
+                );
+                let (a, r) = (mm(a), mm(r));
+                let src = format!(
+                    "robot Slider {{ state slide: real; geometry: urdf(\"slider.urdf\"); invariant: -3 <= slide <= 3; }}
+motion Slider.extend(a: real) {{
+  interruptible: false;
+  pre: 0 <= a && slide == 0;
+  guarantee: 0 <= slide && slide <= a;
+  post: slide == a;
+  footprint(px, py, pz): px^2 + py^2 <= {r}^2 && -1 <= pz && pz <= 1;
+  duration: [2, 2];
+}}
+system S {{ participant A: Slider {{ init: slide == 0; }} }}
+choreography G = dt<A: extend({a})>. end;
+process A = dt<extend({a})>.end;
+"
+                );
+                (src, vec![("slider.urdf", urdf)])
+            }
+            BodyScene::Cradle { w, h, s, f } => {
+                // robots/meshes/cradle.obj's faces, its slot and floor moved.
+                let pin = f + 1;
+                let (s, f) = (mm(s), mm(f));
+                let mut obj = String::from("# a U-shaped cradle\n");
+                for y in ["-0.1", "0.1"] {
+                    for (x, z) in [
+                        ("-0.15", "-0.01"),
+                        ("0.15", "-0.01"),
+                        ("0.15", "0.1"),
+                        (s.as_str(), "0.1"),
+                        (s.as_str(), f.as_str()),
+                        ("-X", f.as_str()),
+                        ("-X", "0.1"),
+                        ("-0.15", "0.1"),
+                    ] {
+                        let x = if x == "-X" { format!("-{s}") } else { x.to_string() };
+                        writeln!(obj, "v {x} {y} {z}").expect("write");
+                    }
+                }
+                for t in [
+                    [1, 2, 5],
+                    [9, 13, 10],
+                    [1, 5, 6],
+                    [9, 14, 13],
+                    [1, 6, 7],
+                    [9, 15, 14],
+                    [1, 7, 8],
+                    [9, 16, 15],
+                    [2, 3, 4],
+                    [10, 12, 11],
+                    [2, 4, 5],
+                    [10, 13, 12],
+                    [2, 1, 9],
+                    [2, 9, 10],
+                    [3, 2, 10],
+                    [3, 10, 11],
+                    [4, 3, 11],
+                    [4, 11, 12],
+                    [5, 4, 12],
+                    [5, 12, 13],
+                    [6, 5, 13],
+                    [6, 13, 14],
+                    [7, 6, 14],
+                    [7, 14, 15],
+                    [8, 7, 15],
+                    [8, 15, 16],
+                    [1, 8, 16],
+                    [1, 16, 9],
+                ] {
+                    writeln!(obj, "f {} {} {}", t[0], t[1], t[2]).expect("write");
+                }
+                let src = format!(
+                    "robot Sled {{ state x: real; geometry: box({}, 0.1, {}) at pose(x, 0, 0); invariant: -5 <= x <= 5; }}
+motion Sled.hold {{
+  interruptible: true;
+  guarantee: x == old(x);
+  footprint: mesh(\"cradle.obj\") at pose(x, 0, 0);
+  duration: [0, inf];
+}}
+system S {{
+  participant P: Sled {{ init: x == 0; }}
+  obstacle Pin {{ geometry: box(0.004, 0.004, 0.002) at pose(0, 0, {}); at: pose(0, 0, 0); }}
+}}
+choreography G = dt<P: hold>. end;
+process P = dt<hold>.end;
+",
+                    mm(w),
+                    mm(h),
+                    mm(pin)
+                );
+                (src, vec![("cradle.obj", obj)])
+            }
+        }
+    }
+}
+
+fn body_scene() -> impl Strategy<Value = BodyScene> {
+    let slider = (0u8..3, -500i64..=0, 100i64..=1500, 0i64..=1500, 100i64..=1800)
+        .prop_map(|(limit, lo, hi, a, r)| BodyScene::Slider { limit, lo, hi, a, r });
+    let cradle = (10i64..=140, 5i64..=80, 30i64..=80, 10i64..=60).prop_map(|(w, h, s, f)| BodyScene::Cradle {
+        w: 2 * w,
+        h,
+        s,
+        f,
+    });
+    prop_oneof![slider, cradle]
+}
+
+/// Checks `src` with the files `files` served from memory beside it.
+fn check_with_files(src: &str, files: &[(&str, String)]) -> Report {
+    let mut load = |p: &std::path::Path| {
+        files
+            .iter()
+            .find(|(name, _)| p == std::path::Path::new("virtual").join(name))
+            .map(|(_, text)| text.clone().into_bytes())
+            .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::NotFound, "not in memory"))
+    };
+    let mut db = SourceDb::new();
+    let root = db.add("virtual/generated.chor", src);
+    let mut cfg = Config::patient();
+    cfg.smt.jobs = 1;
+    cfg.smt.timeout = std::time::Duration::from_secs(5);
+    mochi::driver::check_loaded(&mut db, root, &cfg, &mut load)
+}
+
+#[test]
+fn generated_bodies_in_footprints_agree_with_their_ground_truth() {
+    let mut runner = TestRunner::new_with_rng(
+        RunnerConfig { cases: cases() * 2, failure_persistence: None, ..RunnerConfig::default() },
+        TestRng::from_seed(RngAlgorithm::ChaCha, &seed()),
+    );
+    let tally = std::sync::Mutex::new([0usize; 4]);
+    let result = runner.run(&body_scene(), |scene| {
+        let (src, files) = scene.render();
+        let r = check_with_files(&src, &files);
+        let broken = scene.broken();
+        tally.lock().expect("tally")[match (broken, r.verdict) {
+            (true, _) => 0,
+            (false, Verdict::Verified) => 1,
+            (false, Verdict::Unknown) => 2,
+            _ => 3,
+        }] += 1;
+        prop_assert!(
+            !(broken && r.verdict == Verdict::Verified),
+            "FALSE VERIFIED: {scene:?} is broken (the slider leaves its disc, or the box meets the pin), yet verified\n{src}\n{}",
+            files.iter().map(|(n, t)| format!("--- {n}\n{t}")).collect::<String>()
+        );
+        // The files are well formed: a fine scene is never rejected for them.
+        prop_assert!(
+            !(!broken && codes(&r).iter().any(|c| c.starts_with("E050"))),
+            "a well-formed scene {scene:?} was rejected: {:?}\n{src}",
+            codes(&r)
+        );
+        Ok(())
+    });
+    let t = tally.into_inner().expect("tally");
+    eprintln!(
+        "bodies in footprints: {} broken (none verified), {} fine and verified, {} fine and unknown, {} fine and rejected",
+        t[0], t[1], t[2], t[3]
+    );
+    if let Err(e) = result {
+        panic!("{e}");
+    }
 }
