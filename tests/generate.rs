@@ -2303,7 +2303,8 @@ impl BodyScene {
                 let beyond_limits = limit == 0 && (a > hi || 0 < lo);
                 beyond_limits || outside((a + 50) * (a + 50) + 50 * 50) || outside(100 * 100 + 100 * 100)
             }
-            BodyScene::Cradle { h, f, .. } => h >= f + 1,
+            // The pin's floor is at `f + 1`: closed boxes meet when the box reaches it.
+            BodyScene::Cradle { h, f, .. } => h > f,
         }
     }
 
@@ -2476,7 +2477,7 @@ fn generated_bodies_in_footprints_agree_with_their_ground_truth() {
         );
         // The files are well formed: a fine scene is never rejected for them.
         prop_assert!(
-            !(!broken && codes(&r).iter().any(|c| c.starts_with("E050"))),
+            broken || !codes(&r).iter().any(|c| c.starts_with("E050")),
             "a well-formed scene {scene:?} was rejected: {:?}\n{src}",
             codes(&r)
         );
