@@ -180,7 +180,15 @@ fn within(a: &Piece, b: &Piece) -> bool {
     if !exact(b) || points.is_empty() {
         return false;
     }
-    let inside = |shape: &parry3d::shape::SharedShape| {
+    // A markedly concave mesh is read by the geometric checks as the union of its convex
+    // pieces (`geometry::solid_closest`), not as its hull: a body in the hull may lie in the
+    // mesh's hollow, where an obstacle the footprint clears can stand. Within one piece is
+    // within that union.
+    let containers: Vec<_> = match b.solid.pieces() {
+        Some((pieces, _)) => pieces.iter().map(|piece| &piece.shape).collect(),
+        None => vec![&b.solid.shape],
+    };
+    containers.iter().any(|shape| {
         points.iter().all(|q| {
             let local = b.solid.pose.inverse_transform_point(q);
             let proj = shape.project_local_point(&local, false);
@@ -188,15 +196,7 @@ fn within(a: &Piece, b: &Piece) -> bool {
             let d = (proj.point - local).norm();
             proj.is_inside && d.is_finite() && d >= depth + margin
         })
-    };
-    // A markedly concave mesh is read by the geometric checks as the union of its convex
-    // pieces (`geometry::solid_closest`), not as its hull: a body in the hull may lie in the
-    // mesh's hollow, where an obstacle the footprint clears can stand. Within one piece is
-    // within that union.
-    match b.solid.pieces() {
-        Some((pieces, _)) => pieces.iter().any(|piece| inside(&piece.shape)),
-        None => inside(&b.solid.shape),
-    }
+    })
 }
 
 #[cfg(test)]
