@@ -23,6 +23,7 @@ mod affine;
 mod contract;
 mod place;
 mod pose;
+pub(crate) mod predicate;
 mod scene;
 mod squares;
 

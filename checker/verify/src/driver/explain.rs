@@ -125,6 +125,9 @@ pub(super) fn undecided_help(why: &smt::Why, cut_by_deadline: bool) -> String {
                 "raise the per-query limit with `--timeout SECONDS`, or simplify the predicates (keep them polynomial and local); {STAYS}"
             ),
         },
+        smt::Why::Interval(s) if s.contains("against obstacle") => format!(
+            "leave more room between the footprint and the obstacle (the search cannot separate surfaces closer than its resolution), bound the footprint's extent with a conjunct such as `x - r <= px <= x + r` so that the boxes of the interval index separate them, or raise the limit with `--timeout SECONDS`; {STAYS}"
+        ),
         smt::Why::Interval(_) => format!(
             "widen the footprint where the body comes close to it (the search bounds each URDF or mesh solid by a sphere or a cylinder about its part's frame, so it needs room for those), or write it as `footprint: geometry;` (the body itself, which holds without a question); {STAYS}"
         ),
