@@ -168,6 +168,12 @@ impl std::fmt::Display for Why {
 pub use crate::diag::{Assignment, Overlap};
 pub use hard::Hard;
 
+/// The requirement of `part` of `ob` in words, as the note "required: ..." of a failed
+/// part shows it (before any note on the engine that found the counterexample).
+pub fn describe_part(prog: &Program, ob: &Obligation, part: &Part) -> String {
+    describe::describe(prog, ob, part)
+}
+
 /// A failed part: what failed and the counterexample.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Failure {
