@@ -693,7 +693,8 @@ impl<'a> Geo<'a> {
     /// The configuration `q` itself as the counterexample's values, when Z3 gives no model
     /// with the dimensions pinned to it (the witness the search confirmed was a Z3 model
     /// rounded to doubles, which may miss an equality by an ulp): each participant's
-    /// state at the contact (`Cart.x(t)`, or `Cart.x` at the start, [T-SESS]), marked
+    /// state at the contact (`Cart.x(t)`, `Cart.x(t1)` on a side of `*`, or `Cart.x` at the
+    /// start, [T-SESS]), marked
     /// approximate (`≈`); the time is the overlap's.
     pub(super) fn dim_values(&self, q: &[f64]) -> Vec<Assignment> {
         let mut out: Vec<Assignment> = self
@@ -702,8 +703,17 @@ impl<'a> Geo<'a> {
             .zip(q)
             .filter(|(d, _)| matches!(d, Dim::Now(..)))
             .map(|(d, v)| {
+                // A state at the time: `(t)`, or on the sides of `*` the side's own time,
+                // `(t1)` or `(t2)`, as the SMT stage names them.
+                let two = self.runs.iter().any(|r| r.clock == 1);
                 let name = match d {
-                    Dim::Now(..) if !self.initial => format!("{}(t)", self.dim_name(*d)),
+                    Dim::Now(r, _) if !self.initial => {
+                        let tag = match self.runs.iter().find(|x| x.role == *r) {
+                            Some(x) if two => ["t1", "t2"][x.clock.min(1)],
+                            _ => "t",
+                        };
+                        format!("{}({tag})", self.dim_name(*d))
+                    }
                     _ => self.dim_name(*d),
                 };
                 Assignment { name, value: format!("≈{v}") }
