@@ -331,6 +331,83 @@ fn layout(prog: &Program, ob: &Obligation, part: &Part) -> Option<Layout> {
     Some(Layout { preds, slots, dims, lo, hi, names })
 }
 
+/// At one state the simulator reached (every variable but the point known, as `value`
+/// gives it): whether some point of `obstacle` is in participant `role`'s footprint
+/// predicate `fp` (in its own frame), by the same search over the obstacle's points alone.
+/// `None` when the footprint does not turn with the state (Z3 is asked as before);
+/// `Some(Ok(None))` when no point is; `Some(Ok(Some(p)))` a point in both, checked exactly
+/// ([`crate::exact`]); `Some(Err(why))` undecided.
+pub(crate) fn point_in_obstacle(
+    prog: &Program,
+    role: RoleId,
+    fp: &Expr,
+    obstacle: &crate::hir::body::Obstacle,
+    value: &dyn Fn(&Var) -> Option<crate::exact::Value>,
+    limit: Duration,
+) -> Option<Result<Option<[crate::exact::Num; 3]>, String>> {
+    use crate::exact::{self, Num, Tri, Value};
+    let moving = |v: &Var| matches!(v, Var::Own(Slot::State(_)) | Var::Clock);
+    let turns = fp.any(|e| match &e.kind {
+        ExprKind::Call(Builtin::Sin | Builtin::Cos, args) => args.iter().any(|a| mentions(a, &moving)),
+        _ => false,
+    });
+    if !turns || prog.role(role).mounted_on.is_some() {
+        return None;
+    }
+    let region = crate::space::region::obstacle_region(prog, obstacle)?;
+    let world = [0, 1, 2].map(|k| point_var(k, Loc::default()));
+    let local = crate::space::region::to_part_frame(prog, &role_pose(prog, role), &world);
+    let fp_world = fp.map(&mut |e: Expr| match e.kind {
+        ExprKind::Var(Var::Point(k)) => local[k].clone(),
+        _ => e,
+    });
+    let obox = obstacle_box(prog, obstacle)?;
+    let dims = vec![Dim::Point(0), Dim::Point(1), Dim::Point(2)];
+    let dim_of = |v: &Var| match v {
+        Var::Point(k) => Some(*k),
+        _ => None,
+    };
+    let mut table = VarTable::new();
+    let preds = vec![Pred::new(prog, &region, &mut table, &dim_of), Pred::new(prog, &fp_world, &mut table, &dim_of)];
+    let enclose = |n: &Num| Interval::new(Interval::of_rational(&n.lo).lo, Interval::of_rational(&n.hi).hi);
+    let slots = table
+        .vars()
+        .iter()
+        .map(|v| match v {
+            Var::Point(k) => Ok(*k),
+            other => Err(match value(other) {
+                Some(Value::Num(n)) => Some(enclose(&n)),
+                _ => None,
+            }),
+        })
+        .collect();
+    let layout = Layout {
+        preds,
+        slots,
+        dims,
+        lo: obox.iter().map(|i| i.lo).collect(),
+        hi: obox.iter().map(|i| i.hi).collect(),
+        names: ["point.x", "point.y", "point.z"].map(String::from).to_vec(),
+    };
+    // A candidate is a point only when both predicates hold of it exactly.
+    let mut exactly = |pins: &Pins| -> Option<[Num; 3]> {
+        let p: Vec<Num> =
+            pins.iter().map(|(_, v)| bounds::decimal(&format!("{v}")).map(Num::exact)).collect::<Option<_>>()?;
+        let p: [Num; 3] = p.try_into().ok()?;
+        let env = |v: &Var| match v {
+            Var::Point(k) => p.get(*k).cloned().map(Value::Num),
+            other => value(other),
+        };
+        (exact::holds(prog, &region, &env) == Tri::True && exact::holds(prog, &fp_world, &env) == Tri::True)
+            .then(|| p.clone())
+    };
+    Some(match search(&layout, limit, &mut exactly) {
+        Found::Apart => Ok(None),
+        Found::Contact(p) => Ok(Some(p)),
+        Found::Undecided(why) => Err(why),
+    })
+}
+
 /// The participant's constant `at:` pose (missing arguments 0).
 fn role_pose(prog: &Program, role: RoleId) -> Pose {
     let given = &prog.role(role).pose;
