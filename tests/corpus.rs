@@ -461,27 +461,78 @@ fn part_kind(p: &Part) -> String {
     text.split(['(', ' ', '{']).next().unwrap_or_default().to_string()
 }
 
+/// The note of a counterexample found by the geometric procedure (parry's contact).
+const GEOMETRIC: &str = "[found by the geometric procedure";
+
+/// A geometric counterexample placed again ([`mochi::collision::replay_contact`]): each
+/// body or footprint at the states and time the diagnostic shows, the point `point` (the
+/// one shown, or a corruption of it).
+fn replay_geometric(
+    prog: &Program,
+    ob: &Obligation,
+    part: &Part,
+    cx: &Counterexample,
+    point: [f64; 3],
+) -> Result<mochi::collision::ContactReplay, String> {
+    // A value as shown: `≈v` (the configuration itself), a decimal or a fraction `n/d` of
+    // Z3's model with the configuration pinned (each a double, so `n / d` is exact).
+    let number = |text: &str| -> Option<f64> {
+        let text = text.trim_start_matches('≈');
+        match text.split_once('/') {
+            Some((n, d)) => Some(n.parse::<f64>().ok()? / d.parse::<f64>().ok()?),
+            None => text.parse::<f64>().ok(),
+        }
+    };
+    let times = cx.overlap.as_ref().map(|o| o.times.clone()).unwrap_or_default();
+    let value = |name: &str| -> Option<f64> {
+        if let Some(a) = cx.values.iter().find(|a| a.name == name) {
+            return number(&a.value);
+        }
+        match name {
+            "time" | "time 1" => times.first().copied(),
+            "time 2" => times.get(1).copied(),
+            _ => None,
+        }
+    };
+    mochi::collision::replay_contact(prog, ob, part, &value, point)
+}
+
 /// Every counterexample a report shows, with the obligation and part it refutes.
 fn shown_counterexamples(path: &Path, report: &mochi::driver::Report) -> Vec<(Program, Obligation, Part, Diagnostic)> {
-    let shown: Vec<Diagnostic> = report
+    let (geometric, shown): (Vec<Diagnostic>, Vec<Diagnostic>) = report
         .diagnostics
         .iter()
         .filter(|d| d.counterexample.as_deref().is_some_and(|c| !c.values.is_empty() || c.overlap.is_some()))
-        // Parry's contacts are not read back here (see the test), and which pair the
-        // geometric search meets first depends on its time budget: not matched either.
-        .filter(|d| !d.notes.iter().any(|n| n.contains("found by the geometric procedure")))
         .cloned()
-        .collect();
-    if shown.is_empty() {
+        .partition(|d| d.notes.iter().any(|n| n.contains(GEOMETRIC)));
+    if shown.is_empty() && geometric.is_empty() {
         return Vec::new();
+    }
+    let mochi::driver::Planned { program: prog, obligations } =
+        report.planned.as_ref().unwrap_or_else(|| panic!("{}: a counterexample, but no obligations", path.display()));
+    let mut out = Vec::new();
+    // The geometric procedure's contacts: the part is the one at the diagnostic's span whose
+    // requirement the note states (deciding again would meet whichever pair the search's
+    // time budget reaches first).
+    for d in geometric {
+        let found = obligations.iter().filter(|ob| ob.span == d.span).find_map(|ob| {
+            let mochi::smt::goals::Plan::Parts(parts) = mochi::smt::goals::plan(prog, ob) else { return None };
+            parts.into_iter().find_map(|part| {
+                let required = format!("required: {} {GEOMETRIC}", mochi::smt::describe_part(prog, ob, &part));
+                d.notes.iter().any(|n| n.starts_with(&required)).then(|| (ob.clone(), part))
+            })
+        });
+        let (ob, part) = found
+            .unwrap_or_else(|| panic!("{}: no geometric part explains {} ({})", path.display(), d.code, d.message));
+        out.push((prog.clone(), ob, part, d));
+    }
+    if shown.is_empty() {
+        return out;
     }
     // The obligations the driver planned (its one wiring), decided again here so that each
     // shown counterexample can be matched to its failed part.
-    let mochi::driver::Planned { program: prog, obligations } =
-        report.planned.as_ref().unwrap_or_else(|| panic!("{}: a counterexample, but no obligations", path.display()));
     let labels = vec![String::new(); obligations.len()];
     let results = mochi::smt::discharge(prog, obligations, &labels, &Config::patient().smt);
-    let mut out = Vec::new();
     for d in shown {
         // The obligation at the diagnostic's span whose failed part the diagnostic names.
         let found = obligations.iter().zip(&results).find_map(|(ob, (decision, _))| match decision {
@@ -516,16 +567,48 @@ fn counterexamples_falsify_their_goals(
     report: &mochi::driver::Report,
     totals: &Mutex<Totals>,
 ) -> Vec<String> {
-    // `geometric`: counterexamples this test cannot read back (parry's contacts, values
-    // shown only approximately); each was replayed exactly before it was shown.
+    // `geometric`: counterexamples this test cannot read back (values shown only
+    // approximately, an algebraic number or a long fraction); each was replayed exactly
+    // before it was shown.
     let (mut violated, mut geometric, mut failures) = (0, 0, Vec::new());
     let mut decided = Vec::new();
     let mut kinds = std::collections::BTreeSet::new();
     for (prog, ob, part, d) in shown_counterexamples(path, report) {
-        // Parry's contact between bodies with no predicate: nothing here to evaluate
-        // (the geometric procedure replays its own contacts).
-        if d.notes.iter().any(|n| n.contains("found by the geometric procedure")) {
-            geometric += 1;
+        // Parry's contact between bodies: placed again at the states and time shown, the
+        // sides must touch there and the point must lie on both, at a configuration the
+        // contracts allow; the point moved by a metre must be caught.
+        if d.notes.iter().any(|n| n.contains(GEOMETRIC)) {
+            let cx = d.counterexample.as_deref().expect("a counterexample");
+            let Some(point) = cx.overlap.as_ref().map(|o| o.point) else {
+                failures.push(format!("{}: {} ({}): a contact without its point", path.display(), d.code, d.message));
+                continue;
+            };
+            match replay_geometric(&prog, &ob, &part, cx, point) {
+                Ok(r) if r.falsifies() => {
+                    violated += 1;
+                    kinds.insert(part_kind(&part));
+                    let moved = [point[0] + 1.0, point[1] + 1.0, point[2] + 1.0];
+                    if replay_geometric(&prog, &ob, &part, cx, moved).is_ok_and(|r| r.falsifies()) {
+                        failures.push(format!(
+                            "{}: moving {}'s contact point by a metre is not noticed",
+                            path.display(),
+                            d.code
+                        ));
+                    }
+                }
+                Ok(r) => failures.push(format!(
+                    "{}: {} ({}) [{part:?}]: the contact does not replay: {r:?}",
+                    path.display(),
+                    d.code,
+                    d.message
+                )),
+                Err(why) => failures.push(format!(
+                    "{}: {} ({}) [{part:?}]: the contact cannot be replayed: {why}",
+                    path.display(),
+                    d.code,
+                    d.message
+                )),
+            }
             continue;
         }
         // A value shown only approximately (`≈`, an algebraic number or a long
@@ -853,7 +936,7 @@ fn corpus_files() -> Vec<PathBuf> {
 struct Totals {
     /// Counterexamples decided violated by the exact replay.
     violated: usize,
-    /// Counterexamples that cannot be read back (parry's contacts, approximate values).
+    /// Counterexamples that cannot be read back (approximate values).
     geometric: usize,
     /// The kinds of part whose counterexamples were decided violated.
     kinds: std::collections::BTreeSet<String>,

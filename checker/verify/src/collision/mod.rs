@@ -23,6 +23,7 @@ mod affine;
 mod contract;
 mod place;
 mod pose;
+pub(crate) mod predicate;
 mod scene;
 mod squares;
 
@@ -95,14 +96,24 @@ pub(crate) fn applies(prog: &Program, ob: &Obligation, part: &Part) -> bool {
 
 /// Decides `part` of `ob` geometrically, within `limit`.
 pub(crate) fn decide(prog: &Program, ob: &Obligation, part: &Part, limit: Duration) -> GeoAnswer {
-    let Some(world) = crate::space::world::of(prog) else { return GeoAnswer::Unknown("no geometry was built".into()) };
+    match question(prog, ob, part) {
+        Ok(Some(geo)) => geo.solve(limit),
+        // A mounted robot and its carrier are attached at the mount, like two links of
+        // one robot: their mutual clearance is not a question of the protocol.
+        Ok(None) => GeoAnswer::Apart,
+        Err(why) => GeoAnswer::Unknown(why),
+    }
+}
+
+/// The scene of `part` of `ob`: `None` when its two participants are attached (a mounted
+/// robot and its carrier).
+fn question<'a>(prog: &'a Program, ob: &'a Obligation, part: &Part) -> Result<Option<Geo<'a>>, String> {
+    let Some(world) = crate::space::world::of(prog) else { return Err("no geometry was built".into()) };
     let built = match (&ob.goal, part) {
         (Goal::Compatible { parts }, Part::Disjoint(i, j)) => {
             let (a, b) = (parts[*i].0, parts[*j].0);
-            // A mounted robot and its carrier are attached at the mount, like two links of
-            // one robot: their mutual clearance is not a question of the protocol.
             if attached(prog, a, b) {
-                return GeoAnswer::Apart;
+                return Ok(None);
             }
             let mut runs = vec![run(&parts[*i], &ob.hyps, 0), run(&parts[*j], &ob.hyps, 0)];
             runs.extend(carrier_runs(prog, parts, &[a, b], &ob.hyps));
@@ -124,11 +135,11 @@ pub(crate) fn decide(prog: &Program, ob: &Obligation, part: &Part, limit: Durati
         (Goal::InitiallyDisjoint { firsts }, Part::InitiallyApart { r, s }) => {
             // [T-SESS] between a mounted robot and its carrier: attached, as above.
             if attached(prog, firsts[*r].0, firsts[*s].0) {
-                return GeoAnswer::Apart;
+                return Ok(None);
             }
             let first = |k: usize| firsts[k].1.first().cloned();
             let (Some(ar), Some(as_)) = (first(*r), first(*s)) else {
-                return GeoAnswer::Unknown("a participant with no first motion".into());
+                return Err("a participant with no first motion".into());
             };
             let runs = vec![
                 Run { role: firsts[*r].0, app: ar, hyps: ob.hyps.clone(), clock: 0 },
@@ -136,13 +147,65 @@ pub(crate) fn decide(prog: &Program, ob: &Obligation, part: &Part, limit: Durati
             ];
             Geo::new(prog, world, ob, runs, [Who::Run(0), Who::Run(1)], Mode::Initial)
         }
-        _ => return GeoAnswer::Unknown("not a collision question".into()),
+        _ => return Err("not a collision question".into()),
     };
-    let geo = match built {
-        Ok(g) => g,
-        Err(why) => return GeoAnswer::Unknown(why),
-    };
-    geo.solve(limit)
+    built.map(Some)
+}
+
+/// A counterexample of the geometric procedure placed again ([`replay_contact`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContactReplay {
+    /// The two sides' distance at the configuration, by parry, on a mesh's own triangles
+    /// where its hull is touched (as the search confirms a contact): at most 0 when they
+    /// touch.
+    pub distance: f64,
+    /// How far the point shown lies from each side (0 inside one of its solids; a mesh is
+    /// measured by its convex hull, which holds it).
+    pub point_to: [f64; 2],
+    /// A guarantee, an invariant or (at the start) the context is false at the
+    /// configuration, by outward-rounded interval truth at that one point.
+    pub infeasible: bool,
+}
+
+/// How far from a side the point of a contact may lie and still count as on it (m): parry
+/// computes in f64, and the point shown is the midpoint of its two witness points.
+pub const POINT_TOLERANCE: f64 = 1e-6;
+
+impl ContactReplay {
+    /// The claim of a contact: the configuration is one the contracts allow, the two sides
+    /// touch there, and the point shown lies on both.
+    pub fn falsifies(&self) -> bool {
+        !self.infeasible && self.distance <= 0.0 && self.point_to.iter().all(|d| *d <= POINT_TOLERANCE)
+    }
+}
+
+/// Replays a counterexample of the geometric procedure to `part` of `ob`: each body or
+/// footprint of the question placed at the configuration the counterexample shows (`value`
+/// gives a value by the name the report shows: `Cart.x(t)`, `Cart.x` at the start, `Cart.x(t1)`
+/// for a side of `*`, `time`, `time 1`), and the claim evaluated: the sides' distance there,
+/// the point's distance from each, and whether the configuration is allowed. An `Err` when the
+/// question has no scene (not a geometric question, attached participants) or a value the
+/// configuration needs is missing.
+pub fn replay_contact(
+    prog: &Program,
+    ob: &Obligation,
+    part: &Part,
+    value: &dyn Fn(&str) -> Option<f64>,
+    point: [f64; 3],
+) -> Result<ContactReplay, String> {
+    let _consts = bounds::ConstCache::new();
+    let geo = question(prog, ob, part)?.ok_or("the two participants are attached: no contact to replay")?;
+    let q: Vec<f64> = geo
+        .dims
+        .iter()
+        .map(|d| {
+            geo.dim_value(*d, value).ok_or_else(|| format!("the counterexample gives no value of {}", geo.dim_name(*d)))
+        })
+        .collect::<Result<_, _>>()?;
+    let infeasible = matches!(geo.feasible(&q, &q), Feasible::No);
+    let at = geo.distance(&q);
+    let point_to = [0, 1].map(|side| geo.point_distance(side, &q, point));
+    Ok(ContactReplay { distance: at.distance, point_to, infeasible })
 }
 
 /// Whether one of `a`, `b` rides (directly or through other carriers) on the other.

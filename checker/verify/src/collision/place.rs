@@ -613,6 +613,51 @@ impl<'a> Geo<'a> {
         }
     }
 
+    /// The value of dimension `d` in a counterexample, by the name the report gives it:
+    /// `time` (`time 1`, `time 2` for the sides of `*`; 0 at the start), a participant's
+    /// state at the time (`Cart.x(t)`, `(t1)`, `(t2)`; a state the report names only with
+    /// `(t)`, as [`Geo::dim_values`] does) or at the start (`Cart.x`, [T-SESS]).
+    pub(super) fn dim_value(&self, d: Dim, value: &dyn Fn(&str) -> Option<f64>) -> Option<f64> {
+        let two = self.runs.iter().any(|r| r.clock == 1);
+        match d {
+            Dim::Clock(_) if self.initial => Some(0.0),
+            Dim::Clock(k) => value(&self.dim_name(Dim::Clock(k))),
+            Dim::Now(r, slot) => {
+                let base = format!("{}.{}", self.prog.role_name(r), self.prog.kind_of(r).var(slot).0);
+                if self.initial {
+                    return value(&base);
+                }
+                let tag = match self.runs.iter().find(|x| x.role == r) {
+                    Some(x) if two => ["t1", "t2"][x.clock.min(1)],
+                    _ => "t",
+                };
+                value(&format!("{base}({tag})")).or_else(|| value(&format!("{base}(t)")))
+            }
+        }
+    }
+
+    /// The distance of world point `p` from side `side` placed at configuration `q`: the
+    /// least over its solids of parry's distance from the point to the solid (0 inside).
+    pub(super) fn point_distance(&self, side: usize, q: &[f64], p: [f64; 3]) -> f64 {
+        let point = parry3d::math::Point::new(p[0], p[1], p[2]);
+        self.side_frames(side, q, q, q)
+            .into_iter()
+            .zip(&self.sides[side])
+            .map(|(frames, placed)| match frames {
+                Some(frames) => {
+                    let mut pose = geometry::identity();
+                    for (f, _) in frames {
+                        pose *= f;
+                    }
+                    let pose = pose * placed.piece.solid.pose;
+                    (placed.piece.solid.shape.distance_to_point(&pose, &point, true) - placed.piece.solid.slack)
+                        .max(0.0)
+                }
+                None => f64::INFINITY,
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// The question's configurations, as the SMT stage is asked about them.
     pub(super) fn configs(&self) -> Configs<'_> {
         Configs { prog: self.prog, hyps: &self.ob.hyps, runs: &self.runs, dims: &self.dims, initial: self.initial }
@@ -648,7 +693,8 @@ impl<'a> Geo<'a> {
     /// The configuration `q` itself as the counterexample's values, when Z3 gives no model
     /// with the dimensions pinned to it (the witness the search confirmed was a Z3 model
     /// rounded to doubles, which may miss an equality by an ulp): each participant's
-    /// state at the contact (`Cart.x(t)`, or `Cart.x` at the start, [T-SESS]), marked
+    /// state at the contact (`Cart.x(t)`, `Cart.x(t1)` on a side of `*`, or `Cart.x` at the
+    /// start, [T-SESS]), marked
     /// approximate (`≈`); the time is the overlap's.
     pub(super) fn dim_values(&self, q: &[f64]) -> Vec<Assignment> {
         let mut out: Vec<Assignment> = self
@@ -657,8 +703,17 @@ impl<'a> Geo<'a> {
             .zip(q)
             .filter(|(d, _)| matches!(d, Dim::Now(..)))
             .map(|(d, v)| {
+                // A state at the time: `(t)`, or on the sides of `*` the side's own time,
+                // `(t1)` or `(t2)`, as the SMT stage names them.
+                let two = self.runs.iter().any(|r| r.clock == 1);
                 let name = match d {
-                    Dim::Now(..) if !self.initial => format!("{}(t)", self.dim_name(*d)),
+                    Dim::Now(r, _) if !self.initial => {
+                        let tag = match self.runs.iter().find(|x| x.role == *r) {
+                            Some(x) if two => ["t1", "t2"][x.clock.min(1)],
+                            _ => "t",
+                        };
+                        format!("{}({tag})", self.dim_name(*d))
+                    }
                     _ => self.dim_name(*d),
                 };
                 Assignment { name, value: format!("≈{v}") }

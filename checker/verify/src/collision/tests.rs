@@ -136,3 +136,78 @@ mod mount_tests {
         assert_ne!(v, Verdict::Verified);
     }
 }
+
+mod replay_tests {
+    use crate::diag::Code;
+    use crate::driver::{Config, Verdict};
+    use crate::smt::goals::{plan, Part, Plan};
+
+    /// The spinning bar of `search_tests` beside the near pillar (its face 0.45 from the
+    /// centre): its contact, placed again at the heading and time the counterexample shows,
+    /// replays (the bar touches the pillar there, the point is on both); the same
+    /// counterexample with the heading turned by a quarter (the bar along y, 0.4 m clear of
+    /// the pillar) or the point moved away does not.
+    #[test]
+    fn a_geometric_contact_replays_and_a_perturbed_one_does_not() {
+        let src = "robot Bar { state x: real, y: real, th: real;
+               geometry: box(1.0, 0.1, 0.2) at pose(x, y, 0, 0, 0, th);
+               invariant: -5 <= x <= 5 && -5 <= y <= 5 && -pi <= th <= pi; }
+             motion Bar.spin { interruptible: false; pre: true; guarantee: x == old(x) && y == old(y);
+               post: x == old(x) && y == old(y); footprint: geometry; duration: [1, 1]; }
+             system S {
+               participant B: Bar { init: x == 0 && y == 0 && th == pi / 2; }
+               obstacle Pillar { geometry: cylinder(0.1, 1); at: pose(0.55, 0, 0); }
+             }
+             choreography S = dt<B: spin>. end;
+             process B = dt<spin>.end;";
+        let mut db = crate::source::SourceDb::new();
+        let path = crate::testing::repo("choreographies/geo-test.chor").display().to_string();
+        let r = crate::fsload::check_source(&mut db, &path, src, &Config::patient());
+        assert_eq!(r.verdict, Verdict::Rejected);
+        let d = r.diagnostics.iter().find(|d| d.code == Code::ObstacleHit).expect("E0510");
+        let cx = d.counterexample.as_deref().expect("a counterexample");
+        let overlap = cx.overlap.as_ref().expect("a point");
+        let planned = r.planned.as_ref().expect("planned");
+        let prog = &planned.program;
+        let (ob, part) = planned
+            .obligations
+            .iter()
+            .find_map(|ob| match plan(prog, ob) {
+                Plan::Parts(parts) => {
+                    parts.into_iter().find(|p| matches!(p, Part::ClearOf { .. })).map(|p| (ob.clone(), p))
+                }
+                _ => None,
+            })
+            .expect("the obstacle question");
+        let number = |t: &str| -> Option<f64> {
+            let t = t.trim_start_matches('≈');
+            match t.split_once('/') {
+                Some((n, d)) => Some(n.parse::<f64>().ok()? / d.parse::<f64>().ok()?),
+                None => t.parse().ok(),
+            }
+        };
+        let shown = |turn: f64| {
+            move |name: &str| -> Option<f64> {
+                let v = match cx.values.iter().find(|a| a.name == name) {
+                    Some(a) => number(&a.value)?,
+                    None if name == "time" => *overlap.times.first()?,
+                    None => return None,
+                };
+                Some(if name == "B.th(t)" { v + turn } else { v })
+            }
+        };
+        let replay = |turn: f64, point: [f64; 3]| {
+            super::super::replay_contact(prog, &ob, &part, &shown(turn), point).expect("a scene")
+        };
+        let r = replay(0.0, overlap.point);
+        assert!(r.falsifies(), "{r:?} ({cx:?})");
+        let turned = replay(std::f64::consts::FRAC_PI_2, overlap.point);
+        assert!(!turned.falsifies() && turned.distance > 0.3, "{turned:?}");
+        let p = overlap.point;
+        let moved = replay(0.0, [p[0], p[1] + 0.5, p[2]]);
+        assert!(!moved.falsifies() && moved.point_to[1] > 0.3, "{moved:?}");
+        // A missing value is no replay.
+        let none = |_: &str| None;
+        assert!(super::super::replay_contact(prog, &ob, &part, &none, p).is_err());
+    }
+}

@@ -125,6 +125,9 @@ pub(super) fn undecided_help(why: &smt::Why, cut_by_deadline: bool) -> String {
                 "raise the per-query limit with `--timeout SECONDS`, or simplify the predicates (keep them polynomial and local); {STAYS}"
             ),
         },
+        smt::Why::Interval(s) if s.contains("against obstacle") => format!(
+            "leave more room between the footprint and the obstacle (the search cannot separate surfaces closer than its resolution), bound the footprint's extent with a conjunct such as `x - r <= px <= x + r` so that the boxes of the interval index separate them, or raise the limit with `--timeout SECONDS`; {STAYS}"
+        ),
         smt::Why::Interval(_) => format!(
             "widen the footprint where the body comes close to it (the search bounds each URDF or mesh solid by a sphere or a cylinder about its part's frame, so it needs room for those), or write it as `footprint: geometry;` (the body itself, which holds without a question); {STAYS}"
         ),
@@ -219,8 +222,9 @@ pub(super) fn since_start(prog: &crate::hir::Program, ob: &Obligation) -> Since 
 }
 
 /// The participants' states in a collision's counterexample, one participant at a time:
-/// `Cart: x = 0.8, v = 0.5` from the values `Cart.x(t)`, `Cart.v(t)` (at the contact)
-/// or `Cart.x`, `Cart.v` (at the motion's start, `at_start`).
+/// `Cart: x = 0.8, v = 0.5` from the values `Cart.x(t)`, `Cart.v(t)` (at the contact; on
+/// the sides of `*`, `Cart.x(t1)` and `Cart.x(t2)`, each side at its own time) or `Cart.x`,
+/// `Cart.v` (at the motion's start, `at_start`).
 pub(super) fn states(values: &[crate::diag::Assignment], at_start: bool) -> Vec<String> {
     let mut by_role: Vec<(String, Vec<String>)> = Vec::new();
     for a in values {
@@ -230,7 +234,7 @@ pub(super) fn states(values: &[crate::diag::Assignment], at_start: bool) -> Vec<
             }
             a.name.as_str()
         } else {
-            match a.name.strip_suffix("(t)") {
+            match ["(t)", "(t1)", "(t2)"].iter().find_map(|tag| a.name.strip_suffix(tag)) {
                 Some(n) if !n.contains('(') => n,
                 _ => continue,
             }
@@ -255,13 +259,21 @@ pub(super) fn counterexample_text(cx: &Counterexample, code: Code, since: Option
     // A collision: the contact's time within the motion and since the choreography's
     // start, and every participant's state there. A contact is not claimed the earliest:
     // the solver's model is one contact, not the first.
-    let collision = since.is_some() && cx.overlap.as_ref().is_some_and(|o| o.times.len() == 1);
+    // The two sides of `*` (E0406): each side's time on its own clock, and every
+    // participant's state at its side's time.
+    let sides = code == Code::SidesOverlap && cx.overlap.as_ref().is_some_and(|o| o.times.len() == 2);
+    let collision = sides || (since.is_some() && cx.overlap.as_ref().is_some_and(|o| o.times.len() == 1));
     if let Some(o) = &cx.overlap {
         let p = o.point.map(short);
+        let meet = if code == Code::ObstacleHit { "the footprint meets the obstacle" } else { "the footprints meet" };
         let at = match (o.times.as_slice(), since) {
             ([], _) => String::new(),
+            ([t1, t2], _) if sides => format!(
+                "the footprints meet when side 1's motion has run {} s and side 2's {} s (each side of `*` on its own clock, from the start of its motion: the sides are not synchronised, so full separation asks that their footprints never meet at any two times of their motions, and these need not be one instant of the choreography): ",
+                short(*t1),
+                short(*t2)
+            ),
             ([t], Some(since)) if o.not_before.is_some() || *t == 0.0 => {
-                let meet = if code == Code::ObstacleHit { "the footprint meets the obstacle" } else { "the footprints meet" };
                 let when = match o.not_before {
                     Some(lo) => format!(
                         "{meet} at {} s into this joint motion, and no meeting is possible at or before {} s (proved), so the first is between {} and {} s",
@@ -275,12 +287,12 @@ pub(super) fn counterexample_text(cx: &Counterexample, code: Code, since: Option
                 }
             }
             ([t], Some(Since::Start)) => format!(
-                "the footprints meet at {} s into this joint motion, which is {} s after the choreography starts (no motion precedes it on this path, and messages take no time): ",
+                "{meet} at {} s into this joint motion, which is {} s after the choreography starts (no motion precedes it on this path, and messages take no time): ",
                 short(*t),
                 short(*t)
             ),
             ([t], Some(Since::Open(why))) => format!(
-                "the footprints meet at {} s into this joint motion (the time since the choreography started is not determined: {why}): ",
+                "{meet} at {} s into this joint motion (the time since the choreography started is not determined: {why}): ",
                 short(*t)
             ),
             ([t], None) => format!("at time {} s, ", short(*t)),
@@ -300,10 +312,12 @@ pub(super) fn counterexample_text(cx: &Counterexample, code: Code, since: Option
         if now.is_empty() {
             parts.push("the participants' states at that time are not part of this counterexample".to_string());
         } else {
-            parts.push(format!("the participants' states at that time: {}", now.join("; ")));
+            let when = if sides { "at those times" } else { "at that time" };
+            parts.push(format!("the participants' states {when}: {}", now.join("; ")));
         }
         if !start.is_empty() {
-            parts.push(format!("at the start of the joint motion: {}", start.join("; ")));
+            let motion = if sides { "at the start of their motions" } else { "at the start of the joint motion" };
+            parts.push(format!("{motion}: {}", start.join("; ")));
         }
         // The rest (payload values, inputs): what the states above do not show.
         let shown = |n: &str| {

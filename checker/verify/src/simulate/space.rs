@@ -333,7 +333,38 @@ impl Runner<'_, '_> {
             }
             let region = crate::space::region::obstacle_region(prog, obstacle);
             let mounted = prog.role(o.role).mounted_on.is_some();
-            if let (Fp::Pred(_, None), Some(region), false) = (&f, &region, mounted) {
+            if let (Fp::Pred(fp, None), Some(region), false) = (&f, &region, mounted) {
+                // A footprint turned by the state (`cos(theta)`): the interval search over
+                // the obstacle's points at this state, which Z3's nonlinear arithmetic
+                // leaves open (`collision::predicate`).
+                let args = self.arg_values(&o.app);
+                let env = frame_env(&o.now, &o.start, &args, &o.clock, &[]);
+                let limit = std::time::Duration::from_secs(10);
+                match crate::collision::predicate::point_in_obstacle(prog, o.role, &fp.pred, obstacle, &env, limit) {
+                    Some(Ok(None)) => continue,
+                    Some(Ok(Some(p))) => {
+                        let msg = format!(
+                            "{context}: the footprint of {} reaches into obstacle `{}` at the point ({}, {}, {}) at time {}",
+                            self.who(o),
+                            obstacle.name,
+                            exact::decimal(&p[0].lo),
+                            exact::decimal(&p[1].lo),
+                            exact::decimal(&p[2].lo),
+                            exact::decimal(t)
+                        );
+                        self.report(Kind::Collision, t, msg);
+                        return false;
+                    }
+                    Some(Err(why)) => {
+                        let msg = format!(
+                            "{context}: comparing with obstacle `{}`: the interval search stopped: {why}",
+                            obstacle.name
+                        );
+                        self.report(Kind::Undecided, t, msg);
+                        return false;
+                    }
+                    None => {}
+                }
                 match self.sess.overlap_region(prog, o, region) {
                     Ok(None) => continue,
                     Ok(Some(p)) => {

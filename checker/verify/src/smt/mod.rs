@@ -127,10 +127,12 @@ pub enum Why {
     /// The geometric procedure (parry's distances and contacts under interval branch
     /// and bound, [`crate::collision`]) stopped without deciding: why.
     Search(String),
-    /// The interval search for body containment against stand-ins (`space::enclose`,
-    /// a URDF or mesh part under a predicate footprint, or a footprint with a URDF or mesh
-    /// part as the container) stopped without deciding: why. No SMT query is posed for
-    /// these parts (the encoding has no predicate for a URDF or a mesh).
+    /// An interval search stopped without deciding: why. Body containment against
+    /// stand-ins (`space::enclose`: a URDF or mesh part under a predicate footprint, or a
+    /// footprint with a URDF or mesh part as the container), for which no SMT query is
+    /// posed (the encoding has no predicate for a URDF or a mesh); or a footprint predicate
+    /// turned by the state against an obstacle (`collision::predicate`), whose questions
+    /// Z3's nonlinear arithmetic does not decide.
     Interval(String),
     /// A construct the encoding does not support.
     Unsupported(String),
@@ -151,10 +153,7 @@ impl std::fmt::Display for Why {
             Why::Search(s) => {
                 write!(f, "the geometric search (parry's distances under interval branch and bound) stopped: {s}")
             }
-            Why::Interval(s) => write!(
-                f,
-                "the interval search (branch and bound over the state and stand-ins for the body's solids) stopped, and no SMT query can decide it: {s}"
-            ),
+            Why::Interval(s) => write!(f, "the interval search stopped without deciding: {s}"),
             Why::Unsupported(s) => write!(f, "the SMT encoding does not support {s}"),
             Why::Abandoned(d) => write!(
                 f,
@@ -168,6 +167,12 @@ impl std::fmt::Display for Why {
 
 pub use crate::diag::{Assignment, Overlap};
 pub use hard::Hard;
+
+/// The requirement of `part` of `ob` in words, as the note "required: ..." of a failed
+/// part shows it (before any note on the engine that found the counterexample).
+pub fn describe_part(prog: &Program, ob: &Obligation, part: &Part) -> String {
+    describe::describe(prog, ob, part)
+}
 
 /// A failed part: what failed and the counterexample.
 #[derive(Clone, Debug, PartialEq, Serialize)]

@@ -331,7 +331,10 @@ impl Worker<'_> {
                     }
                     // A joint motion's footprints: look for an earlier meeting, and
                     // prove a time before which they do not meet.
-                    if !geometric && matches!(ob.goal, Goal::Compatible { .. }) {
+                    // (Not after the interval search: its questions are the ones Z3's
+                    // nonlinear arithmetic does not decide.)
+                    let interval = crate::collision::predicate::applies(self.prog, ob, part);
+                    if !geometric && !interval && matches!(ob.goal, Goal::Compatible { .. }) {
                         if let Some(found) = overlap.as_ref().and_then(|o| o.times.first().copied()) {
                             let (not_before, better) = self.earliest(ob, part, found, &mut stats);
                             if let Some(Answer::Sat { values: v, overlap: o, bound: b, .. }) = better {
@@ -347,6 +350,8 @@ impl Worker<'_> {
                     // contact (parry, at a configuration a Z3 model of the contracts gave).
                     let engine = if geometric {
                         " [found by the geometric procedure: parry's contact at a state and time Z3 showed the contracts allow]"
+                    } else if interval {
+                        " [found by the interval search: a point of the obstacle inside the footprint at a state and time it found, completed by Z3 and replayed exactly]"
                     } else {
                         ""
                     };
@@ -464,6 +469,42 @@ impl Worker<'_> {
         })
     }
 
+    /// The part's query with each of `pins` (a variable of the query by name, and a
+    /// value) pinned: a model of it, replayed exactly against the part's goal, is a
+    /// counterexample at those values (`collision::predicate`'s candidates). `None` when
+    /// a name is not in the query, Z3 gives no model, or the model does not replay.
+    fn pinned_witness(&self, ob: &Obligation, part: &Part, pins: &crate::collision::predicate::Pins) -> Option<Answer> {
+        let q = goals::build(self.prog, ob, part).ok()?;
+        let mut eqs = Vec::new();
+        for (name, v) in pins {
+            let Some((_, encode::Term::R(t))) = q.enc.terms().find(|(n, _)| *n == name) else { return None };
+            // The shortest decimal that reads back as the double: what the report shows.
+            let value = crate::bounds::decimal(&format!("{v}")).and_then(|r| encode::real_of_rational(&r));
+            eqs.push(t.eq(value.or_else(|| encode::real_of_f64(*v))?));
+        }
+        let solver = solver_for(&q);
+        for a in q.assertions.iter().chain(q.enc.side_conditions()).chain(&eqs) {
+            solver.assert(a);
+        }
+        let seq = self.watchdog.arm(self.timeout);
+        let result = solver.check();
+        self.watchdog.disarm(seq);
+        let m = match result {
+            z3::SatResult::Sat => solver.get_model()?,
+            _ => return None,
+        };
+        let exact = replay::valuation(&q.enc, &m);
+        if !matches!(replay::replay(self.prog, ob, part, &exact), replay::Replay::Falsifies) {
+            return None;
+        }
+        let overlap = q.point.as_ref().map(|p| Overlap {
+            point: [0, 1, 2].map(|i| encode::Encoder::value_of(&m, &p[i]).unwrap_or(f64::NAN)),
+            times: q.times.iter().map(|t| encode::Encoder::value_of(&m, t).unwrap_or(f64::NAN)).collect(),
+            not_before: None,
+        });
+        Some(Answer::Sat { values: q.enc.assignments(&m), overlap, bound: q.enc.shared_names(), exact })
+    }
+
     /// Bisects the time of a joint motion's footprint meeting found at `found` s: each
     /// step asks the part's query with `time <= mid`. Unsat proves the footprints do not
     /// meet at or before `mid` (the encoding encloses, so its unsat is sound); a model
@@ -549,6 +590,29 @@ impl Worker<'_> {
                     Answer::Sat { values, overlap: Some(overlap), bound: Vec::new(), exact: Default::default() }
                 }
                 crate::collision::GeoAnswer::Unknown(why) => Answer::Unknown(Why::Search(why)),
+            };
+        }
+        // A footprint predicate turned by the state against an obstacle: the interval
+        // search over the obstacle's points and the state, Z3 asked only to complete a
+        // candidate into a counterexample (`collision::predicate`).
+        let mut pinned = 0;
+        let found = crate::collision::predicate::decide(self.prog, ob, part, self.timeout, &mut |pins| {
+            pinned += 1;
+            self.pinned_witness(ob, part, pins)
+        });
+        if let Some(found) = found {
+            stats.geometric += 1;
+            stats.queries += pinned;
+            return match found {
+                crate::collision::predicate::Found::Apart => Answer::Unsat,
+                crate::collision::predicate::Found::Contact(a) => a,
+                crate::collision::predicate::Found::Undecided(why) => Answer::Unknown(Why::Interval(format!(
+                    "the footprint against obstacle `{}`: {why}",
+                    match part {
+                        Part::ClearOf { o, .. } => self.prog.obstacles.get(*o).map_or("?", |x| x.name.as_str()),
+                        _ => "?",
+                    }
+                ))),
             };
         }
         // A payload float chosen by the progress check: first with integer witnesses

@@ -180,7 +180,7 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
                         None => Plan::Parts((0..n).map(Part::Contains).collect()),
                         Some((Solids::Fails(why), _)) => Plan::Fails(why),
                         Some((Solids::Unknown(why), _)) => Plan::Undecided(super::Why::Interval(format!(
-                            "a URDF or mesh body in the predicate footprint of `{}`: {why}",
+                            "branch and bound over the state and stand-ins for the body's solids, and no SMT query can decide it: a URDF or mesh body in the predicate footprint of `{}`: {why}",
                             p.name
                         ))),
                         Some((Solids::Holds(note), others)) if others.is_empty() => Plan::Holds(Some(note)),
@@ -197,7 +197,7 @@ pub fn plan(prog: &Program, ob: &Obligation) -> Plan {
                         crate::space::contain::Contained::No(why) => Plan::Fails(why),
                         crate::space::contain::Contained::Unknown(why) => {
                             Plan::Undecided(super::Why::Interval(format!(
-                        "a footprint with a URDF or mesh part (that of `{}`) as a container of the robot's body: {why}",
+                        "branch and bound over the state and stand-ins for the body's solids, and no SMT query can decide it: a footprint with a URDF or mesh part (that of `{}`) as a container of the robot's body: {why}",
                         p.name
                     )))
                         }
