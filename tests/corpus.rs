@@ -847,6 +847,18 @@ fn fails_with_exactly_its_code_at_its_position(
 /// can fire (see the named test).
 const NOT_ALONE: &[(&str, &str)] = &[
     (
+        "E0801",
+        "a refusal of `mochi monitor`/`proxy`/`mission`, not of `mochi check`: a protocol that is \
+         not verified (every rejected file is one). Tested in tests/monitor.rs::\
+         a_protocol_not_verified_is_refused_with_a_code_and_a_position",
+    ),
+    (
+        "E0802",
+        "a refusal of the run-time monitor's compilation, not of `mochi check`: a construct a \
+         verified protocol may have but the monitor cannot run (no dialect, more than 64 roles). \
+         Tested in monitor::tests::a_construct_the_monitor_cannot_run_is_refused_with_e0802_at_it",
+    ),
+    (
         "E0430",
         "a warning about the environment, not the source: an SMT dump that cannot be written \
          (`--dump-smt`). Tested in tests/cli.rs::a_dump_that_cannot_be_written_is_a_warning_not_a_lost_error",

@@ -682,8 +682,25 @@ fn the_hot_path_does_not_allocate() {
     // The counter counts: a violation is recorded with its values (off the hot path).
     let before = allocations();
     let stray = msg("MISSION_ACK", &to_gcs, &[]);
-    let _ = m.on_frame(&frame((9, 9), &stray));
+    let Outcome::Violation(v) = m.on_frame(&frame((9, 9), &stray)) else { panic!("a stray ACK accepted") };
     assert!(allocations() > before, "the counting allocator counts nothing");
+    // The reports are taken without allocating, and the record is empty after.
+    let before = allocations();
+    let (mut violations, mut summaries) = (0, 0);
+    {
+        let r = m.take_reports();
+        for x in r.violations {
+            violations += usize::from(x.kind == Kind::OutsideSession);
+        }
+        summaries += r.summaries.count();
+    }
+    assert_eq!(allocations(), before, "take_reports allocated");
+    assert_eq!((violations, summaries), (1, 1));
+    assert!(m.violations().is_empty() && m.summaries().is_empty());
+    assert!(m.violation(v).is_none(), "a taken violation is still found");
+    // A later violation gets a fresh index (not one a caller may still hold).
+    let Outcome::Violation(w) = m.on_frame(&frame((9, 9), &stray)) else { panic!("a stray ACK accepted") };
+    assert!(w > v && m.violation(w).is_some_and(|x| x.kind == Kind::OutsideSession));
 }
 
 // ---- the real captures: the verdict table of docs/captures.md -----------------------
@@ -752,6 +769,83 @@ fn the_captures_table_is_what_the_monitor_finds() {
         };
         assert_eq!(verdict, expected, "{p} x {c}");
     }
+}
+
+/// The vehicle-side vtol log holds a mission download (the vehicle's MISSION_COUNT to the
+/// ground station, its items): the upload protocols must not take it as an upload with the
+/// vehicle as their ground station. The vehicle (1/1) says what it is in its HEARTBEAT.
+#[test]
+fn a_download_is_not_bound_as_an_upload_with_the_roles_reversed() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let bytes =
+        std::fs::read(root.join("../shared/data/mavlink_captures/uavlogviewer_vtol.tlog")).expect("the vtol log");
+    for name in ["mission-upload.chor", "mission-upload-tolerant.chor", "fence-upload.chor", "rally-upload.chor"] {
+        let (_, prog, verdict) = load(&root.join("choreographies/mavlink").join(name));
+        assert_eq!(verdict, Verdict::Verified, "{name}");
+        let mut m = Monitor::new(vec![Automaton::compile(&prog).expect("compiled")]);
+        mochi::mavio::log::read_log(&bytes, mochi::mavio::parse::Config::default(), |f| {
+            m.on_frame(&f);
+        });
+        assert_eq!(m.end_kind(1, 1), mochi::monitor::EndKind::Vehicle, "{name}");
+        assert_eq!(m.stats.sessions_started, 0, "{name}: the download was taken as an upload");
+        // What is left is the vehicle's one MISSION_ACK, which no upload of the log asked for.
+        assert_eq!(m.violations().len(), 1, "{name}");
+        assert_eq!(m.violations()[0].kind, Kind::OutsideSession, "{name}");
+    }
+}
+
+/// `mochi monitor` refuses a protocol `mochi check` did not verify with E0801, shown as
+/// mochi's other diagnostics: the code, the file, line and column of the protocol's first
+/// error, and what to do.
+#[test]
+fn a_protocol_not_verified_is_refused_with_a_code_and_a_position() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_mochi"))
+        .current_dir(root)
+        .args([
+            "monitor",
+            "--color",
+            "never",
+            "-p",
+            "choreographies/mavlink/rejected/E0419-param-pass-index-out-of-range.chor",
+            "../shared/data/mavlink_captures/rust-mavlink_crate-0.21.0_log.tlog",
+        ])
+        .output()
+        .expect("mochi runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("error[E0801]"), "{err}");
+    assert!(err.contains("E0419-param-pass-index-out-of-range.chor:70:5"), "{err}");
+    assert!(err.contains("help:") && err.contains("mochi check"), "{err}");
+}
+
+/// ardusub's list download ends by time (the ground station's 1 s and the vehicle's 3 s of
+/// silence pass in the log's time) long before the vehicle's PARAM_VALUE with index 65535 (a
+/// parameter changed): the session is closed when the first frame after its bounds arrives,
+/// and that PARAM_VALUE is no flood item of it.
+#[test]
+fn a_session_ended_by_an_invisible_timeout_is_closed_while_the_log_goes_on() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let (_, prog, _) = load(&root.join("choreographies/mavlink/param-list.chor"));
+    let bytes =
+        std::fs::read(root.join("../shared/data/mavlink_captures/ardusub_log_tools_small.tlog")).expect("the log");
+    let mut m = Monitor::new(vec![Automaton::compile(&prog).expect("compiled")]);
+    let mut ended_at = None;
+    mochi::mavio::log::read_log(&bytes, mochi::mavio::parse::Config::default(), |f| {
+        let before = m.stats.ended_by_time;
+        m.on_frame(&f);
+        if m.stats.ended_by_time > before && ended_at.is_none() {
+            ended_at = Some(m.stats.frames - 1);
+        }
+    });
+    let ended_at = ended_at.expect("the download ended by time while the log went on");
+    assert_eq!(m.summaries().len(), 1, "closed before the end of the log");
+    let s = &m.summaries()[0];
+    assert!(s.conformant && s.last_frame < ended_at, "{s:?}");
+    assert_eq!(m.violations().len(), 1);
+    let v = &m.violations()[0];
+    assert!(v.frame > ended_at && v.msgid == 22, "{v:?}");
+    assert_eq!(v.kind, Kind::OutsideSession, "the PARAM_VALUE 65535 was taken in the ended session");
 }
 
 // ---- timeouts: the parameter list, in the frames' time -------------------------------

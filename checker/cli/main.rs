@@ -266,12 +266,35 @@ pub(crate) fn verified_automata(
             let shown: String =
                 report.diagnostics.iter().filter(|d| d.is_error()).map(|d| render::text(db, d, color)).collect();
             eprint_safe(&shown);
-            eprintln_safe(&format!(
-                "error: {} is {}, not verified: mochi {verb} only verified protocols (the monitor enforces what the static checks assume); run `mochi check {}`",
-                p.display(),
-                format!("{:?}", report.verdict).to_lowercase(),
-                p.display()
-            ));
+            // The refusal itself (E0801), at the protocol's first error or undecided
+            // obligation, else at the start of the file.
+            let at = report
+                .diagnostics
+                .iter()
+                .find(|d| d.is_error())
+                .or_else(|| report.diagnostics.iter().find(|d| d.code == mochi::diag::Code::Undecided))
+                .map(|d| d.span)
+                .or_else(|| file_start(db, p));
+            let verdict = format!("{:?}", report.verdict).to_lowercase();
+            match at {
+                Some(span) => {
+                    let d = mochi::diag::Diagnostic::error(
+                        mochi::diag::Code::MonitorNotVerified,
+                        span,
+                        format!("{} is {verdict}, not verified: mochi {verb} only verified protocols", p.display()),
+                    )
+                    .with_help(format!(
+                        "the monitor enforces what the static checks assume, which is proved only for a verified protocol; run `mochi check {}` and fix what it reports",
+                        p.display()
+                    ));
+                    eprint_safe(&render::text(db, &d, color));
+                }
+                None => eprintln_safe(&format!(
+                    "error[E0801]: {} is {verdict}, not verified: mochi {verb} only verified protocols; run `mochi check {}`",
+                    p.display(),
+                    p.display()
+                )),
+            }
             return Err(Outcome::Invalid);
         }
         automata.push(monitorable(db, p, color)?);
@@ -303,17 +326,17 @@ pub(crate) fn monitorable(
     match mochi::monitor::Automaton::compile(&prog) {
         Ok(a) => Ok(a),
         Err(e) => {
-            let at = e
-                .span
-                .map(|s| {
-                    let (f, l, c) = db.location(s);
-                    format!("{f}:{l}:{c}: ")
-                })
-                .unwrap_or_default();
-            eprintln_safe(&format!("error: {at}{} cannot be monitored: {}", p.display(), e.message));
+            let fallback = mochi::source::Span::new(root, 0, 0);
+            eprint_safe(&render::text(db, &e.diagnostic(fallback), color.for_stream(false)));
             Err(Outcome::Invalid)
         }
     }
+}
+
+/// The first character of a file the database holds, as a span.
+fn file_start(db: &SourceDb, p: &Path) -> Option<mochi::source::Span> {
+    let name = p.display().to_string();
+    db.find(&name).map(|f| mochi::source::Span::new(f, 0, 0))
 }
 
 /// Only verified protocols are monitored: the monitor enforces what the static checks

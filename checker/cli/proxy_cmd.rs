@@ -82,7 +82,7 @@ fn verified_in_children(
             eprintln_safe(&String::from_utf8_lossy(&out.stdout));
             eprintln_safe(&String::from_utf8_lossy(&out.stderr));
             eprintln_safe(&format!(
-                "error: {} is not verified (`mochi check` exits with {}): mochi enforces only verified protocols (the monitor enforces what the static checks assume)",
+                "error[E0801]: {} is not verified (`mochi check` exits with {}): mochi enforces only verified protocols (the monitor enforces what the static checks assume)",
                 p.display(),
                 out.status.code().map_or("a signal".to_string(), |c| c.to_string())
             ));

@@ -759,6 +759,24 @@ codes! {
          separation of footprints, refinement and typing side conditions). When a query could not \
          be decided — no solver in this build, a timeout, or an unsupported theory — the check is \
          reported as unknown and the verdict is `unknown` (exit code 3), never `verified`.";
+    MonitorNotVerified = "E0801", "a protocol that is not verified cannot be monitored",
+        "`mochi monitor`, `mochi proxy` and `mochi mission` enforce a protocol's guards and \
+         refinements on real MAVLink traffic, and what they enforce is what the static checks \
+         assumed when they proved the protocol: that every message is its sender's obligation, \
+         that a choice is total, that every loop ends. For a protocol the checks rejected or could \
+         not decide, those assumptions are not proved, and a monitor that accepts its runs would \
+         accept runs of a wrong protocol. The diagnostic points at the protocol's first error (or \
+         undecided obligation), which is shown above it. Run `mochi check FILE`, fix what it reports \
+         (or give it more time: `--timeout`), and monitor the verified protocol.";
+    MonitorUnsupported = "E0802", "a construct the run-time monitor cannot run",
+        "The monitor compiles a verified MAVLink protocol into an automaton over the messages of \
+         one stream. Some constructs have no run-time meaning there: a joint motion or a parallel \
+         composition `*` (the monitor sees MAVLink messages, not motions), a program without a \
+         `dialect` (no wire format to decode), more than 64 participants, a loop that can jump back \
+         without any message (it would spin without input), and a value that is not held in a \
+         register (a name the monitor cannot evaluate). The diagnostic names the construct and \
+         points at it. Monitor a MAVLink protocol (`dialect common;`, messages only), and write a \
+         loop so that every path through its body sends a message.";
 }
 
 impl std::fmt::Display for Code {

@@ -112,12 +112,73 @@ pub enum StateKind {
     End,
 }
 
+/// What a MAVLink end is, as its HEARTBEAT says, and what a role must be played by.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum EndKind {
+    /// Not known (no HEARTBEAT seen from the end; a role of no conventional name).
+    #[default]
+    Unknown,
+    /// A ground station: HEARTBEAT `type == MAV_TYPE_GCS`; a role named `GCS`.
+    GroundStation,
+    /// A vehicle's autopilot: HEARTBEAT `autopilot != MAV_AUTOPILOT_INVALID` and a type
+    /// other than `MAV_TYPE_GCS`; a role named `UAV`, `Vehicle`, `Autopilot`, ...
+    Vehicle,
+}
+
+impl EndKind {
+    /// Whether an end of kind `end` may play a role of kind `self`: either is unknown, or
+    /// they are the same.
+    #[inline]
+    pub fn admits(self, end: EndKind) -> bool {
+        self == EndKind::Unknown || end == EndKind::Unknown || self == end
+    }
+
+    /// The kind a role's name declares (case-insensitive): `GCS`, `GroundStation`,
+    /// `Ground_Station`, `Ground` a ground station; `UAV`, `UAS`, `Vehicle`, `Autopilot`,
+    /// `Drone`, `Copter`, `Plane`, `Rover`, `Sub`, `Boat` a vehicle; any other name is played
+    /// by any end (docs/monitor.md, "Which end plays which role").
+    pub fn of_role(name: &str) -> EndKind {
+        let n = name.to_ascii_lowercase();
+        match n.as_str() {
+            "gcs" | "groundstation" | "ground_station" | "ground" => EndKind::GroundStation,
+            "uav" | "uas" | "vehicle" | "autopilot" | "drone" | "copter" | "plane" | "rover" | "sub" | "boat" => {
+                EndKind::Vehicle
+            }
+            _ => EndKind::Unknown,
+        }
+    }
+
+    /// The kind a HEARTBEAT payload declares (`type` at byte 4, `autopilot` at byte 5; a
+    /// MAVLink 2 payload truncated before them reads zeros, as the wire format says). A
+    /// HEARTBEAT of `MAV_TYPE_GENERIC` and `MAV_AUTOPILOT_GENERIC` (all zeros: a default or
+    /// truncated one) claims nothing: unknown.
+    pub fn of_heartbeat(payload: &[u8]) -> EndKind {
+        let ty = payload.get(4).copied().unwrap_or(0);
+        let autopilot = payload.get(5).copied().unwrap_or(0);
+        if ty == MAV_TYPE_GCS {
+            EndKind::GroundStation
+        } else if ty == 0 && autopilot == 0 {
+            EndKind::Unknown
+        } else if autopilot != MAV_AUTOPILOT_INVALID {
+            EndKind::Vehicle
+        } else {
+            EndKind::Unknown
+        }
+    }
+}
+
+/// `MAV_TYPE_GCS` and `MAV_AUTOPILOT_INVALID` (common.xml).
+const MAV_TYPE_GCS: u8 = 6;
+const MAV_AUTOPILOT_INVALID: u8 = 8;
+
 /// A protocol compiled for the monitor.
 #[derive(Clone, Debug)]
 pub struct Automaton {
     pub name: String,
     pub prog: Program,
     pub roles: Vec<String>,
+    /// The kind of end each role must be played by ([`EndKind::of_role`]).
+    pub role_kinds: Vec<EndKind>,
     pub states: Vec<StateKind>,
     pub edges: Vec<Edge>,
     pub arena: Arena,
@@ -139,6 +200,22 @@ pub struct Automaton {
 pub struct CompileError {
     pub message: String,
     pub span: Option<Span>,
+}
+
+impl CompileError {
+    /// The refusal as a diagnostic (E0802) at the construct, or at `fallback` (the file)
+    /// when it has no position, with what to do about it.
+    pub fn diagnostic(&self, fallback: Span) -> crate::diag::Diagnostic {
+        crate::diag::Diagnostic::error(
+            crate::diag::Code::MonitorUnsupported,
+            self.span.unwrap_or(fallback),
+            format!("the monitor cannot run this protocol: {}", self.message),
+        )
+        .with_help(
+            "the monitor runs MAVLink protocols (`dialect ...;`, messages only) whose loops send a message on \
+             every path back; write the construct so, or check the protocol statically only (`mochi check`)",
+        )
+    }
 }
 
 fn err<T>(message: impl Into<String>, span: Option<Span>) -> Result<T, CompileError> {
@@ -207,6 +284,7 @@ impl Automaton {
                 name: chor.name.clone(),
                 prog: prog.clone(),
                 roles: prog.roles.iter().map(|r| r.name.clone()).collect(),
+                role_kinds: prog.roles.iter().map(|r| EndKind::of_role(&r.name)).collect(),
                 states: vec![StateKind::End],
                 edges: Vec::new(),
                 arena,

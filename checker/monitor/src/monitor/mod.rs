@@ -54,7 +54,7 @@ mod session;
 mod stream;
 pub mod wire;
 
-pub use automaton::{Automaton, CompileError, Edge, FieldKind, ObservedRead, StateKind, StreamDef};
+pub use automaton::{Automaton, CompileError, Edge, EndKind, FieldKind, ObservedRead, StateKind, StreamDef};
 pub use code::Val;
 
 use crate::mavio::Frame;
@@ -194,6 +194,8 @@ pub struct Stats {
     /// Late messages: a first message of a branch its receiver abandoned by a timeout,
     /// ignored (each also counted in `passed`).
     pub late: u64,
+    /// Sessions closed by time while the stream went on (each also in `sessions_ended`).
+    pub ended_by_time: u64,
 }
 
 struct Session {
@@ -217,6 +219,13 @@ struct Session {
     late: Option<u32>,
 }
 
+/// What [`Monitor::take_reports`] hands over: the recorded violations and the summaries of
+/// the sessions that ended, each drained from the monitor.
+pub struct Reports<'a> {
+    pub violations: std::vec::Drain<'a, Violation>,
+    pub summaries: std::vec::Drain<'a, SessionSummary>,
+}
+
 /// The monitor: protocols, their open sessions, and what it found.
 pub struct Monitor {
     protos: Vec<Automaton>,
@@ -231,6 +240,8 @@ pub struct Monitor {
     undo_strs: Vec<u8>,
     args: Vec<Val>,
     violations: Vec<Violation>,
+    /// How many violations [`Monitor::take_reports`] took: the first index in `violations`.
+    taken_violations: usize,
     summaries: Vec<SessionSummary>,
     /// The latest reading of each stream from each end (`stream.rs`), a register file to
     /// check a stream message in, and the ends a step's snapshots bound a role to.
@@ -239,6 +250,13 @@ pub struct Monitor {
     inferred: Vec<(usize, (u8, u8))>,
     /// The latest frame time seen (the log's or the proxy's clock).
     clock: Option<u64>,
+    /// Each end's kind, as its latest HEARTBEAT declared it (`session::kinds_fit`).
+    kinds: Vec<session::EndOf>,
+    /// Whether some protocol has a timeout branch (sessions may end by time).
+    timed: bool,
+    /// The ends whose kind [`Monitor::pin_end_kind`] fixed (HEARTBEATs do not change it).
+    pinned: Vec<(u8, u8)>,
+    pinned_kinds: bool,
     pub stats: Stats,
 }
 
@@ -257,6 +275,7 @@ impl Monitor {
         let undo = protos.iter().map(|a| a.arena.regs.len()).max().unwrap_or(0);
         let strs = protos.iter().map(|a| a.arena.str_size as usize).max().unwrap_or(0);
         let n = protos.len();
+        let timed = protos.iter().any(|a| a.timeouts.iter().any(Option::is_some));
         Monitor {
             protos,
             slots: Vec::new(),
@@ -267,11 +286,16 @@ impl Monitor {
             undo_strs: Vec::with_capacity(strs),
             args: Vec::with_capacity(undo + 8),
             violations: Vec::new(),
+            taken_violations: 0,
             summaries: Vec::new(),
             readings: Vec::with_capacity(16),
             scratch: vec![Val::Unset; undo],
             inferred: Vec::with_capacity(8),
             clock: None,
+            kinds: Vec::with_capacity(16),
+            timed,
+            pinned: Vec::new(),
+            pinned_kinds: false,
             stats: Stats::default(),
         }
     }
@@ -280,12 +304,24 @@ impl Monitor {
         &self.protos
     }
 
+    /// Violation `i` (the index an [`Outcome::Violation`] carries), unless it was taken.
     pub fn violation(&self, i: usize) -> Option<&Violation> {
-        self.violations.get(i)
+        i.checked_sub(self.taken_violations).and_then(|k| self.violations.get(k))
     }
 
+    /// The violations recorded and not yet taken ([`Monitor::take_reports`]).
     pub fn violations(&self) -> &[Violation] {
         &self.violations
+    }
+
+    /// Takes the violations and session summaries recorded so far, oldest first, leaving
+    /// the monitor's buffers empty with their capacity (no allocation: the caller iterates
+    /// the drains). A long-running user (a proxy) calls it after reporting, so that the
+    /// record does not grow with the stream. Violation indices stay unique: one taken is no
+    /// longer found by [`Monitor::violation`], later ones keep counting.
+    pub fn take_reports(&mut self) -> Reports<'_> {
+        self.taken_violations += self.violations.len();
+        Reports { violations: self.violations.drain(..), summaries: self.summaries.drain(..) }
     }
 
     /// The sessions that ended so far (and, after [`Monitor::finish`], every session).
@@ -300,6 +336,12 @@ impl Monitor {
         self.stats.frames += 1;
         if let Some(t) = f.time_us {
             self.clock = Some(self.clock.map_or(t, |c| c.max(t)));
+            if self.timed {
+                self.end_by_time();
+            }
+        }
+        if f.msgid == HEARTBEAT {
+            self.heard(f);
         }
         let mut result = None;
         let mut in_alphabet = false;
@@ -317,9 +359,11 @@ impl Monitor {
             if !self.protos[p].in_alphabet(f.msgid) {
                 continue;
             }
-            // A `COMMAND_LONG` of a command no edge fixes is not this protocol's message.
+            // A `COMMAND_LONG` of a command no edge fixes is not this protocol's message, nor
+            // is a message whose ends are of kinds no edge of its label admits (a vehicle's
+            // MISSION_COUNT to an upload whose `GCS` sends it).
             let a = &self.protos[p];
-            if !a.edges.iter().any(|e| session::label_fits(e, f)) {
+            if !a.edges.iter().any(|e| session::label_fits(e, f) && session::kinds_fit(a, e, &self.kinds, f)) {
                 continue;
             }
             in_alphabet = true;
@@ -350,6 +394,58 @@ impl Monitor {
         }
     }
 
+    /// Closes, conformant, every open session that ended by time before the stream's clock:
+    /// its state reaches `end` by timeouts alone and their bounds passed since it was
+    /// entered (`session::ends_by_time`). Nothing says so on the link (a ground station that
+    /// gave up sends nothing), so the next frame with a time is when the monitor learns it;
+    /// a later message of that session is then in no session.
+    fn end_by_time(&mut self) {
+        let mut k = 0;
+        while k < self.open.len() {
+            let slot = self.open[k];
+            let s = &self.slots[slot];
+            if session::ends_by_time(&self.protos[s.proto], s.state, s.entered_us, self.clock) {
+                self.stats.ended_by_time += 1;
+                // `close` moves the last open session to position `k`.
+                self.close(slot, true, true);
+            } else {
+                k += 1;
+            }
+        }
+    }
+
+    /// The kind of end `(sys, comp)`, as its latest HEARTBEAT declared it.
+    pub fn end_kind(&self, sys: u8, comp: u8) -> EndKind {
+        session::kind_of(&self.kinds, (sys, comp))
+    }
+
+    /// Fixes the kind of end `(sys, comp)`, whatever its HEARTBEATs say from now on: a
+    /// proxy knows which side a frame came from (`--gcs` or `--vehicle`), which a HEARTBEAT
+    /// only claims.
+    pub fn pin_end_kind(&mut self, sys: u8, comp: u8, kind: EndKind) {
+        self.pinned_kinds = true;
+        match self.kinds.iter_mut().find(|(e, _)| *e == (sys, comp)) {
+            Some(k) => k.1 = kind,
+            None => self.kinds.push(((sys, comp), kind)),
+        }
+        if !self.pinned.contains(&(sys, comp)) {
+            self.pinned.push((sys, comp));
+        }
+    }
+
+    /// A HEARTBEAT: its sender's kind, kept (in place once the end is known), unless pinned.
+    fn heard(&mut self, f: &Frame) {
+        let kind = EndKind::of_heartbeat(f.payload);
+        let end = (f.sysid, f.compid);
+        if self.pinned_kinds && self.pinned.contains(&end) {
+            return;
+        }
+        match self.kinds.iter_mut().find(|(e, _)| *e == end) {
+            Some(k) => k.1 = kind,
+            None => self.kinds.push((end, kind)),
+        }
+    }
+
     /// Ends the stream: every open session is reported incomplete, unless its state can
     /// end by timeouts alone and their bounds passed before the stream's last time (then it
     /// ended by time, conformant). Returns all summaries.
@@ -368,6 +464,9 @@ impl Monitor {
         &self.summaries
     }
 }
+
+/// HEARTBEAT's message id.
+const HEARTBEAT: u32 = 0;
 
 /// The failure an undefined or undecided predicate is (`edge` is `None` at an assignment).
 fn verdict_fail(v: Verdict, edge: Option<u32>, pred: u32, field: Option<u16>) -> Fail {

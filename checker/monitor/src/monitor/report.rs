@@ -39,13 +39,13 @@ impl Monitor {
             strs: s.map(|s| s.strs.clone()).unwrap_or_default(),
             roles: s.map(|s| s.roles.clone()).unwrap_or_default(),
         });
-        self.violations.len() - 1
+        self.taken_violations + self.violations.len() - 1
     }
 
     /// A violation in words: what broke, where in the source, the values involved, and each
     /// role's local state (its binding and the values it knows).
     pub fn describe(&self, db: &crate::source::SourceDb, i: usize) -> String {
-        let Some(v) = self.violations.get(i) else { return String::new() };
+        let Some(v) = self.violation(i) else { return String::new() };
         let mut out = format!("frame {}", v.frame);
         if let Some(t) = v.time_us {
             out += &format!(" (t = {t} us)");

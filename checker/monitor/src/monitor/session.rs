@@ -1,7 +1,7 @@
 //! Sessions: which session a frame is a step of, starting one, taking a step (its
 //! guard, its fields decoded and checked, its ends bound), the assignments of loops.
 
-use super::automaton::{Automaton, Edge, FieldKind, FieldRead, StateKind};
+use super::automaton::{Automaton, Edge, EndKind, FieldKind, FieldRead, StateKind};
 use super::code::{Env, Val};
 use super::num::Q;
 use super::wire::{self, Scalar};
@@ -22,7 +22,7 @@ impl Monitor {
             let a = &self.protos[p];
             let mut found = false;
             for &e in a.edges_of(s.state) {
-                if label_fits(&a.edges[e as usize], f) && ends_fit(&a.edges[e as usize], &s.roles, f) {
+                if label_fits(&a.edges[e as usize], f) && ends_fit(a, &a.edges[e as usize], &s.roles, &self.kinds, f) {
                     found = true;
                     break;
                 }
@@ -31,15 +31,14 @@ impl Monitor {
                 return Some(self.step(slot, f, index, 0));
             }
             if a.timeout(s.state).is_some() {
-                if let Some((hops, _)) = timeout_chain(a, s.state, &s.roles, f) {
+                if let Some((hops, _)) = timeout_chain(a, s.state, &s.roles, &self.kinds, f) {
                     return Some(self.step(slot, f, index, hops));
                 }
             }
             if let Some(late) = s.late {
-                if a.edges_of(late)
-                    .iter()
-                    .any(|&e| label_fits(&a.edges[e as usize], f) && ends_fit(&a.edges[e as usize], &s.roles, f))
-                {
+                if a.edges_of(late).iter().any(|&e| {
+                    label_fits(&a.edges[e as usize], f) && ends_fit(a, &a.edges[e as usize], &s.roles, &self.kinds, f)
+                }) {
                     // A message of a branch its receiver abandoned by a timeout, arriving
                     // after: real peers ignore it (docs/observed-and-timeouts.md, "Late
                     // messages"); not a step, not a violation.
@@ -53,7 +52,7 @@ impl Monitor {
             }
         }
         let a = &self.protos[p];
-        let fresh = vec_fresh_check(a, f);
+        let fresh = vec_fresh_check(a, &self.kinds, f);
         if fresh {
             let slot = self.start(p, index);
             let o = self.step(slot, f, index, 0);
@@ -272,7 +271,7 @@ impl Monitor {
         let mut chosen = None;
         for &e in a.edges_of(s.state) {
             let edge = &a.edges[e as usize];
-            if !label_fits(edge, f) || !ends_fit(edge, &s.roles, f) {
+            if !label_fits(edge, f) || !ends_fit(a, edge, &s.roles, &self.kinds, f) {
                 continue;
             }
             if !edge.observed.is_empty() {
@@ -471,7 +470,13 @@ impl Monitor {
 /// Whether the frame is a first message after timeouts from `state`: the number of
 /// timeouts taken in a row (each the waiting role giving up on the state it leaves) and
 /// their bounds' sum in milliseconds, when an edge of the state they lead to fits the frame.
-pub(super) fn timeout_chain(a: &Automaton, state: u32, roles: &[Binding], f: &Frame) -> Option<(u32, u64)> {
+pub(super) fn timeout_chain(
+    a: &Automaton,
+    state: u32,
+    roles: &[Binding],
+    kinds: &[EndOf],
+    f: &Frame,
+) -> Option<(u32, u64)> {
     let mut at = state;
     let mut ms: u64 = 0;
     for hop in 1..=a.states.len() as u32 {
@@ -481,7 +486,7 @@ pub(super) fn timeout_chain(a: &Automaton, state: u32, roles: &[Binding], f: &Fr
         let fits = a
             .edges_of(at)
             .iter()
-            .any(|&e| label_fits(&a.edges[e as usize], f) && ends_fit(&a.edges[e as usize], roles, f));
+            .any(|&e| label_fits(&a.edges[e as usize], f) && ends_fit(a, &a.edges[e as usize], roles, kinds, f));
         if fits {
             return Some((hop, ms));
         }
@@ -534,9 +539,13 @@ pub(super) fn targets_of(slots: (Option<wire::Slot>, Option<wire::Slot>), f: &Fr
 
 /// Whether the frame's ends fit the session's bindings: the sender is the edge's sender
 /// role (or that role is unbound and the sender plays no other role), and the targets, when
-/// the message has them and they are not broadcast (0), are the receiver role's.
+/// the message has them and they are not broadcast (0), are the receiver role's; and the
+/// ends are of the kinds the roles ask ([`kinds_fit`]).
 #[inline]
-pub(super) fn ends_fit(e: &Edge, roles: &[Binding], f: &Frame) -> bool {
+pub(super) fn ends_fit(a: &Automaton, e: &Edge, roles: &[Binding], kinds: &[EndOf], f: &Frame) -> bool {
+    if !kinds_fit(a, e, kinds, f) {
+        return false;
+    }
     let from = roles[e.from.idx()];
     let sender_ok = match (from.sys, from.comp) {
         (Some(s), Some(c)) => s == f.sysid && c == f.compid,
@@ -568,12 +577,41 @@ pub(super) fn ends_fit(e: &Edge, roles: &[Binding], f: &Frame) -> bool {
 
 /// Whether the frame can start a session of `a`: a first edge of its start state fits it
 /// with no role bound.
-pub(super) fn vec_fresh_check(a: &Automaton, f: &Frame) -> bool {
+pub(super) fn vec_fresh_check(a: &Automaton, kinds: &[EndOf], f: &Frame) -> bool {
     let none = [Binding::default(); 64];
     let roles = &none[..a.roles.len().min(64)];
     a.edges_of(a.settle(a.start))
         .iter()
-        .any(|&e| label_fits(&a.edges[e as usize], f) && ends_fit(&a.edges[e as usize], roles, f))
+        .any(|&e| label_fits(&a.edges[e as usize], f) && ends_fit(a, &a.edges[e as usize], roles, kinds, f))
+}
+
+/// An end's kind, as its latest HEARTBEAT declared it.
+pub(super) type EndOf = ((u8, u8), EndKind);
+
+/// The kind of end `(sys, comp)` (unknown when it sent no HEARTBEAT).
+#[inline]
+pub(super) fn kind_of(kinds: &[EndOf], end: (u8, u8)) -> EndKind {
+    kinds.iter().find(|(e, _)| *e == end).map_or(EndKind::Unknown, |(_, k)| *k)
+}
+
+/// Whether the frame's ends may play the edge's roles by their kinds: the source's kind is
+/// admitted by the sender role's, and the target's (when the message names one end, system
+/// and component, neither broadcast) by the receiver role's. A vehicle's MISSION_COUNT
+/// (the answer of a download) is no upload's first message when the upload's `GCS` must be
+/// a ground station.
+#[inline]
+pub(super) fn kinds_fit(a: &Automaton, e: &Edge, kinds: &[EndOf], f: &Frame) -> bool {
+    if kinds.is_empty() {
+        return true;
+    }
+    let (from, to) = (a.role_kinds[e.from.idx()], a.role_kinds[e.to.idx()]);
+    if !from.admits(kind_of(kinds, (f.sysid, f.compid))) {
+        return false;
+    }
+    match targets(e, f) {
+        (Some(s), Some(c)) if s != 0 && c != 0 => to.admits(kind_of(kinds, (s, c))),
+        _ => true,
+    }
 }
 
 /// A numeric field's value: an integer, or a float as the exact rational it is (`None`: NaN

@@ -157,7 +157,7 @@ impl Monitor {
                         strs: Vec::new(),
                         roles: Vec::new(),
                     });
-                    return Class::Violation(self.violations.len() - 1);
+                    return Class::Violation(self.taken_violations + self.violations.len() - 1);
                 }
                 Err(_) => {}
             }
@@ -169,7 +169,7 @@ impl Monitor {
     /// (label, ends, guard, refinements), tried on a session that is then discarded: no
     /// session, violation or statistic is left of the trial.
     fn starts_cleanly(&mut self, p: usize, f: &Frame, index: u64) -> bool {
-        if !super::session::vec_fresh_check(&self.protos[p], f) {
+        if !super::session::vec_fresh_check(&self.protos[p], &self.kinds, f) {
             return false;
         }
         let (id, started) = (self.next_id, self.stats.sessions_started);

@@ -251,3 +251,74 @@ choreography P =
     // f32::MAX does not fit a register's rational either: decided the same way.
     assert!(matches!(m.on_frame(&frame(255, 190, &set(f32::MAX))), Outcome::Ended { .. }));
 }
+
+/// A HEARTBEAT of `type` and `autopilot`.
+fn heartbeat(d: &Dialect, ty: i128, autopilot: i128) -> (u32, Vec<u8>) {
+    payload(d, "HEARTBEAT", &[("type", int(ty)), ("autopilot", int(autopilot))], &[])
+}
+
+#[test]
+fn a_vehicles_mission_count_does_not_start_an_upload() {
+    // MAV_TYPE_FIXED_WING 1, MAV_AUTOPILOT_ARDUPILOTMEGA 3; MAV_TYPE_GCS 6, MAV_AUTOPILOT_INVALID 8.
+    let mut db = SourceDb::new();
+    let (mut m, d) = upload_monitor(&mut db);
+    assert_eq!(m.on_frame(&frame(1, 1, &heartbeat(d, 1, 3))), Outcome::Passed);
+    assert_eq!(m.end_kind(1, 1), EndKind::Vehicle);
+    // The vehicle answers a download (the MISSION_REQUEST_LIST is not this protocol's):
+    // its MISSION_COUNT to the ground station is no upload's, whose GCS sends it.
+    let count = to_gcs(d, "MISSION_COUNT", &[("count", int(2))]);
+    assert_eq!(m.on_frame(&frame(1, 1, &count)), Outcome::Passed);
+    assert_eq!(m.stats.sessions_started, 0);
+    // The same count from a ground station does start one.
+    assert_eq!(m.on_frame(&frame(255, 190, &heartbeat(d, 6, 8))), Outcome::Passed);
+    assert_eq!(m.end_kind(255, 190), EndKind::GroundStation);
+    let count = to_uav(d, "MISSION_COUNT", &[("count", int(2))]);
+    assert!(matches!(m.on_frame(&frame(255, 190, &count)), Outcome::Step { .. }));
+    // A ground station's count addressed to another ground station (by its HEARTBEAT) is
+    // no upload either: the receiver must be a vehicle.
+    assert_eq!(m.on_frame(&frame(255, 230, &heartbeat(d, 6, 8))), Outcome::Passed);
+    let sideways = payload(
+        d,
+        "MISSION_COUNT",
+        &[("target_system", int(255)), ("target_component", int(230)), ("count", int(2))],
+        &[],
+    );
+    assert_eq!(m.on_frame(&frame(255, 190, &sideways)), Outcome::Passed);
+    assert_eq!(m.stats.sessions_started, 1);
+    // Ends with no HEARTBEAT play any role, as before.
+    let unknown =
+        payload(d, "MISSION_COUNT", &[("target_system", int(7)), ("target_component", int(1)), ("count", int(2))], &[]);
+    assert!(matches!(m.on_frame(&frame(9, 9, &unknown)), Outcome::Step { .. }));
+    // A default HEARTBEAT (all zeros) claims nothing; a pinned kind is not changed by one.
+    assert_eq!(m.on_frame(&frame(4, 4, &heartbeat(d, 0, 0))), Outcome::Passed);
+    assert_eq!(m.end_kind(4, 4), EndKind::Unknown);
+    m.pin_end_kind(255, 190, EndKind::GroundStation);
+    assert_eq!(m.on_frame(&frame(255, 190, &heartbeat(d, 2, 3))), Outcome::Passed);
+    assert_eq!(m.end_kind(255, 190), EndKind::GroundStation);
+    // Role names declare the kinds.
+    assert_eq!(EndKind::of_role("GCS"), EndKind::GroundStation);
+    assert_eq!(EndKind::of_role("Vehicle"), EndKind::Vehicle);
+    assert_eq!(EndKind::of_role("Sender"), EndKind::Unknown);
+}
+
+#[test]
+fn a_construct_the_monitor_cannot_run_is_refused_with_e0802_at_it() {
+    let mut db = SourceDb::new();
+    let src = "dialect common;
+system S { participant GCS; participant UAV; }
+choreography C =
+  mu t. ( GCS -> UAV: MISSION_CLEAR_ALL(mission_type). end
+        + GCS -> UAV: MISSION_SET_CURRENT(seq). t );";
+    let prog = program(&mut db, src);
+    assert!(Automaton::compile(&prog).is_ok());
+    let file = db.find("t.chor").expect("the file");
+    // A program with no dialect has no wire format: refused, at the choreography.
+    let mut no_dialect = prog.clone();
+    no_dialect.dialect = None;
+    let e = Automaton::compile(&no_dialect).expect_err("no dialect");
+    let d = e.diagnostic(crate::source::Span::new(file, 0, 0));
+    assert_eq!(d.code, crate::diag::Code::MonitorUnsupported);
+    assert!(d.message.contains("dialect"), "{}", d.message);
+    assert_eq!(db.location(d.span).1, 3, "at the choreography");
+    assert!(d.help.as_deref().is_some_and(|h| h.contains("mochi check")));
+}
