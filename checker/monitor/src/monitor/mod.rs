@@ -309,6 +309,15 @@ impl Monitor {
         &self.summaries
     }
 
+    /// Forgets the violations and session summaries recorded so far (the indices of earlier
+    /// outcomes no longer name them); sessions, readings and statistics are kept. For a
+    /// caller that reports each outcome as it comes (the proxy), so that the record does not
+    /// grow with the stream. No allocation: the record keeps its capacity.
+    pub fn clear_reports(&mut self) {
+        self.violations.clear();
+        self.summaries.clear();
+    }
+
     /// Monitors one frame (the hot path: no allocation unless a session starts in a new
     /// slot, ends, or a violation is recorded).
     pub fn on_frame(&mut self, f: &Frame) -> Outcome {
