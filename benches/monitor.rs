@@ -20,8 +20,9 @@
 //!   verifies, at once.
 //!
 //! With `--callgrind WHICH` (`synthetic` or a part of a capture's name) it makes one pass
-//! over that stream with the three protocols and no timing, for an instruction count of the
-//! monitor's work that does not move with the machine's load.
+//! over that stream with the three protocols (with `--all`: every protocol under
+//! `choreographies/mavlink/`) and no timing, for an instruction count of the monitor's work
+//! that does not move with the machine's load.
 
 use mochi::dialect::Dialect;
 use mochi::mavio::log::read_log;
@@ -192,7 +193,7 @@ fn callgrind(protos: &[Automaton], synthetic: &[Frame], which: &str) {
         for f in synthetic {
             std::hint::black_box(m.on_frame(std::hint::black_box(f)));
         }
-        println!("callgrind: synthetic upload, {} frames, 3 protocols", synthetic.len());
+        println!("callgrind: synthetic upload, {} frames, {} protocols", synthetic.len(), protos.len());
         return;
     }
     for path in captures().into_iter().filter(|p| p.to_string_lossy().contains(which)) {
@@ -203,7 +204,7 @@ fn callgrind(protos: &[Automaton], synthetic: &[Frame], which: &str) {
         for f in &frames {
             std::hint::black_box(m.on_frame(std::hint::black_box(f)));
         }
-        println!("callgrind: {}, {} frames, 3 protocols", path.display(), frames.len());
+        println!("callgrind: {}, {} frames, {} protocols", path.display(), frames.len(), protos.len());
     }
 }
 
@@ -271,7 +272,24 @@ fn main() {
         .collect();
     let args: Vec<String> = std::env::args().collect();
     if let Some(k) = args.iter().position(|a| a == "--callgrind") {
-        callgrind(&protos, &frames, args.get(k + 1).map_or("synthetic", |s| s.as_str()));
+        let which = args.get(k + 1).map_or("synthetic", |s| s.as_str());
+        if args.iter().any(|a| a == "--all") {
+            // Every protocol under choreographies/mavlink/, compiled without verification
+            // (all of them verify: the timed run checks it).
+            let mut paths: Vec<PathBuf> = std::fs::read_dir("choreographies/mavlink")
+                .map(|d| {
+                    d.filter_map(|e| e.ok())
+                        .map(|e| e.path())
+                        .filter(|p| p.extension().is_some_and(|e| e == "chor"))
+                        .collect()
+                })
+                .unwrap_or_default();
+            paths.sort();
+            let all: Vec<Automaton> = paths.iter().map(|p| compile(&p.to_string_lossy())).collect();
+            callgrind(&all, &frames, which);
+        } else {
+            callgrind(&protos, &frames, which);
+        }
         return;
     }
     let mut best = f64::INFINITY;
