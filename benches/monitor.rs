@@ -1,26 +1,37 @@
 //! The run-time monitor's work per message (target: under 100 ns).
 //!
 //! ```text
-//! cargo bench --bench monitor             # 200 passes over the stream
-//! cargo bench --bench monitor -- --quick  # 20 passes
+//! cargo bench --bench monitor                          # 200 passes (synthetic), 20 per capture
+//! cargo bench --bench monitor -- --quick               # 20 and 3
+//! valgrind --tool=callgrind --toggle-collect='*Monitor*on_frame*' \
+//!     target/release/deps/monitor-HASH --callgrind ardusub  # instructions, one pass
 //! ```
 //!
-//! The stream: a 500-item mission upload (`choreographies/mavlink/mission-upload-tolerant.chor`:
-//! MISSION_COUNT, 500 times MISSION_REQUEST_INT and MISSION_ITEM_INT, MISSION_ACK,
-//! MISSION_CURRENT) interleaved with telemetry the protocols do not speak (ATTITUDE,
-//! GLOBAL_POSITION_INT, SYS_STATUS, VFR_HUD after every protocol message), monitored
-//! together with `arm-command.chor` and `param-set.chor` (three protocols at once). The
-//! frames are built once (payloads encoded by the dialect's wire layout); the timed loop
-//! is `Monitor::on_frame` over the whole stream, a new monitor per pass (so each pass starts
-//! the session again), and the figure is the wall time per frame. The benchmark prints and
-//! asserts only that every pass ends the upload conformant with no violation.
+//! Three figures, each the wall time of `Monitor::on_frame` per frame, a new monitor per pass
+//! (so each pass starts the sessions again), the frames prepared beforehand:
+//!
+//! - a synthetic 500-item mission upload (`mission-upload-tolerant.chor`: MISSION_COUNT, 500
+//!   times MISSION_REQUEST_INT and MISSION_ITEM_INT, MISSION_ACK, MISSION_CURRENT) with
+//!   telemetry the protocols do not speak (ATTITUDE, GLOBAL_POSITION_INT, SYS_STATUS,
+//!   VFR_HUD after every protocol message), monitored together with `arm-command.chor` and
+//!   `param-set.chor`; every pass must end the upload conformant with no violation (asserted);
+//! - every capture of `../shared/data/mavlink_captures` with the same three protocols;
+//! - every capture with every protocol under `choreographies/mavlink/` that `mochi check`
+//!   verifies, at once.
+//!
+//! With `--callgrind WHICH` (`synthetic` or a part of a capture's name) it makes one pass
+//! over that stream with the three protocols (with `--all`: every protocol under
+//! `choreographies/mavlink/`) and no timing, for an instruction count of the monitor's work
+//! that does not move with the machine's load.
 
 use mochi::dialect::Dialect;
+use mochi::mavio::log::read_log;
+use mochi::mavio::parse::Config;
 use mochi::mavio::Frame;
 use mochi::monitor::wire::{self, Layout, Scalar};
-use mochi::monitor::{Automaton, Monitor, Outcome};
+use mochi::monitor::{Automaton, Monitor, Outcome, Stats};
 use mochi::source::SourceDb;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 const ITEMS: i128 = 500;
@@ -81,6 +92,161 @@ fn stream(d: &Dialect) -> Vec<Owned> {
     out
 }
 
+/// A log's frames, copied out of the file once (the reader is not timed here: the figure
+/// is the monitor's work).
+struct Owned2 {
+    meta: Vec<(Option<u64>, u8, u8, u8, u32, bool)>,
+    payloads: Vec<Vec<u8>>,
+    raws: Vec<Vec<u8>>,
+}
+
+impl Owned2 {
+    fn read(bytes: &[u8]) -> Owned2 {
+        let mut o = Owned2 { meta: Vec::new(), payloads: Vec::new(), raws: Vec::new() };
+        read_log(bytes, Config::default(), |f| {
+            o.meta.push((f.time_us, f.version, f.sysid, f.compid, f.msgid, f.signed));
+            o.payloads.push(f.payload.to_vec());
+            o.raws.push(f.raw.to_vec());
+        });
+        o
+    }
+
+    fn frames(&self) -> Vec<Frame<'_>> {
+        self.meta
+            .iter()
+            .zip(self.payloads.iter().zip(&self.raws))
+            .map(|(&(time_us, version, sysid, compid, msgid, signed), (p, r))| Frame {
+                time_us,
+                version,
+                sysid,
+                compid,
+                msgid,
+                payload: p,
+                signed,
+                raw: r,
+            })
+            .collect()
+    }
+}
+
+/// The best and the mean time per frame of `passes` runs of a fresh monitor of `protos`
+/// over `frames`, and the last run's statistics.
+fn time_passes(protos: &[Automaton], frames: &[Frame], passes: usize) -> (f64, f64, Stats) {
+    let mut best = f64::INFINITY;
+    let mut total = 0.0;
+    let mut stats = Stats::default();
+    for _ in 0..passes {
+        let mut m = Monitor::new(protos.to_vec());
+        let t = Instant::now();
+        for f in frames {
+            std::hint::black_box(m.on_frame(std::hint::black_box(f)));
+        }
+        let ns = t.elapsed().as_nanos() as f64 / frames.len().max(1) as f64;
+        stats = m.stats;
+        best = best.min(ns);
+        total += ns;
+    }
+    (best, total / passes as f64, stats)
+}
+
+/// The protocols under `choreographies/mavlink/` that `mochi check` verifies (the monitor
+/// enforces only those), compiled.
+fn verified_protocols() -> Vec<(String, Automaton)> {
+    let dir = Path::new("choreographies/mavlink");
+    let mut paths: Vec<_> = std::fs::read_dir(dir)
+        .map(|d| {
+            d.filter_map(|e| e.ok()).map(|e| e.path()).filter(|p| p.extension().is_some_and(|e| e == "chor")).collect()
+        })
+        .unwrap_or_default();
+    paths.sort();
+    let mut out = Vec::new();
+    for p in paths {
+        let mut db = SourceDb::new();
+        let verified = mochi::fsload::check_file(&mut db, &p, &mochi::driver::Config::default())
+            .is_ok_and(|r| r.verdict == mochi::driver::Verdict::Verified);
+        if verified {
+            let name = p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+            out.push((name, compile(&p.to_string_lossy())));
+        }
+    }
+    out
+}
+
+fn captures() -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/mavlink_captures");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .map(|d| {
+            d.filter_map(|e| e.ok()).map(|e| e.path()).filter(|p| p.extension().is_some_and(|e| e != "md")).collect()
+        })
+        .unwrap_or_default();
+    files.sort();
+    files
+}
+
+/// Under callgrind only the work of `Monitor::on_frame` is of interest
+/// (`--toggle-collect='*Monitor*on_frame*'`): one pass over one stream with the three
+/// protocols, no timing, no verification (Z3 under valgrind would take minutes). `which` is
+/// `synthetic` or a part of a capture's file name.
+fn callgrind(protos: &[Automaton], synthetic: &[Frame], which: &str) {
+    if which == "synthetic" {
+        let mut m = Monitor::new(protos.to_vec());
+        for f in synthetic {
+            std::hint::black_box(m.on_frame(std::hint::black_box(f)));
+        }
+        println!("callgrind: synthetic upload, {} frames, {} protocols", synthetic.len(), protos.len());
+        return;
+    }
+    for path in captures().into_iter().filter(|p| p.to_string_lossy().contains(which)) {
+        let Ok(bytes) = std::fs::read(&path) else { continue };
+        let log = Owned2::read(&bytes);
+        let frames = log.frames();
+        let mut m = Monitor::new(protos.to_vec());
+        for f in &frames {
+            std::hint::black_box(m.on_frame(std::hint::black_box(f)));
+        }
+        println!("callgrind: {}, {} frames, {} protocols", path.display(), frames.len(), protos.len());
+    }
+}
+
+/// The table of the real captures monitored with `protos`; the mean time per message over
+/// all their frames.
+fn real(title: &str, protos: &[Automaton], passes: usize) -> f64 {
+    println!("monitor: real captures, {title}");
+    println!(
+        "  {:<52} {:>8} {:>7} {:>6} {:>6} {:>10} {:>10}",
+        "capture", "frames", "passed", "steps", "viol.", "mean ns", "best ns"
+    );
+    let (mut frames_all, mut ns_all) = (0usize, 0.0f64);
+    for path in captures() {
+        let Ok(bytes) = std::fs::read(&path) else { continue };
+        let log = Owned2::read(&bytes);
+        let fs = log.frames();
+        if fs.is_empty() {
+            continue;
+        }
+        let (best, mean, st) = time_passes(protos, &fs, passes);
+        frames_all += fs.len();
+        ns_all += mean * fs.len() as f64;
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        println!(
+            "  {:<52} {:>8} {:>7} {:>6} {:>6} {:>10.1} {:>10.1}",
+            name,
+            fs.len(),
+            st.passed,
+            st.steps,
+            st.violations,
+            mean,
+            best
+        );
+    }
+    let mean_all = ns_all / frames_all.max(1) as f64;
+    println!(
+        "  all {frames_all} frames: {mean_all:.1} ns/message mean (target {TARGET_NS} ns): {}",
+        if mean_all < TARGET_NS { "met" } else { "NOT met" }
+    );
+    mean_all
+}
+
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
     let passes = if quick { 20 } else { 200 };
@@ -104,6 +270,28 @@ fn main() {
             raw: p,
         })
         .collect();
+    let args: Vec<String> = std::env::args().collect();
+    if let Some(k) = args.iter().position(|a| a == "--callgrind") {
+        let which = args.get(k + 1).map_or("synthetic", |s| s.as_str());
+        if args.iter().any(|a| a == "--all") {
+            // Every protocol under choreographies/mavlink/, compiled without verification
+            // (all of them verify: the timed run checks it).
+            let mut paths: Vec<PathBuf> = std::fs::read_dir("choreographies/mavlink")
+                .map(|d| {
+                    d.filter_map(|e| e.ok())
+                        .map(|e| e.path())
+                        .filter(|p| p.extension().is_some_and(|e| e == "chor"))
+                        .collect()
+                })
+                .unwrap_or_default();
+            paths.sort();
+            let all: Vec<Automaton> = paths.iter().map(|p| compile(&p.to_string_lossy())).collect();
+            callgrind(&all, &frames, which);
+        } else {
+            callgrind(&protos, &frames, which);
+        }
+        return;
+    }
     let mut best = f64::INFINITY;
     let mut total = 0.0;
     for _ in 0..passes {
@@ -123,7 +311,7 @@ fn main() {
     let mean = total / passes as f64;
     let protocol = frames.len() / (1 + 4);
     println!(
-        "monitor: {} frames per pass ({} protocol messages, {} telemetry), 3 protocols, {passes} passes",
+        "monitor: synthetic upload, {} frames per pass ({} protocol messages, {} telemetry), 3 protocols, {passes} passes",
         frames.len(),
         protocol,
         frames.len() - protocol
@@ -132,4 +320,15 @@ fn main() {
         "monitor: {mean:.1} ns/message mean, {best:.1} ns/message best (target {TARGET_NS} ns): {}",
         if mean < TARGET_NS { "met" } else { "NOT met" }
     );
+
+    // The real captures: with the same three protocols, and with every verified protocol
+    // at once (the heaviest configuration: each frame is looked up in every protocol's
+    // alphabet and streams, and the protocols that overlap, such as the two mission uploads,
+    // find violations of each other's sessions, which are recorded).
+    let real_passes = if quick { 3 } else { 20 };
+    real("mission-upload-tolerant, arm-command, param-set", &protos, real_passes);
+    let verified = verified_protocols();
+    let all: Vec<Automaton> = verified.iter().map(|(_, a)| a.clone()).collect();
+    let names: Vec<&str> = verified.iter().map(|(n, _)| n.as_str()).collect();
+    real(&format!("{} verified protocols at once: {}", all.len(), names.join(", ")), &all, real_passes);
 }

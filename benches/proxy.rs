@@ -302,14 +302,53 @@ fn memory() {
     std::thread::sleep(Duration::from_millis(300));
     let rss1 = vm(pid, "VmRSS:").unwrap_or(0);
     let hwm = vm(pid, "VmHWM:").unwrap_or(0);
+    let (anon, file) = (vm(pid, "RssAnon:").unwrap_or(0), vm(pid, "RssFile:").unwrap_or(0));
+    let pss = rollup(pid, "Pss:").unwrap_or(0);
+    let maps = mappings(pid);
     let _ = child.kill();
     let _ = child.wait();
+    let mb = |k: u64| k as f64 / 1024.0;
     println!(
         "proxy memory: mochi proxy (3 protocols) VmRSS {:.1} MB after start, {:.1} MB after 200,000 datagrams of flood; peak VmHWM {:.1} MB (target < 8 MB)",
-        rss0 as f64 / 1024.0,
-        rss1 as f64 / 1024.0,
-        hwm as f64 / 1024.0
+        mb(rss0),
+        mb(rss1),
+        mb(hwm)
     );
+    println!(
+        "  after the flood: RssAnon {:.1} MB (heap, stacks), RssFile {:.1} MB (the executable and the shared libraries' pages), Pss {:.1} MB (shared pages divided among the processes that map them)",
+        mb(anon),
+        mb(file),
+        mb(pss)
+    );
+    let top: Vec<String> = maps.iter().take(6).map(|(k, name)| format!("{} {:.1} MB", name, mb(*k))).collect();
+    println!("  resident by mapping: {}", top.join(", "));
+}
+
+/// A field of /proc/PID/smaps_rollup, in kB.
+fn rollup(pid: u32, key: &str) -> Option<u64> {
+    let s = std::fs::read_to_string(format!("/proc/{pid}/smaps_rollup")).ok()?;
+    let l = s.lines().find(|l| l.starts_with(key))?;
+    l.split_whitespace().nth(1)?.parse().ok()
+}
+
+/// Resident kB per mapped file (anonymous mappings as `[anon]`), largest first.
+fn mappings(pid: u32) -> Vec<(u64, String)> {
+    let Ok(s) = std::fs::read_to_string(format!("/proc/{pid}/smaps")) else { return Vec::new() };
+    let mut by: std::collections::BTreeMap<String, u64> = Default::default();
+    let mut name = String::new();
+    for l in s.lines() {
+        let mut w = l.split_whitespace();
+        let first = w.next().unwrap_or("");
+        if first.contains('-') && first.chars().all(|c| c.is_ascii_hexdigit() || c == '-') {
+            let path = l.split_whitespace().nth(5).unwrap_or("[anon]");
+            name = path.rsplit('/').next().unwrap_or(path).to_string();
+        } else if first == "Rss:" {
+            *by.entry(name.clone()).or_default() += w.next().and_then(|k| k.parse::<u64>().ok()).unwrap_or(0);
+        }
+    }
+    let mut v: Vec<(u64, String)> = by.into_iter().map(|(n, k)| (k, n)).collect();
+    v.sort_by(|a, b| b.cmp(a));
+    v
 }
 
 fn main() {

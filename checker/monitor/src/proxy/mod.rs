@@ -16,13 +16,13 @@
 //! as received (the signature is not checked, nor stripped).
 //!
 //! Memory is bounded whatever the input: the receive buffer is fixed, the frame reassembly
-//! buffer holds at most one receive plus one incomplete frame ([`Stream`]), and the
-//! monitor's record of violations and ended sessions (which it keeps for its reports) is
-//! cleared by rebuilding the monitor once it holds [`REPORT_CAP`] entries and no session is
-//! open, or, whatever is open, at [`HARD_CAP`] entries or [`SESSION_CAP`] open sessions (a
-//! flood of session openings): an [`Event::Reset`] says so. A session lost in a reset is not a
-//! pass: its next message fits no session and is dropped as outside any session, or starts a
-//! new one if it is a first message, as it would have anyway.
+//! buffer holds at most one receive plus one incomplete frame ([`Stream`]), the monitor's
+//! record of violations and ended sessions (which it keeps for reports) is cleared after
+//! each frame's event is built (`Monitor::clear_reports`: a flood of violations grows
+//! nothing and loses no session), and the monitor is rebuilt at [`SESSION_CAP`] open
+//! sessions (a flood of session openings): an [`Event::Reset`] says so. A session lost in a
+//! reset is not a pass: its next message fits no session and is dropped as outside any
+//! session, or starts a new one if it is a first message, as it would have anyway.
 
 pub mod endpoint;
 
@@ -35,11 +35,6 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
-/// Recorded violations and session summaries kept before the monitor is rebuilt (when no
-/// session is open).
-pub const REPORT_CAP: usize = 1024;
-/// Recorded entries at which the monitor is rebuilt even with sessions open.
-pub const HARD_CAP: usize = 8 * REPORT_CAP;
 /// Open sessions at which the monitor is rebuilt.
 pub const SESSION_CAP: u64 = 1024;
 /// The receive buffer: the largest UDP datagram.
@@ -316,6 +311,9 @@ impl Proxy<'_> {
                 forwarded
             }
         };
+        // The event holds all it needs: the record is not kept (it would grow with every
+        // violation and ended session).
+        g.monitor.clear_reports();
         self.bound(g, events, totals);
         forward
     }
@@ -323,22 +321,18 @@ impl Proxy<'_> {
     /// Keeps the monitor's memory bounded (the module comment says how).
     fn bound(&self, g: &mut Shared, events: &mut Vec<Event>, totals: &Totals) {
         let m = &g.monitor;
-        let recorded = m.violations().len() + m.summaries().len();
         let open = m.stats.sessions_started.saturating_sub(m.stats.sessions_ended);
-        let reason = if recorded >= HARD_CAP {
-            "record full"
-        } else if open >= SESSION_CAP {
-            "too many open sessions"
-        } else if recorded >= REPORT_CAP && open == 0 {
-            ""
-        } else {
+        if open < SESSION_CAP {
             return;
-        };
-        if !reason.is_empty() {
-            g.resets += 1;
-            totals.resets.fetch_add(1, Ordering::Relaxed);
-            events.push(Event::Reset { time_us: now_us(), reason, open_sessions_lost: open, resets: g.resets });
         }
+        g.resets += 1;
+        totals.resets.fetch_add(1, Ordering::Relaxed);
+        events.push(Event::Reset {
+            time_us: now_us(),
+            reason: "too many open sessions",
+            open_sessions_lost: open,
+            resets: g.resets,
+        });
         g.monitor = Monitor::new(self.protocols.clone());
     }
 

@@ -163,9 +163,9 @@ fn garbage_and_floods_neither_stop_it_nor_grow_its_record() {
         let mut crc = bad.clone();
         let n = crc.len();
         crc[n - 3] ^= 0xff;
-        // Garbage, frames with bad checksums, truncated frames, and violations, many times
-        // the monitor's record.
-        for k in 0..(2 * REPORT_CAP + 256) {
+        // Garbage, frames with bad checksums, truncated frames, and violations, two thousand
+        // times.
+        for k in 0..2304 {
             for b in noise.iter_mut() {
                 x ^= x << 13;
                 x ^= x >> 17;
@@ -193,8 +193,8 @@ fn garbage_and_floods_neither_stop_it_nor_grow_its_record() {
             }
         }
         assert_eq!(got.as_deref(), Some(&ok[..]), "the proxy forwards after the flood");
-        assert!(totals.violations.load(Ordering::Relaxed) > REPORT_CAP as u64);
-        // The record of violations was cleared on the way (no session open: no session lost).
+        assert!(totals.violations.load(Ordering::Relaxed) > 1024);
+        // The record of violations is not kept (no session open: no session lost).
         assert!(totals.resets.load(Ordering::Relaxed) == 0, "no lossy reset without open sessions");
         assert!(lines.all().iter().any(|e| matches!(e, Event::Violation { .. })));
     });
@@ -216,6 +216,51 @@ fn a_flood_of_session_openings_is_bounded() {
             "{:?}",
             all.iter().filter(|e| matches!(e, Event::Reset { .. })).collect::<Vec<_>>()
         );
+    });
+}
+
+fn param_value(v: f32) -> MavMessage {
+    MavMessage::PARAM_VALUE(mavlink::dialects::common::PARAM_VALUE_DATA {
+        param_value: v,
+        param_count: 1,
+        param_index: 0,
+        param_id: [0; 16].into(),
+        param_type: mavlink::dialects::common::MavParamType::MAV_PARAM_TYPE_REAL32,
+    })
+}
+
+#[test]
+fn a_flood_of_violations_inside_an_open_session_loses_nothing() {
+    with_proxy(true, Mode::Enforce, |gcs, vehicle, lines, totals| {
+        // A session opens: the set of 5 waits for the vehicle's echo.
+        gcs.send(&encode((255, 190), 0, &param_set(5.0), None)).unwrap();
+        let mut b = [0u8; 512];
+        let (_, proxy) = vehicle.recv_from(&mut b).expect("the set is forwarded");
+        // Nine thousand wrong echoes: each is dropped, reported, and forgotten; the session
+        // stays open in its state.
+        let wrong = encode((1, 1), 0, &param_value(6.0), None);
+        let flood = 9000;
+        for k in 0..flood {
+            vehicle.send_to(&wrong, proxy).unwrap();
+            if k % 32 == 0 {
+                std::thread::sleep(Duration::from_millis(2));
+            }
+        }
+        let right = encode((1, 1), 1, &param_value(5.0), None);
+        let mut got = None;
+        for _ in 0..50 {
+            vehicle.send_to(&right, proxy).unwrap();
+            let f = recv(gcs);
+            if f == right {
+                got = Some(f);
+                break;
+            }
+        }
+        assert_eq!(got.as_deref(), Some(&right[..]), "the echo that fits the session is forwarded");
+        std::thread::sleep(Duration::from_millis(50));
+        assert!(totals.violations.load(Ordering::Relaxed) > 8000, "{totals:?}");
+        assert_eq!(totals.resets.load(Ordering::Relaxed), 0, "the open session was lost in a reset");
+        assert!(lines.all().iter().any(|e| matches!(e, Event::End { conformant: true, .. })), "the session ended");
     });
 }
 
