@@ -6,6 +6,7 @@ use crate::hir::{Global, Program};
 use crate::obligation::Obligation;
 
 mod context;
+mod crossing;
 mod observed;
 mod refined;
 
