@@ -7,6 +7,7 @@ use crate::obligation::Obligation;
 
 mod context;
 mod crossing;
+mod floats;
 mod observed;
 mod refined;
 
