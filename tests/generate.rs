@@ -553,11 +553,20 @@ enum Msg {
 struct Protocol {
     msgs: Vec<(bool, Msg)>,
     /// A timeout branch beside the message at this index: `( p -> q: msg. rest + after
-    /// 1000 ms by q. q -> p: HEARTBEAT. end )`. The receiver may always give up there (time
+    /// 1000 ms by q. end )`. The receiver may always give up there (time
     /// passes), so that message having no admissible payload is a dead branch, not a stuck
     /// protocol; every other message, before it or after it on the message branch, must
     /// still have one.
     timeout: Option<usize>,
+}
+
+/// The timeout crossing's ground truth (E0326, docs/observed-and-timeouts.md): with the
+/// timeout beside message `k` from `p` to `q`, `p` may send it just as `q` gives up and
+/// ends; `p` then goes on alone, and a later message from `q` to `p` is one it waits for
+/// for ever (it has no timeout of its own). Later messages from `p` reach no session.
+fn crosses(p: &Protocol) -> bool {
+    let Some((from_gcs, _)) = p.timeout.and_then(|k| p.msgs.get(k)) else { return false };
+    p.timeout.is_some_and(|k| p.msgs[k + 1..].iter().any(|(f, _)| f != from_gcs))
 }
 
 /// The smallest float32 above `v` (finite `v`).
@@ -715,8 +724,8 @@ fn render_protocol(p: &Protocol, binders: &[String]) -> String {
     }
     match p.timeout.and_then(|k| p.msgs.get(k)) {
         Some((from_gcs, _)) => {
-            let (a, b) = if *from_gcs { ("GCS", "UAV") } else { ("UAV", "GCS") };
-            let _ = writeln!(s, "  end\n  + after 1000 ms by {b}. {b} -> {a}: HEARTBEAT. end );");
+            let b = if *from_gcs { "UAV" } else { "GCS" };
+            let _ = writeln!(s, "  end\n  + after 1000 ms by {b}. end );");
         }
         None => s.push_str("  end;\n"),
     }
@@ -805,6 +814,10 @@ fn generated_protocols_agree_with_their_ground_truth() {
                 base.verdict != Verdict::Verified,
                 "FALSE VERIFIED: no admissible payload fits message {k} on some path, yet verified\n{src}"
             ),
+            None if crosses(&p) => prop_assert!(
+                base.verdict != Verdict::Verified && codes(&base).contains(&"E0326".to_string()),
+                "FALSE VERIFIED: a message can cross the timeout, yet {said}\n{src}"
+            ),
             // Behind a dead branch (the message beside the timeout has no admissible
             // payload) the rest of that branch is never reached, and mochi may still find a
             // later message without a payload of its own (E0419 at an unreachable point: a
@@ -882,13 +895,15 @@ fn the_float_oracle_sees_the_gap_between_neighbours() {
 
 /// The timeout oracle against mochi: a timeout beside the first message does not hide that
 /// the second has no admissible payload after it (the receiver's giving up is one branch; the
-/// message branch must still progress), and beside the second it does.
+/// message branch must still progress), and beside the second it does. Both messages go
+/// from GCS to UAV: a message back from the waiting side after the timeout's choice is the
+/// crossing (E0326), asked at the end.
 #[test]
 fn a_timeout_beside_an_earlier_message_keeps_a_later_defect() {
     let q = Protocol {
         msgs: vec![
             (true, Msg::Int { f: 5, lo: 250, hi: 300, tie: Tie::None }),
-            (false, Msg::Int { f: 5, lo: 0, hi: 300, tie: Tie::AtLeast(1) }),
+            (true, Msg::Int { f: 5, lo: 0, hi: 300, tie: Tie::AtLeast(1) }),
         ],
         timeout: None,
     };
@@ -910,6 +925,14 @@ fn a_timeout_beside_an_earlier_message_keeps_a_later_defect() {
         r.verdict,
         codes(&r)
     );
+    // The second message sent back by the side that waits: after a crossing it has ended,
+    // and the sender of the first waits for it for ever.
+    let mut back = Protocol { timeout: Some(0), ..q.clone() };
+    back.msgs[1] = (false, Msg::Int { f: 5, lo: 0, hi: 10, tie: Tie::None });
+    assert!(crosses(&back) && !crosses(&Protocol { timeout: Some(1), ..back.clone() }));
+    let src = render_protocol(&back, &names);
+    let r = check(&src);
+    assert!(r.verdict == Verdict::Rejected && codes(&r) == ["E0326"], "{:?} {:?}\n{src}", r.verdict, codes(&r));
 }
 
 // ---------------------------------------------------------------------------------------

@@ -472,6 +472,21 @@ codes! {
          chose. The protocol is still checked as a protocol (well-formedness, total choice, \
          progress, termination and knowledge). Remove the `process` items to check the protocol \
          alone.";
+    TimeoutCrossing = "E0326", "a message of a choice can cross the waiting role's timeout",
+        "On a real link a message takes time: at a choice `( p -> R: l. G + ... + after T ms by R. \
+         G_t )`, `p` may send `l` just as `R` gives up, so `p` goes on in `G` while `R` goes on in \
+         `G_t`, and `l` reaches `R` late. mochi accepts the choice when no such run meets an \
+         unexpected message: (1) after each message branch `p` still accepts `R`'s first message \
+         of `G_t`, because the branch goes on exactly as `G_t` does, or jumps straight back to the \
+         choice with its loop's parameters unchanged (whose timeout alternative is `p`'s part of \
+         `G_t`); (2) where `R` next receives from `p` in `G_t`, the late message's label is not \
+         expected (`R` ignores it as late), or is expected by a branch with no guard and no \
+         refinement that jumps straight back to that reception (`R` absorbs it); (3) no third \
+         participant takes part in the branches before they jump or end. Otherwise `R` reads the \
+         late message as the answer to its next request (mavlink/mavlink#950's race) or `p` meets \
+         a message its branch does not expect. Make the branch go on as the timeout branch, loop \
+         back to the choice, or accept any late message where `R` next waits \
+         (docs/observed-and-timeouts.md, \"The timeout crossing\").";
     PreconditionAtMotion = "E0402", "a primitive's precondition may not hold when the joint motion starts",
         "[AGCOMP] composes primitives from their preconditions (Sec 3.4, \"compatible from Pre\"): \
          at the `dt<...>` each participant's precondition must follow from what is known there \

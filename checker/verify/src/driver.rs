@@ -308,7 +308,12 @@ fn checks(db: &mut SourceDb, root: FileId, cfg: &Config, load: &mut syntax::Byte
     if !(side_ok && scope_ok) {
         return run.finish();
     }
-    let diags = run.stage(|| wf::sync::check(&prog, &chor.body));
+    // Asynchrony: the timeout crossing (E0326) with synchronisability on happens-before.
+    let diags = run.stage(|| {
+        let mut d = wf::sync::check(&prog, &chor.body);
+        d.extend(plan::crossing::check(&prog, &chor.body));
+        d
+    });
     if !run.record("synchronisable", diags) {
         return run.finish();
     }

@@ -215,7 +215,8 @@ struct Session {
     /// a timeout, the earliest instant the timeout could fire), in µs of the frames' time.
     entered_us: Option<u64>,
     /// The state whose timeout its waiting role took last, while late messages of its
-    /// abandoned branches are ignored (until that role's next step after the timeout).
+    /// abandoned branches are ignored (until the other end's first step after the timeout
+    /// that is none of the abandoned choice's messages).
     late: Option<u32>,
 }
 

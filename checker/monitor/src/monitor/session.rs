@@ -154,10 +154,18 @@ impl Monitor {
                 match fired {
                     Some(abandoned) => s.late = Some(abandoned),
                     None => {
-                        // The role that timed out acted again: late messages are over.
-                        let by = s.late.and_then(|l| a.timeout(l)).map(|t| t.by);
-                        if by == Some(a.edges[e as usize].from) {
-                            s.late = None;
+                        // Late messages are over once the abandoned choice's sender takes a
+                        // step that is none of that choice's messages: FIFO puts every late
+                        // message before it, whereas the waiting role's own sends may
+                        // interleave with late arrivals (docs/observed-and-timeouts.md, "The
+                        // timeout crossing").
+                        if let Some(l) = s.late {
+                            let by = a.timeout(l).map(|t| t.by);
+                            let edge = &a.edges[e as usize];
+                            let of_choice = a.edges_of(l).iter().any(|&x| label_fits(&a.edges[x as usize], f));
+                            if by.is_some() && by != Some(edge.from) && !of_choice {
+                                s.late = None;
+                            }
                         }
                     }
                 }

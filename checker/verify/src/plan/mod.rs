@@ -33,6 +33,7 @@
 //! Every step only keeps or weakens what holds, so every obligation's hypotheses hold
 //! whenever the choreography reaches its point.
 
+pub mod crossing;
 mod enum_entry;
 mod initial;
 mod measure;

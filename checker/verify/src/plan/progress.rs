@@ -82,6 +82,15 @@ impl Contexts<'_> {
         taken.assume(&any);
         let waits = self.prog.role_name(m.to);
         let what = format!("a message of this choice, which `{waits}` otherwise only ever leaves by its timeout");
+        // A `float` payload field is a float32, which the satisfiability question assumes as
+        // `true` (over the reals): asked again with every value chosen, its format exact.
+        let floats = firsts.iter().flat_map(|f| &f.payload).any(|x| self.prog.wire_floats.contains_key(&x.value));
+        if floats {
+            let facts = self.exact(taken.facts());
+            if let Some(ob) = super::streams::float_witness(self.prog, &facts, m.loc, &what) {
+                self.obligations.push(ob);
+            }
+        }
         self.reachable(m.loc.0, what, &taken, vec![sigma.facts().to_vec()], false);
     }
 }

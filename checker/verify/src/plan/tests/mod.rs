@@ -6,6 +6,8 @@ use crate::hir::{Global, Program};
 use crate::obligation::Obligation;
 
 mod context;
+mod crossing;
+mod floats;
 mod observed;
 mod refined;
 
