@@ -465,6 +465,11 @@ impl Monitor {
         }
     }
 
+    /// Whether [`Monitor::pin_end_kind`] fixed the kind of end `(sys, comp)`.
+    pub fn is_pinned(&self, sys: u8, comp: u8) -> bool {
+        self.pinned.contains(&(sys, comp))
+    }
+
     /// A HEARTBEAT: its sender's kind, kept (in place once the end is known), unless pinned.
     fn heard(&mut self, f: &Frame) {
         let kind = EndKind::of_heartbeat(f.payload);

@@ -29,7 +29,7 @@ pub mod endpoint;
 pub use endpoint::{Endpoint, Port};
 
 use crate::mavio::parse::{Config, Counts, Item, Stream};
-use crate::monitor::{Automaton, Kind, Monitor, Outcome};
+use crate::monitor::{Automaton, EndKind, Kind, Monitor, Outcome};
 use crate::source::SourceDb;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Mutex;
@@ -258,6 +258,16 @@ impl Proxy<'_> {
         events: &mut Vec<Event>,
         totals: &Totals,
     ) -> bool {
+        // The side a frame comes from says what its end is; a HEARTBEAT only claims it. Were
+        // the claim believed, a ground station announcing itself as an autopilot would take
+        // its upload out of every upload protocol's reach, and the upload would pass unjudged.
+        if !g.monitor.is_pinned(f.sysid, f.compid) {
+            let kind = match dir {
+                Dir::GcsToVehicle => EndKind::GroundStation,
+                Dir::VehicleToGcs => EndKind::Vehicle,
+            };
+            g.monitor.pin_end_kind(f.sysid, f.compid, kind);
+        }
         let outcome = g.monitor.on_frame(f);
         let at =
             At { time_us: f.time_us.unwrap_or(0), dir, msgid: f.msgid, from: (f.sysid, f.compid), signed: f.signed };

@@ -291,3 +291,27 @@ fn unknown_message_ids_are_forwarded_whole_unless_they_hide_a_frame() {
         assert_eq!(totals.dropped.load(Ordering::Relaxed), 1);
     });
 }
+
+#[test]
+fn a_ground_station_claiming_to_be_an_autopilot_is_still_judged_as_the_ground_station() {
+    with_proxy(true, Mode::Enforce, |gcs, vehicle, lines, totals| {
+        // A HEARTBEAT from the ground-station side that claims an ArduPilot quadrotor: the
+        // monitor would read the end as a vehicle, which cannot play `GCS`, and the set would
+        // pass as outside the protocol. The proxy knows the side: it is the ground station.
+        use mavlink::dialects::common::{MavAutopilot, MavType, HEARTBEAT_DATA};
+        let claim = MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+            mavtype: MavType::MAV_TYPE_QUADROTOR,
+            autopilot: MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA,
+            ..HEARTBEAT_DATA::default()
+        });
+        let hb = encode((255, 190), 0, &claim, None);
+        gcs.send(&hb).unwrap();
+        assert_eq!(recv(vehicle), hb);
+        gcs.send(&encode((255, 190), 1, &param_set(11.0), None)).unwrap();
+        let ok = encode((255, 190), 2, &param_set(5.0), None);
+        gcs.send(&ok).unwrap();
+        assert_eq!(recv(vehicle), ok, "the violating set was forwarded");
+        std::thread::sleep(Duration::from_millis(50));
+        assert_eq!(totals.dropped.load(Ordering::Relaxed), 1, "{:?}", lines.all());
+    });
+}
