@@ -52,8 +52,7 @@
 //! The table of every mutant (id, verdict, codes, description) is written to
 //! `target/mutation/table.tsv`.
 
-#[path = "mutation/ops.rs"]
-mod ops;
+use crate::ops;
 
 use mochi::driver::{Config, Verdict};
 use mochi::fsload::check_file;

@@ -16,6 +16,9 @@
 
 #[path = "cli.rs"]
 mod cli;
+/// The corpus and the checking shared by `metamorphic` and `differential`.
+#[path = "metamorphic/common.rs"]
+mod common;
 #[path = "differential.rs"]
 mod differential;
 #[path = "generate.rs"]
@@ -26,6 +29,9 @@ mod mavio;
 mod metamorphic;
 #[path = "mutation.rs"]
 mod mutation;
+/// The mutation operators, shared by `mutation`, `differential` and `simulate`.
+#[path = "mutation/ops.rs"]
+mod ops;
 #[path = "props.rs"]
 mod props;
 #[path = "proxy.rs"]
