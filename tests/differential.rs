@@ -22,8 +22,7 @@
 //! tests/mutation/ops.rs): a fixed sample of 24, all three modes each;
 //! `MOCHI_DIFF_MUTANTS=N` runs N.
 
-#[path = "metamorphic/common.rs"]
-mod common;
+use crate::common;
 
 use common::{baseline, check, config, corpus, fnv, in_slice, par_map, timed, Outcome, Program};
 use std::path::PathBuf;
@@ -65,9 +64,7 @@ fn the_number_of_workers_changes_no_verdict() {
 // rejections, counterexamples, replays and unknowns that the corpus, mostly correct, takes
 // rarely, and a cache key or a worker order that merges two questions shows there too.
 
-#[path = "mutation/ops.rs"]
-#[allow(dead_code)]
-mod ops;
+use crate::ops;
 
 /// How many mutants the comparison runs: `MOCHI_DIFF_MUTANTS` (the long mode), else 24.
 fn mutant_budget() -> usize {

@@ -468,6 +468,6 @@ fn the_census_in_the_docs_is_current() {
     assert_eq!(
         &text[b + BEGIN.len()..e],
         out,
-        "docs/captures.md is stale: run `MAVIO_BLESS=1 cargo test --test mavio census`"
+        "docs/captures.md is stale: run `MAVIO_BLESS=1 cargo test --test suite -- mavio::the_census`"
     );
 }

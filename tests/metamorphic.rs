@@ -22,8 +22,7 @@
 //! per property, every slice and the heavy files too. A file of `choreographies/` is
 //! compared with the outcome its golden snapshot records (common.rs, `baseline`).
 
-#[path = "metamorphic/common.rs"]
-mod common;
+use crate::common;
 #[path = "metamorphic/transform.rs"]
 mod transform;
 

@@ -32,7 +32,8 @@
 //!   by a hash of its id (the same every run). A run of `cargo test` checks one of the
 //!   sample's [`SLICES`] slices (the next bits of the same hash): the day's, so that
 //!   successive days check different mutants and the whole sample is checked every
-//!   [`SLICES`] days, at a quarter of the time. The run prints its slice;
+//!   [`SLICES`] days, at an eighth of the time (`.ci/run --full` checks the whole sample). The
+//!   run prints its slice;
 //!   `MOCHI_MUTATION_SLICE=k` checks slice `k` again and `MOCHI_MUTATION_SLICE=all` the whole
 //!   sample (the default when blessing or with `MOCHI_MUTATION_ONLY`). The sample is a subset
 //!   of the full set, so one survivors list serves both. `cargo test` builds mochi optimised
@@ -51,8 +52,7 @@
 //! The table of every mutant (id, verdict, codes, description) is written to
 //! `target/mutation/table.tsv`.
 
-#[path = "mutation/ops.rs"]
-mod ops;
+use crate::ops;
 
 use mochi::driver::{Config, Verdict};
 use mochi::fsload::check_file;
@@ -74,8 +74,9 @@ const RETRY_TIMEOUT: Duration = Duration::from_secs(10);
 const SAMPLE: u64 = 7;
 
 /// The sample is cut into this many slices (by the same hash); a run of `cargo test` checks
-/// one of them, a different one each day.
-const SLICES: u64 = 4;
+/// one of them, a different one each day: about 160 mutants, a minute or two on two cores
+/// while the other tests run beside it.
+const SLICES: u64 = 8;
 /// A run fails when more than one mutant in this many is still undecided for want of time
 /// after the second look: such a run tests too little of what it sampled.
 const MAX_TIMED_OUT_ONE_IN: usize = 20;

@@ -489,9 +489,7 @@ fn the_command_line_reports_findings_and_exit_codes() {
 // motion replaced by another of the file's process motions); a mutant check verifies and the
 // simulator finds wrong is a false `verified` of process typing.
 
-#[path = "mutation/ops.rs"]
-#[allow(dead_code)]
-mod ops;
+use crate::ops;
 
 /// A stable hash (FNV-1a) of a mutant's id, for a sample that is the same every run.
 fn fnv(s: &str) -> u64 {

@@ -2,7 +2,7 @@
 """Fills `status`/`why` of the survivors in tests/mutation-survivors.toml that have none, by
 the class rules below (each rule states its argument), from target/mutation/table.tsv.
 Entries that already have an explanation are never touched. Run after
-`MOCHI_MUTATION_BLESS=1 cargo test --test mutation`; review `git diff` before committing.
+`MOCHI_MUTATION_BLESS=1 cargo test --test suite -- mutation::`; review `git diff` before committing.
 Rules that do not match leave the entry `unexplained`: explain those by hand."""
 import re, sys, os
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
