@@ -87,6 +87,9 @@ fn feed(m: &mut Monitor, db: &SourceDb, what: &str, msgs: &[((u8, u8), MavMessag
             Outcome::Passed => "passed through (not a protocol message)".to_string(),
             Outcome::Step { session, state } => format!("session {session}: now in state {state}"),
             Outcome::Ended { session } => format!("session {session}: ended, conformant"),
+            Outcome::Late { session } => {
+                format!("session {session}: late, ignored (its branch was abandoned by a timeout)")
+            }
             Outcome::Violation(v) => format!("VIOLATION\n    {}", m.describe(db, v).replace('\n', "\n    ")),
         };
         println!("  {:>2}/{:<3} {:<20} {shown}", from.0, from.1, msg.message_name());

@@ -54,6 +54,12 @@ pub fn proxy_event_json(e: &crate::proxy::Event, protocols: &[String]) -> String
             v["action"] = json!("forward");
             v
         }
+        Event::Late { at, session, forwarded } => {
+            let mut v = head("late", at);
+            v["session"] = json!(session);
+            v["action"] = json!(if *forwarded { "forward" } else { "drop" });
+            v
+        }
         Event::Violation { at, kind, protocol, session, state, field, detail, forwarded } => {
             let mut v = head("violation", at);
             v["kind"] = json!(kind.as_str());

@@ -71,6 +71,11 @@ pub enum Outcome {
     Step { session: u64, state: u32 },
     /// A session took the message and ended, conformant.
     Ended { session: u64 },
+    /// A message of a branch its receiver abandoned by a timeout, arriving after it: the
+    /// static checks assume the receiver ignores it (docs/observed-and-timeouts.md, "Late
+    /// messages"), so it is no step and no violation, and a proxy that enforces drops it
+    /// (a real vehicle might act on a late command).
+    Late { session: u64 },
     /// The message breaks a session or fits none: an index for [`Monitor::violation`].
     Violation(usize),
 }
@@ -400,9 +405,14 @@ impl Monitor {
             }
             in_alphabet = true;
             if let Some(o) = self.on_protocol(p, f, index) {
-                // With several protocols, a violation wins over a step.
+                // With several protocols, a violation wins over a step, and a step over a late
+                // message (another protocol's step must be delivered).
                 result = match (result, o) {
                     (Some(Outcome::Violation(v)), _) => Some(Outcome::Violation(v)),
+                    (
+                        Some(prev @ (Outcome::Step { .. } | Outcome::Ended { .. })),
+                        Outcome::Late { .. } | Outcome::Passed,
+                    ) => Some(prev),
                     _ => Some(o),
                 };
             }

@@ -44,7 +44,7 @@ impl Monitor {
                     // messages"); not a step, not a violation.
                     self.stats.late += 1;
                     self.stats.passed += 1;
-                    return Some(Outcome::Passed);
+                    return Some(Outcome::Late { session: s.id });
                 }
             }
             if between_ends.is_none() && s.roles.iter().any(|b| b.sys == Some(f.sysid) && b.comp == Some(f.compid)) {

@@ -322,3 +322,56 @@ choreography C =
     assert_eq!(db.location(d.span).1, 3, "at the choreography");
     assert!(d.help.as_deref().is_some_and(|h| h.contains("mochi check")));
 }
+
+/// A flood whose receiver gave up: the ground station took the timeout (it sent
+/// PARAM_SET after a second of silence), and a PARAM_VALUE of the flood that was on the wire
+/// arrives after. The static checks (E0326) accept the protocol because the ground station
+/// ignores such a message; the monitor says so (`Late`, not a step, not a violation), and a
+/// proxy that enforces drops it.
+#[test]
+fn a_message_of_an_abandoned_branch_is_late() {
+    let mut db = SourceDb::new();
+    let prog = program(
+        &mut db,
+        "dialect common;
+system S { participant GCS; participant UAV; }
+choreography C =
+  GCS -> UAV: PARAM_REQUEST_LIST.
+  mu flood.
+    ( UAV -> GCS: PARAM_VALUE(param_index as idx {0 <= idx && idx < 10}). flood
+    + after 1000 ms by GCS.
+        GCS -> UAV: PARAM_SET(param_value as v {v <= 10}).
+        UAV -> GCS: STATUSTEXT. end );",
+    );
+    let d = prog.dialect.expect("dialect");
+    let mut m = Monitor::new(vec![Automaton::compile(&prog).expect("compiles")]);
+    let mut at = |us: u64, sysid: u8, compid: u8, msg: &(u32, Vec<u8>)| -> Outcome {
+        let (msgid, payload) = msg;
+        m.on_frame(&Frame {
+            time_us: Some(us),
+            version: 2,
+            sysid,
+            compid,
+            msgid: *msgid,
+            payload,
+            signed: false,
+            raw: &[],
+        })
+    };
+    let list = payload(d, "PARAM_REQUEST_LIST", &[("target_system", int(1)), ("target_component", int(1))], &[]);
+    let value = payload(d, "PARAM_VALUE", &[("param_index", int(3)), ("param_count", int(10))], &[]);
+    let set = payload(
+        d,
+        "PARAM_SET",
+        &[("target_system", int(1)), ("target_component", int(1)), ("param_value", Scalar::F32(2.0))],
+        &[],
+    );
+    assert!(matches!(at(1_000_000, 255, 190, &list), Outcome::Step { .. }));
+    assert!(matches!(at(1_100_000, 1, 1, &value), Outcome::Step { .. }));
+    // 1.1 s of silence: the ground station gives up and sets.
+    assert!(matches!(at(2_200_000, 255, 190, &set), Outcome::Step { .. }));
+    // The flood's value that crossed the timeout.
+    assert!(matches!(at(2_200_100, 1, 1, &value), Outcome::Late { .. }), "a late value is not Late");
+    drop(at);
+    assert_eq!(m.stats.late, 1);
+}

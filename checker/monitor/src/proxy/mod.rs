@@ -84,6 +84,10 @@ pub enum Event {
     Step { at: At, session: u64, state: u32 },
     /// The message ended a session (forwarded); `protocol` indexes [`Proxy::protocols`].
     End { at: At, session: u64, protocol: Option<usize>, conformant: bool },
+    /// A message of a branch its receiver abandoned by a timeout (`Outcome::Late`): the
+    /// static checks assume the receiver ignores it, so it is dropped when enforcing, and
+    /// forwarded (`forwarded`) when only alerting.
+    Late { at: At, session: u64, forwarded: bool },
     /// The monitor rejects the message: dropped, or forwarded when `forwarded`.
     Violation {
         at: At,
@@ -290,6 +294,11 @@ impl Proxy<'_> {
                     });
                 }
                 true
+            }
+            Outcome::Late { session } => {
+                let forwarded = self.mode == Mode::AlertOnly;
+                events.push(Event::Late { at, session, forwarded });
+                forwarded
             }
             Outcome::Violation(i) => {
                 totals.violations.fetch_add(1, Ordering::Relaxed);
