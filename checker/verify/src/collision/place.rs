@@ -639,7 +639,6 @@ impl<'a> Geo<'a> {
     /// The distance of world point `p` from side `side` placed at configuration `q`: the
     /// least over its solids of parry's distance from the point to the solid (0 inside).
     pub(super) fn point_distance(&self, side: usize, q: &[f64], p: [f64; 3]) -> f64 {
-        let point = parry3d::math::Point::new(p[0], p[1], p[2]);
         self.side_frames(side, q, q, q)
             .into_iter()
             .zip(&self.sides[side])
@@ -649,9 +648,7 @@ impl<'a> Geo<'a> {
                     for (f, _) in frames {
                         pose *= f;
                     }
-                    let pose = pose * placed.piece.solid.pose;
-                    (placed.piece.solid.shape.distance_to_point(&pose, &point, true) - placed.piece.solid.slack)
-                        .max(0.0)
+                    (geometry::distance_to_point(&pose, &placed.piece.solid, p) - placed.piece.solid.slack).max(0.0)
                 }
                 None => f64::INFINITY,
             })

@@ -163,6 +163,12 @@ pub fn boundary_points(owner: &Pose3, s: &Solid, inset: f64) -> Vec<[f64; 3]> {
         .collect()
 }
 
+/// parry's distance from the world point `p` to solid `s` whose owner frame is at world pose
+/// `owner` (0 inside; the solid's slack is not subtracted).
+pub fn distance_to_point(owner: &Pose3, s: &Solid, p: [f64; 3]) -> f64 {
+    s.shape.distance_to_point(&(owner * s.pose), &Point3::new(p[0], p[1], p[2]), true)
+}
+
 /// Whether the world point `p` lies in one of the solids `a` (each with its owner frame's
 /// world pose), or within `tol` metres of one.
 pub fn contains(a: &[(Pose3, &Solid)], p: [f64; 3], tol: f64) -> bool {
