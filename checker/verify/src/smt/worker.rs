@@ -442,17 +442,7 @@ impl Worker<'_> {
             return None;
         }
         stats.queries += 1;
-        let solver = solver_for(&q);
-        for a in q.assertions.iter().chain(q.enc.side_conditions()).chain(&pins) {
-            solver.assert(a);
-        }
-        let seq = self.watchdog.arm(self.timeout);
-        let result = solver.check();
-        self.watchdog.disarm(seq);
-        let m = match result {
-            z3::SatResult::Sat => solver.get_model()?,
-            _ => return None,
-        };
+        let m = self.model_with(&q, &pins)?;
         if q.enc.spurious_trig(&m) {
             return None;
         }
@@ -469,6 +459,23 @@ impl Worker<'_> {
         })
     }
 
+    /// A model of the part's query `q` with `extra` asserted beside it, within the time
+    /// limit; `None` when Z3 gives none (unsat, unknown or out of time): the witnesses
+    /// above only ever add a counterexample, so no model means no witness, never a pass.
+    fn model_with(&self, q: &Query, extra: &[z3::ast::Bool]) -> Option<z3::Model> {
+        let solver = solver_for(q);
+        for a in q.assertions.iter().chain(q.enc.side_conditions()).chain(extra) {
+            solver.assert(a);
+        }
+        let seq = self.watchdog.arm(self.timeout);
+        let result = solver.check();
+        self.watchdog.disarm(seq);
+        match result {
+            z3::SatResult::Sat => solver.get_model(),
+            _ => None,
+        }
+    }
+
     /// The part's query with each of `pins` (a variable of the query by name, and a
     /// value) pinned: a model of it, replayed exactly against the part's goal, is a
     /// counterexample at those values (`collision::predicate`'s candidates). `None` when
@@ -482,17 +489,7 @@ impl Worker<'_> {
             let value = crate::bounds::decimal(&format!("{v}")).and_then(|r| encode::real_of_rational(&r));
             eqs.push(t.eq(value.or_else(|| encode::real_of_f64(*v))?));
         }
-        let solver = solver_for(&q);
-        for a in q.assertions.iter().chain(q.enc.side_conditions()).chain(&eqs) {
-            solver.assert(a);
-        }
-        let seq = self.watchdog.arm(self.timeout);
-        let result = solver.check();
-        self.watchdog.disarm(seq);
-        let m = match result {
-            z3::SatResult::Sat => solver.get_model()?,
-            _ => return None,
-        };
+        let m = self.model_with(&q, &eqs)?;
         let exact = replay::valuation(&q.enc, &m);
         if !matches!(replay::replay(self.prog, ob, part, &exact), replay::Replay::Falsifies) {
             return None;
