@@ -22,7 +22,11 @@
 //! split: they range over what Σ gives them. A box is dropped when the obstacle's
 //! predicate, the footprint, the guarantee or the invariant is false at every point of it
 //! (three-valued truth by outward-rounded interval evaluation, [`crate::bounds`], compiled
-//! once), and halved along its widest dimension relative to the root otherwise.
+//! once), and halved along its widest dimension relative to the root otherwise. Boxes are
+//! taken breadth first: a contact on a face of a box (a ball centred on the footprint's
+//! floor meets it on the plane `pz == 0` in its lower half) never yields a box inside both,
+//! and a depth-first search drilled into it until the limit, never reaching the half where
+//! whole boxes of contact are. The frontier is at most the budget of boxes.
 //!
 //! **Sound.** Every configuration of a violation projects into the root box: `P` is in the
 //! obstacle, hence in its box; the state at `t` satisfies the guarantee and the invariant
@@ -511,12 +515,12 @@ fn search<T>(l: &Layout, limit: Duration, confirm: &mut dyn FnMut(&Pins) -> Opti
     let deadline = Instant::now() + limit;
     let n = l.dims.len();
     let width: Vec<f64> = (0..n).map(|d| l.hi[d] - l.lo[d]).collect();
-    let mut stack = vec![(l.lo.clone(), l.hi.clone())];
+    let mut stack = std::collections::VecDeque::from([(l.lo.clone(), l.hi.clone())]);
     let mut env: Vec<Option<Interval>> = vec![None; l.slots.len()];
     let mut scratch = Vec::new();
     let (mut boxes, mut asked) = (0usize, 0usize);
     let mut open: Option<String> = None;
-    while let Some((lo, hi)) = stack.pop() {
+    while let Some((lo, hi)) = stack.pop_front() {
         boxes += 1;
         if boxes > BUDGET {
             return Found::Undecided(format!(
@@ -597,8 +601,8 @@ fn search<T>(l: &Layout, limit: Duration, confirm: &mut dyn FnMut(&Pins) -> Opti
         let (mut lo2, mut hi1) = (lo.clone(), hi.clone());
         hi1[d] = mid;
         lo2[d] = mid;
-        stack.push((lo2, hi));
-        stack.push((lo, hi1));
+        stack.push_back((lo, hi1));
+        stack.push_back((lo2, hi));
     }
     match open {
         Some(why) => Found::Undecided(format!("{why} ({boxes} boxes)")),
@@ -666,6 +670,23 @@ mod tests {
         // Only headings near pi / 4 bring a corner that far: turned to 0.5 rad the square
         // stays clear of the nearer post too.
         assert_eq!(check(&spin("0.36", "0.5")).verdict, Verdict::Verified);
+    }
+
+    /// A ball centred on the footprint's floor (`pz == 0`): its lower half meets the
+    /// footprint only on that plane, where no box of positive size is inside both, so a
+    /// depth-first search drilled into that half forever and ran out of time (unknown)
+    /// although the upper half holds whole boxes of contact. Breadth first, the search
+    /// reaches them.
+    #[test]
+    fn a_ball_on_the_footprints_floor_is_found_to_meet_it() {
+        let ball = spin("0.30", "1.5")
+            .replace("box(0.1, 0.1, 1); at: pose(0.30 + 0.05, 0, 0)", "sphere(0.05); at: pose(0.33, 0, 0)");
+        assert!(ball.contains("sphere"), "the scene changed: {ball}");
+        let hit = check(&ball);
+        assert_eq!(hit.verdict, Verdict::Rejected, "{:?}", hit.diagnostics);
+        assert!(hit.diagnostics.iter().any(|d| d.code == Code::ObstacleHit), "{:?}", hit.diagnostics);
+        let clear = check(&ball.replace("pose(0.33, 0, 0)", "pose(0.43, 0, 0)"));
+        assert_eq!(clear.verdict, Verdict::Verified, "{:?}", clear.diagnostics);
     }
 
     #[test]
