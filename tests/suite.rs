@@ -42,3 +42,5 @@ mod refined;
 mod simulate;
 #[path = "tidy.rs"]
 mod tidy;
+#[path = "turning.rs"]
+mod turning;
