@@ -36,9 +36,9 @@
 //!   run prints its slice;
 //!   `MOCHI_MUTATION_SLICE=k` checks slice `k` again and `MOCHI_MUTATION_SLICE=all` the whole
 //!   sample (the default when blessing or with `MOCHI_MUTATION_ONLY`). The sample is a subset
-//!   of the full set, so one survivors list serves both. `cargo test` builds mochi optimised
-//!   (`[profile.test.package.mochi]` in Cargo.toml), so the sample runs at about the speed of
-//!   a release build.
+//!   of the full set, so one survivors list serves both. `cargo test` builds the checking
+//!   crates optimised (`[profile.test.package.mochi-verify]` and its siblings in Cargo.toml),
+//!   so the sample runs at about the speed of a release build.
 //! - A run fails when more than one mutant in [`MAX_TIMED_OUT_ONE_IN`] is still undecided for
 //!   want of time after the second look: timeouts are neither kills nor survivors, and a run
 //!   with many of them tests too little.
