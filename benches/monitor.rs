@@ -19,6 +19,10 @@
 //! - every capture with every protocol under `choreographies/mavlink/` that `mochi check`
 //!   verifies, at once.
 //!
+//! Each figure twice, side by side: with the protocols compiled as the monitor compiles them
+//! and compiled for the tree evaluator (`Automaton::compile_tree`: every guard and refinement
+//! a tree of operators). `--tree` makes every figure, and `--callgrind`, use the latter.
+//!
 //! With `--callgrind WHICH` (`synthetic` or a part of a capture's name) it makes one pass
 //! over that stream with the three protocols (with `--all`: every protocol under
 //! `choreographies/mavlink/`) and no timing, for an instruction count of the monitor's work

@@ -62,6 +62,8 @@ pub enum Node {
     /// the source; the compiler puts the register first and mirrors the operator): one
     /// comparison of two [`Q`]s, an integer comparison when both are integers.
     CmpConst(BinOp, u16, Q),
+    /// `a OP b` for a comparison `OP` of two registers (`s == i`, `i < count`).
+    CmpRegs(BinOp, u16, u16),
     /// `reg` lies in one of these closed intervals with integer ends (sorted by their lower
     /// ends, pairwise disjoint as sets of reals): a disjunction of `reg == c` and `lo <= reg
     /// && reg <= hi` (an enum's entries, a choice of values) found by one binary search
@@ -139,6 +141,10 @@ impl Arena {
             Node::Reg(r) => f(*r),
             Node::Const(_) | Node::True | Node::Slow => {}
             Node::CmpConst(_, r, _) | Node::InRuns(r, _) => f(*r),
+            Node::CmpRegs(_, a, b) => {
+                f(*a);
+                f(*b);
+            }
             Node::Not(a) | Node::Neg(a) | Node::Abs(a) | Node::HasFlag(a, _) => self.reads(*a, f),
             Node::Bin(_, a, b) | Node::Min(a, b) | Node::Max(a, b) => {
                 self.reads(*a, f);
@@ -282,6 +288,7 @@ impl Arena {
         let (nx, ny) = (&self.nodes[x as usize], &self.nodes[y as usize]);
         match (op, nx, ny) {
             (Eq | Ne | Lt | Le | Gt | Ge, Node::Reg(r), Node::Const(Val::Num(c))) => Node::CmpConst(op, *r, *c),
+            (Eq | Ne | Lt | Le | Gt | Ge, Node::Reg(a), Node::Reg(b)) => Node::CmpRegs(op, *a, *b),
             (Eq | Ne | Lt | Le | Gt | Ge, Node::Const(Val::Num(c)), Node::Reg(r)) => {
                 let mirrored = match op {
                     Lt => Gt,
@@ -350,8 +357,12 @@ fn merge_runs(mut runs: Vec<(i128, i128)>) -> Vec<(i128, i128)> {
 
 /// Whether `x` lies in one of `runs` (sorted, disjoint closed intervals with integer ends).
 fn in_runs(runs: &[(i128, i128)], x: Q) -> bool {
-    let floor = x.floor();
-    let ceil = if x.is_integer() { floor } else { floor + 1 };
+    let (floor, ceil) = if x.is_integer() {
+        (x.num, x.num)
+    } else {
+        let floor = x.floor();
+        (floor, floor + 1)
+    };
     let k = runs.partition_point(|&(lo, _)| lo <= floor);
     k > 0 && ceil <= runs[k - 1].1
 }
@@ -406,7 +417,7 @@ impl Env<'_> {
             Node::Reg(r) => self.regs[*r as usize],
             Node::True => Val::Bool(true),
             Node::Slow => return Err(Stop::Fallback),
-            Node::CmpConst(..) | Node::InRuns(..) => Val::Bool(self.bool(n)?),
+            Node::CmpConst(..) | Node::CmpRegs(..) | Node::InRuns(..) => Val::Bool(self.bool(n)?),
             Node::Not(a) => Val::Bool(!self.bool(*a)?),
             Node::Neg(a) => of(self.num(self.eval(*a)?)?.neg())?,
             Node::Abs(a) => of(self.num(self.eval(*a)?)?.abs())?,
@@ -439,28 +450,7 @@ impl Env<'_> {
                     _ => {
                         let (x, y) = (self.eval(*a)?, self.eval(*b)?);
                         match op {
-                            Eq | Ne => {
-                                let eq = match (x, y) {
-                                    (Val::Bool(p), Val::Bool(q)) => p == q,
-                                    (Val::Lit(_) | Val::Str(_), _) | (_, Val::Lit(_) | Val::Str(_)) => {
-                                        match (self.bytes(x), self.bytes(y)) {
-                                            (Some(p), Some(q)) => p == q,
-                                            _ => return Err(Stop::Fallback),
-                                        }
-                                    }
-                                    _ => self.num(x)?.cmp(self.num(y)?).ok_or(Stop::Fallback)?.is_eq(),
-                                };
-                                Val::Bool(eq == (*op == Eq))
-                            }
-                            Lt | Le | Gt | Ge => {
-                                let o = self.num(x)?.cmp(self.num(y)?).ok_or(Stop::Fallback)?;
-                                Val::Bool(match op {
-                                    Lt => o.is_lt(),
-                                    Le => o.is_le(),
-                                    Gt => o.is_gt(),
-                                    _ => o.is_ge(),
-                                })
-                            }
+                            Eq | Ne | Lt | Le | Gt | Ge => Val::Bool(self.compare(*op, x, y)?),
                             Add => of(self.num(x)?.add(self.num(y)?))?,
                             Sub => of(self.num(x)?.sub(self.num(y)?))?,
                             Mul => of(self.num(x)?.mul(self.num(y)?))?,
@@ -489,22 +479,46 @@ impl Env<'_> {
         })
     }
 
+    /// `x OP y` for a comparison `OP`: truth values and strings by equality only, numbers
+    /// exactly.
+    fn compare(&self, op: BinOp, x: Val, y: Val) -> Result<bool, Stop> {
+        use BinOp::*;
+        let o = match (op, x, y) {
+            (_, Val::Num(p), Val::Num(q)) => {
+                if p.den == 1 && q.den == 1 {
+                    p.num.cmp(&q.num)
+                } else {
+                    p.cmp(q).ok_or(Stop::Fallback)?
+                }
+            }
+            (Eq | Ne, Val::Bool(p), Val::Bool(q)) => return Ok((p == q) == (op == Eq)),
+            (Eq | Ne, Val::Lit(_) | Val::Str(_), _) | (Eq | Ne, _, Val::Lit(_) | Val::Str(_)) => {
+                return match (self.bytes(x), self.bytes(y)) {
+                    (Some(p), Some(q)) => Ok((p == q) == (op == Eq)),
+                    _ => Err(Stop::Fallback),
+                }
+            }
+            _ => return Err(Stop::Fallback),
+        };
+        Ok(match op {
+            Eq => o.is_eq(),
+            Ne => o.is_ne(),
+            Lt => o.is_lt(),
+            Le => o.is_le(),
+            Gt => o.is_gt(),
+            _ => o.is_ge(),
+        })
+    }
+
     /// Evaluates a truth-valued node: the compiled comparisons and the connectives
     /// directly, without a [`Val`] on the way; anything else through [`Env::eval`].
     fn bool(&self, n: u32) -> Result<bool, Stop> {
         match &self.arena.nodes[n as usize] {
-            Node::CmpConst(op, r, c) => {
-                let Val::Num(x) = self.regs[*r as usize] else { return Err(Stop::Fallback) };
-                let o = if x.den == 1 && c.den == 1 { x.num.cmp(&c.num) } else { x.cmp(*c).ok_or(Stop::Fallback)? };
-                Ok(match op {
-                    BinOp::Eq => o.is_eq(),
-                    BinOp::Ne => o.is_ne(),
-                    BinOp::Lt => o.is_lt(),
-                    BinOp::Le => o.is_le(),
-                    BinOp::Gt => o.is_gt(),
-                    _ => o.is_ge(),
-                })
-            }
+            Node::CmpConst(op, r, c) => match self.regs[*r as usize] {
+                x @ Val::Num(_) => self.compare(*op, x, Val::Num(*c)),
+                _ => Err(Stop::Fallback),
+            },
+            Node::CmpRegs(op, a, b) => self.compare(*op, self.regs[*a as usize], self.regs[*b as usize]),
             Node::InRuns(r, runs) => match self.regs[*r as usize] {
                 Val::Num(x) => Ok(in_runs(runs, x)),
                 _ => Err(Stop::Fallback),
