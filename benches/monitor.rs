@@ -19,6 +19,10 @@
 //! - every capture with every protocol under `choreographies/mavlink/` that `mochi check`
 //!   verifies, at once.
 //!
+//! Each figure twice, side by side: with the protocols compiled as the monitor compiles them
+//! and compiled for the tree evaluator (`Automaton::compile_tree`: every guard and refinement
+//! a tree of operators). `--tree` makes every figure, and `--callgrind`, use the latter.
+//!
 //! With `--callgrind WHICH` (`synthetic` or a part of a capture's name) it makes one pass
 //! over that stream with the three protocols (with `--all`: every protocol under
 //! `choreographies/mavlink/`) and no timing, for an instruction count of the monitor's work
@@ -37,12 +41,27 @@ use std::time::Instant;
 const ITEMS: i128 = 500;
 const TARGET_NS: f64 = 100.0;
 
+/// Whether to compile the protocols for the tree evaluator (`--tree`): every guard and
+/// refinement a tree of operators, as before comparisons were compiled
+/// (`Automaton::compile_tree`), for the side-by-side figures.
+fn tree() -> bool {
+    std::env::args().any(|a| a == "--tree")
+}
+
 fn compile(path: &str) -> Automaton {
+    compile_as(path, tree())
+}
+
+fn compile_as(path: &str, tree: bool) -> Automaton {
     let mut db = SourceDb::new();
     let root = mochi::fsload::load_root(&mut db, Path::new(path)).expect("read the protocol");
     let mut load = |p: &Path| mochi::fsload::read_bytes(p);
     let prog = mochi::driver::prepare(&mut db, root, &mut load, mochi::driver::Stage::Names).expect("lowered");
-    Automaton::compile(&prog).expect("compiles")
+    if tree {
+        Automaton::compile_tree(&prog).expect("compiles")
+    } else {
+        Automaton::compile(&prog).expect("compiles")
+    }
 }
 
 /// `(sysid, compid, msgid, payload)`.
@@ -151,7 +170,7 @@ fn time_passes(protos: &[Automaton], frames: &[Frame], passes: usize) -> (f64, f
 
 /// The protocols under `choreographies/mavlink/` that `mochi check` verifies (the monitor
 /// enforces only those), compiled.
-fn verified_protocols() -> Vec<(String, Automaton)> {
+fn verified_protocols() -> Vec<(String, PathBuf)> {
     let dir = Path::new("choreographies/mavlink");
     let mut paths: Vec<_> = std::fs::read_dir(dir)
         .map(|d| {
@@ -166,7 +185,7 @@ fn verified_protocols() -> Vec<(String, Automaton)> {
             .is_ok_and(|r| r.verdict == mochi::driver::Verdict::Verified);
         if verified {
             let name = p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-            out.push((name, compile(&p.to_string_lossy())));
+            out.push((name, p));
         }
     }
     out
@@ -250,11 +269,12 @@ fn real(title: &str, protos: &[Automaton], passes: usize) -> f64 {
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
     let passes = if quick { 20 } else { 200 };
-    let protos = vec![
-        compile("choreographies/mavlink/mission-upload-tolerant.chor"),
-        compile("choreographies/mavlink/arm-command.chor"),
-        compile("choreographies/mavlink/param-set.chor"),
+    let three = [
+        "choreographies/mavlink/mission-upload-tolerant.chor",
+        "choreographies/mavlink/arm-command.chor",
+        "choreographies/mavlink/param-set.chor",
     ];
+    let protos: Vec<Automaton> = three.iter().map(|p| compile(p)).collect();
     let d = protos[0].prog.dialect.expect("dialect");
     let owned = stream(d);
     let frames: Vec<Frame> = owned
@@ -292,13 +312,57 @@ fn main() {
         }
         return;
     }
+    // Side by side in one run: each figure with the protocols compiled for the evaluator
+    // of compiled comparisons (the monitor's) and for the tree evaluator (`--tree`'s).
+    let tree_protos: Vec<Automaton> = three.iter().map(|p| compile_as(p, true)).collect();
+    for (which, protos) in [("compiled", &protos), ("tree", &tree_protos)] {
+        let (best, mean) = synthetic(protos, &frames, passes);
+        let protocol = frames.len() / (1 + 4);
+        println!(
+            "monitor ({which} evaluator): synthetic upload, {} frames per pass ({} protocol messages, {} telemetry), 3 protocols, {passes} passes",
+            frames.len(),
+            protocol,
+            frames.len() - protocol
+        );
+        println!(
+            "monitor ({which} evaluator): {mean:.1} ns/message mean, {best:.1} ns/message best (target {TARGET_NS} ns): {}",
+            if mean < TARGET_NS { "met" } else { "NOT met" }
+        );
+    }
+
+    // The real captures: with the same three protocols, and with every verified protocol
+    // at once (the heaviest configuration: each frame is looked up in the protocols that
+    // speak its message, and the protocols that overlap, such as the two mission uploads,
+    // find violations of each other's sessions, which are recorded).
+    let real_passes = if quick { 3 } else { 20 };
+    let verified = verified_protocols();
+    let names: Vec<&str> = verified.iter().map(|(n, _)| n.as_str()).collect();
+    for (which, tree) in [("compiled", false), ("tree", true)] {
+        let three_protos: Vec<Automaton> = three.iter().map(|p| compile_as(p, tree)).collect();
+        real(
+            &format!("{which} evaluator, mission-upload-tolerant, arm-command, param-set"),
+            &three_protos,
+            real_passes,
+        );
+        let all: Vec<Automaton> = verified.iter().map(|(_, p)| compile_as(&p.to_string_lossy(), tree)).collect();
+        real(
+            &format!("{which} evaluator, {} verified protocols at once: {}", all.len(), names.join(", ")),
+            &all,
+            real_passes,
+        );
+    }
+}
+
+/// The best and the mean time per frame of `passes` runs over the synthetic upload, each
+/// asserted to end the upload conformant.
+fn synthetic(protos: &[Automaton], frames: &[Frame], passes: usize) -> (f64, f64) {
     let mut best = f64::INFINITY;
     let mut total = 0.0;
     for _ in 0..passes {
-        let mut m = Monitor::new(protos.clone());
+        let mut m = Monitor::new(protos.to_vec());
         let t = Instant::now();
         let mut ended = 0;
-        for f in &frames {
+        for f in frames {
             if let Outcome::Ended { .. } = std::hint::black_box(m.on_frame(std::hint::black_box(f))) {
                 ended += 1;
             }
@@ -308,27 +372,5 @@ fn main() {
         best = best.min(ns);
         total += ns;
     }
-    let mean = total / passes as f64;
-    let protocol = frames.len() / (1 + 4);
-    println!(
-        "monitor: synthetic upload, {} frames per pass ({} protocol messages, {} telemetry), 3 protocols, {passes} passes",
-        frames.len(),
-        protocol,
-        frames.len() - protocol
-    );
-    println!(
-        "monitor: {mean:.1} ns/message mean, {best:.1} ns/message best (target {TARGET_NS} ns): {}",
-        if mean < TARGET_NS { "met" } else { "NOT met" }
-    );
-
-    // The real captures: with the same three protocols, and with every verified protocol
-    // at once (the heaviest configuration: each frame is looked up in every protocol's
-    // alphabet and streams, and the protocols that overlap, such as the two mission uploads,
-    // find violations of each other's sessions, which are recorded).
-    let real_passes = if quick { 3 } else { 20 };
-    real("mission-upload-tolerant, arm-command, param-set", &protos, real_passes);
-    let verified = verified_protocols();
-    let all: Vec<Automaton> = verified.iter().map(|(_, a)| a.clone()).collect();
-    let names: Vec<&str> = verified.iter().map(|(n, _)| n.as_str()).collect();
-    real(&format!("{} verified protocols at once: {}", all.len(), names.join(", ")), &all, real_passes);
+    (best, total / passes as f64)
 }

@@ -187,6 +187,9 @@ pub struct Automaton {
     pub timeouts: Vec<Option<Timeout>>,
     /// The message ids of every edge (sorted, deduplicated).
     pub alphabet: Vec<u32>,
+    /// The edges of each message id of the alphabet (sorted by id; each list in edge
+    /// order): the candidates for a frame, without a look at the other edges.
+    pub edges_by_id: Vec<(u32, Box<[u32]>)>,
     /// The system's streams, and their message ids (sorted, deduplicated).
     pub streams: Vec<StreamDef>,
     pub stream_alphabet: Vec<u32>,
@@ -244,6 +247,18 @@ impl Automaton {
     /// `mochi check` verifies: the monitor trusts what the static checks proved, such as
     /// that guards and refinements read only what their participant knows).
     pub fn compile(prog: &Program) -> Result<Automaton, CompileError> {
+        Self::compile_with(prog, false)
+    }
+
+    /// [`Automaton::compile`] with every guard and refinement left a tree of operators
+    /// (`Arena::tree_only`): the evaluator before comparisons were compiled, which the
+    /// benchmark and the differential test run beside the default.
+    #[doc(hidden)]
+    pub fn compile_tree(prog: &Program) -> Result<Automaton, CompileError> {
+        Self::compile_with(prog, true)
+    }
+
+    fn compile_with(prog: &Program, tree_only: bool) -> Result<Automaton, CompileError> {
         let Some(chor) = &prog.choreography else { return err("the program has no choreography", None) };
         let Some(dialect) = prog.dialect else {
             return err("the program names no MAVLink dialect (`dialect common;`)", Some(chor.span));
@@ -251,7 +266,7 @@ impl Automaton {
         if prog.roles.len() > 64 {
             return err("more than 64 participants", Some(chor.span));
         }
-        let mut arena = Arena::default();
+        let mut arena = Arena { tree_only, ..Arena::default() };
         for (i, v) in prog.values.iter().enumerate() {
             let knowers = match &v.origin {
                 ValueOrigin::Message { from, to } => (1u64 << from.idx()) | (1u64 << to.idx()),
@@ -291,6 +306,7 @@ impl Automaton {
                 start: 0,
                 timeouts: Vec::new(),
                 alphabet: Vec::new(),
+                edges_by_id: Vec::new(),
                 streams: Vec::new(),
                 stream_alphabet: Vec::new(),
                 preds: 0,
@@ -308,6 +324,13 @@ impl Automaton {
         let mut alphabet: Vec<u32> = b.a.edges.iter().map(|e| e.msgid).collect();
         alphabet.sort_unstable();
         alphabet.dedup();
+        b.a.edges_by_id = alphabet
+            .iter()
+            .map(|&id| {
+                let es: Vec<u32> = (0..b.a.edges.len() as u32).filter(|&e| b.a.edges[e as usize].msgid == id).collect();
+                (id, es.into_boxed_slice())
+            })
+            .collect();
         b.a.alphabet = alphabet;
         let mut streams: Vec<u32> = b.a.streams.iter().map(|s| s.msgid).collect();
         streams.sort_unstable();
@@ -326,6 +349,15 @@ impl Automaton {
     #[inline]
     pub fn in_alphabet(&self, msgid: u32) -> bool {
         self.alphabet.binary_search(&msgid).is_ok()
+    }
+
+    /// The edges whose message is `msgid` (none when it is outside the alphabet).
+    #[inline]
+    pub fn edges_with(&self, msgid: u32) -> &[u32] {
+        match self.edges_by_id.binary_search_by_key(&msgid, |(id, _)| *id) {
+            Ok(k) => &self.edges_by_id[k].1,
+            Err(_) => &[],
+        }
     }
 
     /// The edges of `state` (empty unless it is a branch).

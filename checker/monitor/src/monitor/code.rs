@@ -58,6 +58,18 @@ pub enum Node {
     /// An operator the fixed-width form does not have: the whole predicate goes to the
     /// fallback.
     Slow,
+    /// `reg OP c` for a comparison `OP` and a numeric constant `c` (either operand order in
+    /// the source; the compiler puts the register first and mirrors the operator): one
+    /// comparison of two [`Q`]s, an integer comparison when both are integers.
+    CmpConst(BinOp, u16, Q),
+    /// `a OP b` for a comparison `OP` of two registers (`s == i`, `i < count`).
+    CmpRegs(BinOp, u16, u16),
+    /// `reg` lies in one of these closed intervals with integer ends (sorted by their lower
+    /// ends, pairwise disjoint as sets of reals): a disjunction of `reg == c` and `lo <= reg
+    /// && reg <= hi` (an enum's entries, a choice of values) found by one binary search
+    /// instead of one comparison per disjunct. Exact for any rational `reg`: an integer `lo`
+    /// is `<= x` iff it is `<= floor(x)`, and `x <= hi` iff `ceil(x) <= hi`.
+    InRuns(u16, Box<[(i128, i128)]>),
 }
 
 /// Why an evaluation stopped.
@@ -103,6 +115,11 @@ pub struct Arena {
     /// Registers decoded from a `float` (`Builtin::Float32`) or `double` field.
     pub float_regs: HashMap<u16, Builtin>,
     pub str_size: u32,
+    /// Compile comparisons with constants and disjunctions of them to [`Node::CmpConst`] and
+    /// [`Node::InRuns`] (the default); without it every operator stays a node of the tree
+    /// (the evaluator as it was first written: the benchmark and the differential test run
+    /// both).
+    pub tree_only: bool,
 }
 
 impl Arena {
@@ -123,6 +140,11 @@ impl Arena {
         match &self.nodes[n as usize] {
             Node::Reg(r) => f(*r),
             Node::Const(_) | Node::True | Node::Slow => {}
+            Node::CmpConst(_, r, _) | Node::InRuns(r, _) => f(*r),
+            Node::CmpRegs(_, a, b) => {
+                f(*a);
+                f(*b);
+            }
             Node::Not(a) | Node::Neg(a) | Node::Abs(a) | Node::HasFlag(a, _) => self.reads(*a, f),
             Node::Bin(_, a, b) | Node::Min(a, b) | Node::Max(a, b) => {
                 self.reads(*a, f);
@@ -180,7 +202,11 @@ impl Arena {
             ExprKind::Unary(UnOp::Neg, a) => Node::Neg(go(self, a)?),
             ExprKind::Binary(op, a, b) => {
                 let (x, y) = (go(self, a)?, go(self, b)?);
-                Node::Bin(*op, x, y)
+                if self.tree_only {
+                    Node::Bin(*op, x, y)
+                } else {
+                    self.flat_bin(*op, x, y)
+                }
             }
             ExprKind::If(c, a, b) => {
                 let (x, y, z) = (go(self, c)?, go(self, a)?, go(self, b)?);
@@ -221,8 +247,124 @@ impl Arena {
                 Node::Slow
             }
         };
-        Ok(self.push(n))
+        let folded = if self.tree_only { None } else { self.fold(prog, &n) };
+        Ok(self.push(folded.unwrap_or(n)))
     }
+
+    /// `n` as a constant when every operand is one and it evaluates in the fixed width
+    /// (`2^64 - 1`, `MAX_SPEED * 2`): the value it has at every message. An operator that
+    /// is undefined or leaves the fixed width on its constants stays one, so that the
+    /// message reports it (or the fallback evaluates it) as before.
+    fn fold(&mut self, prog: &Program, n: &Node) -> Option<Node> {
+        let c = |k: &u32| matches!(self.nodes[*k as usize], Node::Const(_));
+        let all = match n {
+            Node::Not(a) | Node::Neg(a) | Node::Abs(a) | Node::HasFlag(a, _) => c(a),
+            Node::Bin(_, a, b) | Node::Min(a, b) | Node::Max(a, b) => c(a) && c(b),
+            Node::If(x, a, b) => c(x) && c(a) && c(b),
+            _ => false,
+        };
+        if !all {
+            return None;
+        }
+        let at = self.push(n.clone());
+        let v = Env { regs: &[], strs: &[], arena: self, prog }.eval(at);
+        self.nodes.pop();
+        match v {
+            Ok(v @ (Val::Bool(_) | Val::Num(_))) => Some(Node::Const(v)),
+            _ => None,
+        }
+    }
+}
+
+impl Arena {
+    /// `x OP y` in the cheapest exact form: [`Node::CmpConst`] for a register compared with
+    /// a numeric constant, [`Node::InRuns`] for a disjunction of such comparisons of one
+    /// register with integers, else [`Node::Bin`]. The forms agree with the tree: a register
+    /// that holds no [`Q`] (a float too wide for one, or not a number) stops the evaluation
+    /// for the fallback, as the tree's first comparison of it would; with a [`Q`], every
+    /// disjunct is defined, so their order does not matter.
+    fn flat_bin(&self, op: BinOp, x: u32, y: u32) -> Node {
+        use BinOp::*;
+        let (nx, ny) = (&self.nodes[x as usize], &self.nodes[y as usize]);
+        match (op, nx, ny) {
+            (Eq | Ne | Lt | Le | Gt | Ge, Node::Reg(r), Node::Const(Val::Num(c))) => Node::CmpConst(op, *r, *c),
+            (Eq | Ne | Lt | Le | Gt | Ge, Node::Reg(a), Node::Reg(b)) => Node::CmpRegs(op, *a, *b),
+            (Eq | Ne | Lt | Le | Gt | Ge, Node::Const(Val::Num(c)), Node::Reg(r)) => {
+                let mirrored = match op {
+                    Lt => Gt,
+                    Le => Ge,
+                    Gt => Lt,
+                    Ge => Le,
+                    o => o,
+                };
+                Node::CmpConst(mirrored, *r, *c)
+            }
+            (And, _, _) => match self.range(x, y) {
+                Some((r, run)) => Node::InRuns(r, Box::new([run])),
+                None => Node::Bin(op, x, y),
+            },
+            (Or, _, _) => match (self.runs(x), self.runs(y)) {
+                (Some((r, mut a)), Some((s, b))) if r == s => {
+                    a.extend(b);
+                    Node::InRuns(r, merge_runs(a).into_boxed_slice())
+                }
+                _ => Node::Bin(op, x, y),
+            },
+            _ => Node::Bin(op, x, y),
+        }
+    }
+
+    /// The register and intervals node `n` tests, if it is `reg == c` with an integer `c`
+    /// or runs (a range `lo <= reg && reg <= hi` is compiled to runs of its own).
+    fn runs(&self, n: u32) -> Option<(u16, Vec<(i128, i128)>)> {
+        let int = |c: &Q| c.is_integer().then_some(c.num);
+        match &self.nodes[n as usize] {
+            Node::CmpConst(BinOp::Eq, r, c) => Some((*r, vec![(int(c)?, int(c)?)])),
+            Node::InRuns(r, runs) => Some((*r, runs.to_vec())),
+            _ => None,
+        }
+    }
+
+    /// The register and interval of `a && b` when it is `lo <= reg && reg <= hi` (in
+    /// either order) with integer constants `lo <= hi`.
+    fn range(&self, a: u32, b: u32) -> Option<(u16, (i128, i128))> {
+        let bound = |k: u32| match &self.nodes[k as usize] {
+            Node::CmpConst(BinOp::Ge, r, c) if c.is_integer() => Some((*r, true, c.num)),
+            Node::CmpConst(BinOp::Le, r, c) if c.is_integer() => Some((*r, false, c.num)),
+            _ => None,
+        };
+        match (bound(a)?, bound(b)?) {
+            ((r, true, lo), (s, false, hi)) | ((s, false, hi), (r, true, lo)) if r == s && lo <= hi => {
+                Some((r, (lo, hi)))
+            }
+            _ => None,
+        }
+    }
+}
+
+/// Intervals sorted by their lower ends, those that meet (as sets of reals) merged.
+fn merge_runs(mut runs: Vec<(i128, i128)>) -> Vec<(i128, i128)> {
+    runs.sort_unstable();
+    let mut out: Vec<(i128, i128)> = Vec::with_capacity(runs.len());
+    for (lo, hi) in runs {
+        match out.last_mut() {
+            Some(last) if lo <= last.1 => last.1 = last.1.max(hi),
+            _ => out.push((lo, hi)),
+        }
+    }
+    out
+}
+
+/// Whether `x` lies in one of `runs` (sorted, disjoint closed intervals with integer ends).
+fn in_runs(runs: &[(i128, i128)], x: Q) -> bool {
+    let (floor, ceil) = if x.is_integer() {
+        (x.num, x.num)
+    } else {
+        let floor = x.floor();
+        (floor, floor + 1)
+    };
+    let k = runs.partition_point(|&(lo, _)| lo <= floor);
+    k > 0 && ceil <= runs[k - 1].1
 }
 
 /// The deepest expression the monitor compiles.
@@ -275,6 +417,7 @@ impl Env<'_> {
             Node::Reg(r) => self.regs[*r as usize],
             Node::True => Val::Bool(true),
             Node::Slow => return Err(Stop::Fallback),
+            Node::CmpConst(..) | Node::CmpRegs(..) | Node::InRuns(..) => Val::Bool(self.bool(n)?),
             Node::Not(a) => Val::Bool(!self.bool(*a)?),
             Node::Neg(a) => of(self.num(self.eval(*a)?)?.neg())?,
             Node::Abs(a) => of(self.num(self.eval(*a)?)?.abs())?,
@@ -307,28 +450,7 @@ impl Env<'_> {
                     _ => {
                         let (x, y) = (self.eval(*a)?, self.eval(*b)?);
                         match op {
-                            Eq | Ne => {
-                                let eq = match (x, y) {
-                                    (Val::Bool(p), Val::Bool(q)) => p == q,
-                                    (Val::Lit(_) | Val::Str(_), _) | (_, Val::Lit(_) | Val::Str(_)) => {
-                                        match (self.bytes(x), self.bytes(y)) {
-                                            (Some(p), Some(q)) => p == q,
-                                            _ => return Err(Stop::Fallback),
-                                        }
-                                    }
-                                    _ => self.num(x)?.cmp(self.num(y)?).ok_or(Stop::Fallback)?.is_eq(),
-                                };
-                                Val::Bool(eq == (*op == Eq))
-                            }
-                            Lt | Le | Gt | Ge => {
-                                let o = self.num(x)?.cmp(self.num(y)?).ok_or(Stop::Fallback)?;
-                                Val::Bool(match op {
-                                    Lt => o.is_lt(),
-                                    Le => o.is_le(),
-                                    Gt => o.is_gt(),
-                                    _ => o.is_ge(),
-                                })
-                            }
+                            Eq | Ne | Lt | Le | Gt | Ge => Val::Bool(self.compare(*op, x, y)?),
                             Add => of(self.num(x)?.add(self.num(y)?))?,
                             Sub => of(self.num(x)?.sub(self.num(y)?))?,
                             Mul => of(self.num(x)?.mul(self.num(y)?))?,
@@ -357,10 +479,59 @@ impl Env<'_> {
         })
     }
 
+    /// `x OP y` for a comparison `OP`: truth values and strings by equality only, numbers
+    /// exactly.
+    fn compare(&self, op: BinOp, x: Val, y: Val) -> Result<bool, Stop> {
+        use BinOp::*;
+        let o = match (op, x, y) {
+            (_, Val::Num(p), Val::Num(q)) => {
+                if p.den == 1 && q.den == 1 {
+                    p.num.cmp(&q.num)
+                } else {
+                    p.cmp(q).ok_or(Stop::Fallback)?
+                }
+            }
+            (Eq | Ne, Val::Bool(p), Val::Bool(q)) => return Ok((p == q) == (op == Eq)),
+            (Eq | Ne, Val::Lit(_) | Val::Str(_), _) | (Eq | Ne, _, Val::Lit(_) | Val::Str(_)) => {
+                return match (self.bytes(x), self.bytes(y)) {
+                    (Some(p), Some(q)) => Ok((p == q) == (op == Eq)),
+                    _ => Err(Stop::Fallback),
+                }
+            }
+            _ => return Err(Stop::Fallback),
+        };
+        Ok(match op {
+            Eq => o.is_eq(),
+            Ne => o.is_ne(),
+            Lt => o.is_lt(),
+            Le => o.is_le(),
+            Gt => o.is_gt(),
+            _ => o.is_ge(),
+        })
+    }
+
+    /// Evaluates a truth-valued node: the compiled comparisons and the connectives
+    /// directly, without a [`Val`] on the way; anything else through [`Env::eval`].
     fn bool(&self, n: u32) -> Result<bool, Stop> {
-        match self.eval(n)? {
-            Val::Bool(b) => Ok(b),
-            _ => Err(Stop::Fallback),
+        match &self.arena.nodes[n as usize] {
+            Node::CmpConst(op, r, c) => match self.regs[*r as usize] {
+                x @ Val::Num(_) => self.compare(*op, x, Val::Num(*c)),
+                _ => Err(Stop::Fallback),
+            },
+            Node::CmpRegs(op, a, b) => self.compare(*op, self.regs[*a as usize], self.regs[*b as usize]),
+            Node::InRuns(r, runs) => match self.regs[*r as usize] {
+                Val::Num(x) => Ok(in_runs(runs, x)),
+                _ => Err(Stop::Fallback),
+            },
+            Node::Bin(BinOp::And, a, b) => Ok(self.bool(*a)? && self.bool(*b)?),
+            Node::Bin(BinOp::Or, a, b) => Ok(self.bool(*a)? || self.bool(*b)?),
+            Node::Bin(BinOp::Implies, a, b) => Ok(!self.bool(*a)? || self.bool(*b)?),
+            Node::Not(a) => Ok(!self.bool(*a)?),
+            Node::True => Ok(true),
+            _ => match self.eval(n)? {
+                Val::Bool(b) => Ok(b),
+                _ => Err(Stop::Fallback),
+            },
         }
     }
 
@@ -402,9 +573,8 @@ impl Env<'_> {
     /// A predicate's truth: `Ok(true/false)`, or why it has none.
     pub fn holds(&self, code: &Code, fallbacks: &mut u64) -> Result<bool, Verdict> {
         if !code.slow {
-            match self.eval(code.root) {
-                Ok(Val::Bool(b)) => return Ok(b),
-                Ok(_) => return Err(Verdict::Undecided),
+            match self.bool(code.root) {
+                Ok(b) => return Ok(b),
                 Err(Stop::Undefined(why)) => return Err(Verdict::Undefined(why)),
                 Err(Stop::Fallback) => {}
             }

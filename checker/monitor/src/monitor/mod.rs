@@ -260,6 +260,10 @@ pub struct Monitor {
     kinds: Vec<session::EndOf>,
     /// Whether some protocol has a timeout branch (sessions may end by time).
     timed: bool,
+    /// No open session ends by time before this instant (µs of the frames' clock): a lower
+    /// bound of their deadlines (`session::end_deadline`), lowered by every step that sets
+    /// one and recomputed by the scan it triggers, so that a frame before it scans nothing.
+    end_due: u64,
     /// The ends whose kind [`Monitor::pin_end_kind`] fixed (HEARTBEATs do not change it).
     pinned: Vec<(u8, u8)>,
     pinned_kinds: bool,
@@ -267,6 +271,11 @@ pub struct Monitor {
     /// streams hold it. A frame whose bit is clear is outside every protocol: it passes
     /// without a look at any protocol (most of a real stream is such telemetry).
     spoken: Vec<u64>,
+    /// For each message id some protocol speaks (sorted): the range of `id_protos` that
+    /// lists the protocols whose alphabet or streams hold it, in protocol order. A frame
+    /// visits only those.
+    by_id: Vec<(u32, u32, u32)>,
+    id_protos: Vec<u32>,
     pub stats: Stats,
 }
 
@@ -297,6 +306,18 @@ impl Monitor {
                 spoken[(*id / 64) as usize] |= 1 << (*id % 64);
             }
         }
+        let mut ids: Vec<u32> =
+            protos.iter().flat_map(|a| a.alphabet.iter().chain(&a.stream_alphabet)).copied().collect();
+        ids.sort_unstable();
+        ids.dedup();
+        let (mut by_id, mut id_protos) = (Vec::with_capacity(ids.len()), Vec::new());
+        for id in ids {
+            let start = id_protos.len() as u32;
+            id_protos.extend(
+                (0..protos.len()).filter(|&p| protos[p].in_alphabet(id) || protos[p].in_streams(id)).map(|p| p as u32),
+            );
+            by_id.push((id, start, id_protos.len() as u32));
+        }
         Monitor {
             protos,
             slots: Vec::new(),
@@ -315,9 +336,12 @@ impl Monitor {
             clock: None,
             kinds: Vec::with_capacity(16),
             timed,
+            end_due: 0,
             pinned: Vec::new(),
             pinned_kinds: false,
             spoken,
+            by_id,
+            id_protos,
             stats: Stats::default(),
         }
     }
@@ -382,7 +406,12 @@ impl Monitor {
         }
         let mut result = None;
         let mut in_alphabet = false;
-        for p in 0..self.protos.len() {
+        let (from, to) = match self.by_id.binary_search_by_key(&f.msgid, |&(id, _, _)| id) {
+            Ok(k) => (self.by_id[k].1 as usize, self.by_id[k].2 as usize),
+            Err(_) => (0, 0),
+        };
+        for k in from..to {
+            let p = self.id_protos[k] as usize;
             if self.protos[p].in_streams(f.msgid) {
                 match self.on_stream(p, f, index) {
                     stream::Class::Reading => continue,
@@ -400,7 +429,10 @@ impl Monitor {
             // is a message whose ends are of kinds no edge of its label admits (a vehicle's
             // MISSION_COUNT to an upload whose `GCS` sends it).
             let a = &self.protos[p];
-            if !a.edges.iter().any(|e| session::label_fits(e, f) && session::kinds_fit(a, e, &self.kinds, f)) {
+            if !a.edges_with(f.msgid).iter().any(|&e| {
+                let e = &a.edges[e as usize];
+                session::label_fits(e, f) && session::kinds_fit(a, e, &self.kinds, f)
+            }) {
                 continue;
             }
             in_alphabet = true;
@@ -442,18 +474,28 @@ impl Monitor {
     /// gave up sends nothing), so the next frame with a time is when the monitor learns it;
     /// a later message of that session is then in no session.
     fn end_by_time(&mut self) {
+        let Some(clock) = self.clock else { return };
+        if clock < self.end_due {
+            return;
+        }
+        let mut due = u64::MAX;
         let mut k = 0;
         while k < self.open.len() {
             let slot = self.open[k];
             let s = &self.slots[slot];
-            if session::ends_by_time(&self.protos[s.proto], s.state, s.entered_us, self.clock) {
-                self.stats.ended_by_time += 1;
-                // `close` moves the last open session to position `k`.
-                self.close(slot, true, true);
-            } else {
-                k += 1;
+            match session::end_deadline(&self.protos[s.proto], s.state, s.entered_us) {
+                Some(d) if clock >= d => {
+                    self.stats.ended_by_time += 1;
+                    // `close` moves the last open session to position `k`.
+                    self.close(slot, true, true);
+                }
+                d => {
+                    due = due.min(d.unwrap_or(u64::MAX));
+                    k += 1;
+                }
             }
         }
+        self.end_due = due;
     }
 
     /// The kind of end `(sys, comp)`, as its latest HEARTBEAT declared it.
@@ -529,5 +571,7 @@ fn reset<T: Clone>(v: &mut Vec<T>, n: usize, x: T) {
     v.resize(n, x);
 }
 
+#[cfg(test)]
+mod code_tests;
 #[cfg(test)]
 mod tests;

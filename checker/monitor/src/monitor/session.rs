@@ -170,6 +170,9 @@ impl Monitor {
                     }
                 }
                 self.stats.steps += 1;
+                if let Some(due) = end_deadline(a, next, s.entered_us) {
+                    self.end_due = self.end_due.min(due);
+                }
                 if matches!(self.protos[p].states[next as usize], StateKind::End) {
                     let id = s.id;
                     self.close(slot, true, true);
@@ -505,18 +508,28 @@ pub(super) fn timeout_chain(
 /// Whether a session in `state`, entered at `entered`, ended by time before `clock`: a
 /// chain of timeouts from `state` reaches `end`, and their bounds' sum passed.
 pub(super) fn ends_by_time(a: &Automaton, state: u32, entered: Option<u64>, clock: Option<u64>) -> bool {
-    let (Some(entered), Some(clock)) = (entered, clock) else { return false };
+    match (end_deadline(a, state, entered), clock) {
+        (Some(due), Some(clock)) => clock >= due,
+        _ => false,
+    }
+}
+
+/// The instant (µs of the frames' clock) from which a session in `state`, entered at
+/// `entered`, has ended by time: when a chain of timeouts from `state` reaches `end`, the
+/// entry time plus their bounds' sum.
+pub(super) fn end_deadline(a: &Automaton, state: u32, entered: Option<u64>) -> Option<u64> {
+    let entered = entered?;
     let mut at = state;
     let mut ms: u64 = 0;
     for _ in 0..a.states.len() {
-        let Some(t) = a.timeout(at) else { return false };
+        let t = a.timeout(at)?;
         ms = ms.saturating_add(t.ms);
         at = a.settle(t.next);
         if matches!(a.states[at as usize], StateKind::End) {
-            return clock >= entered.saturating_add(ms.saturating_mul(1000));
+            return Some(entered.saturating_add(ms.saturating_mul(1000)));
         }
     }
-    false
+    None
 }
 
 /// Whether the frame is the edge's message (and command, for `COMMAND_LONG[MAV_CMD_X]`).

@@ -91,7 +91,7 @@ impl Monitor {
                     }
                 }
             }
-            let could_step = a.edges.iter().any(|e| super::session::label_fits(e, f));
+            let could_step = a.edges_with(f.msgid).iter().any(|&e| super::session::label_fits(&a.edges[e as usize], f));
             if could_step && as_other && !as_sender {
                 continue;
             }
