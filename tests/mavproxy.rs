@@ -40,7 +40,20 @@ fn wpl_items(path: &str) -> Vec<Vec<f64>> {
         .filter_map(|l| {
             let c: Vec<f64> = l.split('\t').map(|x| x.trim().parse::<f64>().expect("a number")).collect();
             (c.len() >= 12).then(|| {
-                vec![c[0], c[2], c[3], c[1], c[11], c[4], c[5], c[6], c[7], (c[8] * 1e7).round(), (c[9] * 1e7).round(), c[10]]
+                vec![
+                    c[0],
+                    c[2],
+                    c[3],
+                    c[1],
+                    c[11],
+                    c[4],
+                    c[5],
+                    c[6],
+                    c[7],
+                    (c[8] * 1e7).round(),
+                    (c[9] * 1e7).round(),
+                    c[10],
+                ]
             })
         })
         .collect()
@@ -60,7 +73,12 @@ fn mavproxy_wp_load_uploads_a_117_item_mission_through_the_proxy_intact() {
     let vehicle = peer(&["vehicle", &format!("udpin:127.0.0.1:{v}"), "honest", "60", "heartbeat"]);
     let gcs = mavproxy(g, &[&format!("when-target wp load {MISSION}")]);
     let ack = gcs.wait_for(Duration::from_secs(40), |l| l["mavproxy"] == "MISSION_ACK");
-    assert_eq!(ack.as_ref().map(|a| a["type"].clone()), Some(0.into()), "MAV_MISSION_ACCEPTED: {:?}", gcs.lines.lock().unwrap());
+    assert_eq!(
+        ack.as_ref().map(|a| a["type"].clone()),
+        Some(0.into()),
+        "MAV_MISSION_ACCEPTED: {:?}",
+        gcs.lines.lock().unwrap()
+    );
     let got = vehicle.wait_for(Duration::from_secs(5), |l| l["event"] == "mission").expect("the vehicle got it");
     assert_eq!(got["acked_early"], false);
     let want = wpl_items(MISSION);

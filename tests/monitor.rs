@@ -1054,15 +1054,22 @@ enum CalBreak {
 /// (the protocol's SILENCE_MS), so no timeout passes before it. Returns the frames, the
 /// index of the one that breaks the protocol, and the time at which the session is over by
 /// time (`None`: it ends with the report).
-fn calibration_trace(prog: &Program, rng: &mut Rng, brk: CalBreak) -> (Vec<((u8, u8), (u32, Vec<u8>), u64)>, Option<usize>, Option<u64>) {
+fn calibration_trace(
+    prog: &Program,
+    rng: &mut Rng,
+    brk: CalBreak,
+) -> (Vec<((u8, u8), (u32, Vec<u8>), u64)>, Option<usize>, Option<u64>) {
     let (gcs, uav) = (RoleId(0), RoleId(1));
     let (g, u) = (end_of(gcs), end_of(uav));
     // MAV_CMD_DO_START_MAG_CAL: param1 magnetometers 0, param2 retry 0, param3 autosave 1.
-    let start = payload(prog, "COMMAND_LONG[MAV_CMD_DO_START_MAG_CAL]", uav, &[("param1", 0), ("param2", 0), ("param3", 1)]);
+    let start =
+        payload(prog, "COMMAND_LONG[MAV_CMD_DO_START_MAG_CAL]", uav, &[("param1", 0), ("param2", 0), ("param3", 1)]);
     let ack = |result: i128| payload(prog, "COMMAND_ACK[MAV_CMD_DO_START_MAG_CAL]", gcs, &[("result", result)]);
     // MAG_CAL_RUNNING_STEP_ONE 2, MAG_CAL_SUCCESS 4, MAG_CAL_FAILED 5.
     let progress = |pct: i128| payload(prog, "MAG_CAL_PROGRESS", gcs, &[("cal_status", 2), ("completion_pct", pct)]);
-    let report = |status: i128, saved: i128| payload(prog, "MAG_CAL_REPORT", gcs, &[("cal_status", status), ("autosaved", saved)]);
+    let report = |status: i128, saved: i128| {
+        payload(prog, "MAG_CAL_REPORT", gcs, &[("cal_status", status), ("autosaved", saved)])
+    };
     let mut t = 1_000_000_000u64;
     let gap = |rng: &mut Rng| 1 + rng.next() % 4_900_000;
     let mut out = vec![(g, start, t)];
@@ -1130,8 +1137,13 @@ fn calibration_and_parachute_end_by_time_as_verified() {
     assert_eq!(verdict, Verdict::Verified);
     let a = Automaton::compile(&prog).unwrap_or_else(|e| panic!("compass-calibration.chor: {}", e.message));
     let heartbeat = (0u32, vec![0u8; 9]);
-    let breaks =
-        [CalBreak::None, CalBreak::ProgressBack, CalBreak::ProgressAfterRefusal, CalBreak::SuccessNotSaved, CalBreak::AfterTheSilence];
+    let breaks = [
+        CalBreak::None,
+        CalBreak::ProgressBack,
+        CalBreak::ProgressAfterRefusal,
+        CalBreak::SuccessNotSaved,
+        CalBreak::AfterTheSilence,
+    ];
     let mut rng = Rng(11);
     let (mut by_time, mut by_report) = (0, 0);
     for round in 0..200 {
@@ -1141,7 +1153,9 @@ fn calibration_and_parachute_end_by_time_as_verified() {
         let mut m = Monitor::new(vec![a.clone()]);
         for (k, (from, msg, t)) in trace.iter().enumerate() {
             match (Some(k) == broken, m.on_frame(&timed(*from, msg, *t))) {
-                (false, Outcome::Violation(v)) => panic!("{brk:?}: conforming frame {k} rejected: {}", m.describe(&db, v)),
+                (false, Outcome::Violation(v)) => {
+                    panic!("{brk:?}: conforming frame {k} rejected: {}", m.describe(&db, v))
+                }
                 (true, Outcome::Violation(v)) => {
                     let expected = match brk {
                         CalBreak::ProgressAfterRefusal => Kind::Guard,
@@ -1182,7 +1196,8 @@ fn calibration_and_parachute_end_by_time_as_verified() {
     let a = Automaton::compile(&prog).expect("parachute.chor compiles");
     let (gcs, uav) = (RoleId(0), RoleId(1));
     let (g, u) = (end_of(gcs), end_of(uav));
-    let safe_hb = payload(&prog, "HEARTBEAT", gcs, &[("type", 2), ("autopilot", 3), ("base_mode", 209), ("custom_mode", 0)]);
+    let safe_hb =
+        payload(&prog, "HEARTBEAT", gcs, &[("type", 2), ("autopilot", 3), ("base_mode", 209), ("custom_mode", 0)]);
     let safe_pos = payload(&prog, "GLOBAL_POSITION_INT", gcs, &[("relative_alt", 50_000), ("vz", 10)]);
     let release = payload(&prog, "COMMAND_LONG[MAV_CMD_DO_PARACHUTE]", uav, &[("param1", 2)]);
     let ack = payload(&prog, "COMMAND_ACK[MAV_CMD_DO_PARACHUTE]", gcs, &[("result", 0)]);

@@ -14,7 +14,8 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 pub(crate) const PEERS: &str = "tests/proxy/peers.py";
-pub(crate) const MISSION: &str = "../shared/data/missions/ardupilot_autotest/ArduPlane_Tests/TerrainAvoidApplet/TopOfTheWorld.txt";
+pub(crate) const MISSION: &str =
+    "../shared/data/missions/ardupilot_autotest/ArduPlane_Tests/TerrainAvoidApplet/TopOfTheWorld.txt";
 
 /// Whether the Python package `module` can be imported; in CI a missing one fails the test.
 pub(crate) fn have(module: &str) -> bool {
@@ -62,7 +63,11 @@ impl Running {
     }
 
     /// Waits until a JSON line satisfies `pred` (or `timeout` passes).
-    pub(crate) fn wait_for(&self, timeout: Duration, pred: impl Fn(&serde_json::Value) -> bool) -> Option<serde_json::Value> {
+    pub(crate) fn wait_for(
+        &self,
+        timeout: Duration,
+        pred: impl Fn(&serde_json::Value) -> bool,
+    ) -> Option<serde_json::Value> {
         let end = Instant::now() + timeout;
         while Instant::now() < end {
             if let Some(v) = self.json().into_iter().find(&pred) {
