@@ -1034,6 +1034,9 @@ fn timeouts_are_enforced_in_the_frames_time() {
     assert_eq!(m.violation(v).map(|v| v.kind), Some(Kind::Undecided));
 }
 
+/// A frame to send at a time: its source end, its message and its time (µs).
+type TimedFrame = ((u8, u8), (u32, Vec<u8>), u64);
+
 /// How a compass calibration trace breaks the protocol, if it does.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum CalBreak {
@@ -1054,11 +1057,7 @@ enum CalBreak {
 /// (the protocol's SILENCE_MS), so no timeout passes before it. Returns the frames, the
 /// index of the one that breaks the protocol, and the time at which the session is over by
 /// time (`None`: it ends with the report).
-fn calibration_trace(
-    prog: &Program,
-    rng: &mut Rng,
-    brk: CalBreak,
-) -> (Vec<((u8, u8), (u32, Vec<u8>), u64)>, Option<usize>, Option<u64>) {
+fn calibration_trace(prog: &Program, rng: &mut Rng, brk: CalBreak) -> (Vec<TimedFrame>, Option<usize>, Option<u64>) {
     let (gcs, uav) = (RoleId(0), RoleId(1));
     let (g, u) = (end_of(gcs), end_of(uav));
     // MAV_CMD_DO_START_MAG_CAL: param1 magnetometers 0, param2 retry 0, param3 autosave 1.
