@@ -358,7 +358,10 @@ fn parachute_is_monitored_with_its_readings() {
         |alt_mm: i128, vz: i128| payload(&prog, "GLOBAL_POSITION_INT", gcs, &[("relative_alt", alt_mm), ("vz", vz)]);
     let gcs_heartbeat = payload(&prog, "HEARTBEAT", uav, &[("type", 6), ("autopilot", 8)]);
     let release = payload(&prog, "COMMAND_LONG[MAV_CMD_DO_PARACHUTE]", uav, &[("param1", 2)]);
-    let ack = |result: i128| payload(&prog, "COMMAND_ACK", gcs, &[("command", 208), ("result", result)]);
+    let ack = |result: i128| payload(&prog, "COMMAND_ACK[MAV_CMD_DO_PARACHUTE]", gcs, &[("result", result)]);
+    // The acknowledgement of another command (MAV_CMD_REQUEST_MESSAGE 512) is not the
+    // protocol's: it passes, inside a session or outside.
+    let other_ack = payload(&prog, "COMMAND_ACK[MAV_CMD_REQUEST_MESSAGE]", gcs, &[("result", 0)]);
     let (g, u) = (end_of(gcs), end_of(uav));
     let run = |frames: &[Sent<'_>]| {
         let mut m = Monitor::new(vec![a.clone()]);
@@ -376,9 +379,12 @@ fn parachute_is_monitored_with_its_readings() {
     let (safe_hb, safe_pos) = (heartbeat(true, 0), position(50_000, 10));
     let (low, climbing, disarmed) = (position(1_000, 10), position(50_000, -30), heartbeat(false, 0));
 
-    // Conforming: readings at their own rates (any number, any order), the GCS waits while
-    // unsafe, releases once safe; a heartbeat of the vehicle between the command and its
-    // ACK is a reading, not a step.
+    // Conforming: readings at their own rates (any number, any order); the GCS sends nothing
+    // while unsafe but its own 1 Hz HEARTBEAT, which is neither a step (the protocol has no
+    // HEARTBEAT step) nor a reading of the vehicle's HEARTBEAT stream (a ground station is no
+    // vehicle: its `type == MAV_TYPE_GCS` breaks the stream's invariant were it one), and
+    // releases once safe; a heartbeat of the vehicle between the command and its ACK is a
+    // reading, and another command's acknowledgement passes.
     let (out, kinds, d, stats) = run(&[
         (u, &disarmed),
         (u, &low),
@@ -388,13 +394,17 @@ fn parachute_is_monitored_with_its_readings() {
         (g, &gcs_heartbeat),
         (u, &safe_pos),
         (u, &safe_hb),
+        (g, &gcs_heartbeat),
         (g, &release),
         (u, &safe_hb),
+        (u, &other_ack),
+        (g, &gcs_heartbeat),
         (u, &safe_pos),
         (u, &ack(0)),
     ]);
     assert!(kinds.iter().all(Option::is_none), "{d:?}");
-    assert!(matches!(out[11], Outcome::Ended { .. }), "{out:?}");
+    assert!(matches!(out[14], Outcome::Ended { .. }), "{out:?}");
+    assert!(matches!(out[3], Outcome::Passed) && matches!(out[11], Outcome::Passed), "{out:?}");
     assert_eq!(stats.readings, 8);
     // A refusal is always allowed; an ACCEPTED needs the vehicle's own latest reading safe.
     let (_, kinds, d, _) = run(&[(u, &safe_hb), (u, &safe_pos), (g, &release), (u, &climbing), (u, &ack(4))]);
@@ -403,8 +413,7 @@ fn parachute_is_monitored_with_its_readings() {
     assert_eq!(kinds[4], Some(Kind::Refinement));
 
     // Mutated: the release on an unsafe latest reading (the reading changed after an
-    // earlier safe one) breaks the guard; on no reading at all, no reading; waiting while
-    // safe breaks the waiting branch's guard.
+    // earlier safe one) breaks the guard; on no reading at all, no reading.
     for unsafe_reading in [&low, &climbing, &disarmed, &heartbeat(true, 1)] {
         let (out, kinds, d, _) = run(&[(u, &safe_hb), (u, &safe_pos), (u, unsafe_reading), (g, &release)]);
         assert_eq!(kinds[3], Some(Kind::Guard), "{out:?} {d:?}");
@@ -412,8 +421,6 @@ fn parachute_is_monitored_with_its_readings() {
     let (_, kinds, d, _) = run(&[(u, &safe_hb), (g, &release)]);
     assert_eq!(kinds[1], Some(Kind::NoReading), "{d:?}");
     assert!(d[0].contains("no reading of the stream yet"), "{d:?}");
-    let (_, kinds, _, _) = run(&[(u, &safe_hb), (u, &safe_pos), (g, &gcs_heartbeat)]);
-    assert_eq!(kinds[2], Some(Kind::Guard));
     // A stream message breaking the stream's invariant (a fixed-wing, once the session knows
     // the vehicle) is a stream violation, and no reading: the last safe one still counts.
     let plane =
@@ -962,8 +969,10 @@ fn timeouts_are_enforced_in_the_frames_time() {
         })
         .map(|p| p.file_name().expect("name").to_string_lossy().into_owned())
         .collect();
-    // A new verified protocol with a timeout needs a trace generator here.
-    assert_eq!(protocols_with_timeouts, vec!["param-list.chor".to_string()]);
+    // A new verified protocol with a timeout needs a trace generator: param-list.chor's is
+    // here, compass-calibration.chor's and parachute.chor's in
+    // `calibration_and_parachute_end_by_time_as_verified`.
+    assert_eq!(protocols_with_timeouts, ["compass-calibration.chor", "parachute.chor", "param-list.chor"]);
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("choreographies/mavlink/param-list.chor");
     let (db, prog, _) = load(&path);
     let a = Automaton::compile(&prog).unwrap_or_else(|e| panic!("param-list.chor: {}", e.message));
@@ -1105,4 +1114,186 @@ fn the_compiled_evaluator_finds_what_the_tree_evaluator_finds_on_every_capture()
         }
     }
     assert!(steps > 100, "the captures exercised the protocols {steps} times only");
+/// A frame to send at a time: its source end, its message and its time (µs).
+type TimedFrame = ((u8, u8), (u32, Vec<u8>), u64);
+
+/// How a compass calibration trace breaks the protocol, if it does.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum CalBreak {
+    None,
+    /// A progress report with a lower percentage than the one before (the loop invariant).
+    ProgressBack,
+    /// A progress report after the vehicle refused the calibration (the guard).
+    ProgressAfterRefusal,
+    /// A success reported not saved, though autosave was asked (the report's refinement).
+    SuccessNotSaved,
+    /// A progress report after the ground station's silence passed: the session is over.
+    AfterTheSilence,
+}
+
+/// A compass calibration in the frames' time: the command, then (or not) the
+/// acknowledgement, accepted or refused, then progress reports that never go back and a
+/// result, or a silence of more than 5 s; each gap before a message of the vehicle under 5 s
+/// (the protocol's SILENCE_MS), so no timeout passes before it. Returns the frames, the
+/// index of the one that breaks the protocol, and the time at which the session is over by
+/// time (`None`: it ends with the report).
+fn calibration_trace(prog: &Program, rng: &mut Rng, brk: CalBreak) -> (Vec<TimedFrame>, Option<usize>, Option<u64>) {
+    let (gcs, uav) = (RoleId(0), RoleId(1));
+    let (g, u) = (end_of(gcs), end_of(uav));
+    // MAV_CMD_DO_START_MAG_CAL: param1 magnetometers 0, param2 retry 0, param3 autosave 1.
+    let start =
+        payload(prog, "COMMAND_LONG[MAV_CMD_DO_START_MAG_CAL]", uav, &[("param1", 0), ("param2", 0), ("param3", 1)]);
+    let ack = |result: i128| payload(prog, "COMMAND_ACK[MAV_CMD_DO_START_MAG_CAL]", gcs, &[("result", result)]);
+    // MAG_CAL_RUNNING_STEP_ONE 2, MAG_CAL_SUCCESS 4, MAG_CAL_FAILED 5.
+    let progress = |pct: i128| payload(prog, "MAG_CAL_PROGRESS", gcs, &[("cal_status", 2), ("completion_pct", pct)]);
+    let report = |status: i128, saved: i128| {
+        payload(prog, "MAG_CAL_REPORT", gcs, &[("cal_status", status), ("autosaved", saved)])
+    };
+    let mut t = 1_000_000_000u64;
+    let gap = |rng: &mut Rng| 1 + rng.next() % 4_900_000;
+    let mut out = vec![(g, start, t)];
+    let mut broken = None;
+    let refused = brk == CalBreak::ProgressAfterRefusal || (brk == CalBreak::None && rng.next().is_multiple_of(4));
+    let no_ack = brk == CalBreak::None && !refused && rng.next().is_multiple_of(5);
+    if no_ack {
+        return (out, None, Some(t + 5_000_000));
+    }
+    t += gap(rng);
+    out.push((u, ack(if refused { 4 } else { 0 }), t));
+    if refused {
+        if brk == CalBreak::ProgressAfterRefusal {
+            t += gap(rng);
+            broken = Some(out.len());
+            out.push((u, progress(10), t));
+        }
+        return (out, broken, Some(t + 5_000_000));
+    }
+    // At least two reports: the second is the loop's, whose refinement reads the first.
+    let n = 2 + rng.next() % 7;
+    let mut pct = 0i128;
+    for k in 0..n {
+        t += gap(rng);
+        if brk == CalBreak::ProgressBack && k == n - 1 {
+            broken = Some(out.len());
+            out.push((u, progress(pct - 1), t));
+            return (out, broken, None);
+        }
+        pct = (pct + 1 + (rng.next() % 30) as i128).min(100);
+        out.push((u, progress(pct), t));
+    }
+    match brk {
+        CalBreak::AfterTheSilence => {
+            t += 5_000_001;
+            broken = Some(out.len());
+            out.push((u, progress(pct), t));
+            (out, broken, None)
+        }
+        CalBreak::SuccessNotSaved => {
+            t += gap(rng);
+            broken = Some(out.len());
+            out.push((u, report(4, 0), t));
+            (out, broken, None)
+        }
+        _ if rng.next().is_multiple_of(3) => (out, None, Some(t + 5_000_000)),
+        _ => {
+            t += gap(rng);
+            let failed = rng.next().is_multiple_of(2);
+            out.push((u, if failed { report(5, 0) } else { report(4, 1) }, t));
+            (out, None, None)
+        }
+    }
+}
+
+/// Static and run time agree on the timeouts of `compass-calibration.chor` and
+/// `parachute.chor`: every conforming trace (a calibration acknowledged or not, accepted or
+/// refused, reporting progress and a result or falling silent; a release acknowledged in
+/// time or not) is accepted and its session ends conformant, by its last message or by time;
+/// each broken trace is rejected at exactly the frame that breaks it, with the rule it breaks.
+#[test]
+fn calibration_and_parachute_end_by_time_as_verified() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("choreographies/mavlink");
+    let (db, prog, verdict) = load(&dir.join("compass-calibration.chor"));
+    assert_eq!(verdict, Verdict::Verified);
+    let a = Automaton::compile(&prog).unwrap_or_else(|e| panic!("compass-calibration.chor: {}", e.message));
+    let heartbeat = (0u32, vec![0u8; 9]);
+    let breaks = [
+        CalBreak::None,
+        CalBreak::ProgressBack,
+        CalBreak::ProgressAfterRefusal,
+        CalBreak::SuccessNotSaved,
+        CalBreak::AfterTheSilence,
+    ];
+    let mut rng = Rng(11);
+    let (mut by_time, mut by_report) = (0, 0);
+    for round in 0..200 {
+        let brk = breaks[round % breaks.len()];
+        let (trace, broken, quiet) = calibration_trace(&prog, &mut rng, brk);
+        assert_eq!(broken.is_some(), brk != CalBreak::None, "{brk:?}");
+        let mut m = Monitor::new(vec![a.clone()]);
+        for (k, (from, msg, t)) in trace.iter().enumerate() {
+            match (Some(k) == broken, m.on_frame(&timed(*from, msg, *t))) {
+                (false, Outcome::Violation(v)) => {
+                    panic!("{brk:?}: conforming frame {k} rejected: {}", m.describe(&db, v))
+                }
+                (true, Outcome::Violation(v)) => {
+                    let expected = match brk {
+                        CalBreak::ProgressAfterRefusal => Kind::Guard,
+                        CalBreak::AfterTheSilence => Kind::OutsideSession,
+                        _ => Kind::Refinement,
+                    };
+                    assert_eq!(m.violation(v).map(|v| v.kind), Some(expected), "{brk:?}: {}", m.describe(&db, v));
+                }
+                (true, o) => panic!("{brk:?}: frame {k} accepted: {o:?}"),
+                _ => {}
+            }
+        }
+        if brk != CalBreak::None {
+            continue;
+        }
+        if let Some(q) = quiet {
+            // One microsecond before the silence passed the session is still open; telemetry
+            // after it moves the clock, and the session ended by time.
+            assert_eq!(m.on_frame(&timed((1, 1), &heartbeat, q - 1)), Outcome::Passed);
+            assert_eq!(m.stats.ended_by_time, 0, "ended before its silence");
+            assert_eq!(m.on_frame(&timed((1, 1), &heartbeat, q)), Outcome::Passed);
+            assert_eq!(m.stats.ended_by_time, 1);
+            by_time += 1;
+        } else {
+            by_report += 1;
+        }
+        let s = m.finish();
+        assert_eq!(s.len(), 1);
+        assert!(s[0].conformant, "a conforming calibration not conformant: {s:?}");
+    }
+    assert!(by_time > 0 && by_report > 0, "{by_time} ended by time, {by_report} by their report");
+
+    // The parachute: a release acknowledged within the ground station's 3 s ends with the
+    // acknowledgement; one never acknowledged ends by time, and an acknowledgement after that
+    // is in no session.
+    let (db, prog, verdict) = load(&dir.join("parachute.chor"));
+    assert_eq!(verdict, Verdict::Verified);
+    let a = Automaton::compile(&prog).expect("parachute.chor compiles");
+    let (gcs, uav) = (RoleId(0), RoleId(1));
+    let (g, u) = (end_of(gcs), end_of(uav));
+    let safe_hb =
+        payload(&prog, "HEARTBEAT", gcs, &[("type", 2), ("autopilot", 3), ("base_mode", 209), ("custom_mode", 0)]);
+    let safe_pos = payload(&prog, "GLOBAL_POSITION_INT", gcs, &[("relative_alt", 50_000), ("vz", 10)]);
+    let release = payload(&prog, "COMMAND_LONG[MAV_CMD_DO_PARACHUTE]", uav, &[("param1", 2)]);
+    let ack = payload(&prog, "COMMAND_ACK[MAV_CMD_DO_PARACHUTE]", gcs, &[("result", 0)]);
+    let t0 = 1_000_000_000u64;
+    for (ack_after, in_time) in [(2_999_999u64, true), (3_000_000, false)] {
+        let mut m = Monitor::new(vec![a.clone()]);
+        for (from, msg, t) in [(u, &safe_hb, t0), (u, &safe_pos, t0 + 1), (g, &release, t0 + 2)] {
+            assert!(!matches!(m.on_frame(&timed(from, msg, t)), Outcome::Violation(_)));
+        }
+        let o = m.on_frame(&timed(u, &ack, t0 + 2 + ack_after));
+        if in_time {
+            assert!(matches!(o, Outcome::Ended { .. }), "{o:?}");
+        } else {
+            let Outcome::Violation(v) = o else { panic!("an acknowledgement after the timeout accepted: {o:?}") };
+            assert_eq!(m.violation(v).map(|v| v.kind), Some(Kind::OutsideSession), "{}", m.describe(&db, v));
+            assert_eq!(m.stats.ended_by_time, 1);
+        }
+        assert!(m.finish().iter().all(|s| s.conformant));
+    }
 }

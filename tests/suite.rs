@@ -25,6 +25,8 @@ mod differential;
 mod generate;
 #[path = "mavio.rs"]
 mod mavio;
+#[path = "mavproxy.rs"]
+mod mavproxy;
 #[path = "metamorphic.rs"]
 mod metamorphic;
 #[path = "mutation.rs"]

@@ -19,17 +19,28 @@ def say(**kw):
 
 
 # ---------------------------------------------------------------- pymavlink vehicle
-def pymavlink_vehicle(url, behaviour, seconds):
+def pymavlink_vehicle(url, behaviour, seconds, heartbeat=False):
     """A vehicle at system 1, component 1: the mission, parameter and command protocols
     as an autopilot serves them. `behaviour` is `honest` or `early-ack` (acknowledges an
-    upload after the first few items: the seed's stale buffer)."""
+    upload after the first few items: the seed's stale buffer). With `heartbeat` it also
+    sends its HEARTBEAT (an ArduPilot quadrotor, disarmed) once a second, as a real
+    autopilot does (MAVProxy waits for one before it talks to the vehicle)."""
     from pymavlink import mavutil
 
     m = mavutil.mavlink_connection(url, source_system=1, source_component=1, dialect="common")
     params = {"MC_PITCH_P": 6.5, "MC_PITCHRATE_FF": 0.0, "MC_PITCHRATE_MAX": 220.0}
     end = time.time() + seconds
     upload = None  # (gcs sys, gcs comp, count, next seq, items, last request time, retries)
+    next_heartbeat = 0.0
     while time.time() < end:
+        if heartbeat and time.time() >= next_heartbeat:
+            # MAV_TYPE_QUADROTOR, MAV_AUTOPILOT_ARDUPILOTMEGA, custom mode enabled,
+            # MAV_STATE_STANDBY. Before the first datagram a udpin end has nobody to send to.
+            try:
+                m.mav.heartbeat_send(2, 3, 1, 0, 3)
+            except OSError:
+                pass
+            next_heartbeat = time.time() + 1.0
         msg = m.recv_match(blocking=True, timeout=0.2)
         if upload is not None and msg is None:
             gs, gc, count, i, items, _, retries = upload
@@ -70,9 +81,16 @@ def pymavlink_vehicle(url, behaviour, seconds):
                 m.mav.mission_request_int_send(gs, gc, i, 0)
         elif t == "PARAM_REQUEST_READ":
             pid = msg.param_id if isinstance(msg.param_id, str) else msg.param_id.decode()
+            if pid == "" and 0 <= msg.param_index < len(params):
+                pid = list(params)[msg.param_index]
             if pid in params:
                 m.mav.param_value_send(pid.encode(), params[pid], 9, len(params),
                                        list(params).index(pid))
+        elif t == "PARAM_REQUEST_LIST":
+            # The whole list, one PARAM_VALUE per parameter (mavlink.io's parameter service).
+            say(event="param_list")
+            for i, (pid, value) in enumerate(params.items()):
+                m.mav.param_value_send(pid.encode(), value, 9, len(params), i)
         elif t == "PARAM_SET":
             pid = msg.param_id if isinstance(msg.param_id, str) else msg.param_id.decode()
             say(event="param_set", id=pid, value=msg.param_value)
@@ -278,7 +296,8 @@ def main(argv):
         return 2
     role, url, rest = argv[1], argv[2], argv[3:]
     if role == "vehicle":
-        return pymavlink_vehicle(url, rest[0] if rest else "honest", float(rest[1]) if len(rest) > 1 else 30)
+        return pymavlink_vehicle(url, rest[0] if rest else "honest", float(rest[1]) if len(rest) > 1 else 30,
+                                 len(rest) > 2 and rest[2] == "heartbeat")
     if role == "gcs-mission":
         return pymavlink_mission(url, rest[0], float(rest[1]) if len(rest) > 1 else 30)
     if role == "gcs-param":

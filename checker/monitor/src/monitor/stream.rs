@@ -59,10 +59,12 @@ fn command_fits(st: &StreamDef, f: &Frame) -> bool {
 impl Monitor {
     /// Whether the frame is a message of one of protocol `p`'s streams.
     ///
-    /// A frame whose label is a stream's is that stream's message when its source is bound
+    /// Only a source of the kind the stream's sending role asks (`EndKind::admits`, as for a
+    /// step) sends the stream: a ground station's HEARTBEAT is not a vehicle's. A frame whose
+    /// label is a stream's is then that stream's message when its source is bound
     /// to the stream's sender in an open session of the protocol, or when the protocol has no
-    /// step with that label. When it has one (the parachute's ground station sends HEARTBEAT
-    /// as a step, the vehicle streams it), a source bound to another role in an open session
+    /// step with that label. When it has one (a ground station sends HEARTBEAT as a step, the
+    /// vehicle streams it), a source bound to another role in an open session
     /// sends a step; a source no session has bound is classified by the payload: the stream's
     /// message if the stream's refinements hold, otherwise a candidate step (which may start
     /// a session, or be a violation as any step). A reading from an end that is not the
@@ -73,6 +75,12 @@ impl Monitor {
             let a = &self.protos[p];
             let st = &a.streams[si];
             if st.msgid != f.msgid || !command_fits(st, f) {
+                continue;
+            }
+            // As for a step (`session::kinds_fit`), the source must be an end of the kind the
+            // stream's sending role asks: a ground station's own HEARTBEAT is no reading of a
+            // vehicle's HEARTBEAT stream (nor a violation of its invariant).
+            if !a.role_kinds[st.from.idx()].admits(super::session::kind_of(&self.kinds, src)) {
                 continue;
             }
             let (mut as_sender, mut as_other) = (false, false);
