@@ -107,7 +107,7 @@ fn a_refusal_reads_as_plain_text_with_its_place() {
     let mut db = SourceDb::new();
     let mut read = |p: &Path| fs.get(p).cloned().ok_or_else(|| std::io::Error::other("no such file"));
     let req = Request { path: Path::new("dir/set.chor"), verified: None };
-    let d = load(&mut db, &req, SET.to_string(), &mut read).err().expect("refused");
+    let Err(d) = load(&mut db, &req, SET.to_string(), &mut read) else { panic!("enforced") };
     let text = plain(&db, &d[0]);
     assert!(text.starts_with("error[E0801]: dir/set.chor:1:1: dir/set.chor was not verified"), "{text}");
     assert!(text.contains("= help: mochi-proxy enforces only protocols"), "{text}");

@@ -215,6 +215,6 @@ proptest! {
             detail: Some(text.clone()),
             forwarded: false,
         };
-        prop_assert_eq!(mine(&e, &[text.clone()]), reference(&e, &[text]));
+        prop_assert_eq!(mine(&e, std::slice::from_ref(&text)), reference(&e, &[text]));
     }
 }
