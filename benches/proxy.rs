@@ -1,7 +1,10 @@
 //! The live proxy's cost (issue 21, Deliver 10): the latency it adds on loopback, median
 //! and p99, with and without the monitor (target under 10 µs median; DATUM added 27 µs on
-//! ArduPilot and 37 µs on PX4), and the resident memory of `mochi proxy` under a flood
-//! (target under 8 MB; DATUM added 13.7 MB).
+//! ArduPilot and 37 µs on PX4), and the resident memory of the enforcing process under a
+//! flood (target under 8 MB; DATUM added 13.7 MB). Side by side, in one run: `mochi proxy`
+//! as users run it (it verifies, then replaces itself with the small `mochi-proxy`, which
+//! enforces: docs/proxy.md, "Two processes") and `mochi proxy --in-process` (the `mochi`
+//! executable enforcing itself, with Z3 linked: what `mochi proxy` was before).
 //!
 //! ```text
 //! cargo bench --bench proxy             # 20 uploads of 500 items per configuration
@@ -11,28 +14,23 @@
 //! Latency: a ground-station socket and a vehicle socket play a 500-item mission upload
 //! (`mission-upload-tolerant.chor`: MISSION_COUNT, then MISSION_REQUEST_INT / MISSION_ITEM_INT
 //! 500 times, MISSION_ACK, MISSION_CURRENT), one message in flight at a time; every message's
-//! one-way time (send to receive, one clock) is recorded. Three configurations, each the
-//! same exchange: directly (no proxy), through the proxy forwarding only (framing and CRC
-//! check, no protocol), and through the proxy enforcing `mission-upload-tolerant.chor`,
-//! `arm-command.chor` and `param-set.chor` together (in process, UDP `udpin:`/`udpout:` ends,
-//! events discarded). The added latency is the proxied figure minus the
-//! direct one. On a shared machine the figures move with the load; the medians are stable
-//! enough to compare.
+//! one-way time (send to receive, one clock) is recorded. Five configurations, each the same
+//! exchange: directly (no proxy), and through each of the two processes forwarding only
+//! (framing and CRC check, no protocol) and enforcing `mission-upload-tolerant.chor`,
+//! `arm-command.chor` and `param-set.chor` together (UDP `udpin:`/`udpout:` ends on
+//! 127.0.0.1, the event lines read from a pipe and discarded). The added latency is the
+//! proxied figure minus the direct one. On a shared machine the figures move with the load;
+//! the medians are stable enough to compare.
 //!
-//! Memory: the `mochi proxy` binary with the three protocols, VmRSS and VmHWM from
-//! /proc/PID/status after it started and after a flood of 200,000 datagrams (telemetry,
-//! garbage, frames with bad checksums, violations, session openings).
+//! Memory: each process enforcing one protocol (`mission-upload-tolerant.chor`) and all 15
+//! of `choreographies/mavlink/`, VmRSS and VmHWM from /proc/PID/status after it started and
+//! after a flood of 200,000 datagrams (telemetry, garbage, frames with bad checksums,
+//! violations, session openings), with the split by mapping from /proc/PID/smaps.
 
 use mavlink::dialects::common::*;
 use mavlink::{MavHeader, MavlinkVersion};
-use mochi::monitor::Automaton;
-use mochi::proxy::{Endpoint, Event, Mode, Proxy, Sink, Totals};
-use mochi::source::SourceDb;
-use std::net::UdpSocket;
-use std::path::Path;
-use std::process::{Command, Stdio};
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Mutex;
+use std::net::{SocketAddr, UdpSocket};
+use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 const ITEMS: u16 = 500;
@@ -41,13 +39,6 @@ const PROTOCOLS: [&str; 3] = [
     "choreographies/mavlink/arm-command.chor",
     "choreographies/mavlink/param-set.chor",
 ];
-
-fn compile(db: &mut SourceDb, path: &str) -> Automaton {
-    let root = mochi::fsload::load_root(db, Path::new(path)).expect("read the protocol");
-    let mut load = |p: &Path| mochi::fsload::read_bytes(p);
-    let prog = mochi::driver::prepare(db, root, &mut load, mochi::driver::Stage::Names).expect("lowered");
-    Automaton::compile(&prog).expect("compiles")
-}
 
 fn frame(from: (u8, u8), seq: u8, m: &MavMessage) -> Vec<u8> {
     let h = MavHeader { system_id: u32::from(from.0), component_id: from.1, sequence: seq };
@@ -164,44 +155,79 @@ fn sockets() -> (UdpSocket, UdpSocket) {
     (g, v)
 }
 
-/// One-way times through an in-process proxy (with these protocols).
-fn through_proxy(
-    protocols: Vec<Automaton>,
-    db: &SourceDb,
-    msgs: &[(bool, Vec<u8>)],
-    uploads: usize,
-) -> (Vec<u64>, u64) {
-    let (gcs, vehicle) = sockets();
-    let gcs_end = Endpoint::parse("udpin:127.0.0.1:0").unwrap().open().unwrap();
-    let veh_end = Endpoint::parse(&format!("udpout:{}", vehicle.local_addr().unwrap())).unwrap().open().unwrap();
-    let proxy_gcs = gcs_end.local_addr().unwrap();
-    let stop = AtomicBool::new(false);
-    let totals = Totals::default();
-    let proxy = Proxy { protocols, db: Some(db), mode: Mode::Enforce, config: Default::default(), steps: true };
-    let proxy_vehicle = Mutex::new(None);
-    let times = std::thread::scope(|s| {
-        s.spawn(|| proxy.run(&*gcs_end, &*veh_end, &Discard, &stop, &totals));
-        // The vehicle learns the proxy's address from the first message it gets (telemetry:
-        // `arm-command.chor` claims HEARTBEAT, and one outside a session would be dropped).
-        let mut buf = [0u8; 512];
-        let hb = frame((255, 190), 0, &MavMessage::ATTITUDE(ATTITUDE_DATA::default()));
-        gcs.send_to(&hb, proxy_gcs).unwrap();
-        let (_, from) = vehicle.recv_from(&mut buf).expect("the proxy forwards");
-        *proxy_vehicle.lock().unwrap() = Some(from);
-        let times = play(&gcs, &vehicle, proxy_gcs, || from, msgs, uploads);
-        stop.store(true, Ordering::Relaxed);
-        times
-    });
-    (times, totals.violations.load(Ordering::Relaxed))
+/// The two ways to run the proxy: `mochi proxy` (which replaces itself with `mochi-proxy`)
+/// and `mochi proxy --in-process`.
+#[derive(Clone, Copy)]
+enum Process {
+    Small,
+    InProcess,
 }
 
-/// Events counted and dropped (the benchmark measures forwarding, not a terminal).
-struct Discard;
-
-impl Sink for Discard {
-    fn events(&self, events: &[Event]) {
-        std::hint::black_box(events.len());
+impl Process {
+    fn name(self) -> &'static str {
+        match self {
+            Process::Small => "mochi proxy (mochi-proxy enforces)",
+            Process::InProcess => "mochi proxy --in-process",
+        }
     }
+}
+
+/// A proxy process between a ground station sending to `gcs_port` and a vehicle at
+/// `vehicle`, enforcing `protocols`; its event lines are read and discarded, as a log
+/// collector would.
+fn spawn(how: Process, protocols: &[String], gcs_port: u16, vehicle: SocketAddr) -> Child {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_mochi"));
+    cmd.arg("proxy");
+    if let Process::InProcess = how {
+        cmd.arg("--in-process");
+    }
+    for p in protocols {
+        cmd.args(["--protocol", p]);
+    }
+    cmd.args(["--gcs", &format!("udpin:127.0.0.1:{gcs_port}"), "--vehicle", &format!("udpout:{vehicle}")]);
+    let mut child = cmd.stdout(Stdio::piped()).stderr(Stdio::inherit()).spawn().expect("mochi proxy");
+    let out = child.stdout.take().unwrap();
+    std::thread::spawn(move || {
+        let _ = std::io::copy(&mut std::io::BufReader::new(out), &mut std::io::sink());
+    });
+    child
+}
+
+/// Sends telemetry from `gcs` to the proxy until `vehicle` receives it (the proxy verifies
+/// first, which takes seconds): the proxy's address on the vehicle's side.
+fn wait_started(gcs: &UdpSocket, gcs_port: u16, vehicle: &UdpSocket) -> SocketAddr {
+    let hb = frame((255, 190), 0, &MavMessage::ATTITUDE(ATTITUDE_DATA::default()));
+    let mut buf = [0u8; 2048];
+    let started = Instant::now();
+    vehicle.set_read_timeout(Some(Duration::from_millis(50))).unwrap();
+    loop {
+        let _ = gcs.send_to(&hb, ("127.0.0.1", gcs_port));
+        if let Ok((_, from)) = vehicle.recv_from(&mut buf) {
+            // Whatever else was sent while it started.
+            while vehicle.recv_from(&mut buf).is_ok() {}
+            vehicle.set_read_timeout(Some(Duration::from_secs(2))).unwrap();
+            return from;
+        }
+        assert!(started.elapsed() < Duration::from_secs(600), "the proxy did not start in 10 minutes");
+    }
+}
+
+/// One-way times through a proxy process (with these protocols).
+fn through(how: Process, protocols: &[String], msgs: &[(bool, Vec<u8>)], uploads: usize) -> Vec<u64> {
+    let (gcs, vehicle) = sockets();
+    let gcs_port = free_port();
+    let mut child = spawn(how, protocols, gcs_port, vehicle.local_addr().unwrap());
+    let from = wait_started(&gcs, gcs_port, &vehicle);
+    let to_vehicle: SocketAddr = format!("127.0.0.1:{gcs_port}").parse().unwrap();
+    let _ = play(&gcs, &vehicle, to_vehicle, || from, msgs, 1);
+    let times = play(&gcs, &vehicle, to_vehicle, || from, msgs, uploads);
+    let _ = child.kill();
+    let _ = child.wait();
+    times
+}
+
+fn free_port() -> u16 {
+    UdpSocket::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
 }
 
 fn vm(pid: u32, key: &str) -> Option<u64> {
@@ -210,40 +236,15 @@ fn vm(pid: u32, key: &str) -> Option<u64> {
     l.split_whitespace().nth(1)?.parse().ok()
 }
 
-fn memory() {
-    let gport = UdpSocket::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+fn memory(how: Process, protocols: &[String]) {
+    let gport = free_port();
     let sink = UdpSocket::bind("127.0.0.1:0").unwrap();
-    sink.set_nonblocking(true).unwrap();
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_mochi"));
-    cmd.arg("proxy");
-    for p in PROTOCOLS {
-        cmd.args(["--protocol", p]);
-    }
-    cmd.args([
-        "--gcs",
-        &format!("udpin:127.0.0.1:{gport}"),
-        "--vehicle",
-        &format!("udpout:{}", sink.local_addr().unwrap()),
-    ]);
-    let mut child = cmd.stdout(Stdio::piped()).stderr(Stdio::null()).spawn().expect("mochi proxy");
-    // Read (and discard) its verdict lines, as a log collector would.
-    let out = child.stdout.take().unwrap();
-    std::thread::spawn(move || {
-        let _ = std::io::copy(&mut std::io::BufReader::new(out), &mut std::io::sink());
-    });
+    let mut child = spawn(how, protocols, gport, sink.local_addr().unwrap());
     let pid = child.id();
-    // Started once it forwards.
     let g = UdpSocket::bind("127.0.0.1:0").unwrap();
-    let hb = frame((255, 190), 0, &MavMessage::ATTITUDE(ATTITUDE_DATA::default()));
+    wait_started(&g, gport, &sink);
+    sink.set_nonblocking(true).unwrap();
     let mut buf = [0u8; 2048];
-    let started = Instant::now();
-    loop {
-        let _ = g.send_to(&hb, ("127.0.0.1", gport));
-        std::thread::sleep(Duration::from_millis(20));
-        if sink.recv(&mut buf).is_ok() || started.elapsed() > Duration::from_secs(120) {
-            break;
-        }
-    }
     let rss0 = vm(pid, "VmRSS:").unwrap_or(0);
     let mut x = 0x9e37_79b9u32;
     let telemetry = frame((1, 1), 0, &MavMessage::ATTITUDE(ATTITUDE_DATA::default()));
@@ -300,6 +301,8 @@ fn memory() {
         }
     }
     std::thread::sleep(Duration::from_millis(300));
+    let exe = std::fs::read_link(format!("/proc/{pid}/exe")).ok();
+    let exe = exe.as_ref().and_then(|e| e.file_name()).map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let rss1 = vm(pid, "VmRSS:").unwrap_or(0);
     let hwm = vm(pid, "VmHWM:").unwrap_or(0);
     let (anon, file) = (vm(pid, "RssAnon:").unwrap_or(0), vm(pid, "RssFile:").unwrap_or(0));
@@ -309,19 +312,21 @@ fn memory() {
     let _ = child.wait();
     let mb = |k: u64| k as f64 / 1024.0;
     println!(
-        "proxy memory: mochi proxy (3 protocols) VmRSS {:.1} MB after start, {:.1} MB after 200,000 datagrams of flood; peak VmHWM {:.1} MB (target < 8 MB)",
+        "  {} [{exe}], {} protocol(s): VmRSS {:.1} MB after start, {:.1} MB after the flood; peak VmHWM {:.1} MB (target < 8 MB)",
+        how.name(),
+        protocols.len(),
         mb(rss0),
         mb(rss1),
         mb(hwm)
     );
     println!(
-        "  after the flood: RssAnon {:.1} MB (heap, stacks), RssFile {:.1} MB (the executable and the shared libraries' pages), Pss {:.1} MB (shared pages divided among the processes that map them)",
+        "    after the flood: RssAnon {:.1} MB (heap, stacks), RssFile {:.1} MB (executable and shared libraries), Pss {:.1} MB",
         mb(anon),
         mb(file),
         mb(pss)
     );
-    let top: Vec<String> = maps.iter().take(6).map(|(k, name)| format!("{} {:.1} MB", name, mb(*k))).collect();
-    println!("  resident by mapping: {}", top.join(", "));
+    let top: Vec<String> = maps.iter().take(7).map(|(k, name)| format!("{} {:.1} MB", name, mb(*k))).collect();
+    println!("    resident by mapping: {}", top.join(", "));
 }
 
 /// A field of /proc/PID/smaps_rollup, in kB.
@@ -351,38 +356,47 @@ fn mappings(pid: u32) -> Vec<(u64, String)> {
     v
 }
 
+/// Every protocol of `choreographies/mavlink/`, sorted.
+fn all_protocols() -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir("choreographies/mavlink")
+        .expect("choreographies/mavlink")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "chor"))
+        .map(|p| p.display().to_string())
+        .collect();
+    v.sort();
+    v
+}
+
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
     let uploads = if quick { 3 } else { 20 };
     let msgs = upload();
-    let mut db = SourceDb::new();
-    let protocols: Vec<Automaton> = PROTOCOLS.iter().map(|p| compile(&mut db, p)).collect();
+    let three: Vec<String> = PROTOCOLS.iter().map(|p| p.to_string()).collect();
 
     let (gcs, vehicle) = sockets();
     let (ga, va) = (gcs.local_addr().unwrap(), vehicle.local_addr().unwrap());
     let _ = play(&gcs, &vehicle, va, || ga, &msgs, 1);
     let direct = play(&gcs, &vehicle, va, || ga, &msgs, uploads);
-    let (forward, _) = through_proxy(Vec::new(), &db, &msgs, uploads);
-    let (monitored, violations) = through_proxy(protocols, &db, &msgs, uploads);
-    assert_eq!(violations, 0, "the conforming upload raised violations");
-
     let n = direct.len();
     let (d50, d99) = quantiles(direct);
-    let (f50, f99) = quantiles(forward);
-    let (m50, m99) = quantiles(monitored);
     println!(
         "proxy latency, one way on loopback UDP, {n} messages per configuration ({uploads} uploads of {ITEMS} items):"
     );
-    println!("  {:<44} {:>10} {:>10}", "", "median µs", "p99 µs");
-    println!("  {:<44} {:>10.2} {:>10.2}", "direct (no proxy)", d50, d99);
-    println!("  {:<44} {:>10.2} {:>10.2}", "through the proxy, forwarding only", f50, f99);
-    println!("  {:<44} {:>10.2} {:>10.2}", "through the proxy, enforcing 3 protocols", m50, m99);
-    println!(
-        "  added by the proxy: {:.2} µs median ({:.2} µs p99) forwarding only, {:.2} µs median ({:.2} µs p99) enforcing (target < 10 µs median)",
-        f50 - d50,
-        f99 - d99,
-        m50 - d50,
-        m99 - d99
-    );
-    memory();
+    println!("  {:<66} {:>10} {:>10} {:>22}", "", "median µs", "p99 µs", "added median (p99) µs");
+    println!("  {:<66} {:>10.2} {:>10.2}", "direct (no proxy)", d50, d99);
+    for how in [Process::Small, Process::InProcess] {
+        for (what, protocols) in [("forwarding only", &Vec::new()), ("enforcing 3 protocols", &three)] {
+            let (m50, m99) = quantiles(through(how, protocols, &msgs, uploads));
+            let label = format!("{}, {what}", how.name());
+            println!("  {label:<66} {m50:>10.2} {m99:>10.2} {:>12.2} ({:.2})", m50 - d50, m99 - d99);
+        }
+    }
+    println!("proxy memory, the enforcing process, under a flood of 200,000 datagrams:");
+    let all = all_protocols();
+    let one = vec![PROTOCOLS[0].to_string()];
+    for how in [Process::Small, Process::InProcess] {
+        memory(how, &one);
+        memory(how, &all);
+    }
 }

@@ -1296,4 +1296,24 @@ fn calibration_and_parachute_end_by_time_as_verified() {
         }
         assert!(m.finish().iter().all(|s| s.conformant));
     }
+/// The proxy's event lines allocate nothing per message once their buffer has grown: a step,
+/// an end and a late message (the events of conforming traffic) are written from integers
+/// and `&'static str`s into the reused buffer (checker/monitor/src/proxy/lines.rs).
+#[test]
+fn the_proxy_lines_of_steps_allocate_nothing() {
+    use mochi::proxy::lines::Lines;
+    use mochi::proxy::{At, Dir, Event, Sink};
+    let at = At { time_us: 1_764_306_000_123_456, dir: Dir::GcsToVehicle, msgid: 73, from: (255, 190), signed: false };
+    let batch = [
+        Event::Step { at, session: 12, state: 4 },
+        Event::End { at, session: 12, protocol: Some(0), conformant: true },
+        Event::Late { at, session: 12, forwarded: false },
+    ];
+    let lines = Lines::new(std::io::sink(), vec!["UploadTolerant".to_string()]);
+    lines.events(&batch);
+    let before = allocations();
+    for _ in 0..1000 {
+        lines.events(&batch);
+    }
+    assert_eq!(allocations() - before, 0, "allocations while writing 3,000 lines");
 }

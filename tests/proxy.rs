@@ -433,3 +433,118 @@ fn a_parachute_release_in_a_wrong_vehicle_state_is_dropped() {
     assert_eq!(end["conformant"], true);
     assert_eq!(violations(&p).len(), 1, "only the early release: {:?}", violations(&p));
 }
+
+// ---- the two processes: `mochi proxy` verifies, `mochi-proxy` enforces -----------------
+
+/// The enforcing process is `mochi-proxy` (`mochi proxy` replaced itself with it) and maps
+/// no libz3 and no libstdc++: the solver is not in the process that stands on the link.
+#[cfg(target_os = "linux")]
+#[test]
+fn the_enforcing_process_is_mochi_proxy_without_z3() {
+    let (p, _, _) = proxy(&["param-set.chor", "mission-upload-tolerant.chor"], &[]);
+    let pid = p.child.id();
+    let exe = std::fs::read_link(format!("/proc/{pid}/exe")).expect("the process's executable");
+    assert_eq!(exe.file_name().and_then(|n| n.to_str()), Some("mochi-proxy"), "{}", exe.display());
+    let maps = std::fs::read_to_string(format!("/proc/{pid}/maps")).expect("its mappings");
+    for lib in ["libz3", "libstdc++"] {
+        assert!(!maps.contains(lib), "the enforcing process maps {lib}:\n{maps}");
+    }
+}
+
+/// `mochi-proxy` on `path` with these extra arguments: its exit code and stderr (it must
+/// refuse before opening an end, so the ends are never used).
+fn small(path: &str, extra: &[&str]) -> (Option<i32>, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_mochi-proxy"))
+        .args(["--protocol", path])
+        .args(extra)
+        .args(["--gcs", &format!("udpin:127.0.0.1:{}", free_port()), "--vehicle", "udpout:127.0.0.1:9"])
+        .stdin(Stdio::null())
+        .output()
+        .expect("runs mochi-proxy");
+    (out.status.code(), String::from_utf8_lossy(&out.stderr).into_owned())
+}
+
+/// The digest `mochi proxy` hands over for the protocol at `path` (its sources as read now).
+fn digest_of(path: &str) -> String {
+    let mut db = mochi::source::SourceDb::new();
+    let root = mochi::fsload::load_root(&mut db, std::path::Path::new(path)).expect("reads");
+    let mut load = |p: &std::path::Path| mochi::fsload::read_bytes(p);
+    mochi::driver::prepare(&mut db, root, &mut load, mochi::driver::Stage::Names).expect("lowers");
+    mochi::proxy::handoff::verified_digest(&db, root).expect("a digest")
+}
+
+/// Run by hand, the small executable enforces no protocol `mochi proxy` did not verify: one
+/// without a digest (here a protocol `mochi check` rejects) is refused with E0801, and so is
+/// a verified protocol changed after its digest was computed. The same file with the right
+/// digest starts.
+#[test]
+fn mochi_proxy_refuses_a_protocol_without_the_digest_of_its_verification() {
+    let rejected = "choreographies/mavlink/rejected/E0316-rally-count-beyond-storage.chor";
+    let (code, err) = small(rejected, &[]);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("error[E0801]") && err.contains("was not verified by `mochi proxy`"), "{err}");
+    // A digest of other bytes is refused too.
+    let (code, err) = small(rejected, &["--verified", &digest_of("choreographies/mavlink/param-set.chor")]);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("error[E0801]") && err.contains("is not what `mochi proxy` verified"), "{err}");
+
+    // A verified protocol, copied with the profiles it imports: with its digest it starts;
+    // with an import changed afterwards, it is refused.
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("handoff-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("profiles")).unwrap();
+    let copy = dir.join("param-set.chor");
+    std::fs::copy("choreographies/mavlink/param-set.chor", &copy).unwrap();
+    for e in std::fs::read_dir("choreographies/mavlink/profiles").unwrap() {
+        let e = e.unwrap().path();
+        std::fs::copy(&e, dir.join("profiles").join(e.file_name().unwrap())).unwrap();
+    }
+    let copy = copy.to_str().unwrap().to_string();
+    let digest = digest_of(&copy);
+    let (g, v) = (free_port(), free_port());
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_mochi-proxy"));
+    cmd.args(["--protocol", &copy, "--verified", &digest]);
+    cmd.args(["--gcs", &format!("udpin:127.0.0.1:{g}"), "--vehicle", &format!("udpout:127.0.0.1:{v}")]);
+    let p = Running::spawn(&mut cmd);
+    let start = p.wait_for(Duration::from_secs(30), |l| l["event"] == "start").expect("it starts with the digest");
+    assert_eq!(start["protocols"], serde_json::json!(["SetPitchRateMax"]), "{start}");
+    drop(p);
+    let import = dir.join("profiles/px4.mochi");
+    let text = std::fs::read_to_string(&import).unwrap();
+    std::fs::write(&import, text + "// edited after the verification\n").unwrap();
+    let (code, err) = small(&copy, &["--verified", &digest]);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("error[E0801]") && err.contains("changed since it was verified"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Without `mochi-proxy` next to it, `mochi proxy` says so and stops (exit 1) rather than
+/// enforcing in a process with Z3 unasked; `--in-process` enforces there.
+#[cfg(unix)]
+#[test]
+fn mochi_proxy_missing_is_an_error_that_says_what_to_do() {
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("alone-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let alone = dir.join("mochi");
+    let _ = std::fs::remove_file(&alone);
+    // A hard link: the same executable under another directory, no copy.
+    if std::fs::hard_link(env!("CARGO_BIN_EXE_mochi"), &alone).is_err() {
+        eprintln!("skipped: cannot link the mochi executable into {}", dir.display());
+        return;
+    }
+    let args = |extra: &[&str]| {
+        let mut c = Command::new(&alone);
+        c.args(["proxy", "--protocol", "choreographies/mavlink/param-set.chor"]);
+        c.args(["--gcs", &format!("udpin:127.0.0.1:{}", free_port())]);
+        c.args(["--vehicle", &format!("udpout:127.0.0.1:{}", free_port())]).args(extra);
+        c
+    };
+    let out = args(&[]).stdin(Stdio::null()).output().expect("runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("mochi-proxy") && err.contains("--in-process") && err.contains("cargo build"), "{err}");
+    let p = Running::spawn(&mut args(&["--in-process"]));
+    let start = p.wait_for(Duration::from_secs(60), |l| l["event"] == "start");
+    assert!(start.is_some(), "--in-process starts without mochi-proxy: {:?}", p.lines.lock().unwrap());
+    drop(p);
+    let _ = std::fs::remove_dir_all(&dir);
+}

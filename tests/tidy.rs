@@ -2,14 +2,16 @@
 //! source, checked here (as rust-analyzer's `tidy` test does):
 //!
 //! - (a) only files under `checker/verify/src/smt/` name `z3`;
-//! - (b) only the IO edge, `checker/cli/main.rs`, `checker/verify/src/fsload.rs` and
-//!   `checker/cli/io.rs`, touches the file system or the standard streams (`std::fs`,
+//! - (b) only the IO edge, `checker/cli/main.rs`, `checker/verify/src/fsload.rs`,
+//!   `checker/cli/io.rs` and `checker/proxy/main.rs` (the small enforcing executable), touches the file system or the standard streams (`std::fs`,
 //!   `File::`, `print!`, `println!`, `eprint!`, `eprintln!`, `stdout()`, `stderr()`,
 //!   `stdin()`);
 //! - (c) every `.rs` file under `checker/` starts with a `//!` module comment;
 //! - (d) only the renderer, `checker/cli/render.rs` and its files `checker/cli/render/`,
 //!   knows output formats and colours: it alone names `serde_json`, `termcolor`, `codespan`
-//!   and `NO_COLOR`;
+//!   and `NO_COLOR`, and writes JSON by hand (`"null"`, `b"null"`, `{\"` in the code); the
+//!   one other writer of JSON is the proxy's event lines, `checker/monitor/src/proxy/lines.rs`
+//!   (by hand, without serde_json: the small executable `mochi-proxy` has no renderer);
 //! - (e) only files under `checker/verify/src/geometry/` name the geometry crates
 //!   (`parry3d`, `nalgebra`, `urdf_rs`, `stl_io`, `tobj`, `roxmltree`); `roxmltree` may
 //!   also be named under `checker/core/src/dialect/` (the reader of the MAVLink XML
@@ -24,7 +26,8 @@
 //!   alone), names only the modules of the verification core (`hir`, `lower`, `dialect`,
 //!   `exact`, `sigma`, `project`, `syntax`, `source`, `diag`) and its own (`mavio`,
 //!   `monitor`), never `z3` or `parry3d`: it must run without the solver and the geometry
-//!   engine;
+//!   engine; the small executable `checker/proxy/` names only `mochi_monitor` (never the
+//!   library `mochi::`, `mochi_verify`, `z3` or `parry3d`), so it links neither;
 //! - (i) the MAVLink readers, `checker/monitor/src/mavio/`, stand alone: they name no other
 //!   module of mochi (`crate::` only as `crate::mavio`), no `z3` and no geometry crate, so
 //!   the run-time side (the monitor, the proxy) can use them without the verifier.
@@ -42,7 +45,8 @@
 use std::path::{Path, PathBuf};
 
 /// The IO edge: the only files that may touch the file system and the standard streams.
-const IO_EDGE: &[&str] = &["checker/cli/main.rs", "checker/verify/src/fsload.rs", "checker/cli/io.rs"];
+const IO_EDGE: &[&str] =
+    &["checker/cli/main.rs", "checker/verify/src/fsload.rs", "checker/cli/io.rs", "checker/proxy/main.rs"];
 
 /// Files that still do IO outside the edge, each with the reason and who removes it. The
 /// lead removes an entry when the branch that fixes it is merged; the test fails if an
@@ -285,6 +289,23 @@ fn the_monitor_names_only_the_core() {
     );
 }
 
+/// Rule (h), the small executable: `checker/proxy/` names the monitor's crate and nothing of
+/// the verifier, so `mochi-proxy` links no Z3 and no geometry engine (tests/proxy.rs checks
+/// the running process maps no libz3).
+#[test]
+fn the_small_executable_names_only_the_monitor() {
+    let files = code_sources();
+    let small: Vec<&(String, String)> = files.iter().filter(|(f, _)| f.starts_with("checker/proxy/")).collect();
+    assert!(!small.is_empty(), "no checker/proxy/: is the rule stale?");
+    let bad: Vec<String> =
+        small.iter().flat_map(|(f, t)| hits(f, t, &["mochi::", "mochi_verify", "z3", "parry3d", "clap"])).collect();
+    assert!(bad.is_empty(), "checker/proxy/ may name only mochi_monitor (and std):\n{}", bad.join("\n"));
+    assert!(
+        small.iter().any(|(f, t)| !hits(f, t, &["mochi_monitor"]).is_empty()),
+        "checker/proxy/ names no mochi_monitor"
+    );
+}
+
 #[test]
 fn the_monitor_rule_finds_foreign_modules() {
     assert_eq!(foreign_modules("use crate::smt::goals; crate::hir::Expr", MONITOR_MAY_NAME), ["smt"]);
@@ -292,27 +313,47 @@ fn the_monitor_rule_finds_foreign_modules() {
     assert!(foreign_modules("use crate::exact::Rat; my_crate::smt", MONITOR_MAY_NAME).is_empty());
 }
 
+/// The one writer of JSON outside the renderer (rule (d)): the proxy's event lines.
+const JSON_WRITER: &str = "checker/monitor/src/proxy/lines.rs";
+
+/// What writing JSON by hand looks like in the code (rule (d)).
+const JSON_BY_HAND: &[&str] = &["\"null\"", "b\"null\"", "{\\\""];
+
 #[test]
 fn only_render_knows_formats_and_colours() {
     let words = ["serde_json", "termcolor", "codespan", "NO_COLOR"];
-    let bad: Vec<String> = code_sources()
+    let files = code_sources();
+    let bad: Vec<String> = files
         .iter()
         .filter(|(f, _)| f != "checker/cli/render.rs" && !f.starts_with("checker/cli/render/"))
         .flat_map(|(f, t)| {
-            let words: Vec<&str> = words
+            let mut words: Vec<&str> = words
                 .iter()
                 .copied()
                 .filter(|w| !(*w == "serde_json" && f == "checker/monitor/src/mavio/mission.rs"))
                 .collect();
+            if f != JSON_WRITER {
+                words.extend(JSON_BY_HAND);
+            }
             hits(f, t, &words)
         })
         .collect();
     assert!(
         bad.is_empty(),
-        "only checker/cli/render.rs and checker/cli/render/ build JSON and decide colour (ARCHITECTURE.md); \
-         return data and let the renderer render it:\n{}",
+        "only checker/cli/render.rs and checker/cli/render/ build JSON and decide colour (ARCHITECTURE.md), \
+         and {JSON_WRITER} the proxy's event lines; return data and let the renderer render it:\n{}",
         bad.join("\n")
     );
+    // The exception is not stale: the writer writes JSON by hand.
+    let writer = &files.iter().find(|(f, _)| f == JSON_WRITER).expect("the proxy's event writer").1;
+    assert!(!hits(JSON_WRITER, writer, JSON_BY_HAND).is_empty(), "{JSON_WRITER} writes no JSON: is the rule stale?");
+}
+
+#[test]
+fn the_json_rule_finds_json_written_by_hand() {
+    let text = "//! m\nfn f(o: &mut Vec<u8>) { o.extend_from_slice(b\"null\"); }\nfn g() -> String { format!(\"{\\\"a\\\":1}\") }\n";
+    assert_eq!(hits("x.rs", text, JSON_BY_HAND).len(), 2);
+    assert!(hits("x.rs", "let s = \"numbers and null\";\n", JSON_BY_HAND).is_empty());
 }
 
 /// The crates no manifest of the core may name (rule (g)): the solver, the geometry engine

@@ -13,8 +13,10 @@
 //! ([`text`], through codespan-reporting, with the user's text escaped and spans clamped),
 //! locations in JSON, and the colour decision. Each subcommand's output is a file of
 //! `render/`: `report.rs` (`mochi check`), `project.rs`, `explain.rs`, `simulation.rs`,
-//! `monitor.rs`, `proxy.rs`, `mission.rs`; their functions are re-exported here
-//! (`render::report_json`, `render::monitor_text`, ...).
+//! `monitor.rs`, `mission.rs`; their functions are re-exported here
+//! (`render::report_json`, `render::monitor_text`, ...). The proxy's event lines are not
+//! here: the small enforcing executable writes them without this renderer
+//! (`checker/monitor/src/proxy/lines.rs`).
 
 use crate::diag::{Diagnostic, Severity};
 use crate::source::{SourceDb, Span};
@@ -34,7 +36,6 @@ mod explain;
 mod mission;
 mod monitor;
 mod project;
-mod proxy;
 mod report;
 mod simulation;
 
@@ -42,7 +43,6 @@ pub use explain::{code_list_text, explain_text};
 pub use mission::{mission_json, MissionFile, MissionList, MissionViolation};
 pub use monitor::{monitor_json_text, monitor_text, MonitoredLog, MonitoredSession};
 pub use project::{local_json, local_text, locals_json, locals_text};
-pub use proxy::{proxy_event_json, proxy_start_json};
 pub use report::{
     clearance_json, clearance_text, diagnostic_json, diagnostics_text, no_report_json, report_json, report_text,
     run_summary_json, run_summary_text, summary_text, RunSummary, MAX_SHOWN, MAX_SHOWN_PER_CODE,

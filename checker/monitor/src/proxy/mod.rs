@@ -25,6 +25,8 @@
 //! session, or starts a new one if it is a first message, as it would have anyway.
 
 pub mod endpoint;
+pub mod handoff;
+pub mod lines;
 
 pub use endpoint::{Endpoint, Port};
 
