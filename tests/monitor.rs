@@ -1114,6 +1114,8 @@ fn the_compiled_evaluator_finds_what_the_tree_evaluator_finds_on_every_capture()
         }
     }
     assert!(steps > 100, "the captures exercised the protocols {steps} times only");
+}
+
 /// A frame to send at a time: its source end, its message and its time (µs).
 type TimedFrame = ((u8, u8), (u32, Vec<u8>), u64);
 
@@ -1296,6 +1298,8 @@ fn calibration_and_parachute_end_by_time_as_verified() {
         }
         assert!(m.finish().iter().all(|s| s.conformant));
     }
+}
+
 /// The proxy's event lines allocate nothing per message once their buffer has grown: a step,
 /// an end and a late message (the events of conforming traffic) are written from integers
 /// and `&'static str`s into the reused buffer (checker/monitor/src/proxy/lines.rs).
