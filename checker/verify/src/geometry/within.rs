@@ -100,9 +100,7 @@ pub fn point_outside(owner: &Pose3, body: &Solid, region: &[(Pose3, &Solid)], to
         }
         let triangle = Triangle::new(w[0], w[1], w[2]);
         let Some(normal) = triangle.normal() else { continue };
-        let Ok(Some(c)) =
-            parry3d::query::contact(&bp, body.shape.as_ref(), &Pose3::identity(), &triangle, 0.0)
-        else {
+        let Ok(Some(c)) = parry3d::query::contact(&bp, body.shape.as_ref(), &Pose3::identity(), &triangle, 0.0) else {
             continue;
         };
         if c.dist.is_nan() || c.dist >= -2.0 * tol {
@@ -164,8 +162,8 @@ mod tests {
         assert_eq!(point_outside(&identity(), &low, &region, 1e-9), None);
         // A box wider than the slot whose corners all lie in the walls' tops, its middle
         // over the slot: only the triangle test finds it.
-        let bridge = Solid::mochi_box(0.2, 0.1, 0.02, nalgebra::Isometry3::translation(0.0, 0.0, 0.07), "bridge")
-            .expect("box");
+        let bridge =
+            Solid::mochi_box(0.2, 0.1, 0.02, nalgebra::Isometry3::translation(0.0, 0.0, 0.07), "bridge").expect("box");
         let p = point_outside(&identity(), &bridge, &region, 1e-9).expect("the middle is over the slot");
         assert!(!solid_contains(&identity(), &c, p, 1e-9), "{p:?}");
     }

@@ -474,12 +474,12 @@ impl Runner<'_, '_> {
             for p in out.into_iter().chain(geometry::boundary_points(owner, solid, 1e-6)) {
                 let outside = out.is_some_and(|q| q == p)
                     || match &f {
-                    Fp::Pred(..) if prog.role(o.role).mounted_on.is_none() => {
-                        let point = p.map(|c| Num::exact(Rat::from_float(c).unwrap_or_default()));
-                        self.in_footprint(o, &point) == Tri::False
-                    }
-                    _ => false,
-                };
+                        Fp::Pred(..) if prog.role(o.role).mounted_on.is_none() => {
+                            let point = p.map(|c| Num::exact(Rat::from_float(c).unwrap_or_default()));
+                            self.in_footprint(o, &point) == Tri::False
+                        }
+                        _ => false,
+                    };
                 if outside {
                     let msg = format!(
                         "{context}: the body of `{}` ({}, solid `{}`) leaves the footprint of `{}` at {} at time {}; {}",
