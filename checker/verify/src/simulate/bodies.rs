@@ -121,7 +121,7 @@ impl<'p> Runner<'_, 'p> {
                     return false;
                 }
             }
-            let others = movers[i + 1..].iter().map(|x| (x, "")).chain(still.iter().map(|x| (x, ", waiting")));
+            let others = movers[i + 1..].iter().map(|x| (x, "")).chain(still.iter().map(|x| (x, ", waiting,")));
             for ((s, other), how) in others {
                 if attached(prog, *r, *s) {
                     continue;
