@@ -439,6 +439,61 @@ fn the_simulator_finds_the_collisions_of_rejected_examples() {
     }
 }
 
+/// The simulator reads a concave mesh footprint as the region its triangles bound: a box
+/// whose top stands in the slot of a cradle (tests/findings/body-in-the-hollow-of-a-mesh-footprint.chor,
+/// inside the cradle's hull) leaves its footprint, and a pin standing in the slot is inside
+/// the box. Reading the footprint as its hull found nothing.
+#[test]
+fn the_simulator_finds_a_body_in_the_hollow_of_a_mesh_footprint() {
+    let path = "tests/findings/body-in-the-hollow-of-a-mesh-footprint.chor";
+    let r = simulate_path(path, &cfg(2, 10, 7));
+    let v = r.findings.iter().find(|f| f.kind == Kind::Violation);
+    let v = v.unwrap_or_else(|| panic!("{path}: no body outside its footprint found: {r:?}"));
+    assert!(v.message.contains("the body of `P` (Sled, solid `box`) leaves the footprint of `hold`"), "{}", v.message);
+}
+
+/// Bodies, not only footprints: a sled that has ended its motion and waits stands where its
+/// motion left it, and the other sled's box backs into it, while the footprints of the two
+/// motions, at their own times, never meet. The simulator places both real bodies at each
+/// sampled time and finds the contact. (B's motion leaves A out of the `dt`, which the
+/// checks reject, E0309: this is a test of the simulator's eyes, not of a verdict.)
+#[test]
+fn the_simulator_finds_a_moving_body_that_meets_a_waiting_one() {
+    let src = "robot Sled {
+  state x: real;
+  geometry: box(0.5, 0.4, 0.1) at pose(x, 0, 0);
+  invariant: -10 <= x <= 10;
+}
+motion Sled.slide(xf: real) {
+  interruptible: false;
+  pre: x < xf;
+  guarantee: old(x) <= x <= xf;
+  post: x == xf;
+  footprint(px, py, pz): old(x) - 0.25 <= px <= xf + 0.25 && -0.2 <= py <= 0.2 && 0 <= pz <= 0.1;
+  duration: [1, 1];
+}
+motion Sled.back(xf: real) {
+  interruptible: false;
+  pre: xf < x;
+  guarantee: xf <= x <= old(x);
+  post: x == xf;
+  footprint(px, py, pz): xf - 0.25 <= px <= old(x) + 0.25 && -0.2 <= py <= 0.2 && 0 <= pz <= 0.1;
+  duration: [1, 1];
+}
+system S {
+  participant A: Sled { init: x == 0; at: pose(0, 0, 0); }
+  participant B: Sled { init: x == 0; at: pose(2, 0, 0); }
+}
+choreography G = dt<A: slide(1)>. A -> B: done. dt<B: back(-0.7)>. end;
+process A = dt<slide(1)>.B!done.end;
+process B = A?done.dt<back(-0.7)>.end;
+";
+    let (_, r) = check_and_simulate(src, &cfg(2, 10, 3));
+    let c = r.findings.iter().find(|f| f.kind == Kind::Collision);
+    let c = c.unwrap_or_else(|| panic!("no collision of the bodies found: {r:?}"));
+    assert!(c.message.contains("the bodies of `B` and `A`, waiting, meet"), "{}", c.message);
+}
+
 /// The simulator finds what the other rejected [AGCOMP] examples get wrong: an
 /// environment allowed to break the cart's assumption (E0403), a non-interruptible pick
 /// outlasting the brake the cart waits on (E0405), a motion that cannot end (E0408).

@@ -560,18 +560,36 @@ fn taylor(f: Builtin, x: &Num) -> Option<Num> {
         return None;
     }
     const DEGREE: u32 = 79;
-    let (mut term, mut sum) = (Rat::one(), Rat::zero());
-    for k in 0..=DEGREE {
-        if k > 0 {
-            term = term * &m / Rat::from_integer(BigInt::from(k));
-        }
+    // The partial sum Σ ± m^k / k! over the used k, exactly, over one denominator: with
+    // m = p / q (q > 0), each term is p^k q^(D-k) (D! / k!) / (q^D D!). Integer products
+    // only, and one reduction at the end (a sum of rationals reduced at every step spent
+    // most of its time in gcds of ever larger numbers).
+    let (p, q) = (m.numer().clone(), m.denom().clone());
+    let mut ppow = Vec::with_capacity(DEGREE as usize + 1);
+    ppow.push(BigInt::one());
+    for k in 1..=DEGREE as usize {
+        let next = &ppow[k - 1] * &p;
+        ppow.push(next);
+    }
+    let (mut num, mut qpow, mut ratio) = (BigInt::zero(), BigInt::one(), BigInt::one());
+    for k in (0..=DEGREE).rev() {
         // sin: k = 1, 3, 5, ... with signs + - + ...; cos: k = 0, 2, 4, ...
         let used = if f == Builtin::Sin { k % 2 == 1 } else { k % 2 == 0 };
         if used {
             let negative = if f == Builtin::Sin { k % 4 == 3 } else { k % 4 == 2 };
-            sum = if negative { sum - &term } else { sum + &term };
+            let term = &ppow[k as usize] * &qpow * &ratio;
+            if negative {
+                num -= term;
+            } else {
+                num += term;
+            }
         }
+        // From k to k - 1: q^(D-k+1) and D! / (k-1)! = (D! / k!) k.
+        qpow *= &q;
+        ratio *= BigInt::from(k);
     }
+    let factorial = (1..=DEGREE).fold(BigInt::one(), |a, k| a * BigInt::from(k));
+    let sum = Rat::new(num, q.pow(DEGREE) * factorial);
     // |m|^80 / 80! <= 8^80 / 80! < 1e-45; the interval's half width; rounding to 1e-40.
     let grid = BigInt::from(10u8).pow(40);
     let pad =
@@ -587,6 +605,29 @@ fn taylor(f: Builtin, x: &Num) -> Option<Num> {
 /// by a margin (1e-9 plus the interval's width: both functions are 1-Lipschitz), and all
 /// of `[-1, 1]` for wide or huge arguments.
 pub fn trig(f: Builtin, x: &Num) -> Num {
+    // The simulator evaluates the same few angles (a pose's, a state's heading) at every
+    // point it tests: the enclosures are remembered per thread (a function of the
+    // argument alone, so the answer is the same), up to a bounded number of arguments.
+    type Memo = std::collections::HashMap<(bool, Rat, Rat), Num>;
+    thread_local! {
+        static MEMO: std::cell::RefCell<Memo> = std::cell::RefCell::new(Memo::new());
+    }
+    let key = (f == Builtin::Sin, x.lo.clone(), x.hi.clone());
+    if let Some(v) = MEMO.with(|m| m.borrow().get(&key).cloned()) {
+        return v;
+    }
+    let v = trig_uncached(f, x);
+    MEMO.with(|m| {
+        let mut m = m.borrow_mut();
+        if m.len() >= 4096 {
+            m.clear();
+        }
+        m.insert(key, v.clone());
+    });
+    v
+}
+
+fn trig_uncached(f: Builtin, x: &Num) -> Num {
     let full = Num::range(Rat::from_integer(BigInt::from(-1)), Rat::one());
     if x.value().is_some_and(Zero::is_zero) {
         return Num::int(if f == Builtin::Sin { 0 } else { 1 });

@@ -299,12 +299,28 @@ impl Robot {
 
     /// Per link, `(frame, solids)`: upper bounds on the distance from the root's origin of
     /// the link's frame and of any point of its collision geometry, over every
-    /// configuration within the joint limits. Along the chain: the sum of the joint-origin
-    /// offsets and of each prismatic joint's largest `|value|` within its limits (rotations
-    /// preserve lengths), plus the link's bounding radius for its solids. Infinite when a
-    /// prismatic joint has no limits (a mimic of a continuous joint) or the sum overflows.
-    /// Linear in the number of links.
+    /// configuration the model allows. Along the chain: the sum of the joint-origin offsets
+    /// and of each prismatic joint's largest `|value|` within its limits (rotations
+    /// preserve lengths), plus the link's bounding radius for its solids. Infinite below a
+    /// prismatic joint whose variable's limits are not a finite range `lower < upper`
+    /// (no limits: a mimic of a continuous joint; a `<limit>` without positions, URDF's
+    /// `0` and `0`; `lower` above `upper`), because those are exactly the limits the kind's
+    /// invariant does not receive (`space::world::add_joint_limits`): the joint then slides
+    /// as far as the contracts let it, which the URDF does not bound. Infinite also when
+    /// the sum overflows. Linear in the number of links.
     pub fn reach(&self) -> Vec<(f64, f64)> {
+        self.chain_reach(true)
+    }
+
+    /// [`Robot::reach`] with every prismatic joint's travel read from the numbers its
+    /// `<limit>` writes, whether or not they are a range: the size of the file's own
+    /// numbers, for the URDF size check (E0530), never a bound on where a
+    /// link can be.
+    pub fn written_reach(&self) -> Vec<(f64, f64)> {
+        self.chain_reach(false)
+    }
+
+    fn chain_reach(&self, range_only: bool) -> Vec<(f64, f64)> {
         let n = self.links.len();
         let mut frame = vec![0.0f64; n];
         for &c in &self.order[1..] {
@@ -314,8 +330,10 @@ impl Robot {
             if jt.kind == JointKind::Prismatic {
                 r += match self.drive[j] {
                     Some((v, m, o)) => match self.joints[self.vars[v]].limits {
-                        Some((lo, hi)) => (m * lo + o).abs().max((m * hi + o).abs()),
-                        None => f64::INFINITY,
+                        Some((lo, hi)) if !range_only || (lo.is_finite() && hi.is_finite() && lo < hi) => {
+                            (m * lo + o).abs().max((m * hi + o).abs())
+                        }
+                        _ => f64::INFINITY,
                     },
                     None => 0.0,
                 };
@@ -443,6 +461,44 @@ mod tests {
             vec![joint("j1", 0, 1, 0.0), joint("j2", 1, 2, 1.0)],
         )
         .unwrap()
+    }
+
+    /// A base and a carriage on a prismatic joint along x whose limits are `limits`, the
+    /// carriage a sphere of radius 0.1 at its frame.
+    fn slider(limits: Option<(f64, f64)>) -> Robot {
+        let link = |name: &str, solids| Link { name: name.into(), solids };
+        let ball = Solid::sphere(0.1, Isometry3::identity(), "ball").unwrap();
+        let joint = Joint {
+            name: "slide".into(),
+            kind: JointKind::Prismatic,
+            parent: 0,
+            child: 1,
+            origin: Isometry3::translation(0.0, 0.0, 0.5),
+            axis: Vector3::x_axis(),
+            limits,
+            velocity: None,
+            mimic: None,
+        };
+        Robot::new("slider".into(), vec![link("base", vec![]), link("carriage", vec![ball])], vec![joint]).unwrap()
+    }
+
+    #[test]
+    fn a_slider_reaches_as_far_as_its_limits_and_without_a_range_without_bound() {
+        // Limits [-1, 2]: the frame at most 0.5 + 2 from the root, the ball 0.1 beyond.
+        let r = slider(Some((-1.0, 2.0))).reach();
+        assert!((r[1].0 - 2.5).abs() < 1e-12 && (r[1].1 - 2.6).abs() < 1e-12, "{r:?}");
+        // The carriage at slide = 1.5 (the kind's invariant allows it: URDF's 0 and 0, or
+        // an upper below the lower, are not given to it) is 1.58 m from the root, beyond
+        // any finite reach the limits would give.
+        for limits in [Some((0.0, 0.0)), Some((1.0, -1.0)), None] {
+            let s = slider(limits);
+            let far = s.link_poses(&[1.5])[1].translation.vector.norm();
+            assert!(far > 1.5);
+            assert_eq!(s.reach()[1].0, f64::INFINITY, "{limits:?}");
+            assert_eq!(s.reach()[1].1, f64::INFINITY, "{limits:?}");
+        }
+        // The file's own numbers, for the size check: 0 and 0 are small.
+        assert!((slider(Some((0.0, 0.0))).written_reach()[1].1 - 0.6).abs() < 1e-12);
     }
 
     #[test]

@@ -377,7 +377,7 @@ fn poly_volume(c: &parry3d::shape::ConvexPolyhedron) -> f64 {
 
 /// The generalised winding number of the triangles about `p`: 1 (or −1) inside a closed
 /// oriented mesh, 0 outside (Van Oosterom and Strackee's solid angle per triangle).
-fn winding(tri: &[[Point3<f64>; 3]], p: &Point3<f64>) -> f64 {
+pub(crate) fn winding(tri: &[[Point3<f64>; 3]], p: &Point3<f64>) -> f64 {
     let mut sum = 0.0;
     for [a, b, c] in tri {
         let (a, b, c) = (a - p, b - p, c - p);

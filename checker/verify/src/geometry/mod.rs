@@ -8,6 +8,7 @@
 //! - [`mesh`]: STL and OBJ meshes, as the convex hulls of their vertices;
 //! - [`urdf`]: URDF files to kinematic trees, with diagnostics pointing into the URDF;
 //! - [`kinematics`]: forward kinematics and sound displacement bounds;
+//! - [`within`]: whether a placed solid lies within others, a mesh read as its triangles;
 //! - [`placement`]: bounds on how far a point placed by a chain of poses moves over a box;
 //! - [`search`]: the geometric search: the branch and bound over boxes of configurations
 //!   (clearance, first contact, [`search::bnb`]); the checks' collision questions posed to
@@ -22,6 +23,7 @@ pub mod placement;
 pub mod search;
 pub mod shape;
 pub mod urdf;
+pub mod within;
 
 pub use kinematics::Robot;
 pub use shape::Solid;

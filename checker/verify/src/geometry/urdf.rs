@@ -287,7 +287,9 @@ pub fn load_robot(
     })?;
     // The robot's size: finite, and small enough that no pose or distance overflows. The
     // reach only grows down a chain, so the link to blame is one whose parent is within.
-    let reach = robot.reach();
+    // The file's own numbers: a slider whose limits are no range is not too large for
+    // them (how far it slides is the contracts' business; `Robot::reach` says unbounded).
+    let reach = robot.written_reach();
     let over = |r: f64| !within_reach(r);
     let blame = (0..robot.links.len())
         .find(|&l| over(reach[l].1) && robot.parent_joint(l).is_none_or(|j| !over(reach[robot.joints[j].parent].0)));

@@ -23,7 +23,10 @@
 //!   point (Z3 at the concrete states, replayed exactly); footprints and obstacles that
 //!   are solids (meshes, URDF links, shapes, mounted on carriers) are placed at the
 //!   concrete poses and their parry distance is at most 0. A robot's body must lie in its
-//!   footprint.
+//!   footprint (a mesh footprint read as the region its triangles bound, hollows outside).
+//! - [`bodies`]: the **real bodies** (shapes, meshes, URDF links at the sampled joint
+//!   values, mounted on their carriers) against every obstacle and every other body, those
+//!   of the participants that wait included, at their last state.
 //! - [`session`]: protocols without motion (MAVLink sessions) run as each participant's
 //!   projection, with only what that participant knows: a read of a value it does not
 //!   have is a finding.
@@ -36,8 +39,10 @@
 //! This is testing, not proof: it samples a few trajectories at a few times. A finding
 //! in a choreography mochi verified is a bug in mochi (or in the contracts' reading);
 //! no finding proves nothing. Participants that have finished a motion and wait for
-//! their next event are not placed (they have no footprint then).
+//! their next event have no footprint then: their bodies, at their last state, are
+//! compared with the bodies that move (outside `*`).
 
+mod bodies;
 mod lockstep;
 mod motion;
 mod par;

@@ -333,8 +333,9 @@ impl Runner<'_, '_> {
     }
 
     /// The participants of a joint motion at one time: every pair's footprints apart,
-    /// each footprint clear of the obstacles, each body within its footprint. False when
-    /// the run must stop.
+    /// each footprint clear of the obstacles, each body within its footprint, and the real
+    /// bodies apart from the obstacles, from each other and (outside `*`) from the bodies
+    /// of the participants that wait ([`super::bodies`]). False when the run must stop.
     pub(super) fn occupied(&mut self, now: &[Occupant], t: &Rat, who: &str) -> bool {
         let moving: Vec<&Occupant> = now.iter().collect();
         for i in 0..now.len() {
@@ -345,6 +346,7 @@ impl Runner<'_, '_> {
             }
         }
         now.iter().all(|o| self.clear_of_obstacles(o, t, who, &moving) && self.body_in_footprint(o, t, who, &moving))
+            && self.bodies_apart(&moving, t, who, self.par_depth == 0)
     }
 
     /// An argument of a primitive now: its value (exact, or an enclosure such as that of

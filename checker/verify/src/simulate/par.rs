@@ -153,7 +153,8 @@ impl Runner<'_, '_> {
                 self.prog.prim(y.app.prim).name,
                 self.prog.role_name(y.role)
             );
-            if !self.collide(&occ[0], &occ[1], &t, &context, &[&occ[0], &occ[1]]) {
+            let both = [&occ[0], &occ[1]];
+            if !self.collide(&occ[0], &occ[1], &t, &context, &both) || !self.bodies_apart(&both, &t, &context, false) {
                 return false;
             }
         }

@@ -48,17 +48,17 @@ pub(super) fn footprint(prog: &Program, prim: PrimId) -> Fp<'_> {
 
 /// Whether one of `a`, `b` rides (directly or through other carriers) on the other: they
 /// are attached at the mount, as two links of one robot, as the checks read them.
-fn attached(prog: &Program, a: RoleId, b: RoleId) -> bool {
+pub(super) fn attached(prog: &Program, a: RoleId, b: RoleId) -> bool {
     prog.carriers(a).iter().any(|m| m.carrier == b) || prog.carriers(b).iter().any(|m| m.carrier == a)
 }
 
 /// How two placed sets of solids relate.
-enum Meet {
+pub(super) enum Meet {
     Apart,
     Contact { distance: f64, point: [f64; 3], names: [String; 2] },
 }
 
-fn meet(a: &[(Pose3, &Solid)], b: &[(Pose3, &Solid)]) -> Option<Meet> {
+pub(super) fn meet(a: &[(Pose3, &Solid)], b: &[(Pose3, &Solid)]) -> Option<Meet> {
     let c = geometry::distance(a, b)?;
     if c.distance > 0.0 {
         return Some(Meet::Apart);
@@ -68,7 +68,9 @@ fn meet(a: &[(Pose3, &Solid)], b: &[(Pose3, &Solid)]) -> Option<Meet> {
     if c.relation != Relation::HullsTouch {
         return Some(Meet::Contact { distance: c.distance, point, names });
     }
-    // Hulls of meshes touch: the meshes themselves must meet.
+    // Hulls of meshes touch: the meshes themselves must meet, surface to surface, or one
+    // solid lies inside the other's closed mesh (a point of it inside, by the winding
+    // number), where the surfaces are apart.
     for (pa, sa) in a {
         for (pb, sb) in b {
             let (wa, wb) = (pa * sa.pose, pb * sb.pose);
@@ -81,12 +83,18 @@ fn meet(a: &[(Pose3, &Solid)], b: &[(Pose3, &Solid)]) -> Option<Meet> {
                     });
                 }
             }
+            let inner = |(po, so): (&Pose3, &Solid), (pi, si): (&Pose3, &Solid)| {
+                geometry::within::some_point(pi, si).filter(|p| geometry::within::solid_contains(po, so, *p, 0.0))
+            };
+            if let Some(point) = inner((pa, sa), (pb, sb)).or_else(|| inner((pb, sb), (pa, sa))) {
+                return Some(Meet::Contact { distance: 0.0, point, names: [sa.name.clone(), sb.name.clone()] });
+            }
         }
     }
     Some(Meet::Apart)
 }
 
-fn show_point(p: &[f64; 3]) -> String {
+pub(super) fn show_point(p: &[f64; 3]) -> String {
     format!("({:.6}, {:.6}, {:.6})", p[0], p[1], p[2])
 }
 
@@ -102,7 +110,7 @@ impl Runner<'_, '_> {
 
     /// A pose whose arguments read the environment `env`, at its value (the middle of
     /// an enclosure, such as that of `pi / 2`).
-    fn pose_at(&self, pose: &Pose, env: &dyn exact::Env) -> Result<Pose3, String> {
+    pub(super) fn pose_at(&self, pose: &Pose, env: &dyn exact::Env) -> Result<Pose3, String> {
         let mut a = [0.0; 6];
         for (k, e) in pose.args.iter().enumerate() {
             let v = exact::eval(self.prog, e, env)?;
@@ -143,7 +151,7 @@ impl Runner<'_, '_> {
     /// `pieces` of participant `r` placed in the world: their owner frames' poses.
     /// `env` reads the piece poses' variables (own state, and for a footprint `old(x)`,
     /// parameters and `clock`); `now` drives URDF joints.
-    fn place<'w>(
+    pub(super) fn place<'w>(
         &self,
         r: RoleId,
         pieces: &'w [Piece],
@@ -318,7 +326,9 @@ impl Runner<'_, '_> {
     /// contact of solids. False when the run must stop.
     pub(super) fn clear_of_obstacles(&mut self, o: &Occupant, t: &Rat, context: &str, moving: &[&Occupant]) -> bool {
         let prog = self.prog;
-        let Some(world) = crate::space::world::shared(prog) else { return true };
+        if crate::space::world::of(prog).is_none() {
+            return true;
+        }
         for (k, obstacle) in prog.obstacles.iter().enumerate() {
             let f = footprint(prog, o.app.prim);
             if let Fp::All = f {
@@ -406,21 +416,7 @@ impl Runner<'_, '_> {
                     return false;
                 }
             };
-            let placed = self.footprint_solids(o, pieces, moving).and_then(|a| {
-                let base = match &obstacle.pose {
-                    Some(p) => self.pose_at(p, &|_: &Var| None)?,
-                    None => geometry::identity(),
-                };
-                let mut b = Vec::new();
-                for p in world.obstacles.get(k).map(|v| v.as_slice()).unwrap_or_default() {
-                    let pose = match &p.place {
-                        Some(pl) => base * self.pose_at(pl, &|_: &Var| None)?,
-                        None => base,
-                    };
-                    b.push((pose, &*p.solid));
-                }
-                Ok((a, b))
-            });
+            let placed = self.footprint_solids(o, pieces, moving).and_then(|a| Ok((a, self.obstacle_solids(k)?)));
             let (a, b) = match placed {
                 Ok(x) => x,
                 Err(e) => {
@@ -472,15 +468,18 @@ impl Runner<'_, '_> {
             _ => None,
         };
         for (owner, solid) in &placed {
-            for p in geometry::boundary_points(owner, solid, 1e-6) {
-                let outside = match &f {
-                    Fp::Pred(..) if prog.role(o.role).mounted_on.is_none() => {
-                        let point = p.map(|c| Num::exact(Rat::from_float(c).unwrap_or_default()));
-                        self.in_footprint(o, &point) == Tri::False
-                    }
-                    Fp::Solids(_) => fp_solids.as_ref().is_some_and(|s| !geometry::contains(s, p, 1e-9)),
-                    _ => false,
-                };
+            // Solids: each solid of the body within their union, a mesh read as the
+            // region its triangles bound (its hollows are outside), not as its hull.
+            let out = fp_solids.as_ref().and_then(|s| geometry::within::point_outside(owner, solid, s, 1e-9));
+            for p in out.into_iter().chain(geometry::boundary_points(owner, solid, 1e-6)) {
+                let outside = out.is_some_and(|q| q == p)
+                    || match &f {
+                        Fp::Pred(..) if prog.role(o.role).mounted_on.is_none() => {
+                            let point = p.map(|c| Num::exact(Rat::from_float(c).unwrap_or_default()));
+                            self.in_footprint(o, &point) == Tri::False
+                        }
+                        _ => false,
+                    };
                 if outside {
                     let msg = format!(
                         "{context}: the body of `{}` ({}, solid `{}`) leaves the footprint of `{}` at {} at time {}; {}",
