@@ -374,3 +374,60 @@ choreography C =
     assert!(matches!(at(2_200_100, 1, 1, &value), Outcome::Late { .. }), "a late value is not Late");
     assert_eq!(m.stats.late, 1);
 }
+
+/// A ground station's log of a flood it gave up on: its timeout fired 1 s after the value
+/// at 1.1 s, a value of the flood that was on the wire arrives at 2.2 s, and the ground
+/// station sets 1 ms later. The log is a conformant run (the station gave up before the
+/// value came and ignored it), so the set is no violation; a set 1 ms after a value that
+/// came before the bound passed still is one ("before its timeout").
+#[test]
+fn a_late_message_after_the_bound_does_not_restart_the_timeout() {
+    let mut db = SourceDb::new();
+    let prog = program(
+        &mut db,
+        "dialect common;
+system S { participant GCS; participant UAV; }
+choreography C =
+  GCS -> UAV: PARAM_REQUEST_LIST.
+  mu flood.
+    ( UAV -> GCS: PARAM_VALUE(param_index as idx {0 <= idx && idx < 10}). flood
+    + after 1000 ms by GCS.
+        GCS -> UAV: PARAM_SET(param_value as v {v <= 10}).
+        UAV -> GCS: STATUSTEXT. end );",
+    );
+    let d = prog.dialect.expect("dialect");
+    let a = Automaton::compile(&prog).expect("compiles");
+    let list = payload(d, "PARAM_REQUEST_LIST", &[("target_system", int(1)), ("target_component", int(1))], &[]);
+    let value = payload(d, "PARAM_VALUE", &[("param_index", int(3)), ("param_count", int(10))], &[]);
+    let set = payload(
+        d,
+        "PARAM_SET",
+        &[("target_system", int(1)), ("target_component", int(1)), ("param_value", Scalar::F32(2.0))],
+        &[],
+    );
+    let run = |frames: &[(u64, (u8, u8), &(u32, Vec<u8>))]| -> Vec<Outcome> {
+        let mut m = Monitor::new(vec![a.clone()]);
+        frames
+            .iter()
+            .map(|(us, (sysid, compid), (msgid, payload))| {
+                m.on_frame(&Frame {
+                    time_us: Some(*us),
+                    version: 2,
+                    sysid: *sysid,
+                    compid: *compid,
+                    msgid: *msgid,
+                    payload,
+                    signed: false,
+                    raw: &[],
+                })
+            })
+            .collect()
+    };
+    let (gcs, uav) = ((255, 190), (1, 1));
+    let late =
+        run(&[(1_000_000, gcs, &list), (1_100_000, uav, &value), (2_200_000, uav, &value), (2_201_000, gcs, &set)]);
+    assert!(matches!(late[3], Outcome::Step { .. }), "{late:?}");
+    let early =
+        run(&[(1_000_000, gcs, &list), (1_100_000, uav, &value), (1_500_000, uav, &value), (1_501_000, gcs, &set)]);
+    assert!(matches!(early[3], Outcome::Violation(_)), "{early:?}");
+}
