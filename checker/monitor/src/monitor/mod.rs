@@ -219,12 +219,6 @@ struct Session {
     /// When the current state was entered (the time of the frame that reached it, or, after
     /// a timeout, the earliest instant the timeout could fire), in µs of the frames' time.
     entered_us: Option<u64>,
-    /// The earliest instant from which the waiting role may have been waiting in the
-    /// current state: its entry time, unless the state was re-entered by messages of its
-    /// own choice that each came at least the timeout's bound after this instant (the role
-    /// may have given up before them and ignored them as late). A timeout is checked
-    /// against it (`session::fire`).
-    idle_from: Option<u64>,
     /// The state whose timeout its waiting role took last, while late messages of its
     /// abandoned branches are ignored (until the other end's first step after the timeout
     /// that is none of the abandoned choice's messages).
@@ -266,9 +260,6 @@ pub struct Monitor {
     kinds: Vec<session::EndOf>,
     /// Whether some protocol has a timeout branch (sessions may end by time).
     timed: bool,
-    /// Sessions that ended by a timeout, whose abandoned choices' messages may still be on
-    /// the wire (`session::Ghost`), oldest first, at most [`session::GHOSTS`].
-    ghosts: Vec<session::Ghost>,
     /// The ends whose kind [`Monitor::pin_end_kind`] fixed (HEARTBEATs do not change it).
     pinned: Vec<(u8, u8)>,
     pinned_kinds: bool,
@@ -324,7 +315,6 @@ impl Monitor {
             clock: None,
             kinds: Vec::with_capacity(16),
             timed,
-            ghosts: Vec::with_capacity(session::GHOSTS),
             pinned: Vec::new(),
             pinned_kinds: false,
             spoken,
@@ -458,7 +448,6 @@ impl Monitor {
             let s = &self.slots[slot];
             if session::ends_by_time(&self.protos[s.proto], s.state, s.entered_us, self.clock) {
                 self.stats.ended_by_time += 1;
-                self.remember(slot, true);
                 // `close` moves the last open session to position `k`.
                 self.close(slot, true, true);
             } else {

@@ -53,16 +53,6 @@ impl Monitor {
         }
         let a = &self.protos[p];
         let fresh = vec_fresh_check(a, &self.kinds, f);
-        if !fresh {
-            if let Some(id) = self.late_of_ended(p, f) {
-                // A message of a choice that a session abandoned by the timeout that ended
-                // it: still on the wire when its receiver gave up (docs/monitor.md, "Late
-                // messages"); no session's step, and no violation.
-                self.stats.late += 1;
-                self.stats.passed += 1;
-                return Some(Outcome::Late { session: id });
-            }
-        }
         if fresh {
             let slot = self.start(p, index);
             let o = self.step(slot, f, index, 0);
@@ -108,7 +98,6 @@ impl Monitor {
                     taken: Vec::new(),
                     evaluated: Vec::new(),
                     entered_us: None,
-                    idle_from: None,
                     late: None,
                 });
                 self.slots.len() - 1
@@ -129,7 +118,6 @@ impl Monitor {
         s.last_frame = index;
         s.violations = 0;
         s.entered_us = None;
-        s.idle_from = None;
         s.late = None;
         self.open.push(slot);
         self.stats.sessions_started += 1;
@@ -150,7 +138,6 @@ impl Monitor {
         let p = self.slots[slot].proto;
         let state = self.slots[slot].state;
         let entered = self.slots[slot].entered_us;
-        let idle_from = self.slots[slot].idle_from;
         let late = self.slots[slot].late;
         self.undo.clear();
         self.undo_strs.clear();
@@ -164,16 +151,6 @@ impl Monitor {
                 s.visited[next as usize] = true;
                 s.entered_us = f.time_us;
                 let a = &self.protos[p];
-                // A message of the state's own choice that re-enters it at least the
-                // timeout's bound after the waiting role may have started waiting: the role
-                // may have given up before it came and ignored it as late (FIFO lets such a
-                // message arrive after the timeout), so its timeout is still measured from
-                // then. Otherwise the role took it and waits afresh.
-                let given_up_before = next == state
-                    && hops == 0
-                    && matches!((idle_from, a.timeout(state), f.time_us), (Some(i), Some(t), Some(now))
-                        if now >= i.saturating_add(t.ms.saturating_mul(1000)));
-                s.idle_from = if given_up_before { idle_from } else { s.entered_us };
                 match fired {
                     Some(abandoned) => s.late = Some(abandoned),
                     None => {
@@ -193,12 +170,7 @@ impl Monitor {
                     }
                 }
                 self.stats.steps += 1;
-                self.forget_late_of(p, f);
                 if matches!(self.protos[p].states[next as usize], StateKind::End) {
-                    if self.slots[slot].late.is_some() {
-                        self.remember(slot, false);
-                    }
-                    let s = &self.slots[slot];
                     let id = s.id;
                     self.close(slot, true, true);
                     Outcome::Ended { session: id }
@@ -215,7 +187,6 @@ impl Monitor {
                 let s = &mut self.slots[slot];
                 s.state = state;
                 s.entered_us = entered;
-                s.idle_from = idle_from;
                 s.late = late;
                 while let Some((r, v)) = self.undo.pop() {
                     s.regs[r as usize] = v;
@@ -254,7 +225,7 @@ impl Monitor {
             total_ms = total_ms.saturating_add(t.ms);
             at = a.settle(t.next);
         }
-        let due = s.idle_from.or(s.entered_us).map(|e| e.saturating_add(total_ms.saturating_mul(1000)));
+        let due = s.entered_us.map(|e| e.saturating_add(total_ms.saturating_mul(1000)));
         match (f.time_us, due) {
             (Some(t), Some(due)) if t >= due => {}
             (Some(_), Some(_)) => {
@@ -277,7 +248,7 @@ impl Monitor {
             }
         }
         let mut at = first;
-        let mut entered = self.slots[slot].idle_from.or(self.slots[slot].entered_us);
+        let mut entered = self.slots[slot].entered_us;
         for _ in 0..hops {
             let Some(t) = self.protos[self.slots[slot].proto].timeout(at).copied() else { break };
             at = self.settle(slot, t.next)?;
@@ -502,89 +473,6 @@ impl Monitor {
         }
         self.free[self.slots[slot].proto].push(slot);
     }
-}
-
-/// How many sessions ended by a timeout the monitor keeps for their late messages.
-pub(super) const GHOSTS: usize = 8;
-
-/// A session that ended by a timeout: its waiting role gave up, and the session reached
-/// `end` by that timeout's branch (or by time). A message of a choice it abandoned may still
-/// be on the wire; E0326 proves the protocol on the assumption that the receiver ignores
-/// it (a message reaching a role whose session is over is no step of it), so the monitor
-/// reads it as late, not as a message outside any session.
-pub(super) struct Ghost {
-    id: u64,
-    proto: usize,
-    roles: Vec<Binding>,
-    /// The states whose choices the ending timeouts abandoned.
-    late: Vec<u32>,
-}
-
-impl Monitor {
-    /// Keeps session `slot`, ending now, for its late messages: the choice its waiting role
-    /// abandoned last (`s.late`), and with `by_time`, every choice of the chain of timeouts
-    /// from its state to `end`. The oldest kept session makes room (its buffers reused: no
-    /// allocation once [`GHOSTS`] were kept).
-    pub(super) fn remember(&mut self, slot: usize, by_time: bool) {
-        let s = &self.slots[slot];
-        let a = &self.protos[s.proto];
-        let mut g = if self.ghosts.len() >= GHOSTS {
-            self.ghosts.remove(0)
-        } else {
-            Ghost { id: 0, proto: 0, roles: Vec::with_capacity(a.roles.len()), late: Vec::with_capacity(4) }
-        };
-        g.id = s.id;
-        g.proto = s.proto;
-        g.roles.clear();
-        g.roles.extend_from_slice(&s.roles);
-        g.late.clear();
-        g.late.extend(s.late);
-        if by_time {
-            let mut at = s.state;
-            for _ in 0..a.states.len() {
-                let Some(t) = a.timeout(at) else { break };
-                g.late.push(at);
-                at = a.settle(t.next);
-            }
-        }
-        self.ghosts.push(g);
-    }
-
-    /// The kept session of protocol `p` of which the frame is a late message: a first
-    /// message of a choice it abandoned, between its ends.
-    fn late_of_ended(&self, p: usize, f: &Frame) -> Option<u64> {
-        let a = &self.protos[p];
-        self.ghosts.iter().rev().filter(|g| g.proto == p).find_map(|g| {
-            let fits = g.late.iter().any(|&l| {
-                a.edges_of(l).iter().any(|&e| {
-                    let e = &a.edges[e as usize];
-                    label_fits(e, f) && ends_fit(a, e, &g.roles, &self.kinds, f)
-                })
-            });
-            fits.then_some(g.id)
-        })
-    }
-
-    /// A step of protocol `p` from the frame's sender: late messages of that sender to the
-    /// kept sessions are over (FIFO puts them before it).
-    fn forget_late_of(&mut self, p: usize, f: &Frame) {
-        if self.ghosts.is_empty() {
-            return;
-        }
-        let a = &self.protos[p];
-        self.ghosts.retain(|g| {
-            g.proto != p
-                || !g
-                    .late
-                    .iter()
-                    .any(|&l| a.edges_of(l).iter().any(|&e| bound_to(&g.roles, a.edges[e as usize].from, f)))
-        });
-    }
-}
-
-/// Whether `role` is bound, in `roles`, to the frame's sender.
-fn bound_to(roles: &[Binding], role: crate::hir::RoleId, f: &Frame) -> bool {
-    roles.get(role.idx()).is_some_and(|b| b.sys == Some(f.sysid) && b.comp == Some(f.compid))
 }
 
 /// Whether the frame is a first message after timeouts from `state`: the number of
