@@ -14,6 +14,8 @@
 //! corpus, with its own runner, `libtest-mimic`) and `tests/monitor.rs` (its counting
 //! allocator, to measure the monitor's allocations, would count every other test's too).
 
+#[path = "asyncruns.rs"]
+mod asyncruns;
 #[path = "cli.rs"]
 mod cli;
 /// The corpus and the checking shared by `metamorphic` and `differential`.

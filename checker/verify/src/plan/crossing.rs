@@ -28,9 +28,13 @@
 //!    unchanged (an absorbing loop: `R` takes the late message as one more of a stream it
 //!    accepts anyway). Otherwise `R` would read the late message as the answer to its next
 //!    request (mavlink/mavlink#950's race), with values its refinements need not admit.
-//! 3. **Only `p` and `R` take part** in `G_i` and `G_t` up to their jumps: a third role
-//!    could receive from both, and which it gets would depend on the crossing. The rule does
-//!    not decide that case; it rejects it (never a pass).
+//! 3. **A third role.** When `G_i` is `G_t` or jumps straight back to the choice, `p` and
+//!    `R` both go on as `G_t` after the crossing (`p` from `R`'s first message of `G_t` on,
+//!    and before it `p` sends `R` only first messages of the choice), so a third role meets
+//!    exactly the messages of a run in which the timeout branch was taken: it may take part
+//!    in `G_t`. When `R` ended, `p` goes on alone in `G_i`; a third role there would meet
+//!    `p`'s branch while `R` took the timeout's: the rule does not decide that case and
+//!    rejects it (never a pass).
 //!
 //! The rule is structural (no solver): it compares global types up to locations (`Loc`s
 //! compare equal) with values by binding site, which is exact for what it accepts.
@@ -179,34 +183,6 @@ impl<'a> Crossing<'a> {
         for b in branches.iter().filter(|b| b.timeout_head().is_none()) {
             let Some(m) = crate::wf::side::first_message(b) else { continue };
             let cont: Vec<&'a Global> = steps_of(b)[1..].to_vec();
-            // 3. Only p and R take part until the branches jump or end.
-            let mut roles = Vec::new();
-            for g in cont.iter().chain(&t_steps) {
-                g.participants(&mut roles);
-            }
-            if let Some(&q) = roles.iter().find(|&&q| q != p && q != r) {
-                let qn = self.prog.role_name(q);
-                self.diags.push(
-                    Diagnostic::error(
-                        Code::TimeoutCrossing,
-                        m.loc.0,
-                        format!(
-                            "`{pn}`'s `{}` may cross `{rn}`'s timeout, and `{qn}` takes part in what follows",
-                            m.label
-                        ),
-                    )
-                    .with_label(after.loc.0, format!("`{rn}` may give up here while `{}` is on the wire", m.label))
-                    .with_note(format!(
-                        "after a crossing `{pn}` goes on in this branch and `{rn}` in the timeout branch; which \
-                         messages `{qn}` then gets depends on the crossing, which mochi does not decide"
-                    ))
-                    .with_help(format!(
-                        "let `{pn}` and `{rn}` agree first (end both branches, or jump back to the choice) and \
-                         involve `{qn}` after"
-                    )),
-                );
-                continue;
-            }
             // 1. The sender meets R's next message.
             let mut path: Vec<&'a Global> = t_steps.clone();
             path.extend(&tail);
@@ -217,6 +193,34 @@ impl<'a> Crossing<'a> {
             } else if matches!(path.as_slice(), [Global::End(_)]) {
                 // R's session is over: nothing reaches R as a step any more, and p goes on
                 // alone; it must never wait for R without a timeout of its own.
+                // 3. Here only p and R may take part until the branch jumps or ends.
+                let mut roles = Vec::new();
+                for g in cont.iter().chain(&t_steps) {
+                    g.participants(&mut roles);
+                }
+                if let Some(&q) = roles.iter().find(|&&q| q != p && q != r) {
+                    let qn = self.prog.role_name(q);
+                    self.diags.push(
+                        Diagnostic::error(
+                            Code::TimeoutCrossing,
+                            m.loc.0,
+                            format!(
+                                "`{pn}`'s `{}` may cross `{rn}`'s timeout, and `{qn}` takes part in what follows",
+                                m.label
+                            ),
+                        )
+                        .with_label(after.loc.0, format!("`{rn}` may give up here while `{}` is on the wire", m.label))
+                        .with_note(format!(
+                            "after a crossing `{pn}` goes on in this branch and `{rn}` in the timeout branch; which \
+                             messages `{qn}` then gets depends on the crossing, which mochi does not decide"
+                        ))
+                        .with_help(format!(
+                            "let `{pn}` and `{rn}` agree first (end both branches, or jump back to the choice) and \
+                             involve `{qn}` after"
+                        )),
+                    );
+                    continue;
+                }
                 let mut seen = HashSet::new();
                 let mut loops = self.loops.clone();
                 if let Some(at) = self.waits_for_ever(&cont, p, r, &mut loops, &mut seen) {
@@ -343,9 +347,19 @@ impl<'a> Crossing<'a> {
                 if decided_by_r && !own_timeout {
                     return Some(*loc);
                 }
+                // A branch of p's with no guard and no refinement is always enabled: p never
+                // has to wait for R's timeout at this choice (its part of R's timeout branch
+                // is reached only by a message from R, who sends nothing any more).
+                let p_always_sends = bs
+                    .iter()
+                    .filter_map(crate::wf::side::first_message)
+                    .any(|m| m.from == p && m.to == r && takes_anything(m));
                 for b in bs {
                     if crate::wf::side::first_message(b).is_some_and(|m| m.from == r) {
                         continue; // never taken: R sends nothing any more
+                    }
+                    if p_always_sends && b.timeout_head().is_some_and(|a| a.by == r) {
+                        continue;
                     }
                     // R's timeout branch is walked too: unless it ends, p waits there for R's
                     // message (E0324), which a p with every branch's guard false needs.

@@ -118,18 +118,36 @@ fn after_the_waiting_role_ended_the_sender_must_not_wait_for_it_for_ever() {
 }
 
 #[test]
-fn a_third_role_in_the_branches_is_not_decided_and_so_rejected() {
+fn a_third_role_is_accepted_where_both_ends_go_on_as_the_timeout_branch() {
     let three = "system S { participant P; participant Q; participant B; }";
+    // The branch goes on as the timeout branch does: B is told the same either way.
     assert_eq!(
         crossings_in(
             three,
             "P -> Q: ask. ( Q -> P: val. P -> Q: again. P -> B: log. end + after 10 ms by P. P -> Q: again. P -> B: log. end )"
         ),
-        vec!["Q -> P: val."]
-    );
-    // The third role after the two agree (past the choice's jump) is not concerned.
-    assert_eq!(
-        crossings_in(three, "mu t. ( Q -> P: val. t + after 10 ms by P. P -> Q: stop. end )"),
         Vec::<String>::new()
     );
+    // The branch jumps back to the choice: B takes part in the timeout branch only.
+    assert_eq!(
+        crossings_in(three, "mu t. ( Q -> P: val. t + after 10 ms by P. P -> Q: stop. P -> B: log. end )"),
+        Vec::<String>::new()
+    );
+    // The waiting role ended: Q goes on alone with B, undecided, so rejected.
+    assert_eq!(
+        crossings_in(three, "P -> Q: ask. ( Q -> P: val. Q -> B: log. end + after 10 ms by P. end )"),
+        vec!["Q -> P: val."]
+    );
+}
+
+#[test]
+fn a_sender_that_can_always_send_never_waits_for_the_ended_role() {
+    // After Q gave up and ended, P's next choice has an unguarded branch: P never waits
+    // there for Q's message of Q's own timeout branch (Q sends nothing any more).
+    let free =
+        "( P -> Q: ask. ( mu w. ( P -> Q: more. w + after 10 ms by Q. Q -> P: ack. end ) ) + after 5 ms by Q. end )";
+    assert_eq!(crossings(free), Vec::<String>::new());
+    // With a guard on its only branch, P may have to wait for Q's `ack` there, for ever.
+    let guarded = "mu r(n: int {0 <= n} = 1) decreases n. ( P -> Q: ask. ( mu w. ( P -> Q: [n > 0] more. w + after 10 ms by Q. Q -> P: ack. end ) ) + after 5 ms by Q. end )";
+    assert_eq!(crossings(guarded), vec!["P -> Q: ask."]);
 }

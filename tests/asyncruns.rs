@@ -1,0 +1,281 @@
+//! An independent oracle for timeouts on asynchronous links (E0326, the timeout crossing).
+//!
+//! `explore.rs` runs a protocol's projections over FIFO queues, one per ordered pair of
+//! roles, with every interleaving and every moment a timeout may fire, up to a bound, and
+//! says where a role misreads: it receives a label its state does not expect (and the message
+//! is not late), a value its refinement does not admit, a late message as a step of its
+//! protocol (unless the reception absorbs it), a message after its session is over that is
+//! not late, or the run stops with a role waiting for ever. It is written from the runs
+//! alone, not from E0326's rule. The oracle: **a protocol `mochi check` verifies has no
+//! misread run**. And the monitor (`replay.rs`) must read each explored run of a verified
+//! protocol as the explorer does: a step as a step, an ignored late message as `Late`, and a
+//! run in which every role ended as sessions that ended.
+//!
+//! Inputs: every timed protocol of `choreographies/mavlink/` (verified ones must not
+//! misread, each rejected E0326 twin must), the hand-made cases of E0326's unit tests, and
+//! generated protocols (`gen.rs`). Budget: `MOCHI_ASYNC_CASES` generated protocols
+//! (default 24); `MOCHI_LONG=1` makes it 1,500 with deeper runs; `MOCHI_GEN_SEED` picks
+//! another sequence (as in `generate.rs`). A failure prints the protocol and the run.
+
+#[path = "asyncruns/explore.rs"]
+mod explore;
+#[path = "asyncruns/gen.rs"]
+mod gen;
+#[path = "asyncruns/replay.rs"]
+mod replay;
+
+use explore::{Explored, Explorer};
+use mochi::driver::{Config, Report, Stage, Verdict};
+use mochi::hir::Program;
+use mochi::source::SourceDb;
+use replay::Watch;
+use std::path::{Path, PathBuf};
+
+fn long() -> bool {
+    std::env::var("MOCHI_LONG").is_ok_and(|v| v == "1")
+}
+
+fn cases() -> u32 {
+    std::env::var("MOCHI_ASYNC_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(if long() { 1500 } else { 24 })
+}
+
+fn seed() -> u64 {
+    std::env::var("MOCHI_GEN_SEED").ok().and_then(|v| v.parse().ok()).unwrap_or(18)
+}
+
+fn lower(src: &str) -> Option<(SourceDb, Program)> {
+    let mut db = SourceDb::new();
+    let file = db.add("timed.chor", src);
+    let mut no_imports = |_: &Path| Err(std::io::Error::other("no imports"));
+    let prog = mochi::driver::prepare(&mut db, file, &mut no_imports, Stage::Names).ok()?;
+    Some((db, prog))
+}
+
+fn check(src: &str) -> Report {
+    let mut db = SourceDb::new();
+    let mut cfg = Config::default();
+    cfg.smt.jobs = 1;
+    mochi::fsload::check_source(&mut db, "timed.chor", src, &cfg)
+}
+
+fn codes(r: &Report) -> Vec<&'static str> {
+    let mut c: Vec<&str> = r.diagnostics.iter().filter(|d| d.is_error()).map(|d| d.code.as_str()).collect();
+    c.sort();
+    c.dedup();
+    c
+}
+
+fn explore(prog: &Program) -> Result<Explored, String> {
+    let mut x = Explorer::new(prog);
+    if long() {
+        x.depth = 22;
+        x.max_states = 60_000;
+    }
+    x.explore().map_err(|u| format!("the explorer cannot run it: {}", u.0))
+}
+
+/// The oracle on one protocol: if verified, no misread and the monitor agrees. Returns the
+/// verdict, the codes and what the explorer found.
+fn oracle(src: &str) -> Result<(Verdict, Vec<&'static str>, Explored), String> {
+    let report = check(src);
+    let Some((db, prog)) = lower(src) else { return Ok((report.verdict, codes(&report), Explored::default())) };
+    let found = match explore(&prog) {
+        Ok(f) => f,
+        // A protocol that does not project is rejected; one that verifies must be explored.
+        Err(e) if report.verdict == Verdict::Verified => return Err(format!("{e}\n{src}")),
+        Err(_) => return Ok((report.verdict, codes(&report), Explored::default())),
+    };
+    if report.verdict == Verdict::Verified {
+        let x = Explorer::new(&prog);
+        if let Some(m) = &found.misread {
+            return Err(format!("FALSE VERIFIED: {}\n{}\n{src}", m.what, x.render(&m.trace)));
+        }
+        // The monitor reads a session's messages in the order of the global type: with a
+        // third role, a role whose first step waits for nothing may send before the first
+        // message of the session, which a monitor on the wire reports outside any session
+        // (a limitation of the monitor, not of the protocol), so runs of two roles only.
+        let runs = if prog.roles.len() == 2 { &found.runs[..] } else { &[] };
+        for (trace, complete) in runs {
+            let watches = std::iter::once(Watch::Wire).chain(prog.role_ids().map(Watch::At));
+            for w in watches {
+                if let Err(e) = replay::replay(&db, &prog, trace, *complete, w) {
+                    return Err(format!("the monitor ({w:?}) disagrees: {e}\nthe run:\n{}\n{src}", x.render(trace)));
+                }
+            }
+        }
+    }
+    Ok((report.verdict, codes(&report), found))
+}
+
+fn mavlink(dir: &str) -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("choreographies").join(dir);
+    let mut out: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .expect("the corpus")
+        .map(|e| e.expect("an entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "chor"))
+        .filter(|p| std::fs::read_to_string(p).is_ok_and(|s| timed(&s)))
+        .collect();
+    out.sort();
+    out
+}
+
+/// Whether the source has a timeout branch outside its comments.
+fn timed(src: &str) -> bool {
+    src.lines().map(|l| l.split("//").next().unwrap_or("")).any(|l| l.contains(" ms by "))
+}
+
+#[test]
+fn timed_protocols_of_the_corpus_never_misread_and_the_monitor_agrees() {
+    let files = mavlink("mavlink");
+    assert!(!files.is_empty());
+    let mut verified = 0;
+    for f in files {
+        let src = std::fs::read_to_string(&f).expect("readable");
+        let (verdict, codes, found) = oracle(&src).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+        if verdict == Verdict::Verified {
+            verified += 1;
+            assert!(!found.runs.is_empty(), "{}: no run explored", f.display());
+        }
+        eprintln!("{}: {verdict:?} {codes:?}, {} states", f.display(), found.states);
+    }
+    assert!(verified >= 1, "no verified timed protocol in the corpus");
+}
+
+/// The oracle can fail: every rejected twin of E0326 has a run the explorer calls a misread.
+#[test]
+fn the_explorer_finds_each_rejected_crossing() {
+    let files: Vec<PathBuf> = mavlink("mavlink/rejected")
+        .into_iter()
+        .filter(|p| p.file_name().is_some_and(|n| n.to_string_lossy().starts_with("E0326")))
+        .collect();
+    assert!(files.len() >= 3, "{files:?}");
+    for f in files {
+        let src = std::fs::read_to_string(&f).expect("readable");
+        let (_, prog) = lower(&src).expect("lowers");
+        let found = explore(&prog).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+        assert!(found.misread.is_some(), "{}: no misread found in {} states", f.display(), found.states);
+    }
+}
+
+/// The hand-made cases of E0326's unit tests (`plan/tests/crossing.rs`), with the plain
+/// labels they use: where E0326 accepts, the explorer finds no misread.
+#[test]
+fn the_hand_made_cases_of_the_rule_agree_with_the_explorer() {
+    let two = "system S { participant P; participant Q; }";
+    let three = "system S { participant P; participant Q; participant B; }";
+    let cases: &[(&str, &str, bool)] = &[
+        (two, "P -> Q: ask. ( Q -> P: val. P -> Q: more. end + after 10 ms by P. P -> Q: other. end )", false),
+        (two, "P -> Q: ask. ( Q -> P: val. end + after 10 ms by P. P -> Q: again. end )", false),
+        (two, "P -> Q: ask. ( Q -> P: val. P -> Q: again. end + after 10 ms by P. P -> Q: again. end )", true),
+        (two, "P -> Q: ask. ( Q -> P: val. end + after 10 ms by P. end )", true),
+        (two, "mu t. ( Q -> P: val. t + after 10 ms by P. P -> Q: stop. end )", true),
+        (two, "mu t. ( Q -> P: val. t + after 10 ms by P. P -> Q: ask. Q -> P: val. end )", false),
+        (two, "mu t. ( Q -> P: val. t + after 10 ms by P. P -> Q: ask. Q -> P: done. end )", true),
+        (
+            two,
+            "mu t. ( Q -> P: val(x: int). t + after 10 ms by P. P -> Q: ask. mu w. ( Q -> P: val(y: int). w + after 10 ms by P. end ) )",
+            true,
+        ),
+        (
+            two,
+            "mu t. ( Q -> P: val(x: int). t + after 10 ms by P. P -> Q: ask. mu w. ( Q -> P: val(y: int). end + after 10 ms by P. end ) )",
+            false,
+        ),
+        (
+            two,
+            "mu r(n: int {0 <= n} = 3) decreases n. ( P -> Q: [n > 0] ask. ( mu w. ( Q -> P: val. w + after 10 ms by P. r(n - 1) ) ) + after 30 ms by Q. end )",
+            true,
+        ),
+        (
+            two,
+            "mu r(n: int {0 <= n} = 3) decreases n. ( P -> Q: [n > 0] ask. Q -> P: val. r(n - 1) + after 30 ms by Q. end )",
+            false,
+        ),
+        (
+            three,
+            "P -> Q: ask. ( Q -> P: val. P -> Q: again. P -> B: log. end + after 10 ms by P. P -> Q: again. P -> B: log. end )",
+            true,
+        ),
+        (
+            two,
+            "( P -> Q: ask. ( mu w. ( P -> Q: more. w + after 10 ms by Q. Q -> P: ack. end ) ) + after 5 ms by Q. end )",
+            true,
+        ),
+    ];
+    for (system, chor, accepted) in cases {
+        let src = format!("{system} choreography G = {chor};");
+        let (_, prog) = lower(&src).expect("lowers");
+        let found = explore(&prog).unwrap_or_else(|e| panic!("{e}\n{src}"));
+        let x = Explorer::new(&prog);
+        match (&found.misread, accepted) {
+            (Some(m), true) => panic!("E0326 accepts, the explorer finds: {}\n{}\n{src}", m.what, x.render(&m.trace)),
+            (None, false) => panic!("E0326 rejects, the explorer finds no misread in {} states\n{src}", found.states),
+            _ => {}
+        }
+    }
+}
+
+#[test]
+fn generated_timed_protocols_that_verify_never_misread() {
+    use proptest::test_runner::{Config as RunnerConfig, RngAlgorithm, TestRng, TestRunner};
+    let mut s = [0u8; 32];
+    s[..8].copy_from_slice(&seed().to_le_bytes());
+    let mut runner = TestRunner::new_with_rng(
+        RunnerConfig { cases: cases(), failure_persistence: None, ..RunnerConfig::default() },
+        TestRng::from_seed(RngAlgorithm::ChaCha, &s),
+    );
+    let tally = std::sync::Mutex::new(Tally::default());
+    let result = runner.run(&proptest::prelude::any::<u64>(), |n| {
+        let src = gen::Gen::new(n).protocol();
+        let (verdict, codes, found) = oracle(&src).map_err(proptest::test_runner::TestCaseError::fail)?;
+        let mut t = tally.lock().expect("tally");
+        t.inputs += 1;
+        t.states += found.states;
+        match verdict {
+            Verdict::Verified => t.verified += 1,
+            _ if codes == ["E0326"] && found.misread.is_none() && !found.cut => {
+                t.e0326_no_misread += 1;
+                if t.examples.len() < 3 {
+                    t.examples.push(src.clone());
+                }
+            }
+            _ if codes.contains(&"E0326") => t.e0326 += 1,
+            _ => {
+                t.other += 1;
+                for c in &codes {
+                    *t.other_codes.entry(c).or_default() += 1;
+                }
+                if t.other_examples.len() < 4 {
+                    t.other_examples.push(format!("{codes:?} {src}"));
+                }
+            }
+        }
+        if found.misread.is_some() {
+            t.misread += 1;
+        }
+        Ok(())
+    });
+    let t = tally.into_inner().expect("tally");
+    eprintln!("{t:#?}");
+    if let Err(e) = result {
+        panic!("{e}");
+    }
+    assert!(t.verified * 10 >= t.inputs, "too few generated protocols verify to test anything: {t:?}");
+}
+
+/// What the generated inputs were: how many verified, were rejected by E0326 (with or without
+/// a misread the explorer finds: the rule's conservative cases), or by another check.
+#[derive(Default, Debug)]
+struct Tally {
+    inputs: u32,
+    verified: u32,
+    e0326: u32,
+    /// Rejected by E0326 alone, and the explorer finds no misread within its bound.
+    e0326_no_misread: u32,
+    other: u32,
+    other_codes: std::collections::BTreeMap<&'static str, u32>,
+    other_examples: Vec<String>,
+    misread: u32,
+    states: usize,
+    examples: Vec<String>,
+}
