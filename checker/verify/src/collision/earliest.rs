@@ -53,7 +53,7 @@ pub(crate) fn bisect<T>(found: T, at: f64, ask: &mut dyn FnMut(f64) -> Step<T>) 
         }
         let base = lo.unwrap_or(0.0);
         let mid = if step == 0 { 0.0 } else { base + (hi - base) / 2.0 };
-        if !(mid < hi) {
+        if mid >= hi || mid.is_nan() {
             break;
         }
         match ask(mid) {
@@ -88,7 +88,7 @@ impl super::Geo<'_> {
         step_opts.max_nodes = GEO_STEP_NODES;
         let (best, _, window) = bisect(c, at, &mut |mid| {
             let mut capped = self.root.clone();
-            if !(mid >= capped.lo[t]) {
+            if mid < capped.lo[t] || mid.is_nan() {
                 return Step::Undecided("the time asked about is before the motion's start".to_string());
             }
             capped.hi[t] = mid.min(capped.hi[t]);

@@ -206,12 +206,12 @@ pub(super) fn witness_near(
 pub(super) fn draw_contracted(scene: &dyn Scene, b: &QBox, seed: usize) -> Option<Vec<f64>> {
     let q = draw(b, seed);
     let mut cur = b.clone();
-    for k in 0..q.len() {
-        let v = if cur.lo[k] <= q[k] && q[k] <= cur.hi[k] {
-            q[k]
+    for (k, &x) in q.iter().enumerate() {
+        let v = if cur.lo[k] <= x && x <= cur.hi[k] {
+            x
         } else {
             // The draw's uniform share of the contracted range.
-            let u = (q[k] - b.lo[k]) / (b.hi[k] - b.lo[k]);
+            let u = (x - b.lo[k]) / (b.hi[k] - b.lo[k]);
             let u = if u.is_finite() { u } else { 0.5 };
             (cur.lo[k] + u * (cur.hi[k] - cur.lo[k])).clamp(cur.lo[k], cur.hi[k])
         };
