@@ -354,19 +354,6 @@ enum PassEnd {
     },
 }
 
-/// Whether [`probe`] samples boxes yet: once the search has evaluated
-/// [`split::PROBE_AFTER`] boxes (most proofs end sooner and pay nothing for it), or has
-/// spent a tenth of its time to the deadline (where each box is slow, a robot of many
-/// meshes in an unoptimised build, the box count is never reached before the deadline, and
-/// a contact that needs several coordinates at once is never met at a box's centre).
-fn probing(stats: &Stats, opts: &Options, started: Instant) -> bool {
-    stats.nodes >= split::PROBE_AFTER
-        || opts.deadline.is_some_and(|d| {
-            let now = Instant::now();
-            d > started && (now - started) * 10 >= d - started
-        })
-}
-
 /// One branch-and-bound pass over `root`. `earliest`: boxes in order of their time lower
 /// bound, and contacts only from boxes no wider in time than its resolution; otherwise
 /// best first on the lower bound `lower(c) − motion(B)` (the most colliding box first, so
@@ -387,7 +374,6 @@ fn pass(scene: &dyn Scene, root: &QBox, opts: &Options, earliest: bool, max_node
     let mut heap: BinaryHeap<Queued<Node>> = BinaryHeap::new();
     let mut seq = 0u64;
     let mut pending = vec![root.clone()];
-    let started = Instant::now();
     loop {
         // Evaluate the new boxes: infeasible and proved ones are done, the others queue.
         for b in pending.drain(..) {
@@ -446,7 +432,7 @@ fn pass(scene: &dyn Scene, root: &QBox, opts: &Options, earliest: bool, max_node
             }
         }
         if time_ok {
-            if let Some((q, at)) = probe(scene, b, opts, probing(stats, opts, started), stats) {
+            if let Some((q, at)) = probe(scene, b, opts, stats) {
                 out.end = Some(PassEnd::Contact { q, at, box_time: time.map_or(f64::NEG_INFINITY, |t| b.lo[t]) });
                 return out;
             }
