@@ -24,7 +24,8 @@
 //! - **round trip**: each projection prints as a local type that parses back to the same
 //!   type.
 //!
-//! Totals over the whole corpus (at least 20 counterexamples decided violated, at most 4
+//! Totals over the whole corpus (at least 20 counterexamples decided violated, 2 geometric
+//! contacts replayed in exact arithmetic, at most 4
 //! unreadable, at least 8 projections round-tripped) are checked after every file ran, when
 //! no filter left a file out. The tests that are not per file: every code in `diag.rs` is
 //! accounted for (produced by a rejected file, listed in [`NOT_ALONE`], or reserved), the
@@ -455,6 +456,42 @@ fn replay_reading(prog: &Program, ob: &Obligation, part: &Part, model: &Model) -
     }
 }
 
+/// A geometric contact evaluated exactly: the part's own goal ([`replay::replay`]) under
+/// the values shown, with the contact's point (parry's midpoint of its two witness points,
+/// read as the shortest decimal of each double) and its time. `None` when the part's query
+/// cannot state the bodies (a mesh, a URDF link: parry's replay is the check, in f64).
+/// A contact refuted exactly (the point is outside a side, or a hypothesis is false) is an
+/// error; undecided (an enclosure of a turned pose straddles a face) is said.
+fn exact_contact(
+    prog: &Program,
+    ob: &Obligation,
+    part: &Part,
+    d: &Diagnostic,
+    point: [f64; 3],
+) -> Option<Result<Replay, String>> {
+    mochi::smt::goals::build(prog, ob, part).ok()?;
+    let cx = d.counterexample.as_deref()?;
+    let time = cx.overlap.as_ref().and_then(|o| o.times.first().copied());
+    let rat = |v: f64| exact::parse_decimal(&format!("{v}")).map(Value::rat);
+    let mut outcome = None;
+    for mut m in Model::readings(prog, d) {
+        for (k, name) in ["point.x", "point.y", "point.z"].iter().enumerate() {
+            if let Some(v) = rat(point[k]) {
+                m.by_name.entry(name.to_string()).or_insert(v);
+            }
+        }
+        if let Some(v) = time.and_then(rat) {
+            m.by_name.entry("time".to_string()).or_insert(v);
+        }
+        let r = replay_reading(prog, ob, part, &m);
+        if matches!(r, Ok(Replay::Violated)) {
+            return Some(r);
+        }
+        outcome.get_or_insert(r);
+    }
+    outcome
+}
+
 /// The kind of a part, for the coverage of the corpus's counterexamples.
 fn part_kind(p: &Part) -> String {
     let text = format!("{p:?}");
@@ -570,7 +607,7 @@ fn counterexamples_falsify_their_goals(
     // `geometric`: counterexamples this test cannot read back (values shown only
     // approximately, an algebraic number or a long fraction); each was replayed exactly
     // before it was shown.
-    let (mut violated, mut geometric, mut failures) = (0, 0, Vec::new());
+    let (mut violated, mut geometric, mut failures, mut exact_contacts) = (0, 0, Vec::new(), 0);
     let mut decided = Vec::new();
     let mut kinds = std::collections::BTreeSet::new();
     for (prog, ob, part, d) in shown_counterexamples(path, report) {
@@ -583,6 +620,25 @@ fn counterexamples_falsify_their_goals(
                 failures.push(format!("{}: {} ({}): a contact without its point", path.display(), d.code, d.message));
                 continue;
             };
+            // Exactly too, where the part's query can state the bodies (primitive shapes
+            // placed by the language's poses): the part's own goal evaluated in rational
+            // arithmetic at the values shown, the point and the time (`exact_contact`).
+            match exact_contact(&prog, &ob, &part, &d, point) {
+                Some(Ok(Replay::Violated)) => exact_contacts += 1,
+                Some(Ok(Replay::Undecided(why))) => eprintln!(
+                    "{}: {} [{part:?}]: the contact is replayed by parry only (exactly undecided: {why})",
+                    path.display(),
+                    d.code
+                ),
+                Some(Err(why)) => failures.push(format!(
+                    "{}: {} ({}) [{part:?}]: the contact is refuted in exact arithmetic: {why}",
+                    path.display(),
+                    d.code,
+                    d.message
+                )),
+                // Meshes, URDF links, a mounted body: parry's replay below is the check.
+                None => {}
+            }
             match replay_geometric(&prog, &ob, &part, cx, point) {
                 Ok(r) if r.falsifies() => {
                     violated += 1;
@@ -635,6 +691,7 @@ fn counterexamples_falsify_their_goals(
         let mut t = totals.lock().unwrap_or_else(|e| e.into_inner());
         t.violated += violated;
         t.geometric += geometric;
+        t.exact_contacts += exact_contacts;
         t.kinds.extend(kinds);
     }
     // The check can fail: a corrupted counterexample is caught.
@@ -956,6 +1013,8 @@ struct Totals {
     round_tripped: usize,
     /// SMT-decided rejections whose counterexamples were checked to replay.
     smt_rejected: usize,
+    /// Geometric contacts (parry's) also decided violated in exact arithmetic.
+    exact_contacts: usize,
 }
 
 /// The SMT-decided rejections of `choreographies/rejected/` (E04xx, E070x, E0316) show only
@@ -1016,12 +1075,16 @@ fn check_one(path: &Path, totals: &Mutex<Totals>) -> Result<(), String> {
 /// are decided violated, and projections are round-tripped.
 fn check_totals(t: &Totals) -> Result<(), String> {
     eprintln!(
-        "{} counterexamples decided violated ({} not readable), of parts {:?}; {} projections round-tripped",
-        t.violated, t.geometric, t.kinds, t.round_tripped
+        "{} counterexamples decided violated ({} not readable, {} geometric contacts replayed exactly), of parts {:?}; {} projections round-tripped",
+        t.violated, t.geometric, t.exact_contacts, t.kinds, t.round_tripped
     );
     let mut failures = Vec::new();
     if t.violated < 20 {
         failures.push(format!("only {} counterexamples decided violated", t.violated));
+    }
+    // The corpus has two geometric contacts between primitive shapes (measured: 2).
+    if t.exact_contacts < 2 {
+        failures.push(format!("only {} geometric contacts replayed in exact arithmetic", t.exact_contacts));
     }
     if t.geometric > 4 {
         failures.push(format!("{} counterexamples cannot be read back", t.geometric));

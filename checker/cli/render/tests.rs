@@ -222,7 +222,7 @@ fn a_counterexample_is_in_the_json() {
     let (db, f) = db_with("system {}\n");
     let cx = Counterexample {
         values: vec![Assignment { name: "Cart.x".into(), value: "0.5".into() }],
-        overlap: Some(Overlap { point: [1.0, 0.25, 0.0], times: vec![2.5], not_before: None }),
+        overlap: Some(Overlap::at([1.0, 0.25, 0.0], vec![2.5])),
         trace: Vec::new(),
     };
     let d = Diagnostic::error(Code::FootprintsOverlap, Span::new(f, 0, 6), "overlap").with_counterexample(cx);

@@ -55,6 +55,17 @@ pub struct Overlap {
     /// latest at `times[0]`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub not_before: Option<f64>,
+    /// For a joint motion: why the earliest meeting was not narrowed further (a search or
+    /// a query that did not decide within its budget); `None` when nothing was left open.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub earliest_open: Option<String>,
+}
+
+impl Overlap {
+    /// A meeting at `point` and `times`, with nothing said about the earliest one.
+    pub fn at(point: [f64; 3], times: Vec<f64>) -> Overlap {
+        Overlap { point, times, not_before: None, earliest_open: None }
+    }
 }
 
 /// What Z3 found when a predicate check fails, in the user's terms.

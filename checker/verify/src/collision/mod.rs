@@ -21,6 +21,7 @@
 
 mod affine;
 mod contract;
+mod earliest;
 mod place;
 mod pose;
 pub(crate) mod predicate;

@@ -478,6 +478,13 @@ impl<'a> Geo<'a> {
         match d.outcome {
             bnb::Outcome::Apart { .. } => GeoAnswer::Apart,
             bnb::Outcome::Contact(c) => {
+                // The earliest contact (`earliest.rs`): only for one clock (a joint motion;
+                // the sides of `*` have two, the start state none).
+                let one_clock = !self.initial && self.dims.iter().filter(|d| matches!(d, Dim::Clock(_))).count() == 1;
+                let (c, window) = match opts.time_dim.filter(|_| one_clock) {
+                    Some(t) => self.earliest_contact(c, t, &opts),
+                    None => (c, super::earliest::Earliest::default()),
+                };
                 // A contact is confirmed on the meshes themselves (`Geo::distance`), never on
                 // convex hulls alone.
                 let times: Vec<f64> = self
@@ -490,25 +497,20 @@ impl<'a> Geo<'a> {
                     Some(v) if !v.is_empty() => v,
                     _ => self.dim_values(&c.q),
                 };
-                // The earliest contact: the refinement pass proved every configuration
-                // that satisfies the constraints with a time below `clear_before` apart;
-                // `Overlap::not_before` claims "at or before", so the largest double below
-                // it. Only for one clock (a joint motion; the sides of `*` have two), and
-                // only when it says something (above the motion's start).
-                let one_clock = times.len() == 1 && !self.initial;
-                let not_before = c
-                    .clear_before
-                    .filter(|cb| one_clock && cb.is_finite() && *cb > 0.0)
-                    .map(f64::next_down)
-                    .filter(|nb| *nb >= 0.0 && times.first().is_some_and(|t| nb <= t));
-                GeoAnswer::Contact {
-                    values,
-                    overlap: Overlap {
-                        point: c.point,
-                        times: if self.initial { Vec::new() } else { times },
-                        not_before,
-                    },
-                }
+                // The bisection's bound, or the first search's refinement pass's, which
+                // proved every configuration that satisfies the constraints with a time
+                // below `clear_before` apart (`Overlap::not_before` claims "at or before",
+                // so the largest double below it), whichever is later.
+                let refined = c.clear_before.filter(|cb| cb.is_finite() && *cb > 0.0).map(f64::next_down);
+                let not_before = window
+                    .not_before
+                    .into_iter()
+                    .chain(refined)
+                    .reduce(f64::max)
+                    .filter(|nb| one_clock && *nb >= 0.0 && times.first().is_some_and(|t| nb <= t));
+                let mut overlap = Overlap::at(c.point, if self.initial { Vec::new() } else { times });
+                (overlap.not_before, overlap.earliest_open) = (not_before, window.open);
+                GeoAnswer::Contact { values, overlap }
             }
             bnb::Outcome::Unknown { why, qbox, unresolved } => {
                 let at: Vec<String> = self

@@ -23,10 +23,10 @@
 //! predicate, the footprint, the guarantee or the invariant is false at every point of it
 //! (three-valued truth by outward-rounded interval evaluation, [`crate::bounds`], compiled
 //! once), and halved along its widest dimension relative to the root otherwise. Boxes are
-//! taken breadth first: a contact on a face of a box (a ball centred on the footprint's
-//! floor meets it on the plane `pz == 0` in its lower half) never yields a box inside both,
-//! and a depth-first search drilled into it until the limit, never reaching the half where
-//! whole boxes of contact are. The frontier is at most the budget of boxes.
+//! taken breadth first (every box before its halves' halves): a contact on a face of a box
+//! (a ball centred on the footprint's floor meets it on the plane `pz == 0` in its lower
+//! half) never yields a box inside both, and a depth-first search drilled into it until
+//! the limit, never reaching the half where whole boxes of contact are.
 //!
 //! **Sound.** Every configuration of a violation projects into the root box: `P` is in the
 //! obstacle, hence in its box; the state at `t` satisfies the guarantee and the invariant
@@ -43,6 +43,7 @@
 //! budget of boxes or the time limit make the question **unknown** (`Why::Interval`), never
 //! apart.
 
+pub(crate) use super::earliest::Earliest;
 use crate::bounds::compiled::{Compiled, VarTable};
 use crate::bounds::{self, Interval};
 use crate::hir::body::Pose;
@@ -214,18 +215,69 @@ fn target<'a>(
 /// Decides `part` of `ob` by the search, within `limit`; `confirm` is asked for a
 /// counterexample at a candidate's pinned values. `None` when the part is not this
 /// search's, or its root box cannot be bounded (Z3 is asked as before).
+///
+/// A confirmed contact comes with the window of the earliest one ([`earliest`]): `time_of`
+/// reads a counterexample's time (since the motion's start).
 pub(crate) fn decide<T>(
     prog: &Program,
     ob: &Obligation,
     part: &Part,
     limit: Duration,
     confirm: &mut dyn FnMut(&Pins) -> Option<T>,
-) -> Option<Found<T>> {
-    let layout = layout(prog, ob, part)?;
-    Some(search(&layout, limit, confirm))
+    time_of: &dyn Fn(&T) -> Option<f64>,
+) -> Option<Found<(T, Earliest)>> {
+    let layout = layout(prog, ob, part, None)?;
+    let start = Instant::now();
+    Some(match search(&layout, limit, BUDGET, confirm) {
+        Found::Apart => Found::Apart,
+        Found::Undecided(why) => Found::Undecided(why),
+        Found::Contact(found) => {
+            let left = limit.saturating_sub(start.elapsed());
+            Found::Contact(earliest(prog, ob, part, found, left, confirm, time_of))
+        }
+    })
 }
 
-fn layout(prog: &Program, ob: &Obligation, part: &Part) -> Option<Layout> {
+/// Boxes each step of [`earliest`] may search: a budget of boxes, not of time, so that the
+/// window does not depend on the machine's load (the time limit still applies).
+const WINDOW_BUDGET: usize = BUDGET / 8;
+
+/// The window of the first contact below `found`'s ([`super::earliest::bisect`]): each
+/// step is the search with the times capped at `mid` ([`layout`]'s `cap`), whose apart is
+/// the module doc's argument over the capped box, and whose contact is confirmed by
+/// `confirm` as any.
+fn earliest<T>(
+    prog: &Program,
+    ob: &Obligation,
+    part: &Part,
+    found: T,
+    limit: Duration,
+    confirm: &mut dyn FnMut(&Pins) -> Option<T>,
+    time_of: &dyn Fn(&T) -> Option<f64>,
+) -> (T, Earliest) {
+    use super::earliest::{bisect, Step};
+    let deadline = Instant::now() + limit;
+    let at = time_of(&found).unwrap_or(f64::NAN);
+    let (best, _, window) = bisect(found, at, &mut |mid| {
+        let Some(layout) = layout(prog, ob, part, Some(mid)) else {
+            return Step::Undecided("the states up to that time cannot be bounded".to_string());
+        };
+        match search(&layout, deadline.saturating_duration_since(Instant::now()), WINDOW_BUDGET, confirm) {
+            Found::Apart => Step::Apart,
+            Found::Contact(c) => {
+                let t = time_of(&c).unwrap_or(f64::NAN);
+                Step::Contact(c, t)
+            }
+            Found::Undecided(why) => Step::Undecided(why),
+        }
+    });
+    (best, window)
+}
+
+/// The question laid out; with `cap`, only the times in `[0, cap]` (the clock a dimension
+/// whether or not the footprint reads it, and the state's ranges those the guarantee and
+/// invariant give over these times): the question of a contact at or before `cap`.
+fn layout(prog: &Program, ob: &Obligation, part: &Part, cap: Option<f64>) -> Option<Layout> {
     let (role, app, fp, obstacle) = target(prog, ob, part)?;
     let prim = prog.prim(app.prim);
     let kind = prog.kind(prim.kind);
@@ -257,7 +309,8 @@ fn layout(prog: &Program, ob: &Obligation, part: &Part) -> Option<Layout> {
         Some(h) => bounds::eval(prog, h, &start).map_or(f64::INFINITY, |i| i.hi),
         None => f64::INFINITY,
     };
-    let clock = Interval::new(0.0, if clock_hi.is_nan() { f64::INFINITY } else { clock_hi.max(0.0) });
+    let clock_hi = if clock_hi.is_nan() { f64::INFINITY } else { clock_hi.max(0.0) };
+    let clock = Interval::new(0.0, cap.map_or(clock_hi, |c| c.max(0.0).min(clock_hi)));
     let lift = |v: &Var| match v {
         Var::Clock => Some(clock),
         other => start(other),
@@ -279,7 +332,8 @@ fn layout(prog: &Program, ob: &Obligation, part: &Part) -> Option<Layout> {
     // The clock only when the footprint reads it: the guarantee's and invariant's
     // dependence on it is already in the state's ranges, and a dimension the footprint
     // does not read would only multiply the boxes (its whole range is taken instead).
-    if mentions(&fp_world, &|v| matches!(v, Var::Clock)) {
+    // With a cap, the clock relates the guarantee's states to the time asked about.
+    if cap.is_some() || mentions(&fp_world, &|v| matches!(v, Var::Clock)) {
         dims.push(Dim::Clock);
     }
     let obox = obstacle_box(prog, obstacle)?;
@@ -405,7 +459,7 @@ pub(crate) fn point_in_obstacle(
         (exact::holds(prog, &region, &env) == Tri::True && exact::holds(prog, &fp_world, &env) == Tri::True)
             .then(|| p.clone())
     };
-    Some(match search(&layout, limit, &mut exactly) {
+    Some(match search(&layout, limit, BUDGET, &mut exactly) {
         Found::Apart => Ok(None),
         Found::Contact(p) => Ok(Some(p)),
         Found::Undecided(why) => Err(why),
@@ -511,20 +565,24 @@ fn short(lo: f64, hi: f64) -> f64 {
 }
 
 /// The branch and bound (module doc).
-fn search<T>(l: &Layout, limit: Duration, confirm: &mut dyn FnMut(&Pins) -> Option<T>) -> Found<T> {
+fn search<T>(l: &Layout, limit: Duration, budget: usize, confirm: &mut dyn FnMut(&Pins) -> Option<T>) -> Found<T> {
     let deadline = Instant::now() + limit;
     let n = l.dims.len();
     let width: Vec<f64> = (0..n).map(|d| l.hi[d] - l.lo[d]).collect();
-    let mut stack = std::collections::VecDeque::from([(l.lo.clone(), l.hi.clone())]);
+    // Breadth first: a box is split only after every wider box, so a candidate inside both
+    // predicates is met at the coarse level where it fits, and the search is not drawn down
+    // one surface (where the footprint's or obstacle's comparison stays undecided) to the
+    // resolution before it.
+    let mut queue = std::collections::VecDeque::from([(l.lo.clone(), l.hi.clone())]);
     let mut env: Vec<Option<Interval>> = vec![None; l.slots.len()];
     let mut scratch = Vec::new();
     let (mut boxes, mut asked) = (0usize, 0usize);
     let mut open: Option<String> = None;
-    while let Some((lo, hi)) = stack.pop_front() {
+    while let Some((lo, hi)) = queue.pop_front() {
         boxes += 1;
-        if boxes > BUDGET {
+        if boxes > budget {
             return Found::Undecided(format!(
-                "{BUDGET} boxes of the obstacle's points, the state and the time searched without deciding"
+                "{budget} boxes of the obstacle's points, the state and the time searched without deciding"
             ));
         }
         if boxes % 256 == 0 && Instant::now() > deadline {
@@ -601,8 +659,8 @@ fn search<T>(l: &Layout, limit: Duration, confirm: &mut dyn FnMut(&Pins) -> Opti
         let (mut lo2, mut hi1) = (lo.clone(), hi.clone());
         hi1[d] = mid;
         lo2[d] = mid;
-        stack.push_back((lo, hi1));
-        stack.push_back((lo2, hi));
+        queue.push_back((lo, hi1));
+        queue.push_back((lo2, hi));
     }
     match open {
         Some(why) => Found::Undecided(format!("{why} ({boxes} boxes)")),
@@ -692,22 +750,23 @@ mod tests {
     #[test]
     fn a_candidate_is_a_contact_only_when_confirmed_and_never_apart() {
         let (prog, ob, part) = question(&check(&spin("0.36", "1.5")));
-        let l = layout(&prog, &ob, &part).expect("the search's question");
+        let l = layout(&prog, &ob, &part, None).expect("the search's question");
         let mut asked = 0;
-        let found = search(&l, Duration::from_secs(10), &mut |_pins: &Pins| -> Option<()> {
+        let found = search(&l, Duration::from_secs(10), BUDGET, &mut |_pins: &Pins| -> Option<()> {
             asked += 1;
             None
         });
         assert!(matches!(found, Found::Undecided(_)), "an unconfirmed candidate leaves it open");
         assert!(asked > 0);
-        let found = search(&l, Duration::from_secs(10), &mut |pins: &Pins| Some(pins.clone()));
+        let found = search(&l, Duration::from_secs(10), BUDGET, &mut |pins: &Pins| Some(pins.clone()));
         let Found::Contact(pins) = found else { panic!("a contact") };
         let names: Vec<&str> = pins.iter().map(|(n, _)| n.as_str()).collect();
         assert!(names.contains(&"point.x") && names.contains(&"A.th(t)"), "{names:?}");
         // The clear post is apart without a question.
         let (prog, ob, part) = question(&check(&spin("0.38", "1.5")));
-        let l = layout(&prog, &ob, &part).expect("the search's question");
-        let found = search(&l, Duration::from_secs(10), &mut |_pins: &Pins| -> Option<()> { panic!("no candidate") });
+        let l = layout(&prog, &ob, &part, None).expect("the search's question");
+        let found =
+            search(&l, Duration::from_secs(10), BUDGET, &mut |_pins: &Pins| -> Option<()> { panic!("no candidate") });
         assert!(matches!(found, Found::Apart));
     }
 
@@ -715,16 +774,64 @@ mod tests {
     fn a_footprint_touching_the_post_or_a_search_out_of_time_is_never_apart() {
         // Heading 0 only: the square's face is at x = 0.262, the post's face too.
         let (prog, ob, part) = question(&check(&spin("0.262", "0")));
-        let l = layout(&prog, &ob, &part).expect("the search's question");
-        let found = search(&l, Duration::from_secs(10), &mut |_pins: &Pins| -> Option<()> { None });
+        let l = layout(&prog, &ob, &part, None).expect("the search's question");
+        let found = search(&l, Duration::from_secs(10), BUDGET, &mut |_pins: &Pins| -> Option<()> { None });
         assert!(matches!(found, Found::Undecided(_)));
         let (prog, ob, part) = question(&check(&spin("0.371", "1.5")));
-        let l = layout(&prog, &ob, &part).expect("the search's question");
-        let found = search(&l, Duration::ZERO, &mut |_pins: &Pins| -> Option<()> { None });
+        let l = layout(&prog, &ob, &part, None).expect("the search's question");
+        let found = search(&l, Duration::ZERO, BUDGET, &mut |_pins: &Pins| -> Option<()> { None });
         match found {
             Found::Undecided(why) => assert!(why.contains("time limit"), "{why}"),
             _ => panic!("out of time is undecided"),
         }
+    }
+
+    /// A cart whose square footprint (half-side 0.25, written turned by its constant
+    /// heading) drives along x at 0.2 m/s from 0 for 10 s towards a post whose near face is at
+    /// x = 1: by hand, its front face `x + 0.25` first reaches the post at `x = 0.75`, at
+    /// `t = 0.75 / 0.2 = 3.75 s`, and at no time before.
+    const DRIVE: &str = "robot C { state x: real, th: real; invariant: -10 <= x <= 10 && -4 <= th <= 4; }
+         motion C.go() { interruptible: false; pre: true;
+           guarantee: x == old(x) + 0.2 * clock && th == old(th);
+           post: x == old(x) + 2 && th == old(th);
+           footprint(px, py, pz): abs(cos(th) * (px - x) + sin(th) * py) <= 0.25
+             && abs(cos(th) * py - sin(th) * (px - x)) <= 0.25 && 0 <= pz <= 0.1;
+           duration: [10, 10]; }
+         system S {
+           participant A: C { init: x == 0 && th == 0; }
+           obstacle Post { geometry: box(0.1, 0.1, 1); at: pose(1.05, 0, 0); }
+         }
+         choreography S = dt<A: go>. end;
+         process A = dt<go>.end;";
+
+    #[test]
+    fn the_earliest_contact_is_in_a_narrow_proved_window_around_the_time_by_hand() {
+        let r = check(DRIVE);
+        let d = r.diagnostics.iter().find(|d| d.code == Code::ObstacleHit).expect("E0510");
+        assert!(d.notes.iter().any(|n| n.contains("found by the interval search")), "{:?}", d.notes);
+        let o = d.counterexample.as_deref().and_then(|c| c.overlap.clone()).expect("a contact");
+        let (lo, t) = (o.not_before.expect("a proved bound"), o.times[0]);
+        assert!(lo < 3.75 && 3.75 <= t + 1e-9, "window [{lo}, {t}]");
+        assert!(t - lo <= 0.05 * t, "window [{lo}, {t}] wider than 5 %");
+        // Narrowing further may run out of boxes: then it says at which time.
+        assert!(o.earliest_open.as_deref().is_none_or(|w| w.contains("was not decided")), "{o:?}");
+        let shown = d.notes.iter().find(|n| n.starts_with("counterexample")).expect("the note");
+        assert!(
+            shown.contains("no meeting is possible at or before") && shown.contains("since the choreography started"),
+            "{shown}"
+        );
+    }
+
+    #[test]
+    fn a_window_out_of_budget_claims_no_time_and_says_why() {
+        let (prog, ob, part) = question(&check(DRIVE));
+        let mut confirm = |pins: &Pins| -> Option<f64> { pins.iter().find(|(n, _)| n == "time").map(|(_, v)| *v) };
+        let time_of = |t: &f64| Some(*t);
+        let (t, w) = earliest(&prog, &ob, &part, 9.0, Duration::ZERO, &mut confirm, &time_of);
+        // (The start alone is decided in fewer boxes than the search checks its clock after.)
+        assert_eq!(t, 9.0);
+        assert!(w.not_before.is_none_or(|lo| lo == 0.0), "{w:?}");
+        assert!(w.open.is_some_and(|o| o.contains("time limit")));
     }
 
     fn lower(src: &str) -> Program {

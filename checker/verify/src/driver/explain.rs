@@ -257,8 +257,9 @@ pub(super) fn states(values: &[crate::diag::Assignment], at_start: bool) -> Vec<
 pub(super) fn counterexample_text(cx: &Counterexample, code: Code, since: Option<&Since>) -> Option<String> {
     let mut parts = Vec::new();
     // A collision: the contact's time within the motion and since the choreography's
-    // start, and every participant's state there. A contact is not claimed the earliest:
-    // the solver's model is one contact, not the first.
+    // start, and every participant's state there. A contact is claimed the earliest only
+    // with a proof (`Overlap::not_before`: no meeting at or before it), and why a window
+    // was not narrowed is said (`Overlap::earliest_open`), never a guessed time.
     // The two sides of `*` (E0406): each side's time on its own clock, and every
     // participant's state at its side's time.
     let sides = code == Code::SidesOverlap && cx.overlap.as_ref().is_some_and(|o| o.times.len() == 2);
@@ -273,28 +274,24 @@ pub(super) fn counterexample_text(cx: &Counterexample, code: Code, since: Option
                 short(*t1),
                 short(*t2)
             ),
-            ([t], Some(since)) if o.not_before.is_some() || *t == 0.0 => {
-                let when = match o.not_before {
+            ([t], Some(since)) => {
+                let t = *t;
+                let mut when = match o.not_before {
                     Some(lo) => format!(
                         "{meet} at {} s into this joint motion, and no meeting is possible at or before {} s (proved), so the first is between {} and {} s",
-                        short(*t), short(lo), short(lo), short(*t)
+                        short(t), short(lo), short(lo), short(t)
                     ),
-                    None => format!("{meet} at 0 s, the joint motion's start (the earliest)"),
+                    None if t == 0.0 => format!("{meet} at 0 s, the joint motion's start (the earliest)"),
+                    None => format!("{meet} at {} s into this joint motion (the first meeting is at or before it)", short(t)),
                 };
+                if let Some(why) = &o.earliest_open {
+                    when.push_str(&format!("; an earlier first meeting is not excluded: {why}"));
+                }
                 match since {
-                    Since::Start => format!("{when}; the joint motion starts when the choreography does (no motion precedes it on this path, and messages take no time): "),
+                    Since::Start => format!("{when}; the joint motion starts when the choreography does (no motion precedes it on this path, and messages take no time), so these times are also since the choreography started: "),
                     Since::Open(why) => format!("{when} (the time since the choreography started is not determined: {why}): "),
                 }
             }
-            ([t], Some(Since::Start)) => format!(
-                "{meet} at {} s into this joint motion, which is {} s after the choreography starts (no motion precedes it on this path, and messages take no time): ",
-                short(*t),
-                short(*t)
-            ),
-            ([t], Some(Since::Open(why))) => format!(
-                "{meet} at {} s into this joint motion (the time since the choreography started is not determined: {why}): ",
-                short(*t)
-            ),
             ([t], None) => format!("at time {} s, ", short(*t)),
             (ts, _) => format!("at times {} s, ", ts.iter().map(|t| short(*t)).collect::<Vec<_>>().join(" and ")),
         };

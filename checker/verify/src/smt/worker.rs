@@ -342,6 +342,8 @@ impl Worker<'_> {
                             }
                             if let Some(o) = overlap.as_mut() {
                                 o.not_before = not_before;
+                                let undecided = not_before.is_none() && o.times.first().is_some_and(|t| *t > 0.0);
+                                o.earliest_open = undecided.then(|| "whether they meet at the motion's start was not decided (by Z3 within the time limit, with a model that replays exactly)".into());
                             }
                         }
                     }
@@ -446,10 +448,11 @@ impl Worker<'_> {
         if q.enc.spurious_trig(&m) {
             return None;
         }
-        let overlap = q.point.as_ref().map(|p| Overlap {
-            point: [0, 1, 2].map(|i| encode::Encoder::value_of(&m, &p[i]).unwrap_or(f64::NAN)),
-            times: q.times.iter().map(|t| encode::Encoder::value_of(&m, t).unwrap_or(f64::NAN)).collect(),
-            not_before: None,
+        let overlap = q.point.as_ref().map(|p| {
+            Overlap::at(
+                [0, 1, 2].map(|i| encode::Encoder::value_of(&m, &p[i]).unwrap_or(f64::NAN)),
+                q.times.iter().map(|t| encode::Encoder::value_of(&m, t).unwrap_or(f64::NAN)).collect(),
+            )
         });
         Some(Answer::Sat {
             values: q.enc.assignments(&m),
@@ -494,10 +497,11 @@ impl Worker<'_> {
         if !matches!(replay::replay(self.prog, ob, part, &exact), replay::Replay::Falsifies) {
             return None;
         }
-        let overlap = q.point.as_ref().map(|p| Overlap {
-            point: [0, 1, 2].map(|i| encode::Encoder::value_of(&m, &p[i]).unwrap_or(f64::NAN)),
-            times: q.times.iter().map(|t| encode::Encoder::value_of(&m, t).unwrap_or(f64::NAN)).collect(),
-            not_before: None,
+        let overlap = q.point.as_ref().map(|p| {
+            Overlap::at(
+                [0, 1, 2].map(|i| encode::Encoder::value_of(&m, &p[i]).unwrap_or(f64::NAN)),
+                q.times.iter().map(|t| encode::Encoder::value_of(&m, t).unwrap_or(f64::NAN)).collect(),
+            )
         });
         Some(Answer::Sat { values: q.enc.assignments(&m), overlap, bound: q.enc.shared_names(), exact })
     }
@@ -545,10 +549,11 @@ impl Worker<'_> {
                         break;
                     }
                     hi = at;
-                    let overlap = q.point.as_ref().map(|p| Overlap {
-                        point: [0, 1, 2].map(|i| encode::Encoder::value_of(&m, &p[i]).unwrap_or(f64::NAN)),
-                        times: q.times.iter().map(|t| encode::Encoder::value_of(&m, t).unwrap_or(f64::NAN)).collect(),
-                        not_before: None,
+                    let overlap = q.point.as_ref().map(|p| {
+                        Overlap::at(
+                            [0, 1, 2].map(|i| encode::Encoder::value_of(&m, &p[i]).unwrap_or(f64::NAN)),
+                            q.times.iter().map(|t| encode::Encoder::value_of(&m, t).unwrap_or(f64::NAN)).collect(),
+                        )
                     });
                     best = Some(Answer::Sat {
                         values: q.enc.assignments(&m),
@@ -593,16 +598,26 @@ impl Worker<'_> {
         // search over the obstacle's points and the state, Z3 asked only to complete a
         // candidate into a counterexample (`collision::predicate`).
         let mut pinned = 0;
-        let found = crate::collision::predicate::decide(self.prog, ob, part, self.timeout, &mut |pins| {
+        let time_of = |a: &Answer| match a {
+            Answer::Sat { overlap: Some(o), .. } => o.times.first().copied(),
+            _ => None,
+        };
+        let mut pin = |pins: &crate::collision::predicate::Pins| {
             pinned += 1;
             self.pinned_witness(ob, part, pins)
-        });
+        };
+        let found = crate::collision::predicate::decide(self.prog, ob, part, self.timeout, &mut pin, &time_of);
         if let Some(found) = found {
             stats.geometric += 1;
             stats.queries += pinned;
             return match found {
                 crate::collision::predicate::Found::Apart => Answer::Unsat,
-                crate::collision::predicate::Found::Contact(a) => a,
+                crate::collision::predicate::Found::Contact((mut a, early)) => {
+                    if let Answer::Sat { overlap: Some(o), .. } = &mut a {
+                        (o.not_before, o.earliest_open) = (early.not_before, early.open);
+                    }
+                    a
+                }
                 crate::collision::predicate::Found::Undecided(why) => Answer::Unknown(Why::Interval(format!(
                     "the footprint against obstacle `{}`: {why}",
                     match part {
@@ -737,11 +752,10 @@ impl Worker<'_> {
                     Hard::of(&q),
                 )),
                 Some(m) => {
-                    let overlap = q.point.as_ref().map(|p| Overlap {
-                        point: [0, 1, 2].map(|i| encode::Encoder::value_of(&m, &p[i]).unwrap_or(f64::NAN)),
-                        times: q.times.iter().map(|t| encode::Encoder::value_of(&m, t).unwrap_or(f64::NAN)).collect(),
-                        not_before: None,
-                    });
+                    let overlap = q.point.as_ref().map(|p| Overlap::at(
+                        [0, 1, 2].map(|i| encode::Encoder::value_of(&m, &p[i]).unwrap_or(f64::NAN)),
+                        q.times.iter().map(|t| encode::Encoder::value_of(&m, t).unwrap_or(f64::NAN)).collect(),
+                    ));
                     Answer::Sat {
                         values: q.enc.assignments(&m),
                         overlap,

@@ -1,0 +1,188 @@
+//! The earliest contact of a joint motion, once one contact is confirmed: a window
+//! `[not_before, t]` such that no configuration the contracts allow puts the two sides in
+//! contact at a time at or before `not_before` (proved by the deciding search itself, run
+//! again over the times `[0, mid]`), and a contact at `t` (confirmed and replayed as any
+//! counterexample of that search). Sec 3.3 asks only whether a contact exists; the window is
+//! what a user needs to act on it (where along the motion to change the plan).
+//!
+//! **Sound.** Each step asks the same question as the search that found the contact, over
+//! the configurations whose time is in `[0, mid]` (a sub-box of its root): an apart answer
+//! is that search's apart, restricted, so no contact at or before `mid` exists; a contact
+//! answer is that search's contact, confirmed as it confirms; anything else (a budget, a
+//! resolution, a contact whose time is not known) ends the bisection and is said
+//! ([`Earliest::open`]). No time is claimed that a step did not prove.
+
+use crate::geometry::search::bnb;
+
+/// What one step of the bisection found over the times `[0, mid]`.
+pub(crate) enum Step<T> {
+    /// No contact at a time in `[0, mid]`.
+    Apart,
+    /// A confirmed contact, and its time (at most `mid`).
+    Contact(T, f64),
+    /// Neither, with why.
+    Undecided(String),
+}
+
+/// The window of the earliest contact: none at or before `not_before` (proved); `open`:
+/// why it was not narrowed further.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct Earliest {
+    pub not_before: Option<f64>,
+    pub open: Option<String>,
+}
+
+/// Steps of the bisection at most: the window is narrowed to 1 % of the contact's time,
+/// or to `1/2^(STEPS-1)` of the first contact's time.
+pub(crate) const STEPS: usize = 8;
+
+/// Bisects the time of the first contact below `found`'s (at `at` s since the motion's
+/// start): first whether they meet at the motion's start (`mid = 0`), then halves of the
+/// window left; `ask(mid)` decides the question over the times `[0, mid]`. Returns the
+/// earliest confirmed contact found (`found` or an earlier one) with its time, and the
+/// window.
+pub(crate) fn bisect<T>(found: T, at: f64, ask: &mut dyn FnMut(f64) -> Step<T>) -> (T, f64, Earliest) {
+    if !(at.is_finite() && at >= 0.0) {
+        let open = Some("the contact's time is not known".to_string());
+        return (found, at, Earliest { not_before: None, open });
+    }
+    let (mut best, mut hi, mut lo, mut open) = (found, at, None::<f64>, None);
+    for step in 0..STEPS {
+        if hi <= 0.0 || lo.is_some_and(|l| hi - l <= 0.01 * hi) {
+            break;
+        }
+        let base = lo.unwrap_or(0.0);
+        let mid = if step == 0 { 0.0 } else { base + (hi - base) / 2.0 };
+        if mid >= hi || mid.is_nan() {
+            break;
+        }
+        match ask(mid) {
+            Step::Apart => lo = Some(mid),
+            Step::Contact(c, t) if (0.0..=mid).contains(&t) => (best, hi) = (c, t),
+            Step::Contact(..) => {
+                open = Some(format!("a contact at or before {} s was found at a time outside that range", short(mid)));
+                break;
+            }
+            Step::Undecided(why) => {
+                open = Some(format!("whether they meet at or before {} s was not decided: {why}", short(mid)));
+                break;
+            }
+        }
+    }
+    (best, hi, Earliest { not_before: lo, open })
+}
+
+/// Nodes each step of the geometric search's bisection may search: a budget of boxes, not
+/// of time, so that the window does not depend on the machine's load (the query's time
+/// limit still applies).
+const GEO_STEP_NODES: usize = 60_000;
+
+impl super::Geo<'_> {
+    /// The window of the first contact below `c`'s ([`bisect`]): each step is the
+    /// geometric search ([`bnb::decide`]) over the root box with its time dimension `t`
+    /// capped at `mid`, within what is left of `opts`' deadline.
+    pub(super) fn earliest_contact(&self, c: bnb::Contact, t: usize, opts: &bnb::Options) -> (bnb::Contact, Earliest) {
+        let at = c.q.get(t).copied().unwrap_or(f64::NAN);
+        let mut step_opts = opts.clone();
+        step_opts.time_dim = None;
+        step_opts.max_nodes = GEO_STEP_NODES;
+        let (best, _, window) = bisect(c, at, &mut |mid| {
+            let mut capped = self.root.clone();
+            if mid < capped.lo[t] || mid.is_nan() {
+                return Step::Undecided("the time asked about is before the motion's start".to_string());
+            }
+            capped.hi[t] = mid.min(capped.hi[t]);
+            match bnb::decide(self, &capped, &step_opts).outcome {
+                // Every box proved apart or infeasible: no contact the constraints allow.
+                bnb::Outcome::Apart { .. } => Step::Apart,
+                bnb::Outcome::Contact(c) => {
+                    let at = c.q.get(t).copied().unwrap_or(f64::NAN);
+                    Step::Contact(c, at)
+                }
+                bnb::Outcome::Unknown { why, .. } => Step::Undecided(match why {
+                    bnb::UnknownWhy::Resolution => {
+                        "boxes at the search's resolution touch or are too close to call".into()
+                    }
+                    bnb::UnknownWhy::Nodes(n) => format!("{n} boxes searched"),
+                    bnb::UnknownWhy::Deadline => "the time limit was reached (raise it with --timeout)".into(),
+                    bnb::UnknownWhy::BadBox => "the search box is malformed".into(),
+                }),
+            }
+        });
+        (best, window)
+    }
+}
+
+/// A time as the report shows it (five significant digits).
+fn short(t: f64) -> String {
+    let s = format!("{t:.5}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A contact exists exactly from `first` s on: a step is apart below it and finds a
+    /// contact at `mid` otherwise (the least time it may show).
+    fn from(first: f64) -> impl FnMut(f64) -> Step<f64> {
+        move |mid| if mid < first { Step::Apart } else { Step::Contact(mid, first.max(mid / 2.0)) }
+    }
+
+    #[test]
+    fn the_window_holds_the_first_contact_and_narrows_to_one_percent() {
+        let (_, t, w) = bisect(10.0, 10.0, &mut from(3.45));
+        let lo = w.not_before.expect("a proved bound");
+        assert!(lo < 3.45 && 3.45 <= t, "[{lo}, {t}]");
+        assert!(w.open.is_none());
+        // Eight steps from 10 s: the window is at most 10 / 2^7 wide.
+        assert!(t - lo <= 10.0 / 128.0, "[{lo}, {t}]");
+    }
+
+    #[test]
+    fn an_undecided_step_keeps_what_was_proved_and_says_why() {
+        let mut calls = 0;
+        let (_, t, w) = bisect(8.0, 8.0, &mut |mid| {
+            calls += 1;
+            if mid == 0.0 {
+                Step::<f64>::Apart
+            } else {
+                Step::Undecided("out of boxes".into())
+            }
+        });
+        assert_eq!((t, w.not_before, calls), (8.0, Some(0.0), 2));
+        assert!(w.open.as_deref().is_some_and(|o| o.contains("4 s") && o.contains("out of boxes")), "{w:?}");
+        // Nothing proved: no bound, and why.
+        let (_, _, w) = bisect(8.0, 8.0, &mut |_| Step::<f64>::Undecided("time limit".into()));
+        assert!(w.not_before.is_none() && w.open.is_some());
+    }
+
+    /// choreographies/rejected/geometry/E0510-bridge-lowered.chor: by hand (its header),
+    /// the cart's front face first reaches the lowered deck at t = (1.0 - 0.31) / 0.2 =
+    /// 3.45 s; the geometric search's first contact is later (6 s, where it meets the deck
+    /// best first), and the window must hold 3.45 s and be narrow.
+    #[test]
+    fn the_geometric_window_holds_the_bridges_first_contact_by_hand() {
+        use crate::driver::Config;
+        let src = include_str!("../../../../choreographies/rejected/geometry/E0510-bridge-lowered.chor");
+        let path = crate::testing::repo("choreographies/rejected/geometry/E0510-bridge-lowered.chor");
+        let mut db = crate::source::SourceDb::new();
+        let r = crate::fsload::check_source(&mut db, &path.display().to_string(), src, &Config::patient());
+        let d = r.diagnostics.iter().find(|d| d.code == crate::diag::Code::ObstacleHit).expect("E0510");
+        let o = d.counterexample.as_deref().and_then(|c| c.overlap.clone()).expect("a contact");
+        let (lo, t) = (o.not_before.expect("a proved bound"), o.times[0]);
+        assert!(lo < 3.45 && 3.45 <= t + 1e-9, "window [{lo}, {t}]: {o:?}");
+        assert!(t - lo <= 0.05 * t, "window [{lo}, {t}] wider than 5 %: {o:?}");
+    }
+
+    #[test]
+    fn a_contact_at_the_start_is_the_earliest_and_a_bad_time_is_never_taken() {
+        let (_, t, w) = bisect(5.0, 5.0, &mut |_| Step::Contact(0.0, 0.0));
+        assert_eq!((t, w.not_before, w.open), (0.0, None, None));
+        let (_, t, w) = bisect(5.0, 5.0, &mut |mid| Step::Contact(mid + 1.0, mid + 1.0));
+        assert_eq!(t, 5.0);
+        assert!(w.open.is_some());
+        let (_, _, w) = bisect(5.0, f64::NAN, &mut |_| -> Step<f64> { panic!("not asked") });
+        assert!(w.open.is_some());
+    }
+}
