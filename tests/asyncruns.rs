@@ -124,20 +124,44 @@ fn timed(src: &str) -> bool {
     src.lines().map(|l| l.split("//").next().unwrap_or("")).any(|l| l.contains(" ms by "))
 }
 
+/// Files of the corpus in which the explorer finds a run E0326 lets through, each with
+/// what it shows: open findings, kept here so that the test names them and fails when one
+/// is fixed (then remove it) or another file joins them.
+const KNOWN: &[(&str, &str)] = &[(
+    "compass-calibration.chor",
+    "the vehicle's refused COMMAND_ACK crosses the ground station's timeout; the ground station \
+     ends, and the vehicle waits for ever at the next choice, whose only branch it could take \
+     is guarded `res == MAV_RESULT_ACCEPTED` and whose other branch is the ended ground \
+     station's timeout: E0326's condition (1) counts only receptions from the waiting role as \
+     waiting for it, not a choice it decides by its timeout",
+)];
+
 #[test]
 fn timed_protocols_of_the_corpus_never_misread_and_the_monitor_agrees() {
     let files = mavlink("mavlink");
     assert!(!files.is_empty());
     let mut verified = 0;
+    let mut failures = Vec::new();
     for f in files {
+        let name = f.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let known = KNOWN.iter().any(|(k, _)| *k == name);
         let src = std::fs::read_to_string(&f).expect("readable");
-        let (verdict, codes, found) = oracle(&src).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
-        if verdict == Verdict::Verified {
-            verified += 1;
-            assert!(!found.runs.is_empty(), "{}: no run explored", f.display());
+        match oracle(&src) {
+            Ok((verdict, codes, found)) => {
+                if verdict == Verdict::Verified {
+                    verified += 1;
+                    assert!(!found.runs.is_empty(), "{}: no run explored", f.display());
+                }
+                eprintln!("{}: {verdict:?} {codes:?}, {} states", f.display(), found.states);
+                if known {
+                    failures.push(format!("{name}: listed in KNOWN, but the explorer finds nothing now: remove it"));
+                }
+            }
+            Err(e) if known => eprintln!("{name}: the known finding: {}", e.lines().next().unwrap_or("")),
+            Err(e) => failures.push(format!("{}: {e}", f.display())),
         }
-        eprintln!("{}: {verdict:?} {codes:?}, {} states", f.display(), found.states);
     }
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
     assert!(verified >= 1, "no verified timed protocol in the corpus");
 }
 

@@ -23,16 +23,22 @@ fn local_triangles(s: &Solid) -> Option<Vec<[Point3<f64>; 3]>> {
 /// 1/2 in magnitude (1 inside a closed oriented mesh, 0 outside); any other solid is its
 /// convex shape.
 pub fn solid_contains(owner: &Pose3, s: &Solid, p: [f64; 3], tol: f64) -> bool {
+    contains_with(owner, s, local_triangles(s).as_deref(), p, tol)
+}
+
+/// [`solid_contains`] with the mesh solid's triangles given (`local_triangles`, built once
+/// by a caller that asks about many points).
+fn contains_with(owner: &Pose3, s: &Solid, tri: Option<&[[Point3<f64>; 3]]>, p: [f64; 3], tol: f64) -> bool {
     let pose = owner * s.pose;
     let wp = Point3::new(p[0], p[1], p[2]);
-    if let Some(tri) = local_triangles(s) {
+    if let Some(tri) = tri {
         let local = pose.inverse_transform_point(&wp);
         if let Some(m) = s.mesh() {
             if m.distance_to_local_point(&local, false) <= tol {
                 return true;
             }
         }
-        return super::mesh::winding(&tri, &local).abs() >= 0.5;
+        return super::mesh::winding(tri, &local).abs() >= 0.5;
     }
     s.shape.distance_to_point(&pose, &wp, true) <= tol
 }
@@ -81,7 +87,9 @@ pub fn probe_points(owner: &Pose3, s: &Solid, inset: f64) -> Vec<[f64; 3]> {
 /// one. (A concave footprint's hollow may hold every corner of the body's top and still cut
 /// through its middle: that second test finds it.)
 pub fn point_outside(owner: &Pose3, body: &Solid, region: &[(Pose3, &Solid)], tol: f64) -> Option<[f64; 3]> {
-    let inside = |p: [f64; 3]| region.iter().any(|(o, s)| solid_contains(o, s, p, tol));
+    let meshes: Vec<Option<Vec<[Point3<f64>; 3]>>> = region.iter().map(|(_, s)| local_triangles(s)).collect();
+    let inside =
+        |p: [f64; 3]| region.iter().zip(&meshes).any(|((o, s), tri)| contains_with(o, s, tri.as_deref(), p, tol));
     if let Some(p) = probe_points(owner, body, 1e-6).into_iter().find(|p| !inside(*p)) {
         return Some(p);
     }

@@ -452,6 +452,15 @@ impl Runner<'_, '_> {
             Some(b) if !b.is_empty() => b,
             _ => return true,
         };
+        // `footprint: geometry` is the body itself at the same state: within it by
+        // construction (and testing each vertex of a mesh body against the mesh's own
+        // triangles costs vertices times triangles at every sample).
+        if matches!(
+            &prog.prim(o.app.prim).footprint,
+            Footprint::Solid { own: true, .. } | Footprint::Shapes { own: true, .. }
+        ) {
+            return true;
+        }
         let f = footprint(prog, o.app.prim);
         let own = |v: &Var| match v {
             Var::Own(Slot::State(i)) => o.now.get(*i).cloned(),
