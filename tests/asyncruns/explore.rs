@@ -161,10 +161,7 @@ impl<'p> Explorer<'p> {
                 out.cut = true;
                 break;
             }
-            let steps = match self.steps(&c, &mut out.undecided) {
-                Ok(s) => s,
-                Err(u) => return Err(u),
-            };
+            let steps = self.steps(&c, &mut out.undecided)?;
             let mut next = Vec::new();
             for s in steps {
                 match s {
@@ -336,12 +333,10 @@ impl<'p> Explorer<'p> {
                             let by = t.after.by;
                             let at = learnt.at.clone();
                             match &*at {
-                                Local::End(_) => {
-                                    if c.roles[by.idx()].last_timeout == Some(t.after.loc.0.start) {
-                                        let mut n = c.clone();
-                                        n.roles[i] = learnt;
-                                        out.push(Step::To(Box::new(n)));
-                                    }
+                                Local::End(_) if c.roles[by.idx()].last_timeout == Some(t.after.loc.0.start) => {
+                                    let mut n = c.clone();
+                                    n.roles[i] = learnt;
+                                    out.push(Step::To(Box::new(n)));
                                 }
                                 Local::Recv { branches, .. } => {
                                     if let Some(m) = c.queues.get(&(by.0, me.0)).and_then(VecDeque::front) {

@@ -175,11 +175,10 @@ pub fn replay(
                 return Ok(Some(format!("a known disagreement: {kind:?}")));
             }
         }
-        let agrees = match (reading, o) {
-            (_, Outcome::Violation(_) | Outcome::Passed) => false,
-            (Some(Reading::Step), Outcome::Late { .. }) => false,
-            _ => true,
-        };
+        let agrees = !matches!(
+            (reading, o),
+            (_, Outcome::Violation(_) | Outcome::Passed) | (Some(Reading::Step), Outcome::Late { .. })
+        );
         if !agrees {
             let why = match o {
                 Outcome::Violation(v) => m.describe(db, v),
