@@ -584,7 +584,7 @@ impl Env<'_> {
             Ok(exact::Value::Bool(Tri::True)) => Ok(true),
             Ok(exact::Value::Bool(Tri::False)) => Ok(false),
             Ok(_) => Err(Verdict::Undecided),
-            Err(_) => Err(Verdict::Undefined("an operation undefined at these values")),
+            Err(why) => Err(Verdict::Undefined(undefined_reason(&why))),
         }
     }
 
@@ -607,8 +607,21 @@ impl Env<'_> {
                 None => Err(Verdict::Undecided),
             },
             Ok(_) => Err(Verdict::Undecided),
-            Err(_) => Err(Verdict::Undefined("an operation undefined at these values")),
+            Err(why) => Err(Verdict::Undefined(undefined_reason(&why))),
         }
+    }
+}
+
+/// The reason the fixed width would give for what the exact evaluator refused, so that a
+/// report reads the same whichever path evaluated the expression (the fallback runs after an
+/// overflow, and may meet the division by zero the fixed width would have met).
+fn undefined_reason(why: &str) -> &'static str {
+    if why.starts_with("a division by") {
+        "a division by zero"
+    } else if why.starts_with("the square root") {
+        "the square root of a negative number"
+    } else {
+        "an operation undefined at these values"
     }
 }
 

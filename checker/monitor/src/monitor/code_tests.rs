@@ -207,6 +207,16 @@ fn reference(prog: &Program, e: &Expr, regs: &[Val]) -> Result<exact::Value, Str
     exact::eval(prog, e, &env)
 }
 
+/// An answer without the wording of its reason: which partial operator a refusal names
+/// depends on the order the two forms meet them (`x / 0 + sqrt(-1)`), the refusal does not.
+fn kind<T: Clone>(v: &Result<T, Verdict>) -> Result<T, Option<()>> {
+    match v {
+        Ok(x) => Ok(x.clone()),
+        Err(Verdict::Undefined(_)) => Err(Some(())),
+        Err(Verdict::Undecided) => Err(None),
+    }
+}
+
 fn agree(seed: u64, regs: &[Val]) -> Result<(), TestCaseError> {
     let mut g = Gen(seed | 1);
     let prog = Program::default();
@@ -222,7 +232,7 @@ fn agree(seed: u64, regs: &[Val]) -> Result<(), TestCaseError> {
     let (mut fb_f, mut fb_t) = (0, 0);
     if is_pred {
         let (f, t) = (env_f.holds(&cf, &mut fb_f), env_t.holds(&ct, &mut fb_t));
-        prop_assert_eq!(f, t, "compiled and tree differ on {:?} at {:?}", e, regs);
+        prop_assert_eq!(kind(&f), kind(&t), "compiled and tree differ on {:?} at {:?}", e, regs);
         match (&want, f) {
             (Ok(exact::Value::Bool(Tri::True)), Ok(b)) | (Ok(exact::Value::Bool(Tri::False)), Ok(b)) => {
                 prop_assert_eq!(Ok(exact::Value::Bool(Tri::of(b))), want.clone(), "{:?} at {:?}", e, regs)
@@ -238,7 +248,7 @@ fn agree(seed: u64, regs: &[Val]) -> Result<(), TestCaseError> {
         // A register read whole keeps a float too wide for a [`Q`] as the float it is.
         let wide = |x: f64| exact::Rat::from_float(x);
         let (f, t) = (env_f.value(&cf, &mut fb_f), env_t.value(&ct, &mut fb_t));
-        prop_assert_eq!(f, t, "compiled and tree differ on {:?} at {:?}", e, regs);
+        prop_assert_eq!(kind(&f), kind(&t), "compiled and tree differ on {:?} at {:?}", e, regs);
         match (&want, f) {
             (Ok(exact::Value::Num(n)), Ok(Val::Num(q))) => {
                 prop_assert!(
@@ -284,8 +294,20 @@ fn agree(seed: u64, regs: &[Val]) -> Result<(), TestCaseError> {
     Ok(())
 }
 
+fn config() -> ProptestConfig {
+    use proptest::test_runner::RngSeed;
+    let long = std::env::var_os("MOCHI_LONG").is_some();
+    ProptestConfig {
+        cases: if long { 100_000 } else { 1000 },
+        rng_seed: if long { RngSeed::Random } else { RngSeed::Fixed(0x6d6f_6368_6931_3631) },
+        ..ProptestConfig::default()
+    }
+}
+
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 1000, ..ProptestConfig::default() })]
+    // A fixed seed: CI draws the same 1,000 cases each run (two random draws found cases in
+    // CI, each now in the regressions file); `MOCHI_LONG=1` draws 100,000 fresh ones.
+    #![proptest_config(config())]
 
     #[test]
     fn the_compiled_evaluator_is_the_exact_one(seed in any::<u64>(), regs in proptest::collection::vec(value(), REGS)) {
