@@ -229,10 +229,20 @@ fn agree(seed: u64, regs: &[Val]) -> Result<(), TestCaseError> {
     let env_f = Env { regs, strs: &[], arena: &flat, prog: &prog };
     let env_t = Env { regs, strs: &[], arena: &tree, prog: &prog };
     let want = reference(&prog, &e, regs);
+    // The reference's connectives are Kleene's (`(a || x / 0 <= y) && false` is false);
+    // the monitor's, like the static checks', evaluate left to right and are undefined
+    // where that evaluation meets a partial operator outside its domain: exactly where
+    // `definedness(e)` is false. There the monitor must refuse, whatever Kleene says.
+    let undefined =
+        matches!(reference(&prog, &crate::hir::expr::definedness(&e), regs), Ok(exact::Value::Bool(Tri::False)));
     let (mut fb_f, mut fb_t) = (0, 0);
     if is_pred {
         let (f, t) = (env_f.holds(&cf, &mut fb_f), env_t.holds(&ct, &mut fb_t));
         prop_assert_eq!(kind(&f), kind(&t), "compiled and tree differ on {:?} at {:?}", e, regs);
+        if undefined {
+            prop_assert!(matches!(f, Err(_)), "{:?} at {:?} is undefined, the monitor says {:?}", e, regs, f);
+            return Ok(());
+        }
         match (&want, f) {
             (Ok(exact::Value::Bool(Tri::True)), Ok(b)) | (Ok(exact::Value::Bool(Tri::False)), Ok(b)) => {
                 prop_assert_eq!(Ok(exact::Value::Bool(Tri::of(b))), want.clone(), "{:?} at {:?}", e, regs)
@@ -249,6 +259,10 @@ fn agree(seed: u64, regs: &[Val]) -> Result<(), TestCaseError> {
         let wide = |x: f64| exact::Rat::from_float(x);
         let (f, t) = (env_f.value(&cf, &mut fb_f), env_t.value(&ct, &mut fb_t));
         prop_assert_eq!(kind(&f), kind(&t), "compiled and tree differ on {:?} at {:?}", e, regs);
+        if undefined {
+            prop_assert!(matches!(f, Err(_)), "{:?} at {:?} is undefined, the monitor says {:?}", e, regs, f);
+            return Ok(());
+        }
         match (&want, f) {
             (Ok(exact::Value::Num(n)), Ok(Val::Num(q))) => {
                 prop_assert!(
@@ -346,4 +360,33 @@ fn disjunctions_of_one_register_become_runs() {
     assert_eq!(at(Val::Num(Q::int(5))), Ok(true));
     assert_eq!(at(Val::Num(Q::int(3))), Ok(false));
     assert_eq!(at(Val::Num(Q::int(-1))), Ok(false));
+}
+
+/// The fallback reads definedness left to right, as the static checks do: `((x0 + 1 < 2) ||
+/// (x1 / 0 < 1)) || true` with `x0` too wide for the fixed width (so the fallback evaluates
+/// it) is undefined, not true (`exact::eval` makes the inner disjunction Kleene's unknown, and
+/// `unknown || true` true). Before, the monitor passed it, while the static checks assume
+/// (with its definedness) that no such message is ever sent.
+#[test]
+fn the_fallback_reads_definedness_left_to_right() {
+    let prog = Program::default();
+    let mut flat = arena(false);
+    let one = mk(ExprKind::Int(1), Sort::Int);
+    let zero = mk(ExprKind::Int(0), Sort::Int);
+    let two = mk(ExprKind::Int(2), Sort::Int);
+    let wide = bin(BinOp::Lt, bin(BinOp::Add, reg(0), one.clone(), Sort::Real), two, Sort::Bool);
+    let undefined = bin(BinOp::Lt, bin(BinOp::Div, reg(1), zero, Sort::Real), one, Sort::Bool);
+    let either = bin(BinOp::Or, wide, undefined, Sort::Bool);
+    let e = bin(BinOp::Or, either, mk(ExprKind::Bool(true), Sort::Bool), Sort::Bool);
+    let code = flat.compile(&prog, &e).unwrap();
+    let regs = [
+        Val::Wide(f64::from(f32::MAX)),
+        Val::Num(Q::new(1, 1).unwrap()),
+        Val::Num(Q::new(0, 1).unwrap()),
+        Val::Num(Q::new(0, 1).unwrap()),
+    ];
+    let env = Env { regs: &regs, strs: &[], arena: &flat, prog: &prog };
+    let mut fallbacks = 0;
+    assert!(matches!(env.holds(&code, &mut fallbacks), Err(Verdict::Undefined(_))));
+    assert_eq!(fallbacks, 1, "the fixed width stops at the wide register");
 }
