@@ -82,6 +82,13 @@ fn golden_verdict(path: &str) -> Verdict {
     }
 }
 
+/// `files` ordered largest first (by size in bytes, then as they were): a file's size stands
+/// for the cost of its simulation (sorting-case-study, the largest, was the slowest), and
+/// the slowest started last keeps one thread busy alone at the end of [`par_map`].
+fn largest_first<T>(files: &mut [T], path: impl Fn(&T) -> &str) {
+    files.sort_by_cached_key(|f| std::cmp::Reverse(std::fs::metadata(path(f)).map_or(0, |m| m.len())));
+}
+
 /// Runs `f` on every item on two threads (the simulations are independent), results in the
 /// items' order.
 fn par_map<T: Sync, R: Send>(items: &[T], f: impl Fn(usize, &T) -> R + Sync) -> Vec<R> {
@@ -144,8 +151,12 @@ fn verified_files_are_clean(filter: &dyn Fn(&str) -> bool) {
         })
         .collect();
     assert!(!verified.is_empty(), "no verified file was simulated");
+    let mut verified = verified;
+    largest_first(&mut verified, |(_, p)| p);
     let bad: Vec<String> = par_map(&verified, |_, (k, path)| {
+        let started = std::time::Instant::now();
         let r = simulate_path(path, &cfg(2, 12, 100 + *k as u64));
+        eprintln!("  {:>8.2} s  {path}", started.elapsed().as_secs_f64());
         // A timeout branch is refused as undecided (not simulated yet), never a clean run.
         let with_timeouts = [
             "choreographies/mavlink/compass-calibration.chor",
@@ -294,8 +305,9 @@ fn rejected_files_are_found_or_explained(filter: &dyn Fn(&str) -> bool, runs: us
     }
     let mut files = Vec::new();
     chor_files(Path::new("choreographies"), true, &mut files);
-    let files: Vec<String> =
+    let mut files: Vec<String> =
         files.into_iter().filter(|p| filter(p) && !NOT_FOUND.iter().any(|(n, _)| p.ends_with(n))).collect();
+    largest_first(&mut files, |p| p);
     // Per file: `Ok(true)` found, `Ok(false)` no program to run, `Err` missed.
     let results = par_map(&files, |_, path| {
         let mut db = SourceDb::new();
