@@ -14,7 +14,9 @@
 //!   straddles the answer. Never `True` or `False` unless that is the exact answer.
 //! - Division by an interval that contains 0, `sqrt` of a possibly negative number, an
 //!   unbound variable or a tuple is an [`Err`] (the caller treats it as unknown): Z3 gives
-//!   those no fixed value either.
+//!   those no fixed value either. Connectives skip only what their left side decides, as
+//!   `hir::expr::definedness` reads them: an error on a side that is evaluated is the
+//!   whole expression's.
 
 use crate::hir::expr::{BinOp, UnOp};
 use crate::hir::{Builtin, Expr, ExprKind, Loc, Program, Sort, Var};
@@ -389,7 +391,11 @@ fn vec3(v: Value) -> Result<[Num; 3], String> {
 fn binary(op: BinOp, a: Value, b: impl FnOnce() -> Result<Value, String>) -> Result<Value, String> {
     use BinOp::*;
     // Connectives: short-circuit only on a definite answer (an error on the other side
-    // then does not matter: the result does not depend on it).
+    // then does not matter: the result does not depend on it). Otherwise the right side is
+    // evaluated, left to right as the static checks read definedness
+    // (`hir::expr::definedness`): its error is the whole expression's. Reading it as
+    // `Unknown` (Kleene) made `((x < 2) || (y / 0 < 1)) || true` true where mochi's
+    // semantics has no value at all.
     match op {
         And | Or | Implies => {
             let x = a.tri()?;
@@ -401,10 +407,7 @@ fn binary(op: BinOp, a: Value, b: impl FnOnce() -> Result<Value, String>) -> Res
             if decided {
                 return Ok(Value::Bool(Tri::of(op != And)));
             }
-            let y = match b().and_then(|v| v.tri()) {
-                Ok(y) => y,
-                Err(_) => Tri::Unknown,
-            };
+            let y = b()?.tri()?;
             return Ok(Value::Bool(match op {
                 And => x.and(y),
                 Or => x.or(y),

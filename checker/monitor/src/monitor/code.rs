@@ -104,10 +104,6 @@ pub struct Code {
     pub slow: bool,
     /// The expression, for the fallback and for reports.
     pub expr: Expr,
-    /// Where `expr` is defined (`hir::expr::definedness`), for the fallback: `exact::eval`'s
-    /// connectives are Kleene's, which make `(x / 0 < 1) || true` true, while the static
-    /// checks and the fixed width read left to right and call it undefined.
-    pub defined: Expr,
 }
 
 /// The arena and the register map of one protocol.
@@ -136,7 +132,7 @@ impl Arena {
     pub fn compile(&mut self, prog: &Program, e: &Expr) -> Result<Code, String> {
         let mut slow = false;
         let root = self.node(prog, e, &mut slow, 0)?;
-        Ok(Code { root, id: 0, slow, expr: e.clone(), defined: crate::hir::expr::definedness(e) })
+        Ok(Code { root, id: 0, slow, expr: e.clone() })
     }
 
     /// Calls `f` on every register node `n` reads.
@@ -571,14 +567,9 @@ impl Env<'_> {
             Var::Value(id, _) => self.arena.reg_of.get(id).and_then(|r| self.exact_value(*r)),
             _ => None,
         };
-        // Definedness first, as the static checks read it (left to right): where it fails the
-        // expression has no value, whatever Kleene's connectives make of the rest; where it
-        // cannot be decided, neither can the expression.
-        match exact::eval(self.prog, &code.defined, &env)? {
-            exact::Value::Bool(Tri::True) => exact::eval(self.prog, &code.expr, &env),
-            exact::Value::Bool(Tri::False) => Err("an operation undefined at these values".into()),
-            _ => Ok(exact::Value::Bool(Tri::Unknown)),
-        }
+        // `exact::eval` reads connectives left to right, as the fixed width and the static
+        // checks' definedness do: an undefined operation it reaches is an error.
+        exact::eval(self.prog, &code.expr, &env)
     }
 
     /// A predicate's truth: `Ok(true/false)`, or why it has none.
