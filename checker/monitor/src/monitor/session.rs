@@ -35,13 +35,14 @@ impl Monitor {
                     return Some(self.step(slot, f, index, hops));
                 }
             }
-            if let Some(late) = s.late {
+            if let Some(late) = s.late.filter(|_| f.time_us.is_some_and(|t| t <= s.late_until)) {
                 if a.edges_of(late).iter().any(|&e| {
                     label_fits(&a.edges[e as usize], f) && ends_fit(a, &a.edges[e as usize], &s.roles, &self.kinds, f)
                 }) {
                     // A message of a branch its receiver abandoned by a timeout, arriving
-                    // after: real peers ignore it (docs/observed-and-timeouts.md, "Late
-                    // messages"); not a step, not a violation.
+                    // after it and within the late window: real peers ignore it
+                    // (docs/observed-and-timeouts.md, "Late messages"); not a step, not a
+                    // violation.
                     self.stats.late += 1;
                     self.stats.passed += 1;
                     return Some(Outcome::Late { session: s.id });
@@ -53,6 +54,16 @@ impl Monitor {
         }
         let a = &self.protos[p];
         let fresh = vec_fresh_check(a, &self.kinds, f);
+        if !fresh {
+            if let Some(id) = self.late_of_ended(p, f) {
+                // A message of a choice that a session abandoned by the timeout that ended
+                // it, within the late window: its receiver's session is over and it is no
+                // step of any (docs/monitor.md, "Late messages"); not a violation.
+                self.stats.late += 1;
+                self.stats.passed += 1;
+                return Some(Outcome::Late { session: id });
+            }
+        }
         if fresh {
             let slot = self.start(p, index);
             let o = self.step(slot, f, index, 0);
@@ -99,6 +110,9 @@ impl Monitor {
                     evaluated: Vec::new(),
                     entered_us: None,
                     late: None,
+                    late_until: 0,
+                    idle_from: None,
+                    late_from: None,
                 });
                 self.slots.len() - 1
             }
@@ -119,6 +133,9 @@ impl Monitor {
         s.violations = 0;
         s.entered_us = None;
         s.late = None;
+        s.late_until = 0;
+        s.idle_from = None;
+        s.late_from = None;
         self.open.push(slot);
         self.stats.sessions_started += 1;
         // The initial assignments (a protocol that starts with a loop).
@@ -139,6 +156,8 @@ impl Monitor {
         let state = self.slots[slot].state;
         let entered = self.slots[slot].entered_us;
         let late = self.slots[slot].late;
+        let (late_until, idle_from, late_from) =
+            (self.slots[slot].late_until, self.slots[slot].idle_from, self.slots[slot].late_from);
         self.undo.clear();
         self.undo_strs.clear();
         let fired = if hops > 0 { self.fire(slot, f, hops) } else { Ok(None) };
@@ -151,6 +170,23 @@ impl Monitor {
                 s.visited[next as usize] = true;
                 s.entered_us = f.time_us;
                 let a = &self.protos[p];
+                if hops == 0 && next == state {
+                    // A message of the state's own choice, back at the choice with its
+                    // parameters unchanged: when it came at least the timeout's bound after
+                    // the state was entered, the waiting role may have given up before it
+                    // and ignored it (late). Whether it did, its act says: within the
+                    // reaction bound, that act is checked against the entry before it.
+                    let bound = a.timeout(state).map(|t| t.ms.saturating_mul(1000));
+                    if let (Some(b), Some(e), Some(now)) = (bound, entered, f.time_us) {
+                        if now >= e.saturating_add(b) && super::late::params_unchanged(a, &s.regs, &self.undo) {
+                            s.idle_from = Some(e);
+                            s.late_from = Some(now);
+                        }
+                    }
+                } else {
+                    s.idle_from = None;
+                    s.late_from = None;
+                }
                 match fired {
                     Some(abandoned) => s.late = Some(abandoned),
                     None => {
@@ -173,8 +209,13 @@ impl Monitor {
                 if let Some(due) = end_deadline(a, next, s.entered_us) {
                     self.end_due = self.end_due.min(due);
                 }
+                self.forget_late_of(p, f);
                 if matches!(self.protos[p].states[next as usize], StateKind::End) {
+                    let s = &self.slots[slot];
                     let id = s.id;
+                    if s.late.is_some() {
+                        self.remember(slot, false);
+                    }
                     self.close(slot, true, true);
                     Outcome::Ended { session: id }
                 } else {
@@ -191,6 +232,9 @@ impl Monitor {
                 s.state = state;
                 s.entered_us = entered;
                 s.late = late;
+                s.late_until = late_until;
+                s.idle_from = idle_from;
+                s.late_from = late_from;
                 while let Some((r, v)) = self.undo.pop() {
                     s.regs[r as usize] = v;
                 }
@@ -228,9 +272,19 @@ impl Monitor {
             total_ms = total_ms.saturating_add(t.ms);
             at = a.settle(t.next);
         }
-        let due = s.entered_us.map(|e| e.saturating_add(total_ms.saturating_mul(1000)));
+        let total_us = total_ms.saturating_mul(1000);
+        let due = s.entered_us.map(|e| e.saturating_add(total_us));
+        // The act may follow messages of the choice that came after the bound had passed
+        // (`Session::idle_from`): the role gave up before the first of them, they were late,
+        // and it acted within the reaction bound of that first one.
+        let after_late = match (s.idle_from, s.late_from, f.time_us) {
+            (Some(i), Some(m), Some(t)) => t >= i.saturating_add(total_us) && t <= m.saturating_add(self.reaction_us),
+            _ => false,
+        };
+        let mut base = s.entered_us;
         match (f.time_us, due) {
             (Some(t), Some(due)) if t >= due => {}
+            (Some(_), Some(_)) if after_late => base = s.idle_from,
             (Some(_), Some(_)) => {
                 return Err(Fail {
                     kind: Kind::Early,
@@ -251,16 +305,20 @@ impl Monitor {
             }
         }
         let mut at = first;
-        let mut entered = self.slots[slot].entered_us;
+        let mut entered = base;
         for _ in 0..hops {
             let Some(t) = self.protos[self.slots[slot].proto].timeout(at).copied() else { break };
             at = self.settle(slot, t.next)?;
             entered = entered.map(|e| e.saturating_add(t.ms.saturating_mul(1000)));
             self.stats.timeouts += 1;
         }
+        let window = self.protos[self.slots[slot].proto].timeout(first).map_or(0, |t| t.ms.saturating_mul(1000));
         let s = &mut self.slots[slot];
         s.state = at;
         s.entered_us = entered;
+        // Late messages of the abandoned choice arrive within the timeout's bound of the
+        // act: the protocol's timeout exceeds the link's round trip.
+        s.late_until = f.time_us.unwrap_or(0).saturating_add(window);
         Ok(Some(first))
     }
 
