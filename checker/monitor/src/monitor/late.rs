@@ -10,6 +10,51 @@ use super::{Binding, Monitor};
 use crate::hir::ValueOrigin;
 use crate::mavio::Frame;
 
+/// How many abandoned choices a session keeps late windows for (the oldest gives way).
+const LATE_CHOICES: usize = 4;
+
+/// The choices a session's waiting roles abandoned by their timeouts whose late messages
+/// may still arrive: each state with the end of its late window (µs). Fixed room, no
+/// allocation.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct LateSet {
+    at: [(u32, u64); LATE_CHOICES],
+    n: u8,
+}
+
+impl LateSet {
+    /// Adds the choice of `state`, late until `until` (replacing its earlier window; the
+    /// oldest choice gives way when the room is full).
+    pub(super) fn push(&mut self, state: u32, until: u64) {
+        self.retain(|(l, _)| l != state);
+        if self.n as usize == LATE_CHOICES {
+            self.at.copy_within(1.., 0);
+            self.n -= 1;
+        }
+        self.at[self.n as usize] = (state, until);
+        self.n += 1;
+    }
+
+    pub(super) fn iter(&self) -> impl Iterator<Item = (u32, u64)> + '_ {
+        self.at[..self.n as usize].iter().copied()
+    }
+
+    pub(super) fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    pub(super) fn retain(&mut self, mut keep: impl FnMut((u32, u64)) -> bool) {
+        let mut k = 0;
+        for i in 0..self.n as usize {
+            if keep(self.at[i]) {
+                self.at[k] = self.at[i];
+                k += 1;
+            }
+        }
+        self.n = k as u8;
+    }
+}
+
 /// How many sessions ended by a timeout the monitor keeps for their late messages.
 pub(super) const GHOSTS: usize = 8;
 
@@ -28,8 +73,8 @@ pub(super) struct Ghost {
 }
 
 impl Monitor {
-    /// Keeps session `slot`, ending now, for its late messages: the choice its waiting role
-    /// abandoned last (`late`, within its window), and, when it ended by time (`by_time`),
+    /// Keeps session `slot`, ending now, for its late messages: the choices its waiting
+    /// roles abandoned (`late`, each within its window), and, when it ended by time (`by_time`),
     /// every choice of the chain of timeouts from its state to `end`, each late until its
     /// timeout's bound after the instant it was abandoned. The oldest kept session makes
     /// room (its buffers reused: no allocation once [`GHOSTS`] were kept).
@@ -46,7 +91,7 @@ impl Monitor {
         g.roles.clear();
         g.roles.extend_from_slice(&s.roles);
         g.late.clear();
-        g.late.extend(s.late.map(|l| (l, s.late_until)));
+        g.late.extend(s.late.iter());
         if let (true, Some(mut at_us)) = (by_time, s.entered_us) {
             let mut at = s.state;
             for _ in 0..a.states.len() {
@@ -64,7 +109,8 @@ impl Monitor {
     /// message of a choice it abandoned, between its ends, within that choice's window.
     /// Its sender goes on past it alone (its receiver's session is over, E0326's third
     /// case): the states its own messages and timeouts lead to are late within the same
-    /// window (in the ghost's reserved room: no allocation).
+    /// window, lengthened by each of its own timeouts on the way (in the ghost's reserved
+    /// room: no allocation).
     pub(super) fn late_of_ended(&mut self, p: usize, f: &Frame) -> Option<u64> {
         let t = f.time_us?;
         let a = &self.protos[p];
@@ -90,6 +136,7 @@ impl Monitor {
         let (gi, e, until) = hit?;
         let by = a.edges[e as usize].from;
         let mut at = a.settle(a.edges[e as usize].target_state);
+        let mut until = until;
         let g = &mut self.ghosts[gi];
         for _ in 0..a.states.len() {
             if matches!(a.states[at as usize], StateKind::End) {
@@ -99,8 +146,13 @@ impl Monitor {
             if senders && g.late.len() < g.late.capacity() && !g.late.iter().any(|&(l, _)| l == at) {
                 g.late.push((at, until));
             }
+            // The sender's own timeout (it waits for the ended role in vain): what it sends
+            // after comes that much later.
             match a.timeout(at) {
-                Some(t) if t.by == by => at = a.settle(t.next),
+                Some(t) if t.by == by => {
+                    until = until.saturating_add(t.ms.saturating_mul(1000));
+                    at = a.settle(t.next);
+                }
                 _ => break,
             }
         }
@@ -108,20 +160,34 @@ impl Monitor {
     }
 
     /// A step of protocol `p`: the kept sessions whose late messages its sender could send
-    /// are over (FIFO puts every late message of that end before it).
+    /// are over (FIFO puts every late message of that end before it), unless the step's
+    /// message may itself be one of them (a first message of the protocol that is also a
+    /// late message of the ended session: it starts a session, and the ended one's sender
+    /// went on past it).
     pub(super) fn forget_late_of(&mut self, p: usize, f: &Frame) {
         if self.ghosts.is_empty() {
             return;
         }
         let a = &self.protos[p];
+        let kinds = &self.kinds;
         self.ghosts.retain(|g| {
-            g.proto != p
-                || !g.late.iter().any(|&(l, _)| {
-                    a.edges_of(l).iter().any(|&e| {
-                        let b = g.roles.get(a.edges[e as usize].from.idx());
-                        b.is_some_and(|b| b.sys == Some(f.sysid) && b.comp == Some(f.compid))
-                    })
+            if g.proto != p {
+                return true;
+            }
+            let sent_by = |l: u32| {
+                a.edges_of(l).iter().any(|&e| {
+                    let b = g.roles.get(a.edges[e as usize].from.idx());
+                    b.is_some_and(|b| b.sys == Some(f.sysid) && b.comp == Some(f.compid))
                 })
+            };
+            let late_itself = |&(l, until): &(u32, u64)| {
+                f.time_us.is_some_and(|t| t <= until)
+                    && a.edges_of(l).iter().any(|&e| {
+                        let e = &a.edges[e as usize];
+                        label_fits(e, f) && ends_fit(a, e, &g.roles, kinds, f)
+                    })
+            };
+            !g.late.iter().any(|&(l, _)| sent_by(l)) || g.late.iter().any(late_itself)
         });
     }
 }

@@ -221,13 +221,12 @@ struct Session {
     /// When the current state was entered (the time of the frame that reached it, or, after
     /// a timeout, the earliest instant the timeout could fire), in µs of the frames' time.
     entered_us: Option<u64>,
-    /// The state whose timeout its waiting role took last, while late messages of its
-    /// abandoned branches are ignored (until the other end's first step after the timeout
-    /// that is none of the abandoned choice's messages, and at most until `late_until`).
-    late: Option<u32>,
-    /// The end of the late window in time (µs): the waiting role's act plus the bound of
-    /// the timeout it took (`session::fire`; docs/monitor.md, "Late messages").
-    late_until: u64,
+    /// The states whose timeouts its waiting roles took, while late messages of their
+    /// abandoned branches are ignored: until the other end's first step after the timeout
+    /// that is none of the abandoned choice's messages, and at most until the end of each
+    /// one's window in time, the waiting role's act plus the bound of the timeout it took
+    /// (`session::fire`; docs/monitor.md, "Late messages").
+    late: late::LateSet,
     /// A message of the current state's own choice that re-entered it (parameters
     /// unchanged) at least the timeout's bound after it was entered may have reached a
     /// waiting role that had given up: `late_from` is its arrival (the latest such gap's),

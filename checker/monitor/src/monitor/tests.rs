@@ -607,3 +607,77 @@ choreography C =
         }
     }
 }
+
+/// Late messages of a session that ended by its timeouts, found by the explorer of
+/// asynchronous runs (tests/asyncruns.rs): the vehicle floods, the ground station gives up
+/// twice in a row and its session ends by time. A value that crossed the timeout opens a
+/// session of its own (it is a first message of the protocol), and the vehicle's next
+/// message, which goes on past the value in the ended session, is late there, not a
+/// violation of the new session.
+#[test]
+fn a_late_first_message_opens_a_session_and_what_follows_it_is_late() {
+    let mut db = SourceDb::new();
+    let prog = program(
+        &mut db,
+        "dialect common;
+system S { participant GCS; participant UAV; }
+choreography C =
+  ( UAV -> GCS: PARAM_VALUE.
+      ( UAV -> GCS: PARAM_VALUE.
+          ( UAV -> GCS: MISSION_COUNT. end + after 500 ms by GCS. end )
+      + after 500 ms by GCS. end )
+  + after 500 ms by GCS. end );",
+    );
+    let d = prog.dialect.expect("dialect");
+    let a = Automaton::compile(&prog).expect("compiles");
+    let value = payload(d, "PARAM_VALUE", &[("param_index", int(0)), ("param_count", int(1))], &[]);
+    let count = payload(d, "MISSION_COUNT", &[("target_system", int(255)), ("target_component", int(190))], &[]);
+    let uav = (1, 1);
+    let (m, out) = run_timed(&a, &[(1_004_000, uav, &value), (1_507_000, uav, &value), (1_508_000, uav, &count)]);
+    assert!(matches!(out[1], Outcome::Step { .. }), "{out:?}");
+    assert!(matches!(out[2], Outcome::Late { .. }), "{out:?}: {:?}", violation_kind(&m, &out[2]));
+    assert_eq!(m.stats.ended_by_time, 1);
+}
+
+/// Each choice a session's waiting role abandoned keeps its own late window: the vehicle
+/// gives up on the ground station's request after 1 s and on its list after 0.5 s more, and
+/// the session ends; the request that crossed the first timeout, logged after the second,
+/// is late (within 1 s of the first act), as is the list that crossed the second.
+#[test]
+fn every_abandoned_choice_keeps_its_late_window() {
+    let mut db = SourceDb::new();
+    let prog = program(
+        &mut db,
+        "dialect common;
+system S { participant GCS; participant UAV; }
+choreography C =
+  UAV -> GCS: PARAM_VALUE(param_index as i {0 <= i}).
+  ( GCS -> UAV: PARAM_REQUEST_READ. UAV -> GCS: PARAM_VALUE(param_index as j {0 <= j}).
+      ( GCS -> UAV: PARAM_REQUEST_LIST. UAV -> GCS: MISSION_COUNT. end
+      + after 500 ms by UAV. UAV -> GCS: MISSION_COUNT. end )
+  + after 1000 ms by UAV. UAV -> GCS: PARAM_VALUE(param_index as j {0 <= j}).
+      ( GCS -> UAV: PARAM_REQUEST_LIST. UAV -> GCS: MISSION_COUNT. end
+      + after 500 ms by UAV. UAV -> GCS: MISSION_COUNT. end ) );",
+    );
+    let d = prog.dialect.expect("dialect");
+    let a = Automaton::compile(&prog).expect("compiles");
+    let value = payload(d, "PARAM_VALUE", &[("param_index", int(0)), ("param_count", int(1))], &[]);
+    let count = payload(d, "MISSION_COUNT", &[("target_system", int(255)), ("target_component", int(190))], &[]);
+    let to_uav = [("target_system", int(1)), ("target_component", int(1))];
+    let read = payload(d, "PARAM_REQUEST_READ", &to_uav, &[]);
+    let list = payload(d, "PARAM_REQUEST_LIST", &to_uav, &[]);
+    let (gcs, uav) = ((255, 190), (1, 1));
+    let (m, out) = run_timed(
+        &a,
+        &[
+            (1_000_000, uav, &value),
+            (2_000_000, uav, &value),
+            (2_500_000, uav, &count),
+            (2_700_000, gcs, &read),
+            (2_800_000, gcs, &list),
+        ],
+    );
+    assert!(matches!(out[2], Outcome::Ended { .. }), "{out:?}");
+    assert!(matches!(out[3], Outcome::Late { .. }), "{out:?}: {:?}", violation_kind(&m, &out[3]));
+    assert!(matches!(out[4], Outcome::Late { .. }), "{out:?}: {:?}", violation_kind(&m, &out[4]));
+}
