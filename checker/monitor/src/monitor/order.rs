@@ -8,7 +8,10 @@
 //!   monitor would report unexpected, or outside any session when `a` is the session's
 //!   first message (a third role that speaks before the session's first message). After a
 //!   timeout by `R`, only `R` knows the choice was left: the next message must be `R`'s
-//!   (E0324 asks it already).
+//!   (E0324 asks it already). Likewise the waiting role of a timeout must be an end of the
+//!   message that entered its choice: the monitor starts the wait at that message's frame,
+//!   which another role does not see (after another timeout, the wait starts when that one
+//!   could fire, which the monitor computes).
 //! - **A protocol that starts by waiting**: a first choice with a timeout branch in which a
 //!   message follows. The session would be opened by the waiting role's message after its
 //!   timeout, whose start, the instant the waiting began, no frame shows: the timeout's
@@ -37,12 +40,15 @@ pub(super) fn check(a: &Automaton) -> Result<(), CompileError> {
     // For each state reached, the roles that may send next without racing the event before
     // (the last message's two ends, or the role whose timeout was taken): the intersection
     // over every way in. `u64::MAX` at the start: any role opens the session.
-    let mut may: Vec<Option<u64>> = vec![None; a.states.len()];
-    may[start as usize] = Some(u64::MAX);
+    // With it, the roles that may wait by a timeout there: the ends of the message that
+    // entered the state (any role, when a timeout entered it: the wait then starts at the
+    // instant that timeout could fire, which the monitor computes).
+    let mut may: Vec<Option<(u64, u64)>> = vec![None; a.states.len()];
+    may[start as usize] = Some((u64::MAX, u64::MAX));
     let mut work = vec![start];
     while let Some(s) = work.pop() {
-        let Some(m) = may[s as usize] else { continue };
-        let mut next: Vec<(u32, u64)> = Vec::new();
+        let Some((m, wait)) = may[s as usize] else { continue };
+        let mut next: Vec<(u32, u64, u64)> = Vec::new();
         for &e in a.edges_of(s) {
             let edge = &a.edges[e as usize];
             if m & (1u64 << edge.from.idx()) == 0 {
@@ -58,13 +64,25 @@ pub(super) fn check(a: &Automaton) -> Result<(), CompileError> {
                     span: Some(edge.span),
                 });
             }
-            next.push((a.settle(edge.target_state), (1u64 << edge.from.idx()) | (1u64 << edge.to.idx())));
+            let ends = (1u64 << edge.from.idx()) | (1u64 << edge.to.idx());
+            next.push((a.settle(edge.target_state), ends, ends));
         }
         if let Some(t) = a.timeout(s) {
-            next.push((a.settle(t.next), 1u64 << t.by.idx()));
+            if wait & (1u64 << t.by.idx()) == 0 {
+                let by = &a.roles[t.by.idx()];
+                return Err(CompileError {
+                    message: format!(
+                        "`{by}` cannot know when this wait began: it neither sent nor received the message before \
+                         the choice, whose time is the wait's start for the monitor; let `{by}` take part in that \
+                         message, or move the choice after one it takes part in"
+                    ),
+                    span: Some(t.span),
+                });
+            }
+            next.push((a.settle(t.next), 1u64 << t.by.idx(), u64::MAX));
         }
-        for (t, bits) in next {
-            let new = may[t as usize].map_or(bits, |old| old & bits);
+        for (t, bits, waits) in next {
+            let new = may[t as usize].map_or((bits, waits), |(old, w)| (old & bits, w & waits));
             if may[t as usize] != Some(new) {
                 may[t as usize] = Some(new);
                 work.push(t);

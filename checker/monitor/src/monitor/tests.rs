@@ -584,6 +584,16 @@ choreography C =
     );
     assert_eq!(line, 5, "{msg}");
     assert!(msg.contains("starts by waiting"), "{msg}");
+    let (msg, line) = refused(
+        "dialect common;
+system S { participant GCS; participant UAV; participant CAM; }
+choreography C =
+  GCS -> CAM: STATUSTEXT.
+  ( GCS -> UAV: PARAM_REQUEST_LIST. end
+  + after 500 ms by UAV. UAV -> GCS: STATUSTEXT. end );",
+    );
+    assert_eq!(line, 6, "{msg}");
+    assert!(msg.contains("cannot know when this wait began"), "{msg}");
     // A third role that hears of the session first, and a first choice whose timeout
     // branch ends at once, are read.
     for ok in [
