@@ -1129,7 +1129,9 @@ enum CalBreak {
     ProgressAfterRefusal,
     /// A success reported not saved, though autosave was asked (the report's refinement).
     SuccessNotSaved,
-    /// A progress report after the ground station's silence passed: the session is over.
+    /// A progress report after the ground station's silence and the late window after it
+    /// passed (a report within the window is late: `late_messages_of_ended_sessions_...`):
+    /// the session is over.
     AfterTheSilence,
 }
 
@@ -1185,7 +1187,7 @@ fn calibration_trace(prog: &Program, rng: &mut Rng, brk: CalBreak) -> (Vec<Timed
     }
     match brk {
         CalBreak::AfterTheSilence => {
-            t += 5_000_001;
+            t += 10_000_001;
             broken = Some(out.len());
             out.push((u, progress(pct), t));
             (out, broken, None)
@@ -1271,7 +1273,8 @@ fn calibration_and_parachute_end_by_time_as_verified() {
 
     // The parachute: a release acknowledged within the ground station's 3 s ends with the
     // acknowledgement; one never acknowledged ends by time, and an acknowledgement after that
-    // is in no session.
+    // is in no session: late within the 3 s after the timeout (it crossed it), outside any
+    // session after.
     let (db, prog, verdict) = load(&dir.join("parachute.chor"));
     assert_eq!(verdict, Verdict::Verified);
     let a = Automaton::compile(&prog).expect("parachute.chor compiles");
@@ -1283,7 +1286,7 @@ fn calibration_and_parachute_end_by_time_as_verified() {
     let release = payload(&prog, "COMMAND_LONG[MAV_CMD_DO_PARACHUTE]", uav, &[("param1", 2)]);
     let ack = payload(&prog, "COMMAND_ACK[MAV_CMD_DO_PARACHUTE]", gcs, &[("result", 0)]);
     let t0 = 1_000_000_000u64;
-    for (ack_after, in_time) in [(2_999_999u64, true), (3_000_000, false)] {
+    for (ack_after, in_time) in [(2_999_999u64, true), (3_000_000, false), (6_000_001, false)] {
         let mut m = Monitor::new(vec![a.clone()]);
         for (from, msg, t) in [(u, &safe_hb, t0), (u, &safe_pos, t0 + 1), (g, &release, t0 + 2)] {
             assert!(!matches!(m.on_frame(&timed(from, msg, t)), Outcome::Violation(_)));
@@ -1291,6 +1294,9 @@ fn calibration_and_parachute_end_by_time_as_verified() {
         let o = m.on_frame(&timed(u, &ack, t0 + 2 + ack_after));
         if in_time {
             assert!(matches!(o, Outcome::Ended { .. }), "{o:?}");
+        } else if ack_after <= 6_000_000 {
+            assert!(matches!(o, Outcome::Late { .. }), "an acknowledgement that crossed the timeout: {o:?}");
+            assert_eq!((m.stats.ended_by_time, m.stats.late), (1, 1));
         } else {
             let Outcome::Violation(v) = o else { panic!("an acknowledgement after the timeout accepted: {o:?}") };
             assert_eq!(m.violation(v).map(|v| v.kind), Some(Kind::OutsideSession), "{}", m.describe(&db, v));
@@ -1320,4 +1326,115 @@ fn the_proxy_lines_of_steps_allocate_nothing() {
         lines.events(&batch);
     }
     assert_eq!(allocations() - before, 0, "allocations while writing 3,000 lines");
+}
+
+// ---- the late window (bounded in time; it never restarts a timeout) --------------------
+
+/// `param-list.chor` in a ground station's log: the flood's last value came at `t`; the
+/// ground station's timeout could fire at `t + 1 s`; a value that was on the wire when it
+/// gave up is logged 1 ms after that, and its re-request 1 ms after the value. The log is a
+/// run of the protocol (the late value was ignored), so nothing is a violation, and the
+/// session ends by time, conformant. With the re-request 50 ms after the value (beyond the
+/// reaction bound) the ground station took the value: `before its timeout`.
+#[test]
+fn a_late_flood_item_leaves_the_ground_stations_re_request_in_time() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("choreographies/mavlink/param-list.chor");
+    let (db, prog, _) = load(&path);
+    let a = Automaton::compile(&prog).expect("compiled");
+    let (gcs, uav) = (RoleId(0), RoleId(1));
+    let (g, u) = (end_of(gcs), end_of(uav));
+    let list = payload(&prog, "PARAM_REQUEST_LIST", uav, &[]);
+    let value = |i: i128| payload(&prog, "PARAM_VALUE", gcs, &[("param_count", 5), ("param_index", i)]);
+    let read = payload(&prog, "PARAM_REQUEST_READ", uav, &[("param_index", 4)]);
+    let t = 1_700_000_000_000_000u64;
+    let heartbeat = (0u32, vec![0u8; 9]);
+    for (reaction, in_time) in [(1_000u64, true), (50_000, false)] {
+        let mut frames = vec![(g, list.clone(), t)];
+        frames.extend((0..4).map(|i| (u, value(i), t + 10_000 * (i as u64 + 1))));
+        let last = t + 40_000;
+        frames.push((u, value(4), last + 1_001_000));
+        frames.push((g, read.clone(), last + 1_001_000 + reaction));
+        let mut m = Monitor::new(vec![a.clone()]);
+        let outs: Vec<Outcome> = frames.iter().map(|(from, msg, t)| m.on_frame(&timed(*from, msg, *t))).collect();
+        let (flood, act) = (outs[5], outs[6]);
+        assert!(matches!(flood, Outcome::Step { .. }), "the value that may have crossed: {flood:?}");
+        if in_time {
+            if let Outcome::Violation(v) = act {
+                panic!("the re-request after a late value: {}", m.describe(&db, v));
+            }
+            assert_eq!(m.stats.timeouts, 1);
+            m.on_frame(&timed((1, 1), &heartbeat, last + 10_000_000));
+            assert!(m.finish().iter().all(|s| s.conformant), "{:?}", m.summaries());
+        } else {
+            let Outcome::Violation(v) = act else { panic!("a re-request 50 ms after a value accepted: {act:?}") };
+            assert_eq!(m.violation(v).map(|v| v.kind), Some(Kind::Early), "{}", m.describe(&db, v));
+        }
+    }
+}
+
+/// Late messages of sessions that ended by a timeout: `param-list.chor`'s vehicle gives up
+/// 3 s after the ground station's 1 s (the session ends by time); a re-request that crossed
+/// the vehicle's timeout is late within its 3 s after it, outside any session after; and
+/// `compass-calibration.chor`'s progress report that crossed the ground station's 5 s
+/// silence is late, not outside any session.
+#[test]
+fn late_messages_of_ended_sessions_are_late_within_their_window() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("choreographies/mavlink");
+    let (db, prog, _) = load(&dir.join("param-list.chor"));
+    let a = Automaton::compile(&prog).expect("compiled");
+    let (gcs, uav) = (RoleId(0), RoleId(1));
+    let (g, u) = (end_of(gcs), end_of(uav));
+    let list = payload(&prog, "PARAM_REQUEST_LIST", uav, &[]);
+    let value = payload(&prog, "PARAM_VALUE", gcs, &[("param_count", 5), ("param_index", 0)]);
+    let read = payload(&prog, "PARAM_REQUEST_READ", uav, &[("param_index", 4)]);
+    let t = 1_700_000_000_000_000u64;
+    for (after, late) in [(4_500_000u64, true), (7_000_000, true), (7_000_001, false)] {
+        let mut m = Monitor::new(vec![a.clone()]);
+        m.on_frame(&timed(g, &list, t));
+        m.on_frame(&timed(u, &value, t + 10_000));
+        let o = m.on_frame(&timed(g, &read, t + 10_000 + after));
+        assert_eq!(m.stats.ended_by_time, 1);
+        match (late, o) {
+            (true, Outcome::Late { .. }) => assert_eq!(m.stats.late, 1),
+            (false, Outcome::Violation(v)) => {
+                assert_eq!(m.violation(v).map(|v| v.kind), Some(Kind::OutsideSession), "{}", m.describe(&db, v))
+            }
+            (_, o) => panic!("a re-request {after} µs after the value: {o:?}"),
+        }
+    }
+    let (_, prog, _) = load(&dir.join("compass-calibration.chor"));
+    let a = Automaton::compile(&prog).expect("compiled");
+    let start =
+        payload(&prog, "COMMAND_LONG[MAV_CMD_DO_START_MAG_CAL]", uav, &[("param1", 0), ("param2", 0), ("param3", 1)]);
+    let ack = payload(&prog, "COMMAND_ACK[MAV_CMD_DO_START_MAG_CAL]", gcs, &[("result", 0)]);
+    let progress = |pct: i128| payload(&prog, "MAG_CAL_PROGRESS", gcs, &[("cal_status", 2), ("completion_pct", pct)]);
+    let mut m = Monitor::new(vec![a]);
+    for (from, msg, at) in
+        [(g, &start, t), (u, &ack, t + 1_000), (u, &progress(10), t + 2_000), (u, &progress(20), t + 3_000)]
+    {
+        assert!(!matches!(m.on_frame(&timed(from, msg, at)), Outcome::Violation(_)));
+    }
+    let o = m.on_frame(&timed(u, &progress(30), t + 3_000 + 5_000_001));
+    assert!(matches!(o, Outcome::Late { .. }), "{o:?}");
+    assert_eq!((m.stats.ended_by_time, m.stats.late), (1, 1));
+}
+
+/// Every protocol of the corpus is one the monitor reads in its order: none is refused for
+/// a message that may race the one before it, or for starting by waiting.
+#[test]
+fn no_corpus_protocol_is_refused_for_its_order_or_for_starting_by_waiting() {
+    for p in protocols() {
+        let (_, prog, verdict) = load(&p);
+        if verdict != Verdict::Verified {
+            continue;
+        }
+        if let Err(e) = Automaton::compile(&prog) {
+            assert!(
+                !e.message.contains("starts by waiting") && !e.message.contains("may reach the link before"),
+                "{}: {}",
+                p.display(),
+                e.message
+            );
+        }
+    }
 }

@@ -216,7 +216,8 @@ impl CompileError {
         )
         .with_help(
             "the monitor runs MAVLink protocols (`dialect ...;`, messages only) whose loops send a message on \
-             every path back; write the construct so, or check the protocol statically only (`mochi check`)",
+             every path back, whose messages reach the link in the protocol's order and which start with a \
+             message; write the construct so, or check the protocol statically only (`mochi check`)",
         )
     }
 }
@@ -321,6 +322,7 @@ impl Automaton {
         b.a.start = start;
         b.a.timeouts.resize(b.a.states.len(), None);
         b.check_guarded()?;
+        super::order::check(&b.a)?;
         let mut alphabet: Vec<u32> = b.a.edges.iter().map(|e| e.msgid).collect();
         alphabet.sort_unstable();
         alphabet.dedup();

@@ -48,7 +48,9 @@
 
 pub mod automaton;
 pub mod code;
+mod late;
 pub mod num;
+mod order;
 mod report;
 mod session;
 mod stream;
@@ -219,10 +221,20 @@ struct Session {
     /// When the current state was entered (the time of the frame that reached it, or, after
     /// a timeout, the earliest instant the timeout could fire), in µs of the frames' time.
     entered_us: Option<u64>,
-    /// The state whose timeout its waiting role took last, while late messages of its
-    /// abandoned branches are ignored (until the other end's first step after the timeout
-    /// that is none of the abandoned choice's messages).
-    late: Option<u32>,
+    /// The states whose timeouts its waiting roles took, while late messages of their
+    /// abandoned branches are ignored: until the other end's first step after the timeout
+    /// that is none of the abandoned choice's messages, and at most until the end of each
+    /// one's window in time, the waiting role's act plus the bound of the timeout it took
+    /// (`session::fire`; docs/monitor.md, "Late messages").
+    late: late::LateSet,
+    /// A message of the current state's own choice that re-entered it (parameters
+    /// unchanged) at least the timeout's bound after it was entered may have reached a
+    /// waiting role that had given up: `late_from` is its arrival (the latest such gap's),
+    /// `idle_from` the entry before it. The waiting role's act within the reaction bound of
+    /// `late_from` is checked against `idle_from` (`session::fire`): the messages since
+    /// were late. A late message never restarts a timeout.
+    idle_from: Option<u64>,
+    late_from: Option<u64>,
 }
 
 /// What [`Monitor::take_reports`] hands over: the recorded violations and the summaries of
@@ -260,6 +272,13 @@ pub struct Monitor {
     kinds: Vec<session::EndOf>,
     /// Whether some protocol has a timeout branch (sessions may end by time).
     timed: bool,
+    /// Sessions that ended by a timeout, whose abandoned choices' messages may still arrive
+    /// within their late window (`late::Ghost`), oldest first, at most
+    /// [`late::GHOSTS`].
+    ghosts: Vec<late::Ghost>,
+    /// How long after a waiting role's timeout fired its act may reach the log (µs):
+    /// [`REACTION_US`] unless [`Monitor::set_reaction_bound`] says otherwise.
+    reaction_us: u64,
     /// No open session ends by time before this instant (µs of the frames' clock): a lower
     /// bound of their deadlines (`session::end_deadline`), lowered by every step that sets
     /// one and recomputed by the scan it triggers, so that a frame before it scans nothing.
@@ -278,6 +297,12 @@ pub struct Monitor {
     id_protos: Vec<u32>,
     pub stats: Stats,
 }
+
+/// The reaction bound's default: a waiting role acts (sends the first message of its
+/// timeout branch) within 20 ms of its timeout firing, as the log sees it. A message of the
+/// abandoned choice that the log shows before that act is late only if it came at most this
+/// long before it (docs/monitor.md, "Late messages").
+pub const REACTION_US: u64 = 20_000;
 
 /// The message ids [`Monitor`]'s `spoken` bitmap covers (MAVLink 2 ids are 24 bits; the
 /// common and ArduPilot dialects stay below this). A frame with a larger id takes the
@@ -336,6 +361,8 @@ impl Monitor {
             clock: None,
             kinds: Vec::with_capacity(16),
             timed,
+            ghosts: Vec::new(),
+            reaction_us: REACTION_US,
             end_due: 0,
             pinned: Vec::new(),
             pinned_kinds: false,
@@ -486,6 +513,7 @@ impl Monitor {
             match session::end_deadline(&self.protos[s.proto], s.state, s.entered_us) {
                 Some(d) if clock >= d => {
                     self.stats.ended_by_time += 1;
+                    self.remember(slot, true);
                     // `close` moves the last open session to position `k`.
                     self.close(slot, true, true);
                 }
@@ -515,6 +543,13 @@ impl Monitor {
         if !self.pinned.contains(&(sys, comp)) {
             self.pinned.push((sys, comp));
         }
+    }
+
+    /// Sets the reaction bound (µs, default [`REACTION_US`]): how long after its timeout
+    /// fired a waiting role's act may appear in the log. A message of the abandoned choice
+    /// logged before the act is read as late (not restarting the timeout) only within it.
+    pub fn set_reaction_bound(&mut self, us: u64) {
+        self.reaction_us = us;
     }
 
     /// Whether [`Monitor::pin_end_kind`] fixed the kind of end `(sys, comp)`.

@@ -32,20 +32,34 @@ impl Monitor {
             }
             if a.timeout(s.state).is_some() {
                 if let Some((hops, _)) = timeout_chain(a, s.state, &s.roles, &self.kinds, f) {
+                    // An act too early for this session may be a late message of a session
+                    // its timeout ended, whose sender went on (a first message of the
+                    // protocol that opened this session may have been one too).
+                    if !self.act_in_time(slot, f, hops) {
+                        if let Some(id) = self.late_of_ended(p, f) {
+                            self.stats.late += 1;
+                            self.stats.passed += 1;
+                            return Some(Outcome::Late { session: id });
+                        }
+                    }
                     return Some(self.step(slot, f, index, hops));
                 }
             }
-            if let Some(late) = s.late {
-                if a.edges_of(late).iter().any(|&e| {
-                    label_fits(&a.edges[e as usize], f) && ends_fit(a, &a.edges[e as usize], &s.roles, &self.kinds, f)
-                }) {
-                    // A message of a branch its receiver abandoned by a timeout, arriving
-                    // after: real peers ignore it (docs/observed-and-timeouts.md, "Late
-                    // messages"); not a step, not a violation.
-                    self.stats.late += 1;
-                    self.stats.passed += 1;
-                    return Some(Outcome::Late { session: s.id });
-                }
+            let t = f.time_us;
+            if s.late.iter().any(|(late, until)| {
+                t.is_some_and(|t| t <= until)
+                    && a.edges_of(late).iter().any(|&e| {
+                        label_fits(&a.edges[e as usize], f)
+                            && ends_fit(a, &a.edges[e as usize], &s.roles, &self.kinds, f)
+                    })
+            }) {
+                // A message of a branch its receiver abandoned by a timeout, arriving after it
+                // and within the late window: real peers ignore it
+                // (docs/observed-and-timeouts.md, "Late messages"); not a step, not a
+                // violation.
+                self.stats.late += 1;
+                self.stats.passed += 1;
+                return Some(Outcome::Late { session: s.id });
             }
             if between_ends.is_none() && s.roles.iter().any(|b| b.sys == Some(f.sysid) && b.comp == Some(f.compid)) {
                 between_ends = Some(slot);
@@ -53,7 +67,22 @@ impl Monitor {
         }
         let a = &self.protos[p];
         let fresh = vec_fresh_check(a, &self.kinds, f);
+        if !fresh {
+            if let Some(id) = self.late_of_ended(p, f) {
+                // A message of a choice that a session abandoned by the timeout that ended
+                // it, within the late window: its receiver's session is over and it is no
+                // step of any (docs/monitor.md, "Late messages"); not a violation.
+                self.stats.late += 1;
+                self.stats.passed += 1;
+                return Some(Outcome::Late { session: id });
+            }
+        }
         if fresh {
+            // A first message of the protocol starts a session even when it may also be a
+            // late message of a session its timeout ended; that session's sender then went on
+            // past it, so its next messages are late there too, unless the new session takes
+            // them (`late_of_ended` follows the sender).
+            self.late_of_ended(p, f);
             let slot = self.start(p, index);
             let o = self.step(slot, f, index, 0);
             if let Outcome::Violation(_) = o {
@@ -98,7 +127,9 @@ impl Monitor {
                     taken: Vec::new(),
                     evaluated: Vec::new(),
                     entered_us: None,
-                    late: None,
+                    late: Default::default(),
+                    idle_from: None,
+                    late_from: None,
                 });
                 self.slots.len() - 1
             }
@@ -118,7 +149,9 @@ impl Monitor {
         s.last_frame = index;
         s.violations = 0;
         s.entered_us = None;
-        s.late = None;
+        s.late = Default::default();
+        s.idle_from = None;
+        s.late_from = None;
         self.open.push(slot);
         self.stats.sessions_started += 1;
         // The initial assignments (a protocol that starts with a loop).
@@ -139,6 +172,7 @@ impl Monitor {
         let state = self.slots[slot].state;
         let entered = self.slots[slot].entered_us;
         let late = self.slots[slot].late;
+        let (idle_from, late_from) = (self.slots[slot].idle_from, self.slots[slot].late_from);
         self.undo.clear();
         self.undo_strs.clear();
         let fired = if hops > 0 { self.fire(slot, f, hops) } else { Ok(None) };
@@ -151,30 +185,46 @@ impl Monitor {
                 s.visited[next as usize] = true;
                 s.entered_us = f.time_us;
                 let a = &self.protos[p];
-                match fired {
-                    Some(abandoned) => s.late = Some(abandoned),
-                    None => {
-                        // Late messages are over once the abandoned choice's sender takes a
-                        // step that is none of that choice's messages: FIFO puts every late
-                        // message before it, whereas the waiting role's own sends may
-                        // interleave with late arrivals (docs/observed-and-timeouts.md, "The
-                        // timeout crossing").
-                        if let Some(l) = s.late {
-                            let by = a.timeout(l).map(|t| t.by);
-                            let edge = &a.edges[e as usize];
-                            let of_choice = a.edges_of(l).iter().any(|&x| label_fits(&a.edges[x as usize], f));
-                            if by.is_some() && by != Some(edge.from) && !of_choice {
-                                s.late = None;
-                            }
+                if hops == 0 && next == state {
+                    // A message of the state's own choice, back at the choice with its
+                    // parameters unchanged: when it came at least the timeout's bound after
+                    // the state was entered, the waiting role may have given up before it
+                    // and ignored it (late). Whether it did, its act says: within the
+                    // reaction bound, that act is checked against the entry before it.
+                    let bound = a.timeout(state).map(|t| t.ms.saturating_mul(1000));
+                    if let (Some(b), Some(e), Some(now)) = (bound, entered, f.time_us) {
+                        if now >= e.saturating_add(b) && super::late::params_unchanged(a, &s.regs, &self.undo) {
+                            s.idle_from = Some(e);
+                            s.late_from = Some(now);
                         }
                     }
+                } else {
+                    s.idle_from = None;
+                    s.late_from = None;
+                }
+                if fired.is_none() {
+                    // Late messages are over once the abandoned choice's sender takes a step
+                    // that is none of that choice's messages: FIFO puts every late message
+                    // before it, whereas the waiting role's own sends may interleave with late
+                    // arrivals (docs/observed-and-timeouts.md, "The timeout crossing").
+                    let edge = &a.edges[e as usize];
+                    s.late.retain(|(l, _)| {
+                        let by = a.timeout(l).map(|t| t.by);
+                        let of_choice = a.edges_of(l).iter().any(|&x| label_fits(&a.edges[x as usize], f));
+                        !(by.is_some() && by != Some(edge.from) && !of_choice)
+                    });
                 }
                 self.stats.steps += 1;
                 if let Some(due) = end_deadline(a, next, s.entered_us) {
                     self.end_due = self.end_due.min(due);
                 }
+                self.forget_late_of(p, f);
                 if matches!(self.protos[p].states[next as usize], StateKind::End) {
+                    let s = &self.slots[slot];
                     let id = s.id;
+                    if !s.late.is_empty() {
+                        self.remember(slot, false);
+                    }
                     self.close(slot, true, true);
                     Outcome::Ended { session: id }
                 } else {
@@ -191,6 +241,8 @@ impl Monitor {
                 s.state = state;
                 s.entered_us = entered;
                 s.late = late;
+                s.idle_from = idle_from;
+                s.late_from = late_from;
                 while let Some((r, v)) = self.undo.pop() {
                     s.regs[r as usize] = v;
                 }
@@ -219,18 +271,12 @@ impl Monitor {
     /// On failure the caller restores the state, its entry time and the registers.
     fn fire(&mut self, slot: usize, f: &Frame, hops: u32) -> Result<Option<u32>, Fail> {
         let s = &self.slots[slot];
-        let a = &self.protos[s.proto];
         let first = s.state;
-        let mut total_ms: u64 = 0;
-        let mut at = first;
-        for _ in 0..hops {
-            let Some(t) = a.timeout(at) else { break };
-            total_ms = total_ms.saturating_add(t.ms);
-            at = a.settle(t.next);
-        }
-        let due = s.entered_us.map(|e| e.saturating_add(total_ms.saturating_mul(1000)));
+        let (due, after_late) = self.act_due(slot, f, hops);
+        let mut base = s.entered_us;
         match (f.time_us, due) {
             (Some(t), Some(due)) if t >= due => {}
+            (Some(_), Some(_)) if after_late => base = s.idle_from,
             (Some(_), Some(_)) => {
                 return Err(Fail {
                     kind: Kind::Early,
@@ -251,9 +297,13 @@ impl Monitor {
             }
         }
         let mut at = first;
-        let mut entered = self.slots[slot].entered_us;
+        let mut entered = base;
+        let now = f.time_us.unwrap_or(0);
         for _ in 0..hops {
             let Some(t) = self.protos[self.slots[slot].proto].timeout(at).copied() else { break };
+            // Late messages of the abandoned choice arrive within the timeout's bound of the
+            // act: the protocol's timeout exceeds the link's round trip.
+            self.slots[slot].late.push(at, now.saturating_add(t.ms.saturating_mul(1000)));
             at = self.settle(slot, t.next)?;
             entered = entered.map(|e| e.saturating_add(t.ms.saturating_mul(1000)));
             self.stats.timeouts += 1;
@@ -262,6 +312,38 @@ impl Monitor {
         s.state = at;
         s.entered_us = entered;
         Ok(Some(first))
+    }
+
+    /// When the waiting role may act after `hops` timeouts from the session's state: the
+    /// entry time plus their bounds (`None` without a time), and whether the act at the
+    /// frame's time follows messages of the choice that came after the bound had passed
+    /// (`Session::idle_from`: the role gave up before the first of them, they were late, and
+    /// it acted within the reaction bound of that first one).
+    fn act_due(&self, slot: usize, f: &Frame, hops: u32) -> (Option<u64>, bool) {
+        let s = &self.slots[slot];
+        let a = &self.protos[s.proto];
+        let mut total_ms: u64 = 0;
+        let mut at = s.state;
+        for _ in 0..hops {
+            let Some(t) = a.timeout(at) else { break };
+            total_ms = total_ms.saturating_add(t.ms);
+            at = a.settle(t.next);
+        }
+        let total_us = total_ms.saturating_mul(1000);
+        let due = s.entered_us.map(|e| e.saturating_add(total_us));
+        let after_late = match (s.idle_from, s.late_from, f.time_us) {
+            (Some(i), Some(m), Some(t)) => t >= i.saturating_add(total_us) && t <= m.saturating_add(self.reaction_us),
+            _ => false,
+        };
+        (due, after_late)
+    }
+
+    /// Whether the waiting role's act after `hops` timeouts comes in time (`act_due`).
+    fn act_in_time(&self, slot: usize, f: &Frame, hops: u32) -> bool {
+        match (self.act_due(slot, f, hops), f.time_us) {
+            ((Some(due), after_late), Some(t)) => t >= due || after_late,
+            _ => false,
+        }
     }
 
     /// The checks of a step, writing registers (old values in the undo log).

@@ -374,3 +374,320 @@ choreography C =
     assert!(matches!(at(2_200_100, 1, 1, &value), Outcome::Late { .. }), "a late value is not Late");
     assert_eq!(m.stats.late, 1);
 }
+
+// ---- the late window: bounded in time, never restarting a timeout ---------------------
+
+/// A flood the ground station gives up on after a second, then sets a parameter and waits
+/// for a reply; the vehicle ends by its own silence after the set.
+const FLOOD: &str = "dialect common;
+system S { participant GCS; participant UAV; }
+choreography C =
+  GCS -> UAV: PARAM_REQUEST_LIST.
+  mu flood.
+    ( UAV -> GCS: PARAM_VALUE(param_index as idx {0 <= idx && idx < 10}). flood
+    + after 1000 ms by GCS.
+        GCS -> UAV: PARAM_SET(param_value as v {v <= 10}).
+        UAV -> GCS: STATUSTEXT. end );";
+
+/// The frames of the flood protocols: the list, a value, a set (ground station 255/190,
+/// vehicle 1/1).
+fn flood_frames(d: &'static Dialect) -> [(u32, Vec<u8>); 3] {
+    let list = payload(d, "PARAM_REQUEST_LIST", &[("target_system", int(1)), ("target_component", int(1))], &[]);
+    let value = payload(d, "PARAM_VALUE", &[("param_index", int(3)), ("param_count", int(10))], &[]);
+    let set = payload(
+        d,
+        "PARAM_SET",
+        &[("target_system", int(1)), ("target_component", int(1)), ("param_value", Scalar::F32(2.0))],
+        &[],
+    );
+    [list, value, set]
+}
+
+/// A frame to run: its time (µs), its source end, its message.
+type Timed<'a> = (u64, (u8, u8), &'a (u32, Vec<u8>));
+
+/// Runs `frames` through a fresh monitor of `a`.
+fn run_timed(a: &Automaton, frames: &[Timed]) -> (Monitor, Vec<Outcome>) {
+    let mut m = Monitor::new(vec![a.clone()]);
+    let out = frames
+        .iter()
+        .map(|(us, (sysid, compid), (msgid, payload))| {
+            m.on_frame(&Frame {
+                time_us: Some(*us),
+                version: 2,
+                sysid: *sysid,
+                compid: *compid,
+                msgid: *msgid,
+                payload,
+                signed: false,
+                raw: &[],
+            })
+        })
+        .collect();
+    (m, out)
+}
+
+fn violation_kind(m: &Monitor, o: &Outcome) -> Option<Kind> {
+    match o {
+        Outcome::Violation(v) => m.violation(*v).map(|v| v.kind),
+        _ => None,
+    }
+}
+
+/// A ground station's log of a flood it gave up on: its timeout could fire 1 s after the
+/// value at 1.1 s; a value of the flood that was on the wire is logged at 2.2 s, and the
+/// ground station sets 1 ms later. That is a conformant run (it gave up before the value
+/// came and ignored it, then acted), so the set is no violation: the late value does not
+/// restart the timeout. A set 1 ms after a value that came before the bound passed, and a
+/// set 100 ms after the late value (beyond the reaction bound: the ground station took the
+/// value and waited only 100 ms), are each "before its timeout".
+#[test]
+fn a_late_flood_item_does_not_restart_the_timeout() {
+    let mut db = SourceDb::new();
+    let prog = program(&mut db, FLOOD);
+    let a = Automaton::compile(&prog).expect("compiles");
+    let [list, value, set] = flood_frames(prog.dialect.expect("dialect"));
+    let (gcs, uav) = ((255, 190), (1, 1));
+    let (m, out) = run_timed(
+        &a,
+        &[(1_000_000, gcs, &list), (1_100_000, uav, &value), (2_200_000, uav, &value), (2_201_000, gcs, &set)],
+    );
+    assert!(matches!(out[2], Outcome::Step { .. }), "{out:?}: the value may have been a step; it is passed");
+    assert!(matches!(out[3], Outcome::Step { .. }), "{out:?}: {:?}", violation_kind(&m, &out[3]));
+    assert_eq!(m.stats.timeouts, 1);
+    // Several late values: the ground station gave up before the first, and acts within
+    // the reaction bound (20 ms) of it; 25 ms after it, it had taken them.
+    let late = |set_at: u64| {
+        run_timed(
+            &a,
+            &[
+                (1_000_000, gcs, &list),
+                (1_100_000, uav, &value),
+                (2_150_000, uav, &value),
+                (2_155_000, uav, &value),
+                (2_160_000, uav, &value),
+                (set_at, gcs, &set),
+            ],
+        )
+    };
+    let (_, out) = late(2_165_000);
+    assert!(matches!(out[5], Outcome::Step { .. }), "{out:?}");
+    let (m, out) = late(2_175_000);
+    assert_eq!(violation_kind(&m, &out[5]), Some(Kind::Early), "{out:?}");
+    let (m, out) = run_timed(
+        &a,
+        &[(1_000_000, gcs, &list), (1_100_000, uav, &value), (2_050_000, uav, &value), (2_051_000, gcs, &set)],
+    );
+    assert_eq!(violation_kind(&m, &out[3]), Some(Kind::Early), "{out:?}");
+    let (m, out) = run_timed(
+        &a,
+        &[(1_000_000, gcs, &list), (1_100_000, uav, &value), (2_200_000, uav, &value), (2_300_000, gcs, &set)],
+    );
+    assert_eq!(violation_kind(&m, &out[3]), Some(Kind::Early), "{out:?}");
+}
+
+/// A late message is late only within the timeout's bound after the act: the value that
+/// crossed the timeout, logged 100 µs after the set, is `Late`; one logged 1.5 s after it
+/// (the protocol's 1 s timeout exceeds the link's round trip) is no late message: the
+/// ground station, waiting for STATUSTEXT, does not expect it.
+#[test]
+fn the_late_window_closes_after_the_timeouts_bound() {
+    let mut db = SourceDb::new();
+    let prog = program(&mut db, FLOOD);
+    let a = Automaton::compile(&prog).expect("compiles");
+    let [list, value, set] = flood_frames(prog.dialect.expect("dialect"));
+    let (gcs, uav) = ((255, 190), (1, 1));
+    let base = [(1_000_000, gcs, &list), (1_100_000, uav, &value), (2_200_000, gcs, &set)];
+    let (m, out) = run_timed(&a, &[base[0], base[1], base[2], (2_200_100, uav, &value)]);
+    assert!(matches!(out[3], Outcome::Late { .. }), "{out:?}");
+    assert_eq!(m.stats.late, 1);
+    let (m, out) = run_timed(&a, &[base[0], base[1], base[2], (3_700_000, uav, &value)]);
+    assert_eq!(violation_kind(&m, &out[3]), Some(Kind::Unexpected), "{out:?}");
+}
+
+/// A late message of a session that its timeout ended is `Late` within the abandoned
+/// choice's window, not "outside any session": the ground station gives up the flood and
+/// the session ends by time; a value of the flood logged 0.5 s after that end is late, one
+/// logged 5 s after is outside any session.
+#[test]
+fn a_late_message_of_a_session_ended_by_its_timeout_is_late_within_its_window() {
+    let mut db = SourceDb::new();
+    let prog = program(
+        &mut db,
+        "dialect common;
+system S { participant GCS; participant UAV; }
+choreography C =
+  GCS -> UAV: PARAM_REQUEST_LIST.
+  mu flood.
+    ( UAV -> GCS: PARAM_VALUE(param_index as idx {0 <= idx && idx < 10}). flood
+    + after 1000 ms by GCS. end );",
+    );
+    let a = Automaton::compile(&prog).expect("compiles");
+    let [list, value, _] = flood_frames(prog.dialect.expect("dialect"));
+    let (gcs, uav) = ((255, 190), (1, 1));
+    let base = [(1_000_000, gcs, &list), (1_100_000, uav, &value)];
+    let (m, out) = run_timed(&a, &[base[0], base[1], (2_600_000, uav, &value)]);
+    assert!(matches!(out[2], Outcome::Late { .. }), "{out:?}");
+    assert_eq!((m.stats.ended_by_time, m.stats.late), (1, 1));
+    let (m, out) = run_timed(&a, &[base[0], base[1], (7_100_000, uav, &value)]);
+    assert_eq!(violation_kind(&m, &out[2]), Some(Kind::OutsideSession), "{out:?}");
+    // Ended by the ground station's act after its timeout: the value that crossed it.
+    let prog = program(
+        &mut db,
+        "dialect common;
+system S { participant GCS; participant UAV; }
+choreography C =
+  GCS -> UAV: PARAM_REQUEST_LIST.
+  mu flood.
+    ( UAV -> GCS: PARAM_VALUE(param_index as idx {0 <= idx && idx < 10}). flood
+    + after 1000 ms by GCS. GCS -> UAV: PARAM_SET(param_value as v {v <= 10}). end );",
+    );
+    let a = Automaton::compile(&prog).expect("compiles");
+    let [list, value, set] = flood_frames(prog.dialect.expect("dialect"));
+    let base = [(1_000_000, gcs, &list), (1_100_000, uav, &value), (2_200_000, gcs, &set)];
+    let (m, out) = run_timed(&a, &[base[0], base[1], base[2], (2_200_500, uav, &value)]);
+    assert!(matches!(out[2], Outcome::Ended { .. }), "{out:?}");
+    assert!(matches!(out[3], Outcome::Late { .. }), "{out:?}: {:?}", violation_kind(&m, &out[3]));
+    let (m, out) = run_timed(&a, &[base[0], base[1], base[2], (4_000_000, uav, &value)]);
+    assert_eq!(violation_kind(&m, &out[3]), Some(Kind::OutsideSession), "{out:?}");
+}
+
+/// The monitor reads a session's messages in the protocol's order: a third role that may
+/// send before the message its step follows (nothing orders the two on the link), and a
+/// protocol whose first act is a role's after a timeout (no frame shows when its waiting
+/// began), are refused at compile time, at the message and at the timeout.
+#[test]
+fn protocols_the_monitor_would_misread_are_refused_with_a_position() {
+    let refused = |src: &str| {
+        let mut db = SourceDb::new();
+        let prog = program(&mut db, src);
+        let Err(e) = Automaton::compile(&prog) else { panic!("accepted: {src}") };
+        let span = e.span.expect("a position");
+        (e.message, db.location(span).1)
+    };
+    let (msg, line) = refused(
+        "dialect common;
+system S { participant GCS; participant UAV; participant CAM; }
+choreography C =
+  GCS -> UAV: PARAM_REQUEST_LIST.
+  CAM -> UAV: PARAM_REQUEST_READ(param_index as i {0 <= i}).
+  end;",
+    );
+    assert_eq!(line, 5, "{msg}");
+    assert!(msg.contains("`CAM`") && msg.contains("order"), "{msg}");
+    let (msg, line) = refused(
+        "dialect common;
+system S { participant GCS; participant UAV; }
+choreography C =
+  ( UAV -> GCS: PARAM_VALUE(param_index as i {0 <= i}). end
+  + after 1000 ms by GCS. GCS -> UAV: PARAM_REQUEST_LIST. end );",
+    );
+    assert_eq!(line, 5, "{msg}");
+    assert!(msg.contains("starts by waiting"), "{msg}");
+    let (msg, line) = refused(
+        "dialect common;
+system S { participant GCS; participant UAV; participant CAM; }
+choreography C =
+  GCS -> CAM: STATUSTEXT.
+  ( GCS -> UAV: PARAM_REQUEST_LIST. end
+  + after 500 ms by UAV. UAV -> GCS: STATUSTEXT. end );",
+    );
+    assert_eq!(line, 6, "{msg}");
+    assert!(msg.contains("cannot know when this wait began"), "{msg}");
+    // A third role that hears of the session first, and a first choice whose timeout
+    // branch ends at once, are read.
+    for ok in [
+        "dialect common;
+system S { participant GCS; participant UAV; participant CAM; }
+choreography C =
+  GCS -> UAV: PARAM_REQUEST_LIST.
+  UAV -> CAM: PARAM_REQUEST_LIST.
+  CAM -> GCS: PARAM_VALUE(param_index as i {0 <= i}).
+  end;",
+        "dialect common;
+system S { participant GCS; participant UAV; }
+choreography C =
+  ( UAV -> GCS: PARAM_VALUE(param_index as i {0 <= i}). end
+  + after 1000 ms by GCS. end );",
+    ] {
+        let mut db = SourceDb::new();
+        let prog = program(&mut db, ok);
+        if let Err(e) = Automaton::compile(&prog) {
+            panic!("{}\n{ok}", e.message);
+        }
+    }
+}
+
+/// Late messages of a session that ended by its timeouts, found by the explorer of
+/// asynchronous runs (tests/asyncruns.rs): the vehicle floods, the ground station gives up
+/// twice in a row and its session ends by time. A value that crossed the timeout opens a
+/// session of its own (it is a first message of the protocol), and the vehicle's next
+/// message, which goes on past the value in the ended session, is late there, not a
+/// violation of the new session.
+#[test]
+fn a_late_first_message_opens_a_session_and_what_follows_it_is_late() {
+    let mut db = SourceDb::new();
+    let prog = program(
+        &mut db,
+        "dialect common;
+system S { participant GCS; participant UAV; }
+choreography C =
+  ( UAV -> GCS: PARAM_VALUE.
+      ( UAV -> GCS: PARAM_VALUE.
+          ( UAV -> GCS: MISSION_COUNT. end + after 500 ms by GCS. end )
+      + after 500 ms by GCS. end )
+  + after 500 ms by GCS. end );",
+    );
+    let d = prog.dialect.expect("dialect");
+    let a = Automaton::compile(&prog).expect("compiles");
+    let value = payload(d, "PARAM_VALUE", &[("param_index", int(0)), ("param_count", int(1))], &[]);
+    let count = payload(d, "MISSION_COUNT", &[("target_system", int(255)), ("target_component", int(190))], &[]);
+    let uav = (1, 1);
+    let (m, out) = run_timed(&a, &[(1_004_000, uav, &value), (1_507_000, uav, &value), (1_508_000, uav, &count)]);
+    assert!(matches!(out[1], Outcome::Step { .. }), "{out:?}");
+    assert!(matches!(out[2], Outcome::Late { .. }), "{out:?}: {:?}", violation_kind(&m, &out[2]));
+    assert_eq!(m.stats.ended_by_time, 1);
+}
+
+/// Each choice a session's waiting role abandoned keeps its own late window: the vehicle
+/// gives up on the ground station's request after 1 s and on its list after 0.5 s more, and
+/// the session ends; the request that crossed the first timeout, logged after the second,
+/// is late (within 1 s of the first act), as is the list that crossed the second.
+#[test]
+fn every_abandoned_choice_keeps_its_late_window() {
+    let mut db = SourceDb::new();
+    let prog = program(
+        &mut db,
+        "dialect common;
+system S { participant GCS; participant UAV; }
+choreography C =
+  UAV -> GCS: PARAM_VALUE(param_index as i {0 <= i}).
+  ( GCS -> UAV: PARAM_REQUEST_READ. UAV -> GCS: PARAM_VALUE(param_index as j {0 <= j}).
+      ( GCS -> UAV: PARAM_REQUEST_LIST. UAV -> GCS: MISSION_COUNT. end
+      + after 500 ms by UAV. UAV -> GCS: MISSION_COUNT. end )
+  + after 1000 ms by UAV. UAV -> GCS: PARAM_VALUE(param_index as j {0 <= j}).
+      ( GCS -> UAV: PARAM_REQUEST_LIST. UAV -> GCS: MISSION_COUNT. end
+      + after 500 ms by UAV. UAV -> GCS: MISSION_COUNT. end ) );",
+    );
+    let d = prog.dialect.expect("dialect");
+    let a = Automaton::compile(&prog).expect("compiles");
+    let value = payload(d, "PARAM_VALUE", &[("param_index", int(0)), ("param_count", int(1))], &[]);
+    let count = payload(d, "MISSION_COUNT", &[("target_system", int(255)), ("target_component", int(190))], &[]);
+    let to_uav = [("target_system", int(1)), ("target_component", int(1))];
+    let read = payload(d, "PARAM_REQUEST_READ", &to_uav, &[]);
+    let list = payload(d, "PARAM_REQUEST_LIST", &to_uav, &[]);
+    let (gcs, uav) = ((255, 190), (1, 1));
+    let (m, out) = run_timed(
+        &a,
+        &[
+            (1_000_000, uav, &value),
+            (2_000_000, uav, &value),
+            (2_500_000, uav, &count),
+            (2_700_000, gcs, &read),
+            (2_800_000, gcs, &list),
+        ],
+    );
+    assert!(matches!(out[2], Outcome::Ended { .. }), "{out:?}");
+    assert!(matches!(out[3], Outcome::Late { .. }), "{out:?}: {:?}", violation_kind(&m, &out[3]));
+    assert!(matches!(out[4], Outcome::Late { .. }), "{out:?}: {:?}", violation_kind(&m, &out[4]));
+}
