@@ -121,12 +121,9 @@ fn sweep(name: &str, one: impl Fn(usize, &Path) -> Result<(), String> + Sync) {
     assert!(bad.is_empty(), "{name}: {} violation(s)\n\n{}", bad.len(), bad.join("\n\n"));
 }
 
-/// A small deterministic generator for the sweeps' parameters (SplitMix64).
-fn mix(mut x: u64) -> u64 {
-    x = x.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    x ^ (x >> 31)
+/// A small deterministic generator for the sweeps' parameters (SplitMix64's first draw).
+fn mix(x: u64) -> u64 {
+    mochi_core::splitmix::SplitMix64(x).next_u64()
 }
 
 // ---------------------------------------------------------------- renaming

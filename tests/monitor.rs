@@ -21,6 +21,7 @@ use mochi::monitor::wire::{self, Layout, Scalar};
 use mochi::monitor::{Automaton, Kind, Monitor, Outcome};
 use mochi::simulate::{SimConfig, SimMessage};
 use mochi::source::SourceDb;
+use mochi_core::splitmix::SplitMix64;
 use num_traits::ToPrimitive;
 use std::alloc::{GlobalAlloc, Layout as AllocLayout, System};
 use std::cell::Cell;
@@ -482,18 +483,6 @@ fn a_heartbeat_that_could_start_a_session_starts_it() {
 
 // ---- the decoder against the mavlink crate ---------------------------------------------
 
-/// A small deterministic generator (SplitMix64).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-}
-
 /// The crate's value of one field, from its serde form, as what this decoder reads.
 fn crate_value(d: &Dialect, f: &mochi::dialect::Field, j: &serde_json::Value) -> Option<Vec<Scalar>> {
     let entry = |name: &str| d.entry(name).map(|(_, e)| e.value as i128);
@@ -538,25 +527,25 @@ fn same(mine: Scalar, theirs: Scalar) -> bool {
 fn the_payload_decoder_agrees_with_the_mavlink_crate() {
     use mavlink::{dialects::common::MavMessage, MavlinkVersion, Message};
     let d = mochi::dialect::builtin("common").expect("common");
-    let mut rng = Rng(21);
+    let mut rng = SplitMix64(21);
     let (mut decoded, mut fields, mut tried) = (0, 0, 0);
     for msg in &d.messages {
         let l = Layout::of(msg);
         for round in 0..8 {
             tried += 1;
-            let mut p: Vec<u8> = (0..l.size).map(|_| rng.next() as u8).collect();
+            let mut p: Vec<u8> = (0..l.size).map(|_| rng.next_u64() as u8).collect();
             // Strings in ASCII (the crate's serde form of a string needs UTF-8), cut short
             // at a random place; small values in enum fields half of the time so that the
             // crate's typed enums parse.
             for (f, s) in msg.fields.iter().zip(&l.slots) {
                 if f.is_string() {
-                    let cut = (rng.next() % (u64::from(s.len) + 1)) as usize;
+                    let cut = (rng.next_u64() % (u64::from(s.len) + 1)) as usize;
                     for k in 0..s.len as usize {
-                        p[s.offset as usize + k] = if k < cut { b'A' + (rng.next() % 26) as u8 } else { 0 };
+                        p[s.offset as usize + k] = if k < cut { b'A' + (rng.next_u64() % 26) as u8 } else { 0 };
                     }
                 } else if f.enum_name.is_some() && round % 2 == 0 {
                     let e = d.enum_(f.enum_name.as_deref().unwrap_or("")).expect("enum");
-                    let v = e.entries[(rng.next() as usize) % e.entries.len().max(1)].value;
+                    let v = e.entries[(rng.next_u64() as usize) % e.entries.len().max(1)].value;
                     for k in 0..s.len as usize {
                         wire::write(&mut p, *s, k, Scalar::Int(i128::from(v)));
                     }
@@ -894,7 +883,7 @@ enum Break {
 #[allow(clippy::type_complexity)]
 fn param_list_trace(
     prog: &Program,
-    rng: &mut Rng,
+    rng: &mut SplitMix64,
     brk: Break,
 ) -> (Vec<((u8, u8), (u32, Vec<u8>), u64)>, Option<usize>, u64) {
     let (gcs, uav) = (RoleId(0), RoleId(1));
@@ -902,13 +891,13 @@ fn param_list_trace(
     let mut out = Vec::new();
     let mut broken = None;
     out.push((end_of(gcs), payload(prog, "PARAM_REQUEST_LIST", uav, &[]), t));
-    let count = (rng.next() % 40 + 1) as i128;
-    for k in 0..rng.next() % 30 {
+    let count = (rng.next_u64() % 40 + 1) as i128;
+    for k in 0..rng.next_u64() % 30 {
         // The flood may pause for more than the timeout: the ground station has not acted.
-        t += rng.next() % 1_500_000;
-        let mut idx = (rng.next() % count as u64) as i128;
+        t += rng.next_u64() % 1_500_000;
+        let mut idx = (rng.next_u64() % count as u64) as i128;
         if brk == Break::IndexOverCount && k == 0 {
-            idx = count + (rng.next() % 3) as i128;
+            idx = count + (rng.next_u64() % 3) as i128;
             broken = Some(out.len());
         }
         out.push((end_of(uav), payload(prog, "PARAM_VALUE", gcs, &[("param_count", count), ("param_index", idx)]), t));
@@ -923,24 +912,24 @@ fn param_list_trace(
         ));
     }
     let requests = match brk {
-        Break::None => rng.next() % 4,
+        Break::None => rng.next_u64() % 4,
         Break::FourthRequest => 4,
-        _ => 1 + rng.next() % 3,
+        _ => 1 + rng.next_u64() % 3,
     };
     for r in 0..requests {
         // At least the bound after the last message (flood or answer), or after the last
         // request (unanswered: the inner timeout).
         let early = brk == Break::EarlyRequest && r == 0;
-        t += if early { rng.next() % 1_000_000 } else { 1_000_000 + rng.next() % 1_500_000 };
-        let want = (rng.next() % count as u64) as i128;
+        t += if early { rng.next_u64() % 1_000_000 } else { 1_000_000 + rng.next_u64() % 1_500_000 };
+        let want = (rng.next_u64() % count as u64) as i128;
         if early || (brk == Break::FourthRequest && r == 3) {
             broken = Some(out.len());
         }
         out.push((end_of(gcs), payload(prog, "PARAM_REQUEST_READ", uav, &[("param_index", want)]), t));
         let other = brk == Break::OtherIndex && r == 0;
-        if other || !rng.next().is_multiple_of(3) {
-            t += rng.next() % 900_000;
-            let got = if other { want + 1 + (rng.next() % 5) as i128 } else { want };
+        if other || !rng.next_u64().is_multiple_of(3) {
+            t += rng.next_u64() % 900_000;
+            let got = if other { want + 1 + (rng.next_u64() % 5) as i128 } else { want };
             out.push((
                 end_of(uav),
                 payload(prog, "PARAM_VALUE", gcs, &[("param_count", count), ("param_index", got)]),
@@ -977,7 +966,7 @@ fn timeouts_are_enforced_in_the_frames_time() {
     let (db, prog, _) = load(&path);
     let a = Automaton::compile(&prog).unwrap_or_else(|e| panic!("param-list.chor: {}", e.message));
     let heartbeat = (0u32, vec![0u8; 9]);
-    let mut rng = Rng(21);
+    let mut rng = SplitMix64(21);
     let breaks = [Break::None, Break::EarlyRequest, Break::OtherIndex, Break::FourthRequest, Break::IndexOverCount];
     let mut timeouts = 0;
     for round in 0..200 {
@@ -1016,7 +1005,7 @@ fn timeouts_are_enforced_in_the_frames_time() {
     assert!(timeouts > 0, "no timeout branch was taken");
     // Without the silence the session is incomplete: the vehicle's timeout (3 s, the
     // shortest way to `end` from any state) has not passed.
-    let (trace, _, quiet) = param_list_trace(&prog, &mut Rng(5), Break::None);
+    let (trace, _, quiet) = param_list_trace(&prog, &mut SplitMix64(5), Break::None);
     let mut m = Monitor::new(vec![a.clone()]);
     for (from, msg, t) in &trace {
         assert!(!matches!(m.on_frame(&timed(*from, msg, *t)), Outcome::Violation(_)));
@@ -1141,7 +1130,11 @@ enum CalBreak {
 /// (the protocol's SILENCE_MS), so no timeout passes before it. Returns the frames, the
 /// index of the one that breaks the protocol, and the time at which the session is over by
 /// time (`None`: it ends with the report).
-fn calibration_trace(prog: &Program, rng: &mut Rng, brk: CalBreak) -> (Vec<TimedFrame>, Option<usize>, Option<u64>) {
+fn calibration_trace(
+    prog: &Program,
+    rng: &mut SplitMix64,
+    brk: CalBreak,
+) -> (Vec<TimedFrame>, Option<usize>, Option<u64>) {
     let (gcs, uav) = (RoleId(0), RoleId(1));
     let (g, u) = (end_of(gcs), end_of(uav));
     // MAV_CMD_DO_START_MAG_CAL: param1 magnetometers 0, param2 retry 0, param3 autosave 1.
@@ -1154,11 +1147,11 @@ fn calibration_trace(prog: &Program, rng: &mut Rng, brk: CalBreak) -> (Vec<Timed
         payload(prog, "MAG_CAL_REPORT", gcs, &[("cal_status", status), ("autosaved", saved)])
     };
     let mut t = 1_000_000_000u64;
-    let gap = |rng: &mut Rng| 1 + rng.next() % 4_900_000;
+    let gap = |rng: &mut SplitMix64| 1 + rng.next_u64() % 4_900_000;
     let mut out = vec![(g, start, t)];
     let mut broken = None;
-    let refused = brk == CalBreak::ProgressAfterRefusal || (brk == CalBreak::None && rng.next().is_multiple_of(4));
-    let no_ack = brk == CalBreak::None && !refused && rng.next().is_multiple_of(5);
+    let refused = brk == CalBreak::ProgressAfterRefusal || (brk == CalBreak::None && rng.next_u64().is_multiple_of(4));
+    let no_ack = brk == CalBreak::None && !refused && rng.next_u64().is_multiple_of(5);
     if no_ack {
         return (out, None, Some(t + 5_000_000));
     }
@@ -1173,7 +1166,7 @@ fn calibration_trace(prog: &Program, rng: &mut Rng, brk: CalBreak) -> (Vec<Timed
         return (out, broken, Some(t + 5_000_000));
     }
     // At least two reports: the second is the loop's, whose refinement reads the first.
-    let n = 2 + rng.next() % 7;
+    let n = 2 + rng.next_u64() % 7;
     let mut pct = 0i128;
     for k in 0..n {
         t += gap(rng);
@@ -1182,7 +1175,7 @@ fn calibration_trace(prog: &Program, rng: &mut Rng, brk: CalBreak) -> (Vec<Timed
             out.push((u, progress(pct - 1), t));
             return (out, broken, None);
         }
-        pct = (pct + 1 + (rng.next() % 30) as i128).min(100);
+        pct = (pct + 1 + (rng.next_u64() % 30) as i128).min(100);
         out.push((u, progress(pct), t));
     }
     match brk {
@@ -1198,10 +1191,10 @@ fn calibration_trace(prog: &Program, rng: &mut Rng, brk: CalBreak) -> (Vec<Timed
             out.push((u, report(4, 0), t));
             (out, broken, None)
         }
-        _ if rng.next().is_multiple_of(3) => (out, None, Some(t + 5_000_000)),
+        _ if rng.next_u64().is_multiple_of(3) => (out, None, Some(t + 5_000_000)),
         _ => {
             t += gap(rng);
-            let failed = rng.next().is_multiple_of(2);
+            let failed = rng.next_u64().is_multiple_of(2);
             out.push((u, if failed { report(5, 0) } else { report(4, 1) }, t));
             (out, None, None)
         }
@@ -1227,7 +1220,7 @@ fn calibration_and_parachute_end_by_time_as_verified() {
         CalBreak::SuccessNotSaved,
         CalBreak::AfterTheSilence,
     ];
-    let mut rng = Rng(11);
+    let mut rng = SplitMix64(11);
     let (mut by_time, mut by_report) = (0, 0);
     for round in 0..200 {
         let brk = breaks[round % breaks.len()];

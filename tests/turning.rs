@@ -21,6 +21,7 @@
 
 use mochi::driver::{Config, Verdict};
 use mochi::source::SourceDb;
+use mochi_core::splitmix::SplitMix64;
 
 const HALF: f64 = 0.262;
 
@@ -39,16 +40,12 @@ struct Scene {
     cy: f64,
 }
 
-/// splitmix64: a small deterministic generator, so a seed names a sequence of scenes.
-struct Rng(u64);
+/// The scenes' generator (`mochi_core::splitmix`), so a seed names a sequence of scenes.
+struct Rng(SplitMix64);
 
 impl Rng {
     fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
+        self.0.next_u64()
     }
 
     /// A value in [lo, hi], rounded to 0.1 mm (so the source writes it exactly).
@@ -146,7 +143,7 @@ fn cases() -> u64 {
 #[test]
 fn generated_turning_footprints_agree_with_their_sampled_ground_truth() {
     let seed: u64 = std::env::var("MOCHI_GEN_SEED").ok().and_then(|v| v.parse().ok()).unwrap_or(15);
-    let mut rng = Rng(seed);
+    let mut rng = Rng(SplitMix64(seed));
     let mut tally = [0usize; 3];
     for n in 0..cases() {
         let s = scene(&mut rng);

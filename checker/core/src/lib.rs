@@ -7,8 +7,9 @@
 //! and diagnostics), used by every stage; [`sigma`] (the logical context Σ that scoping and
 //! typing thread); [`obligation`] (what a check asks a decision procedure, as data);
 //! [`exact`] (exact arithmetic over rationals) and [`bounds`] (interval enclosures);
-//! [`stack`] (stack growth for recursive passes) and [`xmlscan`] (the linear pre-scan of
-//! XML documents). The checks that decide obligations (Z3, the geometry engine) are in
+//! [`stack`] (stack growth for recursive passes), [`xmlscan`] (the linear pre-scan of
+//! XML documents) and [`splitmix`] (the seeded generator of the simulator and the tests).
+//! The checks that decide obligations (Z3, the geometry engine) are in
 //! `mochi-verify`; the run-time monitor depends on this crate alone (ARCHITECTURE.md).
 
 pub mod bounds;
@@ -22,6 +23,7 @@ pub mod obligation;
 pub mod project;
 pub mod sigma;
 pub mod source;
+pub mod splitmix;
 pub mod stack;
 pub mod subtype;
 pub mod syntax;

@@ -106,18 +106,10 @@ impl<'p> Runner<'_, 'p> {
                         return false;
                     }
                 };
-                if let Some(Meet::Contact { distance, point, names }) = meet(body, &obstacle) {
-                    let msg = format!(
-                        "{context}: the body of `{}` meets obstacle `{}` at {} (`{}` and `{}`, distance {distance:.3e} m) at time {}",
-                        prog.role_name(*r),
-                        prog.obstacles[k].name,
-                        show_point(&point),
-                        names[0],
-                        names[1],
-                        exact::decimal(t),
-                    );
-                    let msg = self.with_state(msg, *r, now);
-                    self.report(Kind::Collision, t, msg);
+                if let Some(contact @ Meet::Contact { .. }) = meet(body, &obstacle) {
+                    let what =
+                        format!("the body of `{}` meets obstacle `{}`", prog.role_name(*r), prog.obstacles[k].name);
+                    self.report_contact(context, &what, contact, *r, now, t);
                     return false;
                 }
             }
@@ -126,23 +118,28 @@ impl<'p> Runner<'_, 'p> {
                 if attached(prog, *r, *s) {
                     continue;
                 }
-                if let Some(Meet::Contact { distance, point, names }) = meet(body, other) {
-                    let msg = format!(
-                        "{context}: the bodies of `{}` and `{}`{how} meet at {} (`{}` and `{}`, distance {distance:.3e} m) at time {}",
-                        prog.role_name(*r),
-                        prog.role_name(*s),
-                        show_point(&point),
-                        names[0],
-                        names[1],
-                        exact::decimal(t),
-                    );
-                    let msg = self.with_state(msg, *r, now);
-                    self.report(Kind::Collision, t, msg);
+                if let Some(contact @ Meet::Contact { .. }) = meet(body, other) {
+                    let what = format!("the bodies of `{}` and `{}`{how} meet", prog.role_name(*r), prog.role_name(*s));
+                    self.report_contact(context, &what, contact, *r, now, t);
                     return false;
                 }
             }
         }
         true
+    }
+
+    /// Reports a contact of `r`'s body (`what` names both sides) as a collision at `t`.
+    fn report_contact(&mut self, context: &str, what: &str, contact: Meet, r: RoleId, now: &[&Occupant], t: &Rat) {
+        let Meet::Contact { distance, point, names } = contact else { return };
+        let msg = format!(
+            "{context}: {what} at {} (`{}` and `{}`, distance {distance:.3e} m) at time {}",
+            show_point(&point),
+            names[0],
+            names[1],
+            exact::decimal(t),
+        );
+        let msg = self.with_state(msg, r, now);
+        self.report(Kind::Collision, t, msg);
     }
 
     /// `msg` with the state of `r` now (a mover's sampled state).

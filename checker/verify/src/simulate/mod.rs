@@ -152,19 +152,15 @@ pub fn simulate_loaded(
     Ok(simulate(&prog, cfg))
 }
 
-/// A small deterministic generator (SplitMix64): runs are reproducible from the seed.
-struct Rng(u64);
+/// The simulator's draws (`mochi_core::splitmix`): runs are reproducible from the seed.
+struct Rng(mochi_core::splitmix::SplitMix64);
 
 impl Rng {
     fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        self.0.next_u64()
     }
     fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
+        self.0.below(n as u64) as usize
     }
     /// A rational in (0, 1) with denominator 1000.
     fn fraction(&mut self) -> Rat {
@@ -242,6 +238,7 @@ pub(super) fn on_wire(prog: &Program, id: crate::hir::ValueId, v: Value) -> (Val
 #[cfg(test)]
 mod tests {
     use super::*;
+    use mochi_core::splitmix::SplitMix64;
 
     #[test]
     fn exact_values_become_literals_and_enclosures_do_not() {
@@ -259,7 +256,7 @@ mod tests {
 
     #[test]
     fn the_generator_is_reproducible_and_fractions_lie_in_the_open_unit_interval() {
-        let (mut a, mut b) = (Rng(7), Rng(7));
+        let (mut a, mut b) = (Rng(SplitMix64(7)), Rng(SplitMix64(7)));
         for _ in 0..100 {
             let (x, y) = (a.fraction(), b.fraction());
             assert_eq!(x, y);

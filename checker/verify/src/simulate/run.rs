@@ -10,6 +10,7 @@ use crate::hir::expr::map_vars;
 use crate::hir::{Expr, Global, Loc, Msg, Program, RoleId, Slot, ValueId, Var};
 use crate::smt::goals::witness::Session;
 use crate::smt::Why;
+use mochi_core::splitmix::SplitMix64;
 use num_bigint::BigInt;
 use num_traits::Zero;
 use std::collections::{HashMap, HashSet};
@@ -63,7 +64,7 @@ impl<'a, 'p> Runner<'a, 'p> {
             sess,
             cfg,
             run,
-            rng: Rng(cfg.seed.wrapping_mul(0x2545_F491_4F6C_DD1D).wrapping_add(run as u64)),
+            rng: Rng(SplitMix64(cfg.seed.wrapping_mul(0x2545_F491_4F6C_DD1D).wrapping_add(run as u64))),
             state: Vec::new(),
             clock: vec![Rat::zero(); prog.roles.len()],
             values: HashMap::new(),

@@ -389,12 +389,10 @@ const ROLES: [&str; 4] = ["P", "Q", "V", "W"];
 
 impl Gen {
     fn below(&mut self, n: u64) -> u64 {
-        // splitmix64
-        self.state = self.state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        (z ^ (z >> 31)) % n
+        let mut g = mochi_core::splitmix::SplitMix64(self.state);
+        let z = g.next_u64();
+        self.state = g.0;
+        z % n
     }
     fn pick(&mut self, scope: &[usize]) -> usize {
         scope[self.below(scope.len() as u64) as usize]
