@@ -130,30 +130,62 @@ fn mavproxy_param_set_passes_a_proxy_whose_protocols_claim_no_parameter() {
     assert!(violations(&p).is_empty(), "{:?}", violations(&p));
 }
 
-/// What `param-set.chor` does to a real ground station today (docs/captures.md, its rows):
-/// its alphabet is PARAM_REQUEST_READ, PARAM_VALUE and PARAM_SET by message id, so the
-/// vehicle's answer to MAVProxy's PARAM_REQUEST_LIST (a PARAM_VALUE per parameter, which no
-/// session of the protocol expects) is dropped as `outside any session`, and MAVProxy never
-/// learns a parameter: it cannot even send the set the protocol exists to check. The real
-/// behaviour is no violation (mavlink.io's parameter service); the language lacks a label
-/// keyed by the parameter's name and streams of it. This test pins the limitation: it fails
-/// when the protocol accepts the list.
+/// MAVProxy through `mochi proxy` enforcing `param-set.chor`, whose labels are keyed by the
+/// parameter's name (docs/captures.md, its rows): MAVProxy fetches the whole list at
+/// connection (PARAM_REQUEST_LIST, then the vehicle's PARAM_VALUE per parameter), and the
+/// list passes: MC_PITCH_P's and MC_PITCHRATE_FF's values are readings of the protocol's
+/// streams, every other parameter's are outside its alphabet. Then `param set
+/// MC_PITCHRATE_MAX 200` (within the bound 540 / (1 + 0.2 * 6.5) = 234.8 the vehicle's gains
+/// allow) is the protocol's one step and passes, conformant; once MAVProxy has the new value,
+/// `param set MC_PITCHRATE_MAX 300` breaks the bound and is dropped, every retry of it, so
+/// the vehicle keeps 200. Before the keyed labels, the list's PARAM_VALUEs were dropped as
+/// `outside any session` and MAVProxy never learnt a parameter (the set never left it).
 #[test]
-fn enforcing_param_set_drops_the_parameter_list_mavproxy_needs() {
+fn mavproxy_gets_the_parameter_list_through_param_set_and_its_sets_are_checked() {
     if !have("MAVProxy") {
         return;
     }
     let (p, g, v) = proxy(&["param-set.chor"], &[]);
     let vehicle = peer(&["vehicle", &format!("udpin:127.0.0.1:{v}"), "honest", "60", "heartbeat"]);
-    let gcs = mavproxy(g, &[]);
+    let gcs = mavproxy(
+        g,
+        &[
+            "when-param MC_PITCHRATE_MAX param set MC_PITCHRATE_MAX 200",
+            "when-value MC_PITCHRATE_MAX 200 param set MC_PITCHRATE_MAX 300",
+        ],
+    );
     assert!(
         vehicle.wait_for(Duration::from_secs(40), |l| l["event"] == "param_list").is_some(),
         "MAVProxy's PARAM_REQUEST_LIST reaches the vehicle (outside the protocol's alphabet)"
     );
-    let dropped = p.wait_for(Duration::from_secs(10), |l| {
-        l["event"] == "violation" && l["msgid"] == 22 && l["kind"] == "outside any session" && l["action"] == "drop"
+    let set = vehicle.wait_for(Duration::from_secs(40), |l| l["event"] == "param_set");
+    assert_eq!(
+        set.as_ref().map(|s| (s["id"].clone(), s["value"].clone())),
+        Some(("MC_PITCHRATE_MAX".into(), 200.0.into())),
+        "{:?}",
+        gcs.lines.lock().unwrap()
+    );
+    let end = p.wait_for(Duration::from_secs(5), |l| l["event"] == "end").expect("the set's session ended");
+    assert_eq!(end["conformant"], true, "{end}");
+    let dropped = p.wait_for(Duration::from_secs(20), |l| {
+        l["event"] == "violation" && l["msgid"] == 23 && l["kind"] == "refinement" && l["action"] == "drop"
     });
-    assert!(dropped.is_some(), "the list's PARAM_VALUEs are dropped: {:?}", violations(&p));
-    std::thread::sleep(Duration::from_millis(500));
-    assert!(gcs.json().iter().all(|l| l["mavproxy"] != "PARAM_VALUE"), "{:?}", gcs.lines.lock().unwrap());
+    assert!(dropped.is_some(), "the set of 300 is dropped: {:?}", p.json());
+    // MAVProxy retries an unanswered set (three attempts, a second apart): none gets through.
+    std::thread::sleep(Duration::from_secs(4));
+    let sets: Vec<_> = vehicle.json().into_iter().filter(|l| l["event"] == "param_set").collect();
+    assert_eq!(sets.len(), 1, "{sets:?}");
+    let got: std::collections::BTreeSet<String> = gcs
+        .json()
+        .iter()
+        .filter(|l| l["mavproxy"] == "PARAM_VALUE")
+        .filter_map(|l| l["id"].as_str().map(str::to_string))
+        .collect();
+    assert_eq!(
+        got.into_iter().collect::<Vec<_>>(),
+        ["MC_PITCHRATE_FF", "MC_PITCHRATE_MAX", "MC_PITCH_P"],
+        "MAVProxy has the whole list"
+    );
+    let passed_list = p.json().iter().all(|l| !(l["event"] == "violation" && l["msgid"] == 22));
+    assert!(passed_list, "no PARAM_VALUE is refused: {:?}", p.json());
 }

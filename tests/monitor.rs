@@ -121,7 +121,7 @@ fn scalar(prog: &Program, v: &Value, wire: mochi::dialect::Wire) -> Option<Scala
 }
 
 /// A message's payload, its fields set to `values` (field name, value), its targets to the
-/// receiver's end (unless listed), and the command a `[MAV_CMD_X]` label fixes.
+/// receiver's end (unless listed), and the key a `[MAV_CMD_X]` or `["NAME"]` label fixes.
 fn encode(prog: &Program, d: &Dialect, m: &SimMessage, values: &[(Option<String>, Value)]) -> (u32, Vec<u8>) {
     encode_label(prog, d, &m.label, m.to, values)
 }
@@ -133,10 +133,7 @@ fn encode_label(
     to: RoleId,
     values: &[(Option<String>, Value)],
 ) -> (u32, Vec<u8>) {
-    let (name, cmd) = match label.split_once('[') {
-        Some((n, c)) => (n, Some(c.trim_end_matches(']'))),
-        None => (label, None),
-    };
+    let (name, key) = mochi::dialect::split_label(label);
     let msg = d.message(name).expect("message of the dialect");
     let l = Layout::of(msg);
     let mut p = vec![0u8; l.size as usize];
@@ -147,9 +144,16 @@ fn encode_label(
     if let Some(s) = l.slot(msg, "target_component") {
         wire::write(&mut p, s, 0, Scalar::Int(i128::from(tc)));
     }
-    if let Some(c) = cmd {
-        let (_, e) = d.entry(c).expect("command entry");
-        wire::write(&mut p, l.slot(msg, "command").expect("command field"), 0, Scalar::Int(i128::from(e.value)));
+    match key {
+        Some(mochi::dialect::LabelKey::Command(c)) => {
+            let (_, e) = d.entry(c).expect("command entry");
+            wire::write(&mut p, l.slot(msg, "command").expect("command field"), 0, Scalar::Int(i128::from(e.value)));
+        }
+        Some(mochi::dialect::LabelKey::Name(k)) => {
+            let f = msg.key_field().expect("a key field");
+            wire::write_str(&mut p, l.slot(msg, &f.name).expect("key field"), k.as_bytes());
+        }
+        None => {}
     }
     for (field, v) in values {
         let Some(field) = field else { continue };
@@ -218,9 +222,14 @@ fn mutation(prog: &Program, d: &Dialect, m: &SimMessage) -> Option<(usize, Value
     let msg = d.message(name)?;
     for (k, (_, field, refinement, v)) in m.fields.iter().enumerate() {
         let (Some(field), Some(refinement)) = (field, refinement) else { continue };
-        // The command a `[MAV_CMD_X]` label fixes is the label: changing it makes another
-        // message, not a broken refinement.
-        if field == "command" && m.label.contains('[') {
+        // The command a `[MAV_CMD_X]` label fixes, and the name a `["NAME"]` label fixes, is
+        // the label: changing it makes another message, not a broken refinement.
+        let keyed = match mochi::dialect::split_label(&m.label).1 {
+            Some(mochi::dialect::LabelKey::Command(_)) => field == "command",
+            Some(mochi::dialect::LabelKey::Name(_)) => msg.key_field().is_some_and(|f| &f.name == field),
+            None => false,
+        };
+        if keyed {
             continue;
         }
         let df = msg.field(field)?;
@@ -322,7 +331,10 @@ fn static_and_run_time_agree_on_every_verified_protocol() {
         assert!(messages > 0, "{name}: the simulation sent nothing");
         checked += 1;
     }
-    assert!(checked >= 10, "only {checked} verified protocols under choreographies/mavlink/");
+    // Nine: param-set.chor reads streams now (its gains): tests/proxy.rs and
+    // tests/mavproxy.rs run it between real peers, and `monitor::tests` a protocol of its
+    // form; param-pass.chor's keyed labels are encoded here (`encode_label`).
+    assert!(checked >= 9, "only {checked} verified protocols under choreographies/mavlink/");
     assert!(mutated >= checked, "only {mutated} mutated traces for {checked} protocols");
 }
 
@@ -633,8 +645,11 @@ fn the_hot_path_does_not_allocate() {
     }
     stream.push(((1, 1), msg("MISSION_ACK", &to_gcs, &[])));
     let last = ((1, 1), msg("MISSION_CURRENT", &[("total", int(items))], &[]));
-    // A string field on the way too: param-set.chor's reads, the first in the warm-up and
-    // the second measured.
+    // Keyed labels on the way too: param-set.chor's streams are keyed by the parameter's
+    // name (`PARAM_VALUE["MC_PITCH_P"]`) and its step is `PARAM_SET["MC_PITCHRATE_MAX"]`, so
+    // each PARAM_VALUE and PARAM_SET is dispatched by comparing its `param_id` with the keys:
+    // a reading of each gain in the warm-up, and measured: a reading, another parameter's
+    // value and set (outside the alphabet by their key), and a read (outside by its id).
     let read = |id: &[u8]| {
         ((255, 190), msg("PARAM_REQUEST_READ", &with(&to_uav, &[("param_index", int(-1))]), &[("param_id", id)]))
     };
@@ -642,14 +657,24 @@ fn the_hot_path_does_not_allocate() {
         ((1, 1), msg("PARAM_VALUE", &[("param_value", Scalar::F32(v)), ("param_type", int(9))], &[("param_id", id)]))
     };
     let mut warm: Vec<_> = stream.clone();
-    warm.extend([last, read(b"MC_PITCH_P"), value(b"MC_PITCH_P", 6.5)]);
+    warm.extend([last, read(b"MC_PITCH_P"), value(b"MC_PITCH_P", 6.5), value(b"MC_PITCHRATE_FF", 0.0)]);
     // Measured: a second upload (its session reuses the first one's slot) without the
     // message that ends it (an end records the session's summary), and the second read.
     let mut measured = stream;
     // The upload's MISSION_ACK ends its session (MISSION_CURRENT is telemetry, not a step).
     let ack = measured.pop();
     assert!(matches!(&ack, Some((_, (47, _)))), "the upload's last message is MISSION_ACK");
-    measured.extend([read(b"MC_PITCHRATE_FF"), value(b"MC_PITCHRATE_FF", 0.25)]);
+    let set = |id: &[u8], v: f32| {
+        let ints = with(&to_uav, &[("param_value", Scalar::F32(v)), ("param_type", int(9))]);
+        ((255, 190), msg("PARAM_SET", &ints, &[("param_id", id)]))
+    };
+    measured.extend([
+        read(b"MC_PITCHRATE_FF"),
+        value(b"MC_PITCHRATE_FF", 0.25),
+        value(b"MC_ROLL_P", 1e9),
+        set(b"MC_ROLL_P", 1e9),
+        set(b"MC_PITCHRATE_MA", 1e9),
+    ]);
     let mut m = Monitor::new(automata);
     let mut outcomes = Vec::with_capacity(warm.len() + measured.len());
     for (from, x) in &warm {
@@ -1430,4 +1455,38 @@ fn no_corpus_protocol_is_refused_for_its_order_or_for_starting_by_waiting() {
             );
         }
     }
+}
+
+/// Keyed streams over a real list download: the two keyed parameters' PARAM_VALUEs of the
+/// ardusub capture are readings (MOT_THST_HOVER twice, SERVO16_FUNCTION's 16 characters
+/// with no NUL once), each of the other 885 names passes outside the alphabet, and with
+/// invariants the captured values break, exactly those three are stream violations.
+#[test]
+fn keyed_streams_read_their_parameters_in_a_real_list_download() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let path = root.join("tests/data/mavlink/keyed-ardusub-parameters.chor");
+    let (_, prog, verdict) = load(&path);
+    assert_eq!(verdict, Verdict::Verified);
+    let bytes = std::fs::read(root.join("../shared/data/mavlink_captures/ardusub_log_tools_small.tlog")).expect("log");
+    let mut m = Monitor::new(vec![Automaton::compile(&prog).expect("compiles")]);
+    mochi::mavio::log::read_log(&bytes, mochi::mavio::parse::Config::default(), |f| {
+        m.on_frame(&f);
+    });
+    assert_eq!((m.violations().len(), m.stats.readings, m.stats.sessions_started), (0, 3, 0));
+    // The same protocol with invariants the captured values break.
+    let text = std::fs::read_to_string(&path).expect("source");
+    let broken = text.replace("hover <= 0.6875}", "hover <= 0.25}").replace("servo16 == 7", "servo16 == 6");
+    let dir = std::env::temp_dir().join(format!("mochi-keyed-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let broken_path = dir.join("broken.chor");
+    std::fs::write(&broken_path, broken).expect("write");
+    let prog = lowered(&broken_path);
+    let mut m = Monitor::new(vec![Automaton::compile(&prog).expect("compiles")]);
+    mochi::mavio::log::read_log(&bytes, mochi::mavio::parse::Config::default(), |f| {
+        m.on_frame(&f);
+    });
+    let _ = std::fs::remove_dir_all(&dir);
+    let kinds: Vec<Kind> = m.violations().iter().map(|v| v.kind).collect();
+    assert_eq!(kinds, [Kind::Stream, Kind::Stream, Kind::Stream]);
+    assert_eq!(m.stats.readings, 0);
 }

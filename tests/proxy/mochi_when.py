@@ -5,6 +5,8 @@ PYTHONPATH=tests/proxy).
 
 Commands:
   when-param NAME COMMAND...   run COMMAND once MAVProxy's parameter cache holds NAME
+  when-value NAME VALUE COMMAND...
+                               run COMMAND once the cache holds NAME with VALUE (within 1e-4)
   when-target COMMAND...       run COMMAND once MAVProxy has heard a vehicle's HEARTBEAT
 
 Each command run is announced on stdout as a JSON line `{"mavproxy": "ran", "command": ...}`
@@ -27,12 +29,19 @@ class WhenModule(mp_module.MPModule):
         self.heard_vehicle = False
         self.add_command("when-param", self.cmd_when_param, "when-param NAME COMMAND")
         self.add_command("when-target", self.cmd_when_target, "when-target COMMAND")
+        self.add_command("when-value", self.cmd_when_value, "when-value NAME VALUE COMMAND")
 
     def cmd_when_param(self, args):
         if len(args) < 2:
             print("usage: when-param NAME COMMAND")
             return
         self.pending.append(("param", args[0].upper(), " ".join(args[1:])))
+
+    def cmd_when_value(self, args):
+        if len(args) < 3:
+            print("usage: when-value NAME VALUE COMMAND")
+            return
+        self.pending.append(("value", (args[0].upper(), float(args[1])), " ".join(args[2:])))
 
     def cmd_when_target(self, args):
         if len(args) < 1:
@@ -43,6 +52,9 @@ class WhenModule(mp_module.MPModule):
     def holds(self, what, arg):
         if what == "param":
             return arg in self.mav_param
+        if what == "value":
+            name, value = arg
+            return name in self.mav_param and abs(float(self.mav_param[name]) - value) < 1e-4
         return self.heard_vehicle
 
     def mavlink_packet(self, m):

@@ -200,7 +200,8 @@ codes! {
         "`COMMAND_LONG[MAV_CMD_X]` and `COMMAND_INT[MAV_CMD_X]` are the command messages with \
          their `command` field fixed to the entry `MAV_CMD_X` of the enum `MAV_CMD`. The command \
          must be such an entry, the message one with a `command` field of enum `MAV_CMD`, and \
-         the program must name a `dialect`.";
+         the program must name a `dialect`. A key `PARAM_VALUE[\"MC_PITCH_P\"]` fixes the \
+         message's one `char[N]` field: a message with none, or several, takes no key.";
     ReservedParam = "E0238", "a reserved command parameter is named",
         "A `MAV_CMD` parameter the dialect marks `reserved=\"true\"` must not be used (it is sent \
          as 0 or NaN and means nothing). Remove it from the payload.";

@@ -236,6 +236,41 @@ impl Message {
     pub fn field(&self, name: &str) -> Option<&Field> {
         self.fields.iter().find(|f| f.name == name)
     }
+
+    /// The field a name key `MSG["KEY"]` fixes: the message's one `char[N]` field
+    /// (PARAM_VALUE's, PARAM_SET's and PARAM_REQUEST_READ's `param_id`, NAMED_VALUE_FLOAT's
+    /// `name`). `None` when the message has no string field or several (the key would not
+    /// say which).
+    pub fn key_field(&self) -> Option<&Field> {
+        let mut strings = self.fields.iter().filter(|f| f.is_string());
+        match (strings.next(), strings.next()) {
+            (Some(f), None) => Some(f),
+            _ => None,
+        }
+    }
+}
+
+/// What a label's `[...]` fixes (LANGUAGE.md, "Commands" and "Keyed labels").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LabelKey<'a> {
+    /// `COMMAND_LONG[MAV_CMD_X]`: the `command` field is the entry `MAV_CMD_X`.
+    Command(&'a str),
+    /// `PARAM_VALUE["MC_PITCH_P"]`: the message's one `char[N]` field
+    /// ([`Message::key_field`]) holds this string, compared as on the wire (up to its first
+    /// NUL byte: the parser keeps the key up to it).
+    Name(&'a str),
+}
+
+/// A label split into its message's name and its key: `COMMAND_LONG[MAV_CMD_X]`,
+/// `PARAM_VALUE["MC_PITCH_P"]` or a plain `HEARTBEAT` (no key). The one reader of the
+/// label's text form, for lowering, the monitor and the tests.
+pub fn split_label(label: &str) -> (&str, Option<LabelKey<'_>>) {
+    let Some((name, rest)) = label.split_once('[') else { return (label, None) };
+    let inner = rest.strip_suffix(']').unwrap_or(rest);
+    match inner.strip_prefix('"').and_then(|k| k.strip_suffix('"')) {
+        Some(key) => (name, Some(LabelKey::Name(key))),
+        None => (name, Some(LabelKey::Command(inner))),
+    }
 }
 
 impl CmdParam {

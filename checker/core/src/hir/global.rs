@@ -141,10 +141,13 @@ pub struct Msg {
 }
 
 /// Whether two labels may be the same message on the wire, so that a receiver cannot tell
-/// them apart: equal labels, or a MAVLink command message with its command fixed
-/// (`COMMAND_LONG[MAV_CMD_X]`) and the same message without (`COMMAND_LONG`, whose
-/// `command` may be `MAV_CMD_X`). Labels of a choice (E0302) and the receptions a merge
-/// joins (E0601) must not overlap. Without a dialect no label has a `[`.
+/// them apart: equal labels, or a MAVLink message with its key fixed (a command
+/// `COMMAND_LONG[MAV_CMD_X]`, a name `PARAM_VALUE["MC_PITCH_P"]`) and the same message
+/// without (`COMMAND_LONG`, whose `command` may be `MAV_CMD_X`). Two different keys of one
+/// message are disjoint (the key field holds one value); a key is kept as the wire reads it
+/// (up to its first NUL), so the same key is the same label text. Labels of a choice
+/// (E0302), the receptions a merge joins (E0601) and a step beside a stream (E0246) must
+/// not overlap. Without a dialect no label has a `[`.
 pub fn labels_overlap(a: &str, b: &str) -> bool {
     let split = |l: &str| match l.split_once('[') {
         Some((m, _)) => (m.to_string(), true),

@@ -1,7 +1,8 @@
 //! MAVLink messages (LANGUAGE.md, MAVLink messages): the `dialect NAME;` item,
 //! message labels resolved in the dialect (E0232), payload fields checked against the
 //! message (E0233-E0235), their sorts and wire ranges, commands
-//! `COMMAND_LONG[MAV_CMD_X]` with parameters by label (E0237, E0238), enum entries as
+//! `COMMAND_LONG[MAV_CMD_X]` with parameters by label (E0237, E0238), labels keyed by a
+//! string field `PARAM_VALUE["MC_PITCH_P"]` (E0237, E0236), enum entries as
 //! `int` constants (interned on first use), and the guard against a binder hiding an
 //! entry (E0240).
 //!
@@ -116,7 +117,7 @@ impl Lowerer {
                 self.err(
                     Code::BadCommand,
                     label.span,
-                    format!("`{}` names a MAVLink command, but this program names no dialect", label.name),
+                    format!("`{}` names a MAVLink command or key, but this program names no dialect", label.name),
                     "add `dialect common;` (or the dialect your autopilot speaks) to the file",
                 );
             }
@@ -136,10 +137,7 @@ impl Lowerer {
             }
             return self.fields(fields, viewer, origin, values);
         };
-        let (name, cmd) = match label.name.split_once('[') {
-            Some((m, c)) => (m, Some(c.trim_end_matches(']'))),
-            None => (label.name.as_str(), None),
-        };
+        let (name, key) = dialect::split_label(&label.name);
         let Some(msg) = d.message(name) else {
             let close = dialect::suggest(name, d.messages.iter().map(|m| m.name.as_str()));
             let help = if close.is_empty() {
@@ -156,10 +154,14 @@ impl Lowerer {
             return self.plain_fields(fields, viewer, origin, values);
         };
         self.deprecated(d, msg, label);
-        let command = match cmd {
-            None => None,
-            Some(c) => match self.command(d, msg, c, label) {
-                Some(e) => Some(e),
+        let (command, key) = match key {
+            None => (None, None),
+            Some(dialect::LabelKey::Command(c)) => match self.command(d, msg, c, label) {
+                Some(e) => (Some(e), None),
+                None => return self.plain_fields(fields, viewer, origin, values),
+            },
+            Some(dialect::LabelKey::Name(k)) => match self.key(msg, k, label) {
+                Some(f) => (None, Some((f.name.as_str(), k))),
                 None => return self.plain_fields(fields, viewer, origin, values),
             },
         };
@@ -176,7 +178,8 @@ impl Lowerer {
                 self.diags.push(d);
             }
             seen.push((res.field.name.as_str(), f.name.span));
-            out.push(self.mav_field(f, &res, command, viewer, origin.clone(), values));
+            let key = key.filter(|(field, _)| *field == res.field.name).map(|(_, k)| k);
+            out.push(self.mav_field(f, &res, command, key, viewer, origin.clone(), values));
         }
         out
     }
@@ -240,6 +243,41 @@ impl Lowerer {
                 None
             }
         }
+    }
+
+    /// `PARAM_VALUE["MC_PITCH_P"]`: the message has one `char[N]` field (its key field,
+    /// `Message::key_field`; E0237 otherwise) and the key fits in it (E0236 otherwise).
+    fn key(&mut self, msg: &'static Message, key: &str, label: &ast::Ident) -> Option<&'static crate::dialect::Field> {
+        let Some(field) = msg.key_field() else {
+            let strings: Vec<&str> = msg.fields.iter().filter(|f| f.is_string()).map(|f| f.name.as_str()).collect();
+            let what = match strings.len() {
+                0 => format!("`{}` has no string field: `{}[\"{key}\"]` names no key", msg.name, msg.name),
+                _ => format!(
+                    "`{}` has several string fields ({}): `{}[\"{key}\"]` does not say which it fixes",
+                    msg.name,
+                    quoted(strings.into_iter()),
+                    msg.name
+                ),
+            };
+            self.err(
+                Code::BadCommand,
+                label.span,
+                what,
+                "a key names a message with one `char[N]` field (`PARAM_VALUE[\"MC_PITCH_P\"]` fixes `param_id`); refine the field in the payload instead",
+            );
+            return None;
+        };
+        let n = field.array.unwrap_or(1) as usize;
+        if key.len() > n {
+            self.err(
+                Code::StringTooLong,
+                label.span,
+                format!("the key \"{key}\" has {} characters, `{}` holds at most {n}", key.len(), field.name),
+                "a `char[N]` field holds N characters: write the name as the autopilot spells it",
+            );
+            return None;
+        }
+        Some(field)
     }
 
     /// The message's field (or command parameter) a payload field names (E0233, E0235,
@@ -332,12 +370,15 @@ impl Lowerer {
     }
 
     /// Lowers one resolved MAVLink field: its value (sort from the wire type), the implicit
-    /// part (wire range, fixed command) and the user's refinement.
+    /// part (wire range, fixed command, the key a keyed label fixes when `key` is this
+    /// field's) and the user's refinement.
+    #[allow(clippy::too_many_arguments)]
     fn mav_field(
         &mut self,
         f: &ast::Field,
         res: &Resolved<'static>,
         command: Option<&'static Entry>,
+        key: Option<&str>,
         viewer: RoleId,
         origin: ValueOrigin,
         values: &mut Vec<ValueId>,
@@ -393,6 +434,16 @@ impl Lowerer {
         let fixed = matches!((command, res.field.name.as_str()), (Some(_), "command"));
         if let (Some(c), true) = (command, fixed) {
             let value = Expr { kind: ExprKind::Int(c.value), sort: Sort::Int, loc };
+            implicit.push(Expr {
+                kind: ExprKind::Binary(BinOp::Eq, Box::new(var()), Box::new(value)),
+                sort: Sort::Bool,
+                loc,
+            });
+        }
+        if let Some(k) = key {
+            // `PARAM_VALUE["MC_PITCH_P"]`: the key field is the key, as a fixed command's
+            // `command` field is the command.
+            let value = self.string(k, loc);
             implicit.push(Expr {
                 kind: ExprKind::Binary(BinOp::Eq, Box::new(var()), Box::new(value)),
                 sort: Sort::Bool,

@@ -530,3 +530,80 @@ fn string_literals_end_at_their_first_nul() {
     assert!(d.is_empty(), "{d:?}");
     assert_eq!(p.strings, vec!["AB".to_string()]);
 }
+
+/// `PARAM_SET["MC_PITCH_P"]` fixes the message's one `char[N]` field to the key, as a
+/// command label fixes `command`; the key is kept as the wire reads it (up to its first NUL)
+/// and must fit the field.
+#[test]
+fn keyed_labels_fix_their_string_field_as_the_wire_reads_it() {
+    let (p, f) = first_refinement("GCS -> UAV: PARAM_SET[\"MC_PITCH_P\"](param_id, param_value as v). end");
+    assert_eq!(first_msg(&p).label, "PARAM_SET[\"MC_PITCH_P\"]");
+    assert_eq!(printed(&p, &f), "param_id == \"MC_PITCH_P\"");
+    // The user's refinement is conjoined to the key.
+    let (p, f) = first_refinement("GCS -> UAV: PARAM_SET[\"MC_PITCH_P\"](param_id {param_id != \"B\"}). end");
+    assert_eq!(printed(&p, &f), "param_id == \"MC_PITCH_P\" && param_id != \"B\"");
+    // Without the field listed the label alone says it; a NUL ends the key.
+    let (p, d) = lower_mav("GCS -> UAV: PARAM_SET[\"MC_X\0Y\"](param_value as v). end");
+    assert!(d.is_empty(), "{d:?}");
+    assert_eq!(first_msg(&p).label, "PARAM_SET[\"MC_X\"]");
+    // param_id is a char[16]: 16 characters fit (no NUL on the wire), 17 do not.
+    let (_, d) = lower_mav("GCS -> UAV: PARAM_SET[\"ABCDEFGHIJKLMNOP\"]. end");
+    assert!(d.is_empty(), "{d:?}");
+    let (_, d) = lower_mav("GCS -> UAV: PARAM_SET[\"ABCDEFGHIJKLMNOPQ\"]. end");
+    assert_eq!(codes(&d), ["E0236"]);
+    // A key needs exactly one string field to fix: none (PARAM_REQUEST_LIST), two
+    // (PARAM_EXT_SET's param_id and param_value).
+    let (_, d) = lower_mav("GCS -> UAV: PARAM_REQUEST_LIST[\"X\"]. end");
+    assert_eq!(codes(&d), ["E0237"]);
+    assert!(d[0].message.contains("no string field"), "{d:?}");
+    let (_, d) = lower_mav("GCS -> UAV: PARAM_EXT_SET[\"X\"]. end");
+    assert_eq!(codes(&d), ["E0237"]);
+    assert!(d[0].message.contains("`param_id`, `param_value`"), "{d:?}");
+    // Every message with one string field takes a key: PARAM_REQUEST_READ, PARAM_VALUE,
+    // NAMED_VALUE_FLOAT.
+    let (_, d) = lower_mav(
+        "GCS -> UAV: PARAM_REQUEST_READ[\"A\"]. UAV -> GCS: PARAM_VALUE[\"A\"]. UAV -> GCS: NAMED_VALUE_FLOAT[\"batt\"](value). end",
+    );
+    assert!(d.is_empty(), "{d:?}");
+}
+
+/// Two keys of one message are two labels (a choice may offer both); a keyed label and the
+/// plain message, or the same key twice however written, are one label on the wire (E0302),
+/// and a step with a streamed key is E0246 while another key of the message is not.
+#[test]
+fn keyed_labels_overlap_only_with_their_own_key_and_the_plain_message() {
+    use crate::hir::labels_overlap;
+    assert!(!labels_overlap("PARAM_SET[\"A\"]", "PARAM_SET[\"B\"]"));
+    assert!(labels_overlap("PARAM_SET[\"A\"]", "PARAM_SET[\"A\"]"));
+    assert!(labels_overlap("PARAM_SET[\"A\"]", "PARAM_SET"));
+    assert!(!labels_overlap("PARAM_SET[\"A\"]", "PARAM_VALUE[\"A\"]"));
+    // The same key written with a NUL inside is the same label text (E0302, the
+    // well-formedness stage's, then sees two equal labels:
+    // choreographies/mavlink/rejected/E0302-same-key-written-twice.chor).
+    let (p, d) = lower_mav("( GCS -> UAV: PARAM_SET[\"A\"]. end + GCS -> UAV: PARAM_SET[\"A\0B\"]. end )");
+    assert!(d.is_empty(), "{d:?}");
+    let Some(Global::Choice(bs, _)) = p.choreography.as_ref().map(|c| c.body.clone()) else { panic!("a choice") };
+    let labels: Vec<String> = bs
+        .iter()
+        .map(|b| match b {
+            Global::Seq(items, _) => match &items[0] {
+                Global::Msg(m) => m.label.clone(),
+                other => panic!("{other:?}"),
+            },
+            Global::Msg(m) => m.label.clone(),
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    assert_eq!(labels, ["PARAM_SET[\"A\"]", "PARAM_SET[\"A\"]"]);
+    let streamed = |step: &str| {
+        lower_src(&format!(
+            "dialect common;\nsystem S {{ participant GCS; participant UAV; \
+             stream UAV -> GCS: PARAM_VALUE[\"A\"](param_value as a); }}\n\
+             choreography G = GCS -> UAV: PARAM_REQUEST_READ[\"B\"]. UAV -> GCS: {step}. end;"
+        ))
+        .1
+    };
+    assert!(streamed("PARAM_VALUE[\"B\"]").is_empty());
+    assert_eq!(codes(&streamed("PARAM_VALUE[\"A\"]")), ["E0246"]);
+    assert_eq!(codes(&streamed("PARAM_VALUE")), ["E0246"]);
+}

@@ -4,8 +4,9 @@
 //! its outgoing edges: every first message of a choice's branches), the points where a
 //! loop is entered or jumped back to (a [`StateKind::Assign`]: recursion parameters are
 //! registers, assigned in parallel, their refinements checked), and `end`. An edge is a
-//! message `from -> to : [guard] LABEL(fields)`: the message id, the command a
-//! `COMMAND_LONG[MAV_CMD_X]` label fixes, the guard, and per listed field where it lies in
+//! message `from -> to : [guard] LABEL(fields)`: the message id, the key a keyed label
+//! fixes ([`Key`]: the command of `COMMAND_LONG[MAV_CMD_X]`, the name of
+//! `PARAM_VALUE["MC_PITCH_P"]`), the guard, and per listed field where it lies in
 //! the payload, its register, its refinement and its enum membership. The compilation is
 //! continuation-passing over the global type (`compile(g, k)` is the state from which `g`
 //! runs and then goes on at `k`), so a choice in the middle of a sequence and loops nested
@@ -16,7 +17,7 @@
 //! state lists its snapshots ([`ObservedRead`]), bound when its message arrives.
 
 use super::code::{Arena, Code, RegInfo};
-use super::wire::{Layout, Slot};
+use super::wire::{self, Layout, Scalar, Slot};
 use crate::hir::{Global, Msg, Program, RoleId, Sort, ValueId, ValueOrigin};
 use crate::source::Span;
 
@@ -43,6 +44,36 @@ pub struct FieldRead {
     pub span: Span,
 }
 
+/// What a keyed label fixes of its message: a frame of the message's id is the label's
+/// only when its key field holds the key. Compared on every such frame, without allocating:
+/// a command is one integer read, a name one comparison of the field's bytes up to its
+/// first NUL (all N bytes when none; `wire::read_str`) with the key's.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Key {
+    /// `COMMAND_LONG[MAV_CMD_X]`: the `command` field's slot and the command.
+    Command(Slot, i128),
+    /// `PARAM_VALUE["MC_PITCH_P"]`: the key field's slot (the message's one `char[N]`
+    /// field) and the key's bytes (at most N, no NUL).
+    Name(Slot, Box<[u8]>),
+}
+
+impl Key {
+    /// Whether `payload` holds the key.
+    #[inline]
+    pub fn fits(&self, payload: &[u8]) -> bool {
+        match self {
+            Key::Command(slot, cmd) => wire::read(payload, *slot, 0) == Scalar::Int(*cmd),
+            Key::Name(slot, key) => wire::read_str(payload, *slot) == &key[..],
+        }
+    }
+}
+
+/// Whether a frame's payload is a label's with key `key` (any payload when there is none).
+#[inline]
+pub fn key_fits(key: &Option<Key>, payload: &[u8]) -> bool {
+    key.as_ref().is_none_or(|k| k.fits(payload))
+}
+
 /// A message step.
 #[derive(Clone, Debug)]
 pub struct Edge {
@@ -50,8 +81,8 @@ pub struct Edge {
     pub to: RoleId,
     pub msgid: u32,
     pub label: String,
-    /// The `command` field's slot and value, for `COMMAND_LONG[MAV_CMD_X]`.
-    pub command: Option<(Slot, i128)>,
+    /// What a keyed label fixes (`COMMAND_LONG[MAV_CMD_X]`, `PARAM_VALUE["MC_PITCH_P"]`).
+    pub key: Option<Key>,
     pub guard: Option<Code>,
     pub fields: Vec<FieldRead>,
     /// `target_system` and `target_component`, when the message has them.
@@ -80,7 +111,7 @@ pub struct StreamDef {
     pub to: Vec<RoleId>,
     pub msgid: u32,
     pub label: String,
-    pub command: Option<(Slot, i128)>,
+    pub key: Option<Key>,
     pub fields: Vec<FieldRead>,
     pub target: (Option<Slot>, Option<Slot>),
     pub span: Span,
@@ -227,7 +258,7 @@ fn err<T>(message: impl Into<String>, span: Option<Span>) -> Result<T, CompileEr
 }
 
 /// A label resolved: its message, the message's layout, and the command it fixes.
-type Label = (&'static crate::dialect::Message, Layout, Option<(Slot, i128)>);
+type Label = (&'static crate::dialect::Message, Layout, Option<Key>);
 
 struct Loop {
     var: String,
@@ -514,29 +545,35 @@ impl Builder<'_> {
         }
     }
 
-    /// The message id, the decoder layout's slots and the fixed command of a label.
+    /// The message id, the decoder layout's slots and the key a keyed label fixes.
     fn label(&self, label: &str, span: Span) -> Result<Label, CompileError> {
-        let (name, cmd) = match label.split_once('[') {
-            Some((n, c)) => (n, Some(c.trim_end_matches(']'))),
-            None => (label, None),
-        };
+        let (name, key) = crate::dialect::split_label(label);
         let Some(msg) = self.dialect.message(name) else {
             return err(format!("`{name}` is not a message of `{}`", self.dialect.name), Some(span));
         };
         let layout = Layout::of(msg);
-        let command = match cmd {
-            Some(c) => {
+        let key = match key {
+            Some(crate::dialect::LabelKey::Command(c)) => {
                 let Some((_, entry)) = self.dialect.entry(c) else {
                     return err(format!("`{c}` is not an entry of the dialect"), Some(span));
                 };
                 let Some(slot) = layout.slot(msg, "command") else {
                     return err(format!("`{name}` has no `command` field"), Some(span));
                 };
-                Some((slot, i128::from(entry.value)))
+                Some(Key::Command(slot, i128::from(entry.value)))
+            }
+            Some(crate::dialect::LabelKey::Name(k)) => {
+                let Some(slot) = msg.key_field().and_then(|f| layout.slot(msg, &f.name)) else {
+                    return err(format!("`{name}` has no one string field to key by"), Some(span));
+                };
+                if k.len() > usize::from(slot.len) || k.as_bytes().contains(&0) {
+                    return err(format!("the key \"{k}\" does not fit `{name}`'s key field"), Some(span));
+                }
+                Some(Key::Name(slot, k.as_bytes().into()))
             }
             None => None,
         };
-        Ok((msg, layout, command))
+        Ok((msg, layout, key))
     }
 
     /// The listed fields of a payload: where each lies, its register, its checks.
@@ -601,7 +638,7 @@ impl Builder<'_> {
 
     fn stream(&mut self, st: &crate::hir::Stream) -> Result<StreamDef, CompileError> {
         let span = st.loc.0;
-        let (msg, layout, command) = self.label(&st.label, span)?;
+        let (msg, layout, key) = self.label(&st.label, span)?;
         let fields = self.fields(msg, &layout, &st.fields, span, false)?;
         let target = (layout.slot(msg, "target_system"), layout.slot(msg, "target_component"));
         Ok(StreamDef {
@@ -609,7 +646,7 @@ impl Builder<'_> {
             to: st.to.clone(),
             msgid: msg.id,
             label: st.label.clone(),
-            command,
+            key,
             fields,
             target,
             span,
@@ -618,7 +655,7 @@ impl Builder<'_> {
 
     fn edge(&mut self, m: &Msg, k: u32) -> Result<u32, CompileError> {
         let span = m.loc.0;
-        let (msg, layout, command) = self.label(&m.label, span)?;
+        let (msg, layout, key) = self.label(&m.label, span)?;
         let guard = match &m.guard {
             Some(g) => Some(self.code(g)?),
             None => None,
@@ -665,7 +702,7 @@ impl Builder<'_> {
             to: m.to,
             msgid: msg.id,
             label: m.label.clone(),
-            command,
+            key,
             guard,
             fields,
             target,

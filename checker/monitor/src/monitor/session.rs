@@ -614,14 +614,11 @@ pub(super) fn end_deadline(a: &Automaton, state: u32, entered: Option<u64>) -> O
     None
 }
 
-/// Whether the frame is the edge's message (and command, for `COMMAND_LONG[MAV_CMD_X]`).
+/// Whether the frame is the edge's message (and key, for `COMMAND_LONG[MAV_CMD_X]` and
+/// `PARAM_VALUE["MC_PITCH_P"]`).
 #[inline]
 pub(super) fn label_fits(e: &Edge, f: &Frame) -> bool {
-    e.msgid == f.msgid
-        && match e.command {
-            Some((slot, cmd)) => wire::read(f.payload, slot, 0) == Scalar::Int(cmd),
-            None => true,
-        }
+    e.msgid == f.msgid && super::automaton::key_fits(&e.key, f.payload)
 }
 
 /// The frame's `target_system` and `target_component`, when the message has them.

@@ -25,7 +25,6 @@ use super::code::{Env, Val};
 use super::session::{decode_num, targets_of};
 use super::{Binding, Fail, Kind, Monitor, Session, Violation};
 use crate::mavio::Frame;
-use crate::monitor::wire::{self, Scalar};
 
 /// The latest accepted message of one stream from one end (to one target: `(0, 0)` when
 /// the message has no target or broadcasts), its listed fields in stream field order.
@@ -50,10 +49,7 @@ pub(super) enum Class {
 }
 
 fn command_fits(st: &StreamDef, f: &Frame) -> bool {
-    match st.command {
-        Some((slot, cmd)) => wire::read(f.payload, slot, 0) == Scalar::Int(cmd),
-        None => true,
-    }
+    super::automaton::key_fits(&st.key, f.payload)
 }
 
 impl Monitor {

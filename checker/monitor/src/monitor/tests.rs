@@ -691,3 +691,94 @@ choreography C =
     assert!(matches!(out[3], Outcome::Late { .. }), "{out:?}: {:?}", violation_kind(&m, &out[3]));
     assert!(matches!(out[4], Outcome::Late { .. }), "{out:?}: {:?}", violation_kind(&m, &out[4]));
 }
+
+/// A keyed label's alphabet is (message id, key): another parameter's PARAM_VALUE,
+/// PARAM_SET and PARAM_REQUEST_READ pass untouched, a name that only starts or ends like the
+/// key is another name, the keyed stream's messages are readings, and a PARAM_SET of the
+/// keyed parameter always opens the protocol (a set from a cached list is checked).
+#[test]
+fn keyed_labels_dispatch_by_the_name_as_the_wire_carries_it() {
+    let mut db = SourceDb::new();
+    let prog = program(
+        &mut db,
+        "dialect common;
+system S {
+  participant GCS;
+  participant UAV;
+  stream UAV -> GCS: PARAM_VALUE[\"MC_PITCH_P\"](param_value as p {0 <= p && p <= 12});
+}
+choreography P =
+  GCS -> UAV: PARAM_SET[\"MC_PITCHRATE_MAX\"](param_value as r {0 <= r && r * (1 + p) <= 540},
+                                            param_type {param_type == MAV_PARAM_TYPE_REAL32}).
+  end;",
+    );
+    let d = prog.dialect.expect("dialect");
+    let a = Automaton::compile(&prog).expect("compiles");
+    assert!(matches!(a.edges[0].key, Some(automaton::Key::Name(_, ref k)) if &k[..] == b"MC_PITCHRATE_MAX"));
+    let mut m = Monitor::new(vec![a]);
+    let value = |id: &[u8], v: f32| {
+        payload(d, "PARAM_VALUE", &[("param_value", Scalar::F32(v)), ("param_type", int(9))], &[("param_id", id)])
+    };
+    let set = |id: &[u8], v: f32| {
+        let ints = [
+            ("target_system", int(1)),
+            ("target_component", int(1)),
+            ("param_value", Scalar::F32(v)),
+            ("param_type", int(9)),
+        ];
+        payload(d, "PARAM_SET", &ints, &[("param_id", id)])
+    };
+    let read = |id: &[u8]| {
+        let ints = [("target_system", int(1)), ("target_component", int(1)), ("param_index", int(-1))];
+        payload(d, "PARAM_REQUEST_READ", &ints, &[("param_id", id)])
+    };
+    // Before any reading of the gain, a set of the keyed parameter is checked: no reading.
+    let Outcome::Violation(v) = m.on_frame(&frame(255, 190, &set(b"MC_PITCHRATE_MAX", 100.0))) else {
+        panic!("a set without the gain accepted")
+    };
+    assert_eq!(m.violation(v).map(|v| v.kind), Some(Kind::NoReading));
+    // Every other parameter's messages are outside the alphabet, whatever their values.
+    for f in [
+        value(b"MC_ROLL_P", 1e9),
+        set(b"MC_ROLL_P", 1e9),
+        read(b"MC_PITCHRATE_MAX"),
+        value(b"MC_PITCH", 100.0),
+        value(b"MC_PITCH_PX", 100.0),
+        set(b"MC_PITCHRATE_MA", 1e9),
+        set(b"", 1e9),
+        value(b"MC_PITCHRATE_MAX", 1e9),
+    ] {
+        assert_eq!(m.on_frame(&frame(1, 1, &f)), Outcome::Passed);
+    }
+    // The keyed stream: a gain beyond its invariant is a violation, one within it a reading.
+    let Outcome::Violation(v) = m.on_frame(&frame(1, 1, &value(b"MC_PITCH_P", 13.0))) else { panic!("13 accepted") };
+    assert_eq!(m.violation(v).map(|v| v.kind), Some(Kind::Stream));
+    assert_eq!(m.on_frame(&frame(1, 1, &value(b"MC_PITCH_P", 6.5))), Outcome::Passed);
+    // The bound with P 6.5 is 540 / 7.5 = 72: 70 passes (a one-step session), 80 does not.
+    assert!(matches!(m.on_frame(&frame(255, 190, &set(b"MC_PITCHRATE_MAX", 70.0))), Outcome::Ended { .. }));
+    let Outcome::Violation(v) = m.on_frame(&frame(255, 190, &set(b"MC_PITCHRATE_MAX", 80.0))) else {
+        panic!("80 accepted")
+    };
+    assert_eq!(m.violation(v).map(|v| v.kind), Some(Kind::Refinement));
+}
+
+/// A name key is compared as the wire carries a `char[N]`: up to the first NUL, or all N
+/// bytes when none; a MAVLink 2 payload truncated of its trailing zeros reads as zero.
+#[test]
+fn a_name_key_fits_the_field_up_to_its_first_nul_or_all_of_it() {
+    let d = crate::dialect::builtin("common").expect("common");
+    let m = d.message("PARAM_SET").expect("PARAM_SET");
+    let slot = Layout::of(m).slot(m, "param_id").expect("param_id");
+    let key = |k: &[u8]| automaton::Key::Name(slot, k.into());
+    let with = |id: &[u8]| payload(d, "PARAM_SET", &[("param_value", Scalar::F32(1.0))], &[("param_id", id)]).1;
+    assert!(key(b"ABCDEFGHIJKLMNOP").fits(&with(b"ABCDEFGHIJKLMNOP")));
+    assert!(!key(b"ABCDEFGHIJKLMNO").fits(&with(b"ABCDEFGHIJKLMNOP")));
+    assert!(!key(b"ABCDEFGHIJKLMNOP").fits(&with(b"ABCDEFGHIJKLMNO")));
+    // Bytes after the NUL are not the name's.
+    assert!(key(b"MC_X").fits(&with(b"MC_X\0Y")));
+    // param_type (0) is truncated away: the payload ends inside param_id's padding.
+    let short = with(b"AB");
+    assert!(short.len() < Layout::of(m).size as usize);
+    assert!(key(b"AB").fits(&short) && !key(b"ABC").fits(&short) && !key(b"").fits(&short));
+    assert!(key(b"").fits(&with(b"")));
+}

@@ -183,15 +183,27 @@ impl Parser {
         }
     }
 
-    /// A message label: a name, or a MAVLink command `COMMAND_LONG[MAV_CMD_X]`, returned as
-    /// one [`Ident`] named `COMMAND_LONG[MAV_CMD_X]` whose span runs to the `]`. In a
-    /// global type the guard's `[` comes before the label, so a `[` after it is the command.
+    /// A message label: a name, a MAVLink command `COMMAND_LONG[MAV_CMD_X]` or a keyed
+    /// label `PARAM_VALUE["MC_PITCH_P"]`, returned as one [`Ident`] named
+    /// `COMMAND_LONG[MAV_CMD_X]` (`PARAM_VALUE["MC_PITCH_P"]`) whose span runs to the `]`. In
+    /// a global type the guard's `[` comes before the label, so a `[` after it is the key.
+    /// A key is kept as the wire reads it, up to its first NUL byte (as a string literal
+    /// is: `lower::mav`'s `string`), so the same key is the same label however it is written.
     fn label(&mut self) -> PResult<Ident> {
         let mut label = self.ident("a message label")?;
         if self.eat_punct("[") {
-            let cmd = self.ident("a command (`COMMAND_LONG[MAV_CMD_NAME]`)")?;
+            let key = match self.peek().clone() {
+                Tok::Str(s) => {
+                    self.bump();
+                    format!("\"{}\"", s.split('\0').next().unwrap_or_default())
+                }
+                _ => {
+                    self.ident("a command (`COMMAND_LONG[MAV_CMD_NAME]`) or a key (`PARAM_VALUE[\"MC_PITCH_P\"]`)")?
+                        .name
+                }
+            };
             self.expect_punct("]")?;
-            label = Ident { name: format!("{}[{}]", label.name, cmd.name), span: label.span.to(self.prev_span()) };
+            label = Ident { name: format!("{}[{key}]", label.name), span: label.span.to(self.prev_span()) };
         }
         Ok(label)
     }

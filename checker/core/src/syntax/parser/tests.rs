@@ -230,3 +230,20 @@ fn a_bad_shape_or_pose_does_not_cascade() {
     let (_, d) = file("system S { obstacl O { } }");
     assert!(d[0].message.contains("`participant`, `stream` or `obstacle`"), "{}", d[0].message);
 }
+
+/// A label's key is a command name or a string literal, kept as the wire reads it (up to
+/// its first NUL); anything else is E0103. The guard's `[` comes before the label, so the
+/// `[` after it is the key.
+#[test]
+fn labels_take_a_command_or_a_name_as_their_key() {
+    let label = |src: &str| match global(src) {
+        Global::Msg(m) => (m.label.name, m.guard.is_some()),
+        other => panic!("expected a message: {other:?}"),
+    };
+    assert_eq!(label("p -> q : COMMAND_LONG[MAV_CMD_X]"), ("COMMAND_LONG[MAV_CMD_X]".to_string(), false));
+    assert_eq!(label("p -> q : [x > 0] PARAM_SET[\"MC_X\"](v)"), ("PARAM_SET[\"MC_X\"]".to_string(), true));
+    assert_eq!(label("p -> q : PARAM_SET[\"MC_X\0Y\"]"), ("PARAM_SET[\"MC_X\"]".to_string(), false));
+    assert_eq!(label("p -> q : PARAM_SET[\"\"]"), ("PARAM_SET[\"\"]".to_string(), false));
+    let (_, d) = parse_global(FileId(0), "p -> q : PARAM_SET[3]");
+    assert_eq!(d.iter().map(|d| d.code.as_str()).collect::<Vec<_>>(), ["E0103"]);
+}
