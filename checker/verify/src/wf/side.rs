@@ -196,7 +196,7 @@ impl<'a> Side<'a> {
             let mut items = Vec::new();
             flatten(b, &mut items);
             let rest = &items[1..];
-            if let Some(own) = self.own_clock(rest, head.to, head.from, 0) {
+            if let Some(own) = self.own_clock(rest, head.from, 0) {
                 self.diags.push(
                     Diagnostic::error(
                         Code::TimeoutUnheard,
@@ -241,14 +241,14 @@ impl<'a> Side<'a> {
     /// [`Self::heard`] accepts) whose `after T ms by p` branch goes on. Through sequences, the
     /// nested choices' message branches are `r`'s and tell `p`; a jump is followed into its
     /// loop's body as `heard` follows it.
-    fn own_clock(&self, items: &[&'a Global], r: RoleId, p: RoleId, depth: usize) -> Option<Loc> {
+    fn own_clock(&self, items: &[&'a Global], p: RoleId, depth: usize) -> Option<Loc> {
         let first = items.first()?;
         match first {
             Global::Seq(..) => {
                 let mut inner = Vec::new();
                 flatten(first, &mut inner);
                 inner.extend_from_slice(&items[1..]);
-                self.own_clock(&inner, r, p, depth)
+                self.own_clock(&inner, p, depth)
             }
             Global::Choice(bs, _) => bs.iter().find_map(|b| {
                 let a = b.timeout_head()?;
@@ -260,9 +260,9 @@ impl<'a> Side<'a> {
                 inner.extend_from_slice(&items[1..]);
                 (!matches!(inner.get(1), Some(Global::End(_)))).then_some(a.loc)
             }),
-            Global::Rec { body, .. } => self.own_clock(&[&**body], r, p, depth),
+            Global::Rec { body, .. } => self.own_clock(&[&**body], p, depth),
             Global::Var(v) if depth < 8 => match self.bodies.iter().rev().find(|(n, _)| *n == v.var) {
-                Some((_, body)) => self.own_clock(&[*body], r, p, depth + 1),
+                Some((_, body)) => self.own_clock(&[*body], p, depth + 1),
                 None => None,
             },
             _ => None,
