@@ -15,7 +15,8 @@
 //!    begins with `R -> p`, a choice in which `p` waits for `R`, or `end`). `p` expects it
 //!    when `G_i` is `G_t` itself (the same steps, the same jump arguments: then `p`'s
 //!    continuation is `p`'s part of `G_t`), or when `G_i` jumps straight back to the choice
-//!    with its loop's parameters unchanged (`p` is at the choice again, whose timeout
+//!    with its loop's parameters unchanged, entering no loop with parameters on the way
+//!    (`p` is at the choice again, whose timeout
 //!    alternative in `p`'s local type, `after T ms by R. T_p`, is `p`'s part of `G_t`; until
 //!    it hears from `R`, `p` sends only first messages of the choice).
 //! 2. **The late messages are absorbed** (the waiting role's side). The late messages are
@@ -79,11 +80,15 @@ fn find_loop<'g>(loops: &[&'g Global], var: &str) -> Option<&'g Global> {
     loops.iter().rev().copied().find(|l| matches!(l, Global::Rec { var: v, .. } if v == var))
 }
 
-/// The first step of a loop's body (through nested `mu`s and sequences).
+/// The first step of a loop's body (through sequences and nested `mu`s without
+/// parameters). Entering a nested loop with parameters sets them to their initial values:
+/// that is a step of its own, so a jump through it does not come straight back to the
+/// choice (the sender would be there with the inner loop's parameters restarted, the
+/// waiting role with its own).
 fn first_step(g: &Global) -> Option<&Global> {
     match g {
         Global::Seq(items, _) => items.first().and_then(first_step),
-        Global::Rec { body, .. } => first_step(body),
+        Global::Rec { body, params, .. } if params.is_empty() => first_step(body),
         other => Some(other),
     }
 }

@@ -196,7 +196,25 @@ impl<'a> Side<'a> {
             let mut items = Vec::new();
             flatten(b, &mut items);
             let rest = &items[1..];
-            if !self.heard(rest, head.to, head.from, 0) {
+            if let Some(own) = self.own_clock(rest, head.from, 0) {
+                self.diags.push(
+                    Diagnostic::error(
+                        Code::TimeoutUnheard,
+                        own.0,
+                        format!("`{p}` times out here before it is told that `{r}` timed out: only `end` may follow"),
+                    )
+                    .with_label(a.loc.0, format!("`{r}` gives up waiting here"))
+                    .with_note(format!(
+                        "`{p}` cannot observe `{r}`'s clock, so its own wait here has no start it shares with \
+                         `{r}`: it may run out while `{r}` still waits for the choice's messages, and what `{p}` \
+                         sends then reaches `{r}` where it expects something else"
+                    ))
+                    .with_help(format!(
+                        "end `{p}`'s timeout branch here with `end`, or let `{r}` speak first (`{r} -> {p}`) \
+                         before `{p}` may time out"
+                    )),
+                );
+            } else if !self.heard(rest, head.to, head.from, 0) {
                 let at = rest.first().map(|g| g.loc()).unwrap_or(a.loc);
                 self.diags.push(
                     Diagnostic::error(
@@ -215,6 +233,39 @@ impl<'a> Side<'a> {
                     )),
                 );
             }
+        }
+    }
+
+    /// Where `p`, after `r` timed out and before it hears from `r`, may take a timeout of its
+    /// own that is not followed by `end`: a nested choice in which `p` waits for `r` (as
+    /// [`Self::heard`] accepts) whose `after T ms by p` branch goes on. Through sequences, the
+    /// nested choices' message branches are `r`'s and tell `p`; a jump is followed into its
+    /// loop's body as `heard` follows it.
+    fn own_clock(&self, items: &[&'a Global], p: RoleId, depth: usize) -> Option<Loc> {
+        let first = items.first()?;
+        match first {
+            Global::Seq(..) => {
+                let mut inner = Vec::new();
+                flatten(first, &mut inner);
+                inner.extend_from_slice(&items[1..]);
+                self.own_clock(&inner, p, depth)
+            }
+            Global::Choice(bs, _) => bs.iter().find_map(|b| {
+                let a = b.timeout_head()?;
+                if a.by != p {
+                    return None;
+                }
+                let mut inner = Vec::new();
+                flatten(b, &mut inner);
+                inner.extend_from_slice(&items[1..]);
+                (!matches!(inner.get(1), Some(Global::End(_)))).then_some(a.loc)
+            }),
+            Global::Rec { body, .. } => self.own_clock(&[&**body], p, depth),
+            Global::Var(v) if depth < 8 => match self.bodies.iter().rev().find(|(n, _)| *n == v.var) {
+                Some((_, body)) => self.own_clock(&[*body], p, depth + 1),
+                None => None,
+            },
+            _ => None,
         }
     }
 
@@ -566,6 +617,13 @@ mod tests {
         assert_eq!(codes("mu t. C -> A: ask. (C -> A: go. end + after 10 ms by A. t)"), vec![Code::TimeoutUnheard]);
         // The sender waits in a nested choice, with its own timeout: told either way.
         assert_eq!(codes("C -> A: go. end + after 10 ms by A. (A -> C: again. end + after 30 ms by C. end)"), vec![]);
+        // ... but its own timeout there may only end: it cannot tell when A gave up, so its
+        // clock may run out while A still waits for `go`, and `late` would reach A there.
+        let own = "C -> A: go. end + after 10 ms by A. (A -> C: again. end + after 30 ms by C. C -> A: late. end)";
+        assert_eq!(codes(own), vec![Code::TimeoutUnheard]);
+        let looped =
+            "mu t. (C -> A: go. t + after 10 ms by A. (A -> C: x. C -> A: y. end + after 5 ms by C. C -> A: y. end))";
+        assert_eq!(codes(looped), vec![Code::TimeoutUnheard]);
         assert_eq!(codes("(after 10 ms by A. end + after 20 ms by A. end)"), vec![Code::ChoiceMismatch]);
     }
 

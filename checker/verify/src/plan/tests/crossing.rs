@@ -151,3 +151,25 @@ fn a_sender_that_can_always_send_never_waits_for_the_ended_role() {
     let guarded = "mu r(n: int {0 <= n} = 1) decreases n. ( P -> Q: ask. ( mu w. ( P -> Q: [n > 0] more. w + after 10 ms by Q. Q -> P: ack. end ) ) + after 5 ms by Q. end )";
     assert_eq!(crossings(guarded), vec!["P -> Q: ask."]);
 }
+
+#[test]
+fn a_jump_to_an_outer_loop_restarts_the_inner_loops_parameters() {
+    // The choice is the first step of both loops, but `outer(a)` enters `inner` again with
+    // `b = a`: after a crossing of `again`, Q is back at the choice with b = 0 while P, who
+    // took the timeout, has its own b (2 after two rounds) and sends go(v = 2), which Q's
+    // `v == b` refuses. Not a jump straight back to the choice.
+    let reset = "mu outer(a: int {a == 0} = 0). mu inner(b: int {0 <= b} = a). \
+                 ( Q -> P: again. outer(a) + after 10 ms by P. P -> Q: go(v: int {v == b}). Q -> P: ok. inner(b + 1) )";
+    assert_eq!(crossings(reset), vec!["Q -> P: agai"]);
+    // An inner loop without parameters restarts nothing: straight back.
+    let plain = "mu outer(a: int {a == 0} = 0). mu inner. \
+                 ( Q -> P: again. outer(a) + after 10 ms by P. P -> Q: go(v: int {v == a}). Q -> P: ok. inner )";
+    assert_eq!(crossings(plain), Vec::<String>::new());
+    // The same for the waiting side: a late `more` absorbed by a branch that jumps to the
+    // outer loop restarts the inner loop's count.
+    let absorb = "( P -> Q: ask. ( mu o(a: int {a == 0} = 0). mu w(k: int {0 <= k} = a). \
+                  ( P -> Q: more. o(a) + after 10 ms by Q. Q -> P: ack(v: int {v == k}). w(k + 1) ) ) \
+                  + after 5 ms by Q. end )";
+    let f = found(TWO, absorb);
+    assert!(!f.is_empty(), "{f:?}");
+}
