@@ -196,7 +196,7 @@ codes! {
         "A `char[N]` field holds at most N characters; a string literal compared with it is \
          longer, so the comparison could never be true (or `!=` never false). Use the name as the \
          autopilot spells it (parameter ids are at most 16 characters).";
-    BadCommand = "E0237", "a command label that names no command",
+    BadKey = "E0237", "a label key the message cannot carry (no such command, or no single string field)",
         "`COMMAND_LONG[MAV_CMD_X]` and `COMMAND_INT[MAV_CMD_X]` are the command messages with \
          their `command` field fixed to the entry `MAV_CMD_X` of the enum `MAV_CMD`. The command \
          must be such an entry, the message one with a `command` field of enum `MAV_CMD`, and \

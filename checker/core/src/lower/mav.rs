@@ -115,7 +115,7 @@ impl Lowerer {
         let Some(d) = self.prog.dialect else {
             if label.name.contains('[') {
                 self.err(
-                    Code::BadCommand,
+                    Code::BadKey,
                     label.span,
                     format!("`{}` names a MAVLink command or key, but this program names no dialect", label.name),
                     "add `dialect common;` (or the dialect your autopilot speaks) to the file",
@@ -223,7 +223,7 @@ impl Lowerer {
         let takes = msg.field("command").is_some_and(|f| f.enum_name.as_deref() == Some("MAV_CMD"));
         if !takes {
             self.err(
-                Code::BadCommand,
+                Code::BadKey,
                 label.span,
                 format!("`{}` has no `command` field: `{}[...]` names no command", msg.name, msg.name),
                 "only command messages (`COMMAND_LONG`, `COMMAND_INT`) take a `[MAV_CMD_...]`",
@@ -239,7 +239,7 @@ impl Lowerer {
                 if !close.is_empty() {
                     help = format!("did you mean {}?", quoted(close.into_iter()));
                 }
-                self.err(Code::BadCommand, label.span, format!("`{cmd}` is not a `MAV_CMD` of `{}`", d.name), help);
+                self.err(Code::BadKey, label.span, format!("`{cmd}` is not a `MAV_CMD` of `{}`", d.name), help);
                 None
             }
         }
@@ -260,7 +260,7 @@ impl Lowerer {
                 ),
             };
             self.err(
-                Code::BadCommand,
+                Code::BadKey,
                 label.span,
                 what,
                 "a key names a message with one `char[N]` field (`PARAM_VALUE[\"MC_PITCH_P\"]` fixes `param_id`); refine the field in the payload instead",

@@ -48,7 +48,8 @@ pub(super) enum Class {
     NotStream,
 }
 
-fn command_fits(st: &StreamDef, f: &Frame) -> bool {
+/// Whether the frame carries the stream's key (its command, or its name), if it has one.
+fn key_fits(st: &StreamDef, f: &Frame) -> bool {
     super::automaton::key_fits(&st.key, f.payload)
 }
 
@@ -70,7 +71,7 @@ impl Monitor {
         for si in 0..self.protos[p].streams.len() {
             let a = &self.protos[p];
             let st = &a.streams[si];
-            if st.msgid != f.msgid || !command_fits(st, f) {
+            if st.msgid != f.msgid || !key_fits(st, f) {
                 continue;
             }
             // As for a step (`session::kinds_fit`), the source must be an end of the kind the
