@@ -127,14 +127,7 @@ fn timed(src: &str) -> bool {
 /// Files of the corpus in which the explorer finds a run E0326 lets through, each with
 /// what it shows: open findings, kept here so that the test names them and fails when one
 /// is fixed (then remove it) or another file joins them.
-const KNOWN: &[(&str, &str)] = &[(
-    "compass-calibration.chor",
-    "the vehicle's refused COMMAND_ACK crosses the ground station's timeout; the ground station \
-     ends, and the vehicle waits for ever at the next choice, whose only branch it could take \
-     is guarded `res == MAV_RESULT_ACCEPTED` and whose other branch is the ended ground \
-     station's timeout: E0326's condition (1) counts only receptions from the waiting role as \
-     waiting for it, not a choice it decides by its timeout",
-)];
+const KNOWN: &[(&str, &str)] = &[];
 
 #[test]
 fn timed_protocols_of_the_corpus_never_misread_and_the_monitor_agrees() {
@@ -225,6 +218,12 @@ fn the_hand_made_cases_of_the_rule_agree_with_the_explorer() {
             "( P -> Q: ask. ( mu w. ( P -> Q: more. w + after 10 ms by Q. Q -> P: ack. end ) ) + after 5 ms by Q. end )",
             true,
         ),
+        // compass-calibration.chor's shape: a refused `ack` crosses P's first timeout, P ends,
+        // and Q has no branch it can take at the next choice, whose timeout (P's) ends Q's
+        // part too: Q's session is over with P's.
+        (two, REFUSED_THEN_SILENCE, true),
+        // The same, with Q's part of P's second timeout a message from P: Q waits for ever.
+        (two, REFUSED_THEN_WAITS, false),
     ];
     for (system, chor, accepted) in cases {
         let src = format!("{system} choreography G = {chor};");
@@ -238,6 +237,13 @@ fn the_hand_made_cases_of_the_rule_agree_with_the_explorer() {
         }
     }
 }
+
+/// A refused answer (`res == 1`) leaves `Q` with no branch at the next choice; after the
+/// crossing of `ack` and P's first timeout, P has ended.
+const REFUSED_THEN_SILENCE: &str = "P -> Q: start. ( Q -> P: ack(res: int {0 <= res && res <= 1}). \
+     ( Q -> P: [res == 0] progress. end + after 10 ms by P. end ) + after 10 ms by P. end )";
+const REFUSED_THEN_WAITS: &str = "P -> Q: start. ( Q -> P: ack(res: int {0 <= res && res <= 1}). \
+     ( Q -> P: [res == 0] progress. P -> Q: bye. end + after 10 ms by P. P -> Q: bye. end ) + after 10 ms by P. end )";
 
 #[test]
 fn generated_timed_protocols_that_verify_never_misread() {

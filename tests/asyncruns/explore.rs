@@ -326,14 +326,21 @@ impl<'p> Explorer<'p> {
                     if let Some(t) = timeout {
                         // This role learns of its peer's timeout from the timeout branch's
                         // first message, or, when its part there is `end`, its session is
-                        // over once the peer took that timeout.
+                        // over once the peer took that timeout or the peer's session is
+                        // over (it ended by an earlier timeout whose message crossed): the
+                        // role learns nothing from the timeout either way, and in time, once
+                        // the bound passed with nothing from the peer, its wait is over (the
+                        // monitor ends such a session by time).
                         let mut learnt = st.clone();
                         learnt.at = t.cont.clone();
                         if self.settle(&mut learnt, undecided).is_ok() {
                             let by = t.after.by;
                             let at = learnt.at.clone();
                             match &*at {
-                                Local::End(_) if c.roles[by.idx()].last_timeout == Some(t.after.loc.0.start) => {
+                                Local::End(_)
+                                    if c.roles[by.idx()].last_timeout == Some(t.after.loc.0.start)
+                                        || matches!(&*c.roles[by.idx()].at, Local::End(_)) =>
+                                {
                                     let mut n = c.clone();
                                     n.roles[i] = learnt;
                                     out.push(Step::To(Box::new(n)));
