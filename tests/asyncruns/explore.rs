@@ -4,7 +4,8 @@
 //! it calls a misread is defined on the runs alone (see `Misread`).
 //!
 //! **Late messages, by the runs alone.** Every message carries how many messages its sender
-//! had received from its receiver when it sent it (a vector-clock entry). When a role takes a
+//! had received from its receiver when it sent it (a vector-clock entry; a message it ignored
+//! as late counts, since it was received and dropped). When a role takes a
 //! timeout at a reception from `q`, it notes how many messages it had sent to `q`: a message
 //! from `q` that carries at most that number was sent before `q` could know of the timeout
 //! (FIFO: `q` hears of it only from a message sent after), so it belongs to the abandoned
@@ -404,6 +405,8 @@ impl<'p> Explorer<'p> {
                 if is_late(st, m) {
                     let mut n = c.clone();
                     let m = n.queues.get_mut(&(*f, *t)).and_then(VecDeque::pop_front).expect("the head");
+                    // Ignored, but received: what its sender sends later comes after it.
+                    n.roles[i].heard[m.from.idx()] += 1;
                     n.trace.push(Event::Ignored(m));
                     out.push(Step::To(Box::new(n)));
                 } else if matches!(&*st.at, Local::End(_)) {
@@ -428,6 +431,7 @@ impl<'p> Explorer<'p> {
         let late = is_late(&before, &m);
         let Some(b) = branches.iter().find(|b| b.from == q && b.label == m.label) else {
             if late {
+                c.roles[me.idx()].heard[q.idx()] += 1;
                 c.trace.push(Event::Ignored(m));
                 return Step::To(Box::new(c));
             }

@@ -65,6 +65,9 @@ fn encode(prog: &Program, m: &Message) -> Option<(u32, Vec<u8>)> {
     Some((msg.id, p))
 }
 
+/// The third known disagreement's name (see [`replay`]).
+pub const LATE_OPENS_A_SESSION: &str = "a known disagreement: a late message opened a new session";
+
 /// What the explorer read a frame as.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Reading {
@@ -123,6 +126,10 @@ pub fn replay(
     let mut clock: u64 = 1_000_000;
     let mut seen = Vec::new();
     let mut ambiguous = false;
+    // The sessions the monitor opened, and those it opened with a frame the explorer read as
+    // late (the third known disagreement below).
+    let mut opened: Vec<u64> = Vec::new();
+    let mut opened_late: Vec<u64> = Vec::new();
     for e in trace {
         clock += 1000;
         let msg = match (e, watch) {
@@ -164,15 +171,28 @@ pub fn replay(
         if reading != Some(Reading::Step) && matches!(o, Outcome::Step { .. } | Outcome::Ended { .. }) {
             ambiguous = true;
         }
-        // Two known disagreements, left to the monitor (reported, not fixed here): a late
+        if let Outcome::Step { session, .. } | Outcome::Ended { session } | Outcome::Late { session } = o {
+            if !opened.contains(&session) {
+                opened.push(session);
+                if reading == Some(Reading::Late) {
+                    opened_late.push(session);
+                }
+            }
+        }
+        // Three known disagreements, left to the monitor (reported, not fixed here): a late
         // flood item that arrives after the waiting role gave up restarts the monitor's
-        // timeout, so the role's act right after it is `before its timeout`; and a late
-        // message of a session that its timeout ended is outside any session.
+        // timeout, so the role's act right after it is `before its timeout`; a late
+        // message of a session that its timeout ended is outside any session; and such a
+        // late message that is a first message of the protocol opens a new session in the
+        // monitor, where the next late message of the run is unexpected.
         if let Outcome::Violation(v) = o {
-            let kind = m.violation(v).map(|v| v.kind);
+            let (kind, session) = m.violation(v).map_or((None, None), |v| (Some(v.kind), v.session));
             let timed = trace.iter().any(|e| matches!(e, Event::Timeout { .. }));
             if timed && matches!(kind, Some(Kind::Early | Kind::OutsideSession)) {
                 return Ok(Some(format!("a known disagreement: {kind:?}")));
+            }
+            if reading == Some(Reading::Late) && session.is_some_and(|s| opened_late.contains(&s)) {
+                return Ok(Some(format!("{LATE_OPENS_A_SESSION}: {kind:?}")));
             }
         }
         let agrees = !matches!(
