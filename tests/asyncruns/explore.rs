@@ -4,7 +4,8 @@
 //! it calls a misread is defined on the runs alone (see `Misread`).
 //!
 //! **Late messages, by the runs alone.** Every message carries how many messages its sender
-//! had received from its receiver when it sent it (a vector-clock entry). When a role takes a
+//! had received from its receiver when it sent it (a vector-clock entry; a message it ignored
+//! as late counts, since it was received and dropped). When a role takes a
 //! timeout at a reception from `q`, it notes how many messages it had sent to `q`: a message
 //! from `q` that carries at most that number was sent before `q` could know of the timeout
 //! (FIFO: `q` hears of it only from a message sent after), so it belongs to the abandoned
@@ -326,14 +327,21 @@ impl<'p> Explorer<'p> {
                     if let Some(t) = timeout {
                         // This role learns of its peer's timeout from the timeout branch's
                         // first message, or, when its part there is `end`, its session is
-                        // over once the peer took that timeout.
+                        // over once the peer took that timeout or the peer's session is
+                        // over (it ended by an earlier timeout whose message crossed): the
+                        // role learns nothing from the timeout either way, and in time, once
+                        // the bound passed with nothing from the peer, its wait is over (the
+                        // monitor ends such a session by time).
                         let mut learnt = st.clone();
                         learnt.at = t.cont.clone();
                         if self.settle(&mut learnt, undecided).is_ok() {
                             let by = t.after.by;
                             let at = learnt.at.clone();
                             match &*at {
-                                Local::End(_) if c.roles[by.idx()].last_timeout == Some(t.after.loc.0.start) => {
+                                Local::End(_)
+                                    if c.roles[by.idx()].last_timeout == Some(t.after.loc.0.start)
+                                        || matches!(&*c.roles[by.idx()].at, Local::End(_)) =>
+                                {
                                     let mut n = c.clone();
                                     n.roles[i] = learnt;
                                     out.push(Step::To(Box::new(n)));
@@ -397,6 +405,8 @@ impl<'p> Explorer<'p> {
                 if is_late(st, m) {
                     let mut n = c.clone();
                     let m = n.queues.get_mut(&(*f, *t)).and_then(VecDeque::pop_front).expect("the head");
+                    // Ignored, but received: what its sender sends later comes after it.
+                    n.roles[i].heard[m.from.idx()] += 1;
                     n.trace.push(Event::Ignored(m));
                     out.push(Step::To(Box::new(n)));
                 } else if matches!(&*st.at, Local::End(_)) {
@@ -421,6 +431,7 @@ impl<'p> Explorer<'p> {
         let late = is_late(&before, &m);
         let Some(b) = branches.iter().find(|b| b.from == q && b.label == m.label) else {
             if late {
+                c.roles[me.idx()].heard[q.idx()] += 1;
                 c.trace.push(Event::Ignored(m));
                 return Step::To(Box::new(c));
             }

@@ -367,7 +367,10 @@ impl<'a> Crossing<'a> {
                         continue;
                     }
                     // R's timeout branch is walked too: unless it ends, p waits there for R's
-                    // message (E0324), which a p with every branch's guard false needs.
+                    // message (E0324), which a p with every branch's guard false needs. When it
+                    // ends, p's part is `end`: p learns nothing from that timeout, and its wait
+                    // there is bounded by time, not by R (docs/observed-and-timeouts.md, "A wait
+                    // that the ended role's timeout ends is not a wait for ever").
                     let mut path = steps_of(b);
                     path.extend_from_slice(rest);
                     if let Some(at) = self.waits_for_ever(&path, p, r, loops, seen) {

@@ -173,3 +173,19 @@ fn a_jump_to_an_outer_loop_restarts_the_inner_loops_parameters() {
     let f = found(TWO, absorb);
     assert!(!f.is_empty(), "{f:?}");
 }
+
+#[test]
+fn a_sender_left_at_a_timeout_that_ends_it_too_is_not_waiting_for_the_ended_role() {
+    // compass-calibration.chor's shape: Q's refused `ack` (res == 1) crosses P's first
+    // timeout and P ends; Q then has no branch at the next choice, whose only way out is P's
+    // timeout. Q's part of it is `end`: Q learns nothing from it, and once P's session is
+    // over (or the bound passed) so is Q's. Not a wait for ever.
+    let silence = "P -> Q: start. ( Q -> P: ack(res: int {0 <= res && res <= 1}). ( Q -> P: [res == 0] progress. end + after 10 ms by P. end ) + after 10 ms by P. end )";
+    assert_eq!(crossings(silence), Vec::<String>::new());
+    // Q waits for a message from P in both branches of the next choice, which never comes.
+    let waits = "P -> Q: start. ( Q -> P: ack(res: int {0 <= res && res <= 1}). ( Q -> P: [res == 0] progress. P -> Q: bye. end + after 10 ms by P. P -> Q: bye. end ) + after 10 ms by P. end )";
+    let f = found(TWO, waits);
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert_eq!(f[0].0, "Q -> P: ack(");
+    assert!(f[0].1.contains("waits for it for ever"), "{f:?}");
+}
