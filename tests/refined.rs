@@ -194,18 +194,3 @@ fn ordinary_mavlink_arithmetic_and_enum_gaps_are_decided() {
     let r = report("choreographies/mavlink/rejected/E0419-clock-past-the-wire-range.chor");
     assert_eq!(value(diagnostics(&r, "E0419")[0], "last").as_deref(), Some("18446744073709551616"));
 }
-
-/// Finding 9 (tests/findings/README.md), not fixed: a `char[N]` value is any string to the
-/// checks, whatever its length, so a string received in a wider field (STATUSTEXT.text,
-/// char[50]) "fits" a narrower one (PARAM_SET.param_id, char[16]): progress finds a
-/// param_id equal to any text, and a process sends the text as the param_id unchanged,
-/// where the wire keeps its first 16 characters. Both are verified today, which is wrong;
-/// this test asserts today's verdict so that it fails once the width is modelled (then
-/// move the files to `choreographies/mavlink/rejected/` with their codes, E0419 and E0709).
-#[test]
-fn finding_a_string_is_verified_to_fit_a_narrower_char_field() {
-    for path in ["tests/findings/char-width-progress.chor", "tests/findings/char-width-send.chor"] {
-        let r = report(path);
-        assert_eq!(r["verdict"], "verified", "{path}: the finding is fixed? {r}");
-    }
-}

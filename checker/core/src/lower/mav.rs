@@ -454,6 +454,9 @@ impl Lowerer {
             let env = Env::role(viewer, values);
             self.pred(r, &env, "a refinement")
         });
+        if let (Some(u), Some(n)) = (&user, self.str_len.get(&v).copied()) {
+            self.string_widths(v, &binder.name, n, u);
+        }
         // The enum of the field, or of the command parameter it carries (COMMAND_LONG's
         // `param1` has none of its own; MAV_CMD_COMPONENT_ARM_DISARM's param1 is a MAV_BOOL).
         // A fixed command is an entry by construction.
@@ -513,6 +516,53 @@ impl Lowerer {
                     "a `char[N]` field holds N characters: write the name as the autopilot spells it",
                 );
             }
+        }
+    }
+
+    /// E0236: `f == e` in the refinement of a `char[N]` field `f`, where `e` may hold a
+    /// longer string (a wider field's value, a string loop parameter). No value of `f`
+    /// equals a longer `e`, while the checks, to which a string is one value without a
+    /// length, would find one: progress would hold of a stuck state, and a process that
+    /// sends `e` in `f` would be typed as sending `e`, where the wire carries its first N
+    /// characters. A literal longer than N is [`Self::string_fits`]'s.
+    fn string_widths(&mut self, v: ValueId, name: &str, n: u32, refinement: &Expr) {
+        let width = |e: &Expr| -> Option<u32> {
+            fn go(lower: &Lowerer, e: &Expr) -> Option<u32> {
+                match &e.kind {
+                    ExprKind::Var(Var::Value(w, _)) => lower.str_len.get(w).copied(),
+                    ExprKind::Int(code) => lower.prog.string(*code).map(|t| t.len() as u32),
+                    ExprKind::If(_, a, b) => Some(go(lower, a)?.max(go(lower, b)?)),
+                    _ => None,
+                }
+            }
+            go(self, e)
+        };
+        let is_field = |e: &Expr| matches!(&e.kind, ExprKind::Var(Var::Value(w, _)) if *w == v);
+        let mut wide = Vec::new();
+        refinement.visit(|e| {
+            let ExprKind::Binary(BinOp::Eq, a, b) = &e.kind else { return };
+            if a.sort != Sort::Str {
+                return;
+            }
+            for (x, other) in [(a, b), (b, a)] {
+                if is_field(x) && !matches!(other.kind, ExprKind::Int(_)) && width(other).is_none_or(|w| w > n) {
+                    wide.push((other.loc, width(other)));
+                }
+            }
+        });
+        for (at, w) in wide {
+            let held = match w {
+                Some(w) => format!("a string of up to {w} characters"),
+                None => "a string of any length (mochi does not know its width)".to_string(),
+            };
+            self.err(
+                Code::StringTooLong,
+                at.0,
+                format!("`{name}` holds at most {n} characters, and this is {held}: a longer one has no equal `{name}`"),
+                format!(
+                    "mochi reads a string as one value without a length, so it cannot tell when no `{name}` exists: compare `{name}` with a value of a field at most {n} wide, or with literals"
+                ),
+            );
         }
     }
 
