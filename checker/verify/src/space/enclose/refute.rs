@@ -33,11 +33,25 @@ use super::*;
 
 /// Pieces examined per body part before the refutation gives up.
 const REFUTE_BUDGET: usize = 8_192;
+/// Pieces examined per body part looking for states at which it sticks out (a reason only).
+const SOMEWHERE_BUDGET: usize = 512;
 
 /// A point of the body outside the footprint at every state the contract's facts allow,
 /// described for the diagnostic: `Some(why)` when some part of the body of `prim`'s kind
 /// sticks out of its footprint at every such state.
 pub fn body_outside(prog: &Program, prim: PrimId) -> Option<String> {
+    outside(prog, prim, true)
+}
+
+/// Where [`body_outside`] does not hold, a piece of states on which a point of the body is
+/// outside the footprint (the same interval truth), described for an unknown's reason: the
+/// body sticks out at those states if the contract allows one, which this search does not
+/// decide (it is no rejection: the states of the piece may all be excluded by the contract).
+pub fn body_outside_somewhere(prog: &Program, prim: PrimId) -> Option<String> {
+    outside(prog, prim, false)
+}
+
+fn outside(prog: &Program, prim: PrimId, everywhere: bool) -> Option<String> {
     let p = prog.prim(prim);
     let fp = match &p.footprint {
         Footprint::Predicate(fp) | Footprint::Shapes { region: fp, .. } => &fp.pred,
@@ -52,7 +66,21 @@ pub fn body_outside(prog: &Program, prim: PrimId) -> Option<String> {
         v => describe(v),
     };
     for (k, part) in body.parts.iter().enumerate() {
-        if let Some(found) = part_outside(prog, part, fp, &facts, &name) {
+        if !everywhere {
+            if let Some(found) = part_outside(prog, part, fp, &facts, &name, false) {
+                return Some(format!(
+                    "part {} of `geometry:` (its {}) sticks out of the footprint at some states within the contract's ranges: at {}, its point ({:.4}, {:.4}, {:.4}) m (in the part's own frame) is outside it; whether the contract allows such a state was not decided",
+                    k + 1,
+                    shape_name(&part.shape),
+                    found.example,
+                    found.point[0],
+                    found.point[1],
+                    found.point[2],
+                ));
+            }
+            continue;
+        }
+        if let Some(found) = part_outside(prog, part, fp, &facts, &name, true) {
             return Some(format!(
                 "the footprint contains the robot's body, but part {} of `geometry:` (its {}) sticks out of it at every state the contract allows (interval subdivision over {}, {} pieces): e.g. at {}, its point ({:.4}, {:.4}, {:.4}) m (in the part's own frame) is outside the footprint",
                 k + 1,
@@ -151,6 +179,7 @@ fn part_outside(
     fp: &Expr,
     facts: &Facts,
     name: &dyn Fn(&Var) -> String,
+    everywhere: bool,
 ) -> Option<Outside> {
     let super::PartGoal { shape, exact, goal } = super::part_goal(prog, part, fp).ok()?;
     let mut table = VarTable::new();
@@ -208,7 +237,7 @@ fn part_outside(
     let mut example: Option<(String, [f64; 3])> = None;
     while let Some((lo, hi)) = stack.pop() {
         pieces += 1;
-        if pieces > REFUTE_BUDGET {
+        if pieces > if everywhere { REFUTE_BUDGET } else { SOMEWHERE_BUDGET } {
             return None;
         }
         for (j, &k) in reads.iter().enumerate() {
@@ -228,7 +257,7 @@ fn part_outside(
             if goal.truth(&env, &mut work) == Some(false) {
                 last = i;
                 settled = true;
-                if example.is_none() {
+                if example.is_none() || !everywhere {
                     let at: Vec<String> =
                         (0..n).map(|j| format!("{} in [{:.4}, {:.4}]", names[j], lo[j], hi[j])).collect();
                     let at = if at.is_empty() { "every state".to_string() } else { at.join(", ") };
@@ -236,6 +265,9 @@ fn part_outside(
                 }
                 break;
             }
+        }
+        if settled && !everywhere {
+            break;
         }
         if settled {
             continue;
@@ -264,7 +296,14 @@ fn part_outside(
             }
         }
         if outside_mid.is_empty() && !mid_ruled_out {
-            return None;
+            if everywhere {
+                return None;
+            }
+            // Looking for some piece: one narrow enough whose middle has the body inside is
+            // left (only a reason is sought, and its neighbours are tried).
+            if (0..n).all(|d| (hi[d] - lo[d]) * 16.0 <= widths[d]) {
+                continue;
+            }
         }
         set(&mut env, &|j| Interval::new(lo[j], hi[j]));
         let found = outside_mid.into_iter().find(|&i| {
@@ -281,10 +320,13 @@ fn part_outside(
             if i >= points.len() {
                 points.push(fine[i - points.len()]);
             }
-            if example.is_none() {
+            if example.is_none() || !everywhere {
                 let at: Vec<String> = (0..n).map(|j| format!("{} in [{:.4}, {:.4}]", names[j], lo[j], hi[j])).collect();
                 let at = if at.is_empty() { "every state".to_string() } else { at.join(", ") };
                 example = Some((at, points[last]));
+            }
+            if !everywhere {
+                break;
             }
             continue;
         }
