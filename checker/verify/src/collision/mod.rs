@@ -169,8 +169,13 @@ pub struct ContactReplay {
 }
 
 /// How far from a side the point of a contact may lie and still count as on it (m): parry
-/// computes in f64, and the point shown is the midpoint of its two witness points.
+/// computes in f64, and the point shown is one the search found on both sides at 1e-9 m
+/// ([`Scene::contact_point`]).
 pub const POINT_TOLERANCE: f64 = 1e-6;
+
+/// How far from each side the point a contact is shown at may lie, by the search's own
+/// measure ([`Scene::contact_point`]): a thousandth of the replay's tolerance.
+const SHARED_POINT: f64 = 1e-9;
 
 impl ContactReplay {
     /// The claim of a contact: the configuration is one the contracts allow, the two sides

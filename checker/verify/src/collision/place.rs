@@ -482,7 +482,7 @@ impl<'a> Geo<'a> {
                 // the sides of `*` have two, the start state none).
                 let one_clock = !self.initial && self.dims.iter().filter(|d| matches!(d, Dim::Clock(_))).count() == 1;
                 let (c, window) = match opts.time_dim.filter(|_| one_clock) {
-                    Some(t) => self.earliest_contact(c, t, &opts),
+                    Some(t) => self.earliest_contact(c, t, &opts, d.stats.nodes),
                     None => (c, super::earliest::Earliest::default()),
                 };
                 // A contact is confirmed on the meshes themselves (`Geo::distance`), never on

@@ -258,7 +258,7 @@ fn earliest<T>(
     use super::earliest::{bisect, Step};
     let deadline = Instant::now() + limit;
     let at = time_of(&found).unwrap_or(f64::NAN);
-    let (best, _, window) = bisect(found, at, &mut |mid| {
+    let (best, _, window) = bisect(found, at, None, &mut |_, mid| {
         let Some(layout) = layout(prog, ob, part, Some(mid)) else {
             return Step::Undecided("the states up to that time cannot be bounded".to_string());
         };

@@ -252,6 +252,19 @@ impl Scene for Geo<'_> {
         ask::witness(&self.configs(), lo, hi)
     }
 
+    /// A point on both sides at `q`, by the measure the replay uses ([`Geo::point_distance`]:
+    /// each side's distance from the point, 0 inside): parry's two witness points, their
+    /// midpoint, or the point of the segment between them where the larger of the two
+    /// distances is least (golden-section search; each distance is convex along the segment
+    /// for one convex solid). Parry's points alone are not enough: against a mesh's
+    /// triangles a penetrating contact's point on the other solid can lie outside the mesh's
+    /// hull by the depth, and their midpoint half of it (0.16 mm on the mounted arm). `None`
+    /// when no point of the segment lies on both within [`SHARED_POINT`]: the contact is then
+    /// not confirmed.
+    fn contact_point(&self, q: &[f64], at: &Closest) -> Option<[f64; 3]> {
+        point_on_both(at.points, &|p| self.point_distance(0, q, p).max(self.point_distance(1, q, p)))
+    }
+
     fn solid_name(&self, side: usize, solid: usize) -> String {
         let Some(p) = self.sides.get(side).and_then(|s| s.get(solid)) else { return "?".into() };
         let owner = match (p.role, p.obstacle) {
@@ -262,4 +275,67 @@ impl Scene for Geo<'_> {
         let hull = if p.piece.solid.is_hull { " (hull)" } else { "" };
         format!("{}'s {}{hull}", owner, p.piece.solid.name)
     }
+}
+
+/// A point within [`SHARED_POINT`] of both sides, by `off` (the larger of its distances from
+/// the two sides), on the segment between parry's witness points `[a, b]`: their midpoint
+/// when it is one (for two convex solids that overlap, a point inside both); else the middle
+/// of the part of the segment where `off` is within the tolerance, found from any point of
+/// it (`a`, `b`, or golden-section search for the least `off`: for one convex solid a side,
+/// each distance is convex along the segment, and so is their maximum, whose sublevel set
+/// is then an interval) by bisection towards each end. The middle rather than an end, so
+/// that the point is inside both where they overlap, not on one's surface (an exact replay
+/// of a point on a surface may find it an ulp outside). `None` when no point of the segment
+/// is within the tolerance of both.
+pub(super) fn point_on_both([a, b]: [[f64; 3]; 2], off: &dyn Fn([f64; 3]) -> f64) -> Option<[f64; 3]> {
+    let at_t = |t: f64| [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2])];
+    let ok = |t: f64| off(at_t(t)) <= SHARED_POINT;
+    if ok(0.5) {
+        return Some(at_t(0.5));
+    }
+    let t0 = if ok(0.0) {
+        0.0
+    } else if ok(1.0) {
+        1.0
+    } else {
+        let g = 0.5 * (5f64.sqrt() - 1.0);
+        let (mut lo, mut hi) = (0.0, 1.0);
+        let mut best = (f64::INFINITY, 0.5);
+        for _ in 0..80 {
+            let (x, y) = (hi - g * (hi - lo), lo + g * (hi - lo));
+            let (fx, fy) = (off(at_t(x)), off(at_t(y)));
+            for (f, t) in [(fx, x), (fy, y)] {
+                if f < best.0 {
+                    best = (f, t);
+                }
+            }
+            if fx <= fy {
+                hi = y;
+            } else {
+                lo = x;
+            }
+        }
+        if best.0.is_nan() || best.0 > SHARED_POINT {
+            return None;
+        }
+        best.1
+    };
+    // The ends of the interval where `off` is within the tolerance, by bisection from `t0`.
+    let end = |towards: f64| {
+        let (mut inside, mut outside) = (t0, towards);
+        if ok(outside) {
+            return outside;
+        }
+        for _ in 0..60 {
+            let m = 0.5 * (inside + outside);
+            if ok(m) {
+                inside = m;
+            } else {
+                outside = m;
+            }
+        }
+        inside
+    };
+    let t = 0.5 * (end(0.0) + end(1.0));
+    Some(at_t(if ok(t) { t } else { t0 }))
 }

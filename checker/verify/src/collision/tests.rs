@@ -211,3 +211,37 @@ mod replay_tests {
         assert!(super::super::replay_contact(prog, &ob, &part, &none, p).is_err());
     }
 }
+
+mod contact_point_tests {
+    use super::super::scene::point_on_both;
+    use super::super::POINT_TOLERANCE;
+
+    /// The distance of `p` from the box `[lo, hi]` (0 inside).
+    fn from_box(p: [f64; 3], lo: [f64; 3], hi: [f64; 3]) -> f64 {
+        (0..3).map(|k| (lo[k] - p[k]).max(p[k] - hi[k]).max(0.0).powi(2)).sum::<f64>().sqrt()
+    }
+
+    /// Two boxes overlapping in `0.9 <= x <= 1`, and witness points each inside one box
+    /// only: their midpoint (the point shown before) lies 2.5 cm outside the first box, as
+    /// a contact against a mesh's triangles put it 0.16 mm outside the hull on the mounted
+    /// arm, where the replay caught it. The point shown must lie on both.
+    #[test]
+    fn the_point_shown_lies_on_both_sides_where_the_midpoint_does_not() {
+        let off = |p: [f64; 3]| from_box(p, [0.0; 3], [1.0; 3]).max(from_box(p, [0.9, 0.0, 0.0], [2.0, 1.0, 1.0]));
+        let points = [[0.1, 0.5, 0.5], [1.95, 0.5, 0.5]];
+        let mid = [1.025, 0.5, 0.5];
+        assert!(off(mid) > POINT_TOLERANCE, "the midpoint is off one side");
+        let p = point_on_both(points, &off).expect("a point on both");
+        assert!(off(p) <= POINT_TOLERANCE && (0.9..=1.0).contains(&p[0]), "{p:?}");
+        // The middle of the overlap along the segment, not its end on a surface.
+        assert!((p[0] - 0.95).abs() < 1e-6, "{p:?}");
+        // Where the midpoint is on both, it is the point (inside both for convex solids).
+        let wide =
+            |p: [f64; 3]| from_box(p, [0.0; 3], [1.2, 1.0, 1.0]).max(from_box(p, [0.9, 0.0, 0.0], [2.0, 1.0, 1.0]));
+        let p = point_on_both(points, &wide).expect("the midpoint");
+        assert!((0..3).all(|k| (p[k] - mid[k]).abs() < 1e-12), "{p:?}");
+        // Sides that do not meet along the segment: no point, so no contact is confirmed.
+        let apart = |p: [f64; 3]| from_box(p, [0.0; 3], [1.0; 3]).max(from_box(p, [1.1, 0.0, 0.0], [2.0, 1.0, 1.0]));
+        assert_eq!(point_on_both(points, &apart), None);
+    }
+}

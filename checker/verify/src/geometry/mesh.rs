@@ -283,8 +283,12 @@ fn hull_of(pts: &[Point3<f64>]) -> Option<SharedShape> {
 /// Meshes of more triangles than this stay their convex hulls: the decomposition evaluates
 /// a winding number over every triangle at each corner and face it tests.
 pub const DECOMPOSE_MAX_TRIANGLES: usize = 2_000;
-/// How many times a cell of the decomposition may be halved (at most 2^this pieces).
-const DECOMPOSE_DEPTH: usize = 6;
+/// How many times a cell of the decomposition may be halved (at most 2^this pieces): a pin
+/// 2 mm clear of a slot's wall needs cells about a centimetre high at the wall's foot. Only
+/// for meshes of at most [`FINE_TRIANGLES`]; larger ones start 6 levels down (each winding
+/// number costs every triangle).
+const DECOMPOSE_DEPTH: usize = 12;
+const FINE_TRIANGLES: usize = 200;
 
 /// Convex pieces whose union contains the solid a closed mesh bounds, for a mesh markedly
 /// concave (its volume at most [`CONCAVE_RATIO`] of its hull's); `None` for a mesh that is
@@ -356,7 +360,7 @@ pub fn decompose(pts: &[Point3<f64>], tris: &[[u32; 3]]) -> Option<Vec<Vec<Point
     let (lo, hi) = verts.iter().fold((verts[0], verts[0]), |(lo, hi), p| (lo.inf(p), hi.sup(p)));
     let all: Vec<usize> = (0..tri.len()).collect();
     let mut pieces = Vec::new();
-    cells(&tri, &all, lo, hi, 0, &mut pieces);
+    cells(&tri, &all, lo, hi, if tri.len() <= FINE_TRIANGLES { 0 } else { 6 }, &mut pieces);
     (!pieces.is_empty()).then_some(pieces)
 }
 

@@ -106,6 +106,20 @@ struct Worker<'a> {
 /// the state ([`Worker::contains_turning`]).
 const QUICK: Duration = Duration::from_secs(1);
 
+/// An undecided body containment with a footprint that turns with the state, its reason made
+/// precise where the interval search finds states at which a point of the body is outside
+/// the footprint (`space::enclose::body_outside_somewhere`): still unknown (whether the
+/// contract allows such a state is not decided), never a rejection.
+fn sticks_out(prog: &Program, prim: crate::hir::PrimId, d: Decision) -> Decision {
+    match d {
+        Decision::Unknown { part, why } => match crate::space::enclose::body_outside_somewhere(prog, prim) {
+            Some(found) => Decision::Unknown { part, why: Why::Interval(format!("{found} ({why})")) },
+            None => Decision::Unknown { part, why },
+        },
+        d => d,
+    }
+}
+
 impl Worker<'_> {
     /// Decides one obligation: every part must hold. A failing part wins over an
     /// unknown one (it is a definite answer).
@@ -159,11 +173,11 @@ impl Worker<'_> {
             }
         }
         if quick.timeout == self.timeout {
-            return (d, stats);
+            return (sticks_out(self.prog, prim, d), stats);
         }
         let (d, more) = self.decide_parts(index, ob);
         stats.add(&more);
-        (d, stats)
+        (sticks_out(self.prog, prim, d), stats)
     }
 
     fn decide_parts(&self, index: usize, ob: &Obligation) -> (Decision, Stats) {

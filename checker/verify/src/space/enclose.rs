@@ -37,7 +37,7 @@
 
 mod refute;
 mod solid;
-pub use refute::body_outside;
+pub use refute::{body_outside, body_outside_somewhere};
 pub use solid::{solid_parts_in_predicate, Solids};
 
 use crate::bounds::compiled::{Compiled, VarTable};

@@ -120,6 +120,13 @@ pub trait Scene {
     /// SMT solver may be asked), preferably near `near`. Used only to confirm a contact
     /// and to attain a clearance's upper bound.
     fn witness(&self, lo: &[f64], hi: &[f64], near: &[f64]) -> Option<Vec<f64>>;
+    /// The point a contact at `q` is shown at (`at`: the sides there, distance ≤ 0): one
+    /// that lies on both sides. `None` when the scene finds none, and then the contact is
+    /// not confirmed (the search goes on). Default: the midpoint of the two closest points.
+    fn contact_point(&self, q: &[f64], at: &Closest) -> Option<[f64; 3]> {
+        let _ = q;
+        Some(midpoint(&at.points))
+    }
     /// The name of solid `solid` of side `side` (0 or 1), for reports.
     fn solid_name(&self, side: usize, solid: usize) -> String;
 }
@@ -208,7 +215,7 @@ impl Options {
 pub struct Contact {
     /// The configuration (satisfies the constraints: the scene's witness).
     pub q: Vec<f64>,
-    /// The contact point (world): the midpoint of the two closest points.
+    /// The contact point (world): a point on both sides ([`Scene::contact_point`]).
     pub point: [f64; 3],
     pub points: [[f64; 3]; 2],
     /// parry's distance at `q` (≤ 0: minus the penetration depth).
@@ -342,6 +349,7 @@ enum PassEnd {
     Contact {
         q: Vec<f64>,
         at: Closest,
+        point: [f64; 3],
         /// The time lower bound of the box the contact was found in.
         box_time: f64,
     },
@@ -352,6 +360,19 @@ enum PassEnd {
         frontier: f64,
         left: usize,
     },
+}
+
+/// Whether [`probe`] samples boxes yet: once the search has evaluated
+/// [`split::PROBE_AFTER`] boxes (most proofs end sooner and pay nothing for it), or has
+/// spent a tenth of its time to the deadline (where each box is slow, a robot of many
+/// meshes in an unoptimised build, the box count is never reached before the deadline, and
+/// a contact that needs several coordinates at once is never met at a box's centre).
+fn probing(stats: &Stats, opts: &Options, started: Instant) -> bool {
+    stats.nodes >= split::PROBE_AFTER
+        || opts.deadline.is_some_and(|d| {
+            let now = Instant::now();
+            d > started && (now - started) * 10 >= d - started
+        })
 }
 
 /// One branch-and-bound pass over `root`. `earliest`: boxes in order of their time lower
@@ -374,6 +395,7 @@ fn pass(scene: &dyn Scene, root: &QBox, opts: &Options, earliest: bool, max_node
     let mut heap: BinaryHeap<Queued<Node>> = BinaryHeap::new();
     let mut seq = 0u64;
     let mut pending = vec![root.clone()];
+    let started = Instant::now();
     loop {
         // Evaluate the new boxes: infeasible and proved ones are done, the others queue.
         for b in pending.drain(..) {
@@ -426,14 +448,16 @@ fn pass(scene: &dyn Scene, root: &QBox, opts: &Options, earliest: bool, max_node
         // witness: the box is split, and its feasible parts are asked in their turn.
         let centre_possible = || scene.feasible(&n.c, &n.c) != Feasible::No;
         if (n.at_c.distance <= 0.0 && time_ok && centre_possible()) || res_box {
-            if let Some((q, at)) = confirm(scene, b, &n.c, &n.at_c, n.feas, stats) {
-                out.end = Some(PassEnd::Contact { q, at, box_time: time.map_or(f64::NEG_INFINITY, |t| b.lo[t]) });
+            if let Some((q, at, point)) = located(scene, confirm(scene, b, &n.c, &n.at_c, n.feas, stats)) {
+                out.end =
+                    Some(PassEnd::Contact { q, at, point, box_time: time.map_or(f64::NEG_INFINITY, |t| b.lo[t]) });
                 return out;
             }
         }
         if time_ok {
-            if let Some((q, at)) = probe(scene, b, opts, stats) {
-                out.end = Some(PassEnd::Contact { q, at, box_time: time.map_or(f64::NEG_INFINITY, |t| b.lo[t]) });
+            if let Some((q, at, point)) = probe(scene, b, opts, probing(stats, opts, started), stats) {
+                out.end =
+                    Some(PassEnd::Contact { q, at, point, box_time: time.map_or(f64::NEG_INFINITY, |t| b.lo[t]) });
                 return out;
             }
         }
@@ -477,9 +501,9 @@ pub fn decide(scene: &dyn Scene, root: &QBox, opts: &Options) -> Verdict {
     }
     let time = opts.time_dim.filter(|&t| t < scene.dims());
     let first = pass(scene, root, opts, false, opts.max_nodes, &mut stats);
-    let contact = |q: Vec<f64>, at: Closest, clear_before: Option<f64>| {
+    let contact = |q: Vec<f64>, at: Closest, point: [f64; 3], clear_before: Option<f64>| {
         Outcome::Contact(Contact {
-            point: midpoint(&at.points),
+            point,
             points: at.points,
             distance: at.distance,
             names: [scene.solid_name(0, at.solids[0]), scene.solid_name(1, at.solids[1])],
@@ -488,9 +512,9 @@ pub fn decide(scene: &dyn Scene, root: &QBox, opts: &Options) -> Verdict {
         })
     };
     match first.end {
-        Some(PassEnd::Contact { q, at, .. }) => {
+        Some(PassEnd::Contact { q, at, point, .. }) => {
             let Some(t) = time else {
-                return finish(contact(q, at, None), stats);
+                return finish(contact(q, at, point, None), stats);
             };
             // Refine: the earliest contact with time ≤ q[t], with the nodes left.
             let mut early = root.clone();
@@ -506,17 +530,19 @@ pub fn decide(scene: &dyn Scene, root: &QBox, opts: &Options) -> Verdict {
                 None => now + refine,
             });
             let second = pass(scene, &early, &o2, true, opts.max_nodes, &mut stats);
-            let (q, at, clear) = match second.end {
-                Some(PassEnd::Contact { q: q2, at: at2, box_time }) => (q2, at2, box_time.min(second.unknown_time)),
-                Some(PassEnd::Budget { frontier, .. }) => (q, at, frontier.min(second.unknown_time)),
+            let (q, at, point, clear) = match second.end {
+                Some(PassEnd::Contact { q: q2, at: at2, point: p2, box_time }) => {
+                    (q2, at2, p2, box_time.min(second.unknown_time))
+                }
+                Some(PassEnd::Budget { frontier, .. }) => (q, at, point, frontier.min(second.unknown_time)),
                 // Every feasible q with time below q[t] was decided: none touches, except
                 // perhaps in boxes left unknown.
                 None => {
                     let t1 = q[t];
-                    (q, at, t1.min(second.unknown_time))
+                    (q, at, point, t1.min(second.unknown_time))
                 }
             };
-            finish(contact(q, at, Some(clear.max(root.lo[t]))), stats)
+            finish(contact(q, at, point, Some(clear.max(root.lo[t]))), stats)
         }
         Some(PassEnd::Budget { why, qbox, left, .. }) => {
             finish(Outcome::Unknown { why, qbox, unresolved: first.unresolved + left }, stats)

@@ -112,13 +112,21 @@ pub(super) fn confirm(
     (d.distance <= 0.0).then_some((q, d))
 }
 
+/// A confirmed contact with the point it is shown at ([`Scene::contact_point`]): a contact
+/// whose sides share no point the scene can find is not confirmed.
+pub(super) fn located(scene: &dyn Scene, found: Option<(Vec<f64>, Closest)>) -> Option<(Vec<f64>, Closest, [f64; 3])> {
+    let (q, at) = found?;
+    let point = scene.contact_point(&q, &at)?;
+    Some((q, at, point))
+}
+
 /// How many configurations [`probe`] samples per box, and how many candidate contacts
 /// per search it may ask the scene to confirm (each a solver call).
 pub(super) const PROBES_PER_BOX: usize = 1;
 pub(super) const PROBE_WITNESSES: usize = 64;
 pub(super) const MIN_WITNESSES: usize = 1024;
-/// Probing starts once a search has evaluated this many boxes: most proofs end sooner
-/// and pay nothing for it.
+/// Probing starts once a search has evaluated this many boxes (or spent a tenth of its
+/// time, `bnb::probing`): most proofs end sooner and pay nothing for it.
 pub(super) const PROBE_AFTER: usize = 3_000;
 
 /// Looks for a contact inside `b` away from its centre: a few configurations drawn from
@@ -129,13 +137,19 @@ pub(super) const PROBE_AFTER: usize = 3_000;
 /// coordinates at once (a heading and a position), which splitting by the motion bound
 /// does not steer towards. Only ever finds contacts: it proves nothing apart, and a
 /// probe that is not confirmed changes nothing.
-pub(super) fn probe(scene: &dyn Scene, b: &QBox, opts: &Options, stats: &mut Stats) -> Option<(Vec<f64>, Closest)> {
-    if stats.witness_calls >= PROBE_WITNESSES || stats.nodes < PROBE_AFTER {
+pub(super) fn probe(
+    scene: &dyn Scene,
+    b: &QBox,
+    opts: &Options,
+    probing: bool,
+    stats: &mut Stats,
+) -> Option<(Vec<f64>, Closest, [f64; 3])> {
+    if stats.witness_calls >= PROBE_WITNESSES || !probing {
         return None;
     }
     for _ in 0..PROBES_PER_BOX {
         stats.probes += 1;
-        let q = draw(b, stats.probes);
+        let Some(q) = draw_contracted(scene, b, stats.probes) else { continue };
         if scene.feasible(&q, &q) == Feasible::No {
             continue;
         }
@@ -145,7 +159,9 @@ pub(super) fn probe(scene: &dyn Scene, b: &QBox, opts: &Options, stats: &mut Sta
         }
         if let Some((w, d)) = witness_near(scene, b, &q, opts, stats) {
             if d.distance <= 0.0 {
-                return Some((w, d));
+                if let Some(found) = located(scene, Some((w, d))) {
+                    return Some(found);
+                }
             }
         }
         if stats.witness_calls >= PROBE_WITNESSES {
@@ -190,6 +206,34 @@ pub(super) fn witness_near(
     stats.distance_calls += 1;
     let d = scene.distance(&w);
     Some((w, d))
+}
+
+/// A configuration of `b` drawn one dimension at a time, the box contracted to the
+/// constraints ([`Scene::contract`]) after each value is fixed: a thin band (a joint that
+/// follows the clock within a tracking error, a position on an annulus) is drawn inside
+/// rather than hit by chance. `None` when a contraction leaves nothing (the values drawn so
+/// far satisfy no constraint). Only a candidate: it is confirmed as any probe.
+pub(super) fn draw_contracted(scene: &dyn Scene, b: &QBox, seed: usize) -> Option<Vec<f64>> {
+    let q = draw(b, seed);
+    let mut cur = b.clone();
+    for (k, &x) in q.iter().enumerate() {
+        let v = if cur.lo[k] <= x && x <= cur.hi[k] {
+            x
+        } else {
+            // The draw's uniform share of the contracted range.
+            let u = (x - b.lo[k]) / (b.hi[k] - b.lo[k]);
+            let u = if u.is_finite() { u } else { 0.5 };
+            (cur.lo[k] + u * (cur.hi[k] - cur.lo[k])).clamp(cur.lo[k], cur.hi[k])
+        };
+        cur.lo[k] = v;
+        cur.hi[k] = v;
+        // Intersected with the box, a malformed answer ignored ([`narrowed`]).
+        cur = narrowed(scene, cur)?;
+        if !cur.lo.iter().zip(&cur.hi).all(|(l, h)| l <= h) {
+            return None;
+        }
+    }
+    Some(cur.lo)
 }
 
 /// The `seed`-th configuration of a fixed pseudo-random sequence (xorshift64*) in `b`.
