@@ -250,6 +250,7 @@ const NOT_FOUND: &[(&str, &str)] = &[
     ("rejected/E0302-duplicate-label.chor", "two branches with one label are ambiguous to the receiver's projection, which a motion choreography's run (the global type) does not consult"),
     ("mavlink/rejected/E0236-status-text-echoed-as-a-param-id.chor", "the simulator draws a string as a code without a length, as the checks read it: the width of a char[N] field is a front-end rule (E0236), which no run of codes can break"),
     ("mavlink/rejected/E0236-process-echoes-a-status-text-as-a-param-id.chor", "the simulator draws a string as a code without a length, as the checks read it: the width of a char[N] field is a front-end rule (E0236), which no run of codes can break"),
+    ("mavlink/rejected/E0236-process-sends-a-status-text-as-a-param-id.chor", "the simulator draws a string as a code without a length, as the checks read it: the width of a char[N] field is a typing rule (E0236), which no run of codes can break"),
     ("mavlink/rejected/E0302-same-key-written-twice.chor", "two branches with one label (the second key ends at its NUL: the same name on the wire) are ambiguous to the receiver's projection, which a run of the global type does not consult"),
     ("rejected/E0303-branch-starts-with-motion.chor", "a choice not decided by one message runs as a random pick: the defect is a participant not told, which needs projections"),
     ("rejected/E0303-fig2-literal-choice.chor", "a choice not decided by one message runs as a random pick: the defect is a participant not told, which needs projections"),

@@ -192,10 +192,13 @@ codes! {
          no sort in mochi yet: it can neither be listed in a payload nor read by a refinement. \
          Leave it out of the message's payload: a field not listed may have any value of its \
          wire type.";
-    StringTooLong = "E0236", "a string literal longer than its field",
+    StringTooLong = "E0236", "a string that may be longer than its field",
         "A `char[N]` field holds at most N characters; a string literal compared with it is \
          longer, so the comparison could never be true (or `!=` never false). Use the name as the \
-         autopilot spells it (parameter ids are at most 16 characters).";
+         autopilot spells it (parameter ids are at most 16 characters). The checks read a \
+         string as one value without a length, so a field's refinement may compare it (`==`) \
+         only with values at most N wide, and a process may send in it only such values: the \
+         wire keeps the first N characters of a longer one.";
     BadKey = "E0237", "a label key the message cannot carry (no such command, or no single string field)",
         "`COMMAND_LONG[MAV_CMD_X]` and `COMMAND_INT[MAV_CMD_X]` are the command messages with \
          their `command` field fixed to the entry `MAV_CMD_X` of the enum `MAV_CMD`. The command \

@@ -338,6 +338,11 @@ pub struct Program {
     /// [`Builtin::Float64`]: every such value is a finite float of that format (the
     /// model of LANGUAGE.md, "Floats are float32"), a fact the encoder may use anywhere.
     pub wire_floats: std::collections::HashMap<ValueId, Builtin>,
+    /// The values of MAVLink `char[N]` fields (and streams' snapshots of them), with N:
+    /// the wire carries at most N characters of such a value, a length the checks do not
+    /// otherwise see (a string is one code to them). Read by E0236 (a refinement comparing
+    /// a field with a wider value) and [T-OUT] (a process sending a wider string).
+    pub str_width: std::collections::HashMap<ValueId, u32>,
     /// The system's streams (`stream UAV -> GCS: HEARTBEAT(base_mode);`), in declaration order.
     pub streams: Vec<Stream>,
 }

@@ -408,7 +408,7 @@ impl Lowerer {
         let v = self.new_value(binder, sort.clone(), origin);
         values.push(v);
         if sort == Sort::Str {
-            self.str_len.insert(v, res.field.array.unwrap_or(1));
+            self.prog.str_width.insert(v, res.field.array.unwrap_or(1));
         }
         let loc = Loc(f.name.span);
         let var = || Expr { kind: ExprKind::Var(Var::Value(v, binder.name.clone())), sort: sort.clone(), loc };
@@ -454,7 +454,7 @@ impl Lowerer {
             let env = Env::role(viewer, values);
             self.pred(r, &env, "a refinement")
         });
-        if let (Some(u), Some(n)) = (&user, self.str_len.get(&v).copied()) {
+        if let (Some(u), Some(n)) = (&user, self.prog.str_width.get(&v).copied()) {
             self.string_widths(v, &binder.name, n, u);
         }
         // The enum of the field, or of the command parameter it carries (COMMAND_LONG's
@@ -506,7 +506,7 @@ impl Lowerer {
             if lit.sort != Sort::Str {
                 continue;
             }
-            let (Some(&n), Some(text)) = (self.str_len.get(v), self.prog.string(*code)) else { continue };
+            let (Some(&n), Some(text)) = (self.prog.str_width.get(v), self.prog.string(*code)) else { continue };
             if text.len() > n as usize {
                 let text = text.to_string();
                 self.err(
@@ -529,7 +529,7 @@ impl Lowerer {
         let width = |e: &Expr| -> Option<u32> {
             fn go(lower: &Lowerer, e: &Expr) -> Option<u32> {
                 match &e.kind {
-                    ExprKind::Var(Var::Value(w, _)) => lower.str_len.get(w).copied(),
+                    ExprKind::Var(Var::Value(w, _)) => lower.prog.str_width.get(w).copied(),
                     ExprKind::Int(code) => lower.prog.string(*code).map(|t| t.len() as u32),
                     ExprKind::If(_, a, b) => Some(go(lower, a)?.max(go(lower, b)?)),
                     _ => None,

@@ -143,8 +143,6 @@ struct Lowerer {
     dialect_failed: bool,
     /// Enum entries of the dialect interned as constants so far ([`Lowerer::entry_const`]).
     entry_consts: HashMap<String, ConstId>,
-    /// The length N of each `char[N]` payload value, for E0236.
-    str_len: HashMap<ValueId, u32>,
     /// The kind of plain participants ([`PLAIN_KIND`]), made on first use.
     plain_kind: Option<KindId>,
     /// Deprecated MAVLink messages warned about (E0244, once each).

@@ -144,8 +144,8 @@ impl Lowerer {
                 if let Some(b) = self.prog.wire_floats.get(&f.value).copied() {
                     self.prog.wire_floats.insert(id, b);
                 }
-                if let Some(n) = self.str_len.get(&f.value).copied() {
-                    self.str_len.insert(id, n);
+                if let Some(n) = self.prog.str_width.get(&f.value).copied() {
+                    self.prog.str_width.insert(id, n);
                 }
                 map.insert(f.value, crate::hir::expr::value_expr(id, &f.name, &f.sort));
                 ids.push(id);

@@ -70,6 +70,9 @@ impl<'a> Checker<'a> {
                 // The type's field is the process's binder from here on; the binder takes
                 // the field's sort.
                 s.vals.insert(f.value, value_expr(*v, &self.prog.value(*v).name, &f.sort));
+                if let Some(&n) = self.prog.str_width.get(&f.value) {
+                    self.bound_width.insert(*v, n);
+                }
             }
             for f in &b.payload {
                 if let Some(r) = &f.refinement {

@@ -331,6 +331,9 @@ struct Checker<'a> {
     stands_for: HashMap<ValueId, (RecParam, RecParam)>,
     /// Advice for an obligation, by its rule and span, more precise than its code's.
     hints: Hints,
+    /// The width N of each process binder that received a `char[N]` field (the field's
+    /// [`Program::str_width`]), for [T-OUT]'s width check.
+    bound_width: HashMap<ValueId, u32>,
 }
 
 /// Advice for obligations (by rule and span) that applies better than their code's
@@ -400,6 +403,7 @@ impl<'a> Checker<'a> {
             contexts: HashMap::new(),
             stands_for: HashMap::new(),
             hints: HashMap::new(),
+            bound_width: HashMap::new(),
         }
     }
 

@@ -42,6 +42,9 @@ impl Checker<'_> {
                 );
             }
         }
+        for (a, f) in args.iter().zip(&b.payload) {
+            self.sent_string_fits(a, f, b.loc);
+        }
         // The type's fields get new values (a binding site met again in a loop): what
         // was known of their earlier values goes. The guard reads only older values.
         let fields: Vec<ValueId> = b.payload.iter().map(|f| f.value).collect();
@@ -96,6 +99,41 @@ impl Checker<'_> {
         st.vals = vals;
         st.actions += 1;
         true
+    }
+
+    /// E0236: a string sent in a `char[N]` field that may be longer than N. The wire keeps
+    /// its first N characters, while [T-OUT] types the send as carrying the whole value (a
+    /// string is one code to the checks, without a length): a received STATUSTEXT.text
+    /// (char[50]) echoed as a PARAM_SET.param_id (char[16]) would be typed as the text.
+    fn sent_string_fits(&mut self, a: &Expr, f: &Field, decl: Loc) {
+        let Some(&n) = self.prog.str_width.get(&f.value) else { return };
+        fn width(c: &Checker, e: &Expr) -> Option<u32> {
+            match &e.kind {
+                ExprKind::Var(Var::Value(v, _)) => c.bound_width.get(v).or_else(|| c.prog.str_width.get(v)).copied(),
+                ExprKind::Int(code) => c.prog.string(*code).map(|t| t.len() as u32),
+                ExprKind::If(_, x, y) => Some(width(c, x)?.max(width(c, y)?)),
+                _ => None,
+            }
+        }
+        let w = width(self, a);
+        if w.is_some_and(|w| w <= n) {
+            return;
+        }
+        let what = match w {
+            Some(w) => format!("a string of up to {w} characters"),
+            None => "a string of a width mochi does not know".to_string(),
+        };
+        self.diags.push(
+            Diagnostic::error(
+                Code::StringTooLong,
+                a.loc.0,
+                format!("this sends {what} in `{}`, which holds at most {n}: the wire keeps its first {n}", f.name),
+            )
+            .with_label(decl.0, "the field is declared here")
+            .with_help(format!(
+                "send a value received in a field at most {n} wide, or a literal of at most {n} characters"
+            )),
+        );
     }
 
     pub(super) fn unexpected_send(&mut self, to: RoleId, label: &str, loc: Loc, branches: &[SendBranch], tloc: Loc) {
