@@ -66,8 +66,9 @@ static DESCRIPTIONS: AtomicBool = AtomicBool::new(true);
 /// `description` of its messages, fields, enums, entries and command parameters is empty. The
 /// names, ids, wire types, enums, units, labels and bounds, everything a program is checked and
 /// lowered against, are the same. For a process that only lowers and enforces protocols
-/// (`mochi-proxy`): the descriptions are about 40% of a parsed dialect's memory and nothing
-/// but a reader of the definitions looks at them. A dialect already read keeps what it has.
+/// (`mochi-proxy`): nothing but a reader of the definitions looks at the descriptions, and
+/// they are a fifth of a parsed dialect's memory (common and ardupilotmega together: 2.5 MB
+/// of heap with them, 2.0 MB without). A dialect already read keeps what it has.
 pub fn without_descriptions() {
     DESCRIPTIONS.store(false, Ordering::Relaxed);
 }
