@@ -463,13 +463,12 @@ fn heartbeats_of_other_autopilots_and_components_pass_the_parachute_protocol() {
             ..Default::default()
         })
     };
-    let mut seq = 1;
     let [ardupilot, position] = vehicle_state(true);
     let px4 = heartbeat(MavType::MAV_TYPE_QUADROTOR, MavAutopilot::MAV_AUTOPILOT_PX4);
     let camera = heartbeat(MavType::MAV_TYPE_CAMERA, MavAutopilot::MAV_AUTOPILOT_INVALID);
-    for (from, m) in [((1, 1), &ardupilot), ((1, 1), &position), ((1, 100), &camera), ((1, 1), &px4)] {
+    let sent = [((1, 1), &ardupilot), ((1, 1), &position), ((1, 100), &camera), ((1, 1), &px4)];
+    for (seq, (from, m)) in (1..).zip(sent) {
         let f = mav(from, seq, m);
-        seq += 1;
         vehicle.send_to(&f, at).unwrap();
         let n = gcs.recv(&mut b).expect("every HEARTBEAT and reading reaches the ground station");
         assert_eq!(&b[..n], &f[..]);
