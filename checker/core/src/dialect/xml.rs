@@ -78,8 +78,8 @@ pub fn parse(root: &str, load: &mut dyn FnMut(&str) -> Option<String>) -> Result
 
 /// [`parse`] over texts that may be borrowed (the bundled files are read in place, not
 /// copied), keeping the description texts only if `descriptions` (without them every
-/// `description` is empty: nothing but diagnostics' readers look at them, and they are about
-/// half of a dialect's memory).
+/// `description` is empty: nothing but a reader of the definitions looks at them, and they are
+/// a fifth of a dialect's memory).
 pub(super) fn parse_texts(
     root: &str,
     load: &mut dyn FnMut(&str) -> Option<Cow<'static, str>>,
