@@ -434,15 +434,33 @@ fn parachute_is_monitored_with_its_readings() {
     let (_, kinds, d, _) = run(&[(u, &safe_hb), (g, &release)]);
     assert_eq!(kinds[1], Some(Kind::NoReading), "{d:?}");
     assert!(d[0].contains("no reading of the stream yet"), "{d:?}");
-    // A stream message breaking the stream's invariant (a fixed-wing, once the session knows
-    // the vehicle) is a stream violation, and no reading: the last safe one still counts.
+    // A stream message breaking the stream's invariant from an end no open session binds as
+    // the vehicle (a fixed-wing's, a PX4 quadrotor's HEARTBEAT) is no reading and no
+    // violation: it passes (a ground station must see every vehicle's and component's
+    // HEARTBEAT), and it erases that end's earlier reading: a release on the safe reading
+    // before it finds no reading.
     let plane =
         payload(&prog, "HEARTBEAT", gcs, &[("type", 1), ("autopilot", 3), ("base_mode", 81), ("custom_mode", 0)]);
-    let (_, kinds, d, stats) =
-        run(&[(u, &disarmed), (u, &safe_pos), (g, &gcs_heartbeat), (u, &plane), (u, &safe_hb), (g, &release)]);
+    // MAV_AUTOPILOT_PX4 12, armed.
+    let px4 =
+        payload(&prog, "HEARTBEAT", gcs, &[("type", 2), ("autopilot", 12), ("base_mode", 209), ("custom_mode", 0)]);
+    for other in [&plane, &px4] {
+        let (out, kinds, d, stats) = run(&[(u, &safe_hb), (u, &safe_pos), (u, other), (g, &release)]);
+        assert!(matches!(out[2], Outcome::Passed), "{out:?} {d:?}");
+        assert_eq!(kinds[3], Some(Kind::NoReading), "{d:?}");
+        assert_eq!(stats.readings, 2);
+    }
+    // Another component of the vehicle's system (a camera: MAV_TYPE_CAMERA 30,
+    // MAV_AUTOPILOT_INVALID 8) passes, and the autopilot's readings still count.
+    let camera = payload(&prog, "HEARTBEAT", gcs, &[("type", 30), ("autopilot", 8)]);
+    let (out, kinds, d, _) = run(&[(u, &safe_hb), (u, &safe_pos), ((u.0, 100), &camera), (g, &release)]);
+    assert!(matches!(out[2], Outcome::Passed) && kinds.iter().all(Option::is_none), "{out:?} {d:?}");
+    // From the end an open session binds as the vehicle (the release sent, its ACK awaited),
+    // it is a stream violation, and no reading: the last safe one still counts.
+    let (out, kinds, d, stats) = run(&[(u, &safe_hb), (u, &safe_pos), (g, &release), (u, &plane), (u, &ack(0))]);
     assert_eq!(kinds[3], Some(Kind::Stream), "{d:?}");
-    assert!(kinds[5].is_none(), "{d:?}");
-    assert_eq!(stats.readings, 3);
+    assert!(kinds[4].is_none() && matches!(out[4], Outcome::Ended { .. }), "{out:?} {d:?}");
+    assert_eq!(stats.readings, 2);
 }
 
 /// A frame from an end no session has bound, whose label is a stream's and a step's, and

@@ -310,7 +310,8 @@ fn mavsdk_action_arms_action_server_through_the_proxy() {
 /// is dropped. When the calibration ended with the vehicle's HEARTBEAT, every HEARTBEAT
 /// outside a calibration was dropped and MAVSDK never saw the vehicle. (`parachute.chor` is
 /// not for this vehicle: MAVSDK's server announces no ArduPilot quadrotor, which breaks the
-/// parachute's HEARTBEAT stream invariant, so its heartbeats would be dropped, by design.)
+/// parachute's HEARTBEAT stream invariant, so its heartbeats pass as no readings and a
+/// release to it would be dropped.)
 #[test]
 fn mavsdk_arms_through_the_calibration_protocol() {
     if !have("mavsdk") {
@@ -432,6 +433,56 @@ fn a_parachute_release_in_a_wrong_vehicle_state_is_dropped() {
     let end = p.wait_for(Duration::from_secs(5), |l| l["event"] == "end").expect("the session ended");
     assert_eq!(end["conformant"], true);
     assert_eq!(violations(&p).len(), 1, "only the early release: {:?}", violations(&p));
+}
+
+/// `parachute.chor` is for ArduPilot quadrotors, yet the HEARTBEATs of a PX4 quadrotor and of
+/// a camera (which break its HEARTBEAT stream's invariant) reach the ground station through
+/// the proxy: dropping them hid every other vehicle and component from it. They are no
+/// readings, and the PX4's erases the safe reading its end streamed before, so a release to
+/// the PX4 vehicle is dropped (no reading).
+#[test]
+fn heartbeats_of_other_autopilots_and_components_pass_the_parachute_protocol() {
+    use mavlink::dialects::common::*;
+    let (p, g, v) = proxy(&["parachute.chor"], &[]);
+    let vehicle = UdpSocket::bind(("127.0.0.1", v)).expect("the vehicle's port");
+    vehicle.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+    let gcs = UdpSocket::bind("127.0.0.1:0").unwrap();
+    gcs.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+    gcs.connect(("127.0.0.1", g)).unwrap();
+    let mut b = [0u8; 2048];
+    let ping = MavMessage::PARAM_REQUEST_LIST(PARAM_REQUEST_LIST_DATA { target_system: 1, target_component: 1 });
+    gcs.send(&mav((255, 190), 0, &ping)).unwrap();
+    let (_, at) = vehicle.recv_from(&mut b).expect("the proxy forwards outside the alphabet");
+    let heartbeat = |mavtype, autopilot| {
+        MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+            mavtype,
+            autopilot,
+            base_mode: MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED,
+            system_status: MavState::MAV_STATE_ACTIVE,
+            mavlink_version: 3,
+            ..Default::default()
+        })
+    };
+    let [ardupilot, position] = vehicle_state(true);
+    let px4 = heartbeat(MavType::MAV_TYPE_QUADROTOR, MavAutopilot::MAV_AUTOPILOT_PX4);
+    let camera = heartbeat(MavType::MAV_TYPE_CAMERA, MavAutopilot::MAV_AUTOPILOT_INVALID);
+    let sent = [((1, 1), &ardupilot), ((1, 1), &position), ((1, 100), &camera), ((1, 1), &px4)];
+    for (seq, (from, m)) in (1..).zip(sent) {
+        let f = mav(from, seq, m);
+        vehicle.send_to(&f, at).unwrap();
+        let n = gcs.recv(&mut b).expect("every HEARTBEAT and reading reaches the ground station");
+        assert_eq!(&b[..n], &f[..]);
+    }
+    gcs.send(&mav((255, 190), 1, &parachute_release())).unwrap();
+    gcs.send(&mav((255, 190), 2, &ping)).unwrap();
+    let (n, _) = vehicle.recv_from(&mut b).unwrap();
+    assert_eq!(&b[..n], &mav((255, 190), 2, &ping)[..], "the release to the PX4 vehicle was forwarded");
+    let dropped = p.wait_for(Duration::from_secs(5), |l| l["event"] == "violation").expect("a violation line");
+    assert_eq!(
+        (dropped["kind"].as_str(), dropped["action"].as_str(), dropped["msgid"].as_u64()),
+        (Some("no reading"), Some("drop"), Some(76))
+    );
+    assert_eq!(violations(&p).len(), 1, "only the release: {:?}", violations(&p));
 }
 
 // ---- the two processes: `mochi proxy` verifies, `mochi-proxy` enforces -----------------

@@ -133,6 +133,9 @@ fn main() -> ExitCode {
             return ExitCode::from(code);
         }
     };
+    // Nothing here reads a dialect's description texts (they are for readers of the
+    // definitions): without them the dialects the protocols name take about half the memory.
+    mochi_monitor::dialect::without_descriptions();
     let loaded = std::thread::Builder::new().stack_size(STACK_SIZE).spawn(move || {
         let mut db = SourceDb::new();
         protocols(&mut db, &args).map(|a| (db, a, args))

@@ -2,7 +2,9 @@
 //! `checker/core/src/dialect/definitions/` (origin, commit and licence in its `SOURCES.md`),
 //! embedded in the binary at build time, each parsed once on first use.
 
-use super::{parse, Dialect};
+use super::{xml, Dialect};
+use std::borrow::Cow;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::OnceLock;
 
 /// The bundled definition files: the name a protocol writes in `dialect NAME;` (the file
@@ -46,14 +48,39 @@ pub fn builtin_names() -> &'static [&'static str] {
 /// machine, best of 20: `common` 5.5 ms, `ardupilotmega` (common's tree and six more files)
 /// 6.7 ms; a cold first read 20-40 ms (`tests::builtin_parse_time_common_and_ardupilotmega_well_under_50ms`
 /// bounds it).
+///
+/// The embedded texts are read in place (not copied), and without their description texts
+/// after [`without_descriptions`].
 pub fn builtin(name: &str) -> Option<&'static Dialect> {
     static CELLS: [OnceLock<Option<Dialect>>; 9] = [const { OnceLock::new() }; 9];
     let i = FILES.iter().position(|(n, _)| *n == name)?;
-    CELLS[i].get_or_init(|| parse(&format!("{name}.xml"), &mut bundled).ok()).as_ref()
+    let descriptions = DESCRIPTIONS.load(Ordering::Relaxed);
+    let mut load = |file: &str| embedded(file).map(Cow::Borrowed);
+    CELLS[i].get_or_init(|| xml::parse_texts(&format!("{name}.xml"), &mut load, descriptions).ok()).as_ref()
 }
 
-/// The loader over the embedded files (by file name, `common.xml`).
-pub(super) fn bundled(file: &str) -> Option<String> {
+/// Whether the bundled dialects keep their description texts ([`without_descriptions`]).
+static DESCRIPTIONS: AtomicBool = AtomicBool::new(true);
+
+/// From now on, a bundled dialect read for the first time keeps no description texts: every
+/// `description` of its messages, fields, enums, entries and command parameters is empty. The
+/// names, ids, wire types, enums, units, labels and bounds, everything a program is checked and
+/// lowered against, are the same. For a process that only lowers and enforces protocols
+/// (`mochi-proxy`): nothing but a reader of the definitions looks at the descriptions, and
+/// they are a fifth of a parsed dialect's memory (common and ardupilotmega together: 2.5 MB
+/// of heap with them, 2.0 MB without). A dialect already read keeps what it has.
+pub fn without_descriptions() {
+    DESCRIPTIONS.store(false, Ordering::Relaxed);
+}
+
+/// The embedded text of a file (by file name, `common.xml`).
+fn embedded(file: &str) -> Option<&'static str> {
     let stem = file.strip_suffix(".xml")?;
-    FILES.iter().find(|(n, _)| *n == stem).map(|(_, t)| t.to_string())
+    FILES.iter().find(|(n, _)| *n == stem).map(|(_, t)| *t)
+}
+
+/// The loader over the embedded files, a copy of the text (for the tests' loaders).
+#[cfg(test)]
+pub(super) fn bundled(file: &str) -> Option<String> {
+    embedded(file).map(str::to_string)
 }

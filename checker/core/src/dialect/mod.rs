@@ -21,7 +21,7 @@
 mod builtin;
 mod xml;
 
-pub use builtin::{builtin, builtin_names};
+pub use builtin::{builtin, builtin_names, without_descriptions};
 pub use xml::{parse, DialectError};
 
 use rustc_hash::FxHashMap;

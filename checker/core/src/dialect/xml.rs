@@ -32,6 +32,7 @@
 
 use super::{CmdParam, Dialect, Entry, Enum, Field, Message, Wire};
 use rustc_hash::{FxHashMap, FxHashSet};
+use std::borrow::Cow;
 use std::fmt;
 
 /// How deep includes may nest (the bundled tree is 4 deep: ardupilotmega, common, standard,
@@ -72,8 +73,21 @@ impl std::error::Error for DialectError {}
 /// is none. Each file is asked for once. The dialect's name is `root`'s file name without
 /// folder and `.xml`. Never panics, whatever the files hold.
 pub fn parse(root: &str, load: &mut dyn FnMut(&str) -> Option<String>) -> Result<Dialect, DialectError> {
+    parse_texts(root, &mut |name| load(name).map(Cow::Owned), true)
+}
+
+/// [`parse`] over texts that may be borrowed (the bundled files are read in place, not
+/// copied), keeping the description texts only if `descriptions` (without them every
+/// `description` is empty: nothing but a reader of the definitions looks at them, and they are
+/// a fifth of a dialect's memory).
+pub(super) fn parse_texts(
+    root: &str,
+    load: &mut dyn FnMut(&str) -> Option<Cow<'static, str>>,
+    descriptions: bool,
+) -> Result<Dialect, DialectError> {
     let mut r = Reader {
         load,
+        descriptions,
         seen: FxHashSet::default(),
         messages: Vec::new(),
         by_name: FxHashMap::default(),
@@ -105,7 +119,9 @@ impl fmt::Display for Origin {
 }
 
 struct Reader<'l> {
-    load: &'l mut dyn FnMut(&str) -> Option<String>,
+    load: &'l mut dyn FnMut(&str) -> Option<Cow<'static, str>>,
+    /// Whether description texts are kept ([`parse_texts`]).
+    descriptions: bool,
     seen: FxHashSet<String>,
     messages: Vec<(Message, Origin)>,
     by_name: FxHashMap<String, usize>,
@@ -122,6 +138,8 @@ struct File<'a> {
     text: &'a str,
     /// The byte offset of each line's start.
     lines: Vec<usize>,
+    /// Whether description texts are kept ([`parse_texts`]).
+    descriptions: bool,
 }
 
 impl File<'_> {
@@ -178,9 +196,22 @@ fn text_of(node: roxmltree::Node<'_, '_>) -> String {
     out
 }
 
-/// The `<description>` child's text, or "".
-fn description(node: roxmltree::Node<'_, '_>) -> String {
+/// The `<description>` child's text, or "" (always "" when `f` keeps no descriptions).
+fn description(f: &File<'_>, node: roxmltree::Node<'_, '_>) -> String {
+    if !f.descriptions {
+        return String::new();
+    }
     node.children().find(|c| c.has_tag_name("description")).map(text_of).unwrap_or_default()
+}
+
+/// The text of a field or parameter element (its description), or "" when `f` keeps no
+/// descriptions.
+fn own_text(f: &File<'_>, node: roxmltree::Node<'_, '_>) -> String {
+    if f.descriptions {
+        text_of(node)
+    } else {
+        String::new()
+    }
 }
 
 /// `"2**k"`, `"0x.."`, decimal, each optionally with a leading `-`; `None` if not an `i64`.
@@ -264,7 +295,7 @@ impl Reader<'_> {
             }
         };
         let lines = std::iter::once(0).chain(text.match_indices('\n').map(|(i, _)| i + 1)).collect();
-        let f = File { name, text: &text, lines };
+        let f = File { name, text: &text, lines, descriptions: self.descriptions };
         if let Some(e) = crate::xmlscan::excess(&text) {
             use crate::xmlscan::{Excess, MAX_ATTRIBUTES, MAX_NAMESPACES};
             return match e {
@@ -320,12 +351,13 @@ impl Reader<'_> {
                 let e = &mut self.enums[i].0;
                 e.bitmask |= bitmask;
                 if e.description.is_empty() {
-                    e.description = description(node);
+                    e.description = description(f, node);
                 }
                 i
             }
             None => {
-                let e = Enum { name: name.to_string(), bitmask, entries: Vec::new(), description: description(node) };
+                let e =
+                    Enum { name: name.to_string(), bitmask, entries: Vec::new(), description: description(f, node) };
                 self.enums.push((e, at));
                 self.enum_at.insert(name.to_string(), self.enums.len() - 1);
                 self.enums.len() - 1
@@ -398,13 +430,13 @@ impl Reader<'_> {
                         enum_name: c.attribute("enum").map(str::to_string),
                         units: c.attribute("units").map(str::to_string),
                         extension,
-                        description: text_of(c),
+                        description: own_text(f, c),
                     });
                 }
                 _ => {}
             }
         }
-        let m = Message { id, name: name.to_string(), fields, deprecated, description: description(node) };
+        let m = Message { id, name: name.to_string(), fields, deprecated, description: description(f, node) };
         let here = f.origin(node.range().start);
         let same_name = self.by_name.get(name).copied();
         let same_id = self.by_id.get(&id).copied();
@@ -481,9 +513,9 @@ fn entry(f: &File<'_>, node: roxmltree::Node<'_, '_>) -> Result<Entry, DialectEr
             min,
             max,
             reserved: f.flag(p, "reserved")?,
-            description: text_of(p),
+            description: own_text(f, p),
         });
     }
     params.sort_by_key(|p| p.index);
-    Ok(Entry { name: name.to_string(), value, params, description: description(node) })
+    Ok(Entry { name: name.to_string(), value, params, description: description(f, node) })
 }

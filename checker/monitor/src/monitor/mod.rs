@@ -377,6 +377,11 @@ impl Monitor {
         &self.protos
     }
 
+    /// The compiled protocols, given back (to rebuild a monitor from them without a copy).
+    pub fn into_protocols(self) -> Vec<Automaton> {
+        self.protos
+    }
+
     /// Violation `i` (the index an [`Outcome::Violation`] carries), unless it was taken.
     pub fn violation(&self, i: usize) -> Option<&Violation> {
         i.checked_sub(self.taken_violations).and_then(|k| self.violations.get(k))

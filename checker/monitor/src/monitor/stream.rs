@@ -10,7 +10,9 @@
 //!    source is the stream's sender; see there how an end no session has bound yet is
 //!    classified);
 //! 2. checking a stream message: [`Monitor::on_stream`] (wire range, enum, invariant;
-//!    a failure is [`Kind::Stream`] and is no reading);
+//!    a failure is no reading, and a [`Kind::Stream`] violation when its end is bound as the
+//!    stream's sender in an open session; from any other end it passes, and the end's
+//!    earlier readings are forgotten);
 //! 3. the latest value: [`Reading`], one per protocol, stream, sender end and target;
 //! 4. taking a snapshot: [`snapshot`], called by the step before its guard;
 //! 5. no reading yet: [`snapshot`] fails with [`Kind::NoReading`], the guard and
@@ -66,6 +68,9 @@ impl Monitor {
     /// message if the stream's refinements hold, otherwise a candidate step (which may start
     /// a session, or be a violation as any step). A reading from an end that is not the
     /// session's stream sender is never used by the session (readings are kept per end).
+    /// A message breaking the stream's refinements is a violation only from an end bound as
+    /// the stream's sender in an open session; from another end it is not this stream's (it
+    /// passes unless a step takes it), and it erases that end's readings of the stream.
     pub(super) fn on_stream(&mut self, p: usize, f: &Frame, index: u64) -> Class {
         let src = (f.sysid, f.compid);
         for si in 0..self.protos[p].streams.len() {
@@ -141,7 +146,7 @@ impl Monitor {
                     self.stats.readings += 1;
                     return Class::Reading;
                 }
-                Err(fail) if as_sender || !could_step => {
+                Err(fail) if as_sender => {
                     let st = &self.protos[p].streams[si];
                     self.stats.violations += 1;
                     let field = fail.field.and_then(|i| st.fields.get(i as usize)).map(|fr| fr.name.clone());
@@ -164,7 +169,17 @@ impl Monitor {
                     });
                     return Class::Violation(self.taken_violations + self.violations.len() - 1);
                 }
-                Err(_) => {}
+                // From an end no open session binds as the stream's sender, a message breaking
+                // the stream's refinements is no reading: its end is none that plays the
+                // sending role (a PX4 autopilot's, a camera's or a gimbal's HEARTBEAT, to a
+                // protocol for ArduPilot quadrotors). Nor is it a violation: it is no step
+                // (passed, unless a step takes it). But it is that end's latest message: an
+                // earlier reading of it is forgotten, so no step reads a value older than its
+                // sender's latest message (docs/monitor.md, "Streams and observed state").
+                Err(_) => {
+                    let (p, si) = (p as u32, si as u32);
+                    self.readings.retain(|r| !(r.proto == p && r.stream == si && r.from == src));
+                }
             }
         }
         Class::NotStream

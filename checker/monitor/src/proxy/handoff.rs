@@ -19,6 +19,7 @@
 //! the same sources.
 
 use crate::diag::{Code, Diagnostic};
+use crate::hir::Global;
 use crate::monitor::Automaton;
 use crate::source::{FileId, SourceDb, Span};
 use crate::syntax::{self, Loader};
@@ -113,7 +114,15 @@ pub fn load(
         diags.retain(Diagnostic::is_error);
         return Err(diags);
     }
-    Automaton::compile(&prog).map_err(|e| vec![e.diagnostic(at)])
+    let mut a = Automaton::compile(&prog).map_err(|e| vec![e.diagnostic(at)])?;
+    drop(prog);
+    // The monitor runs the automaton and reads of the program only its names, constants and
+    // strings (for evaluating and explaining predicates), never the choreography it was
+    // compiled from: its body, with every guard and refinement as a tree, is dropped.
+    if let Some(c) = &mut a.prog.choreography {
+        c.body = Global::End(c.body.loc());
+    }
+    Ok(a)
 }
 
 /// A diagnostic as plain text, `error[CODE]: file:line:column: message` and its help (the

@@ -157,16 +157,21 @@ impl Proxy<'_> {
     /// Runs until `stop` is set: frames from `gcs` go to `vehicle` and back; events go to
     /// `out`. Returns when both directions have stopped; an error of one end is reported and
     /// the proxy goes on (a link that fails is retried, as a ground station does).
-    pub fn run(&self, gcs: &dyn Port, vehicle: &dyn Port, out: &dyn Sink, stop: &AtomicBool, totals: &Totals) {
-        let shared = if self.protocols.is_empty() {
+    ///
+    /// The protocols move into the one monitor (not copied: a copy of each compiled protocol
+    /// and its program would double the proxy's largest memory), hence `self` by value.
+    pub fn run(mut self, gcs: &dyn Port, vehicle: &dyn Port, out: &dyn Sink, stop: &AtomicBool, totals: &Totals) {
+        let protocols = std::mem::take(&mut self.protocols);
+        let shared = if protocols.is_empty() {
             None
         } else {
-            Some(Mutex::new(Shared { monitor: Monitor::new(self.protocols.clone()), resets: 0 }))
+            Some(Mutex::new(Shared { monitor: Monitor::new(protocols), resets: 0 }))
         };
+        let this = &self;
         std::thread::scope(|scope| {
             let shared = shared.as_ref();
-            scope.spawn(move || self.direction(Dir::GcsToVehicle, gcs, vehicle, shared, out, stop, totals));
-            scope.spawn(move || self.direction(Dir::VehicleToGcs, vehicle, gcs, shared, out, stop, totals));
+            scope.spawn(move || this.direction(Dir::GcsToVehicle, gcs, vehicle, shared, out, stop, totals));
+            scope.spawn(move || this.direction(Dir::VehicleToGcs, vehicle, gcs, shared, out, stop, totals));
         });
     }
 
@@ -354,7 +359,8 @@ impl Proxy<'_> {
             open_sessions_lost: open,
             resets: g.resets,
         });
-        g.monitor = Monitor::new(self.protocols.clone());
+        let old = std::mem::replace(&mut g.monitor, Monitor::new(Vec::new()));
+        g.monitor = Monitor::new(old.into_protocols());
     }
 
     /// At most once a second, an event with the input counts of a direction when something

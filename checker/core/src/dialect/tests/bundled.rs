@@ -579,3 +579,32 @@ fn a_dialect_built_by_hand_is_indexed_and_checked() {
     assert!(Dialect::new("t", vec![msg(1, "A"), msg(2, "A")], vec![]).unwrap_err().message.contains("same name"));
     assert!(Dialect::new("t", vec![msg(1, "A"), msg(1, "B")], vec![]).unwrap_err().message.contains("same id"));
 }
+
+/// Without descriptions (what `mochi-proxy` reads, `without_descriptions`), every bundled
+/// dialect is the dialect with descriptions, each description emptied: the same messages,
+/// fields, enums, entries and parameters, nothing else lost.
+#[test]
+fn a_dialect_without_descriptions_is_the_dialect_with_its_descriptions_emptied() {
+    for n in builtin_names() {
+        let mut load = |f: &str| builtin::bundled(f).map(std::borrow::Cow::Owned);
+        let lean = xml::parse_texts(&format!("{n}.xml"), &mut load, false).expect("reads");
+        let mut full = builtin(n).expect("bundled").clone();
+        let texts = full
+            .messages
+            .iter()
+            .flat_map(|m| std::iter::once(&m.description).chain(m.fields.iter().map(|f| &f.description)));
+        assert!(texts.clone().any(|t| !t.is_empty()), "{n}: the full dialect has descriptions");
+        for m in &mut full.messages {
+            m.description.clear();
+            m.fields.iter_mut().for_each(|f| f.description.clear());
+        }
+        for e in &mut full.enums {
+            e.description.clear();
+            for x in &mut e.entries {
+                x.description.clear();
+                x.params.iter_mut().for_each(|p| p.description.clear());
+            }
+        }
+        assert!(lean == full, "{n}: the dialect without descriptions differs in more than its descriptions");
+    }
+}

@@ -112,3 +112,62 @@ fn a_refusal_reads_as_plain_text_with_its_place() {
     assert!(text.starts_with("error[E0801]: dir/set.chor:1:1: dir/set.chor was not verified"), "{text}");
     assert!(text.contains("= help: mochi-proxy enforces only protocols"), "{text}");
 }
+
+/// What `mochi-proxy` keeps of a loaded protocol (the automaton, and of its program the
+/// names, constants and strings, not the choreography's body) monitors as the whole compiled
+/// program does: the same outcomes, and the same explanations of its violations.
+#[test]
+fn a_loaded_protocol_monitors_as_the_whole_program_does() {
+    use crate::mavio::Frame;
+    use crate::monitor::{Monitor, Outcome};
+    use mavlink::dialects::common::{MavMessage, MavParamType, PARAM_SET_DATA, PARAM_VALUE_DATA};
+    use mavlink::{MavlinkVersion, Message};
+    let fs = files(&[("dir/set.chor", SET), ("dir/lib.mochi", LIB)]);
+    let loaded = enforce(&fs, Some(&verified(&fs))).unwrap_or_else(|e| panic!("{e:?}"));
+    assert!(matches!(loaded.prog.choreography.as_ref().map(|c| &c.body), Some(Global::End(_))));
+    let mut db = SourceDb::new();
+    let root = db.add("dir/set.chor", SET);
+    let mut read = |p: &Path| fs.get(p).cloned().ok_or_else(|| std::io::Error::other("no such file"));
+    let (parsed, d) = syntax::parse_with_imports(&mut db, root, &mut read);
+    assert!(d.is_empty(), "{d:?}");
+    let whole = Automaton::compile(&crate::lower::lower(&parsed).0).expect("compiles");
+    let set = |v: f32| {
+        MavMessage::PARAM_SET(PARAM_SET_DATA {
+            param_value: v,
+            target_system: 1,
+            target_component: 1,
+            param_id: [0; 16].into(),
+            param_type: MavParamType::MAV_PARAM_TYPE_REAL32,
+        })
+    };
+    let value = |v: f32| MavMessage::PARAM_VALUE(PARAM_VALUE_DATA { param_value: v, ..Default::default() });
+    // Conforming, then a value above the limit, then a wrong echo.
+    let trace = [(true, set(5.0)), (false, value(5.0)), (true, set(50.0)), (true, set(3.0)), (false, value(4.0))];
+    let run = |a: &Automaton| {
+        let mut m = Monitor::new(vec![a.clone()]);
+        let mut out = Vec::new();
+        for (from_gcs, msg) in &trace {
+            let mut payload = [0u8; 255];
+            let n = msg.ser(MavlinkVersion::V2, &mut payload);
+            let (sysid, compid) = if *from_gcs { (255, 190) } else { (1, 1) };
+            let f = Frame {
+                time_us: Some(1000),
+                version: 2,
+                sysid,
+                compid,
+                msgid: msg.message_id(),
+                payload: &payload[..n],
+                signed: false,
+                raw: &[],
+            };
+            out.push(match m.on_frame(&f) {
+                Outcome::Violation(v) => format!("violation: {}", m.describe(&db, v)),
+                o => format!("{o:?}"),
+            });
+        }
+        out
+    };
+    let (a, b) = (run(&loaded), run(&whole));
+    assert_eq!(a, b);
+    assert_eq!(a.iter().filter(|o| o.starts_with("violation")).count(), 2, "{a:?}");
+}
