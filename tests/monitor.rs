@@ -1478,7 +1478,8 @@ fn no_corpus_protocol_is_refused_for_its_order_or_for_starting_by_waiting() {
 /// Keyed streams over a real list download: the two keyed parameters' PARAM_VALUEs of the
 /// ardusub capture are readings (MOT_THST_HOVER twice, SERVO16_FUNCTION's 16 characters
 /// with no NUL once), each of the other 885 names passes outside the alphabet, and with
-/// invariants the captured values break, exactly those three are stream violations.
+/// invariants the captured values break, none of the three is a reading (outside any
+/// session they pass: not this protocol's vehicle).
 #[test]
 fn keyed_streams_read_their_parameters_in_a_real_list_download() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -1504,7 +1505,9 @@ fn keyed_streams_read_their_parameters_in_a_real_list_download() {
         m.on_frame(&f);
     });
     let _ = std::fs::remove_dir_all(&dir);
+    // Outside any session, a value the invariant refuses is no reading of this protocol's
+    // vehicle (docs/monitor.md, "Streams and observed state"): it passes, and is not read.
     let kinds: Vec<Kind> = m.violations().iter().map(|v| v.kind).collect();
-    assert_eq!(kinds, [Kind::Stream, Kind::Stream, Kind::Stream]);
+    assert_eq!(kinds, []);
     assert_eq!(m.stats.readings, 0);
 }

@@ -415,6 +415,18 @@ impl Program {
     pub fn string(&self, code: i64) -> Option<&str> {
         usize::try_from(code).ok().and_then(|i| self.strings.get(i)).map(String::as_str)
     }
+
+    /// How many characters string `e` may hold at most ([`Program::str_width`]): a
+    /// literal's length, a value's width (or `bound(v)`'s, for values this table does not
+    /// hold: a process's binders), the wider branch of an `if`; `None` when unknown.
+    pub fn str_width_of(&self, e: &Expr, bound: &dyn Fn(ValueId) -> Option<u32>) -> Option<u32> {
+        match &e.kind {
+            ExprKind::Var(Var::Value(v, _)) => self.str_width.get(v).copied().or_else(|| bound(*v)),
+            ExprKind::Int(code) if e.sort == Sort::Str => self.string(*code).map(|t| t.len() as u32),
+            ExprKind::If(_, a, b) => Some(self.str_width_of(a, bound)?.max(self.str_width_of(b, bound)?)),
+            _ => None,
+        }
+    }
     /// For [T-SESS]: each participant's possible first primitives, in role order.
     /// Participants that never move are left out (they have no footprint to place).
     pub fn first_motions(&self) -> Vec<(RoleId, Vec<PrimApp>)> {

@@ -520,23 +520,13 @@ impl Lowerer {
     }
 
     /// E0236: `f == e` in the refinement of a `char[N]` field `f`, where `e` may hold a
-    /// longer string (a wider field's value, a string loop parameter). No value of `f`
+    /// longer string (a wider field's value, a loop parameter whose initial value is). No value of `f`
     /// equals a longer `e`, while the checks, to which a string is one value without a
     /// length, would find one: progress would hold of a stuck state, and a process that
     /// sends `e` in `f` would be typed as sending `e`, where the wire carries its first N
     /// characters. A literal longer than N is [`Self::string_fits`]'s.
     fn string_widths(&mut self, v: ValueId, name: &str, n: u32, refinement: &Expr) {
-        let width = |e: &Expr| -> Option<u32> {
-            fn go(lower: &Lowerer, e: &Expr) -> Option<u32> {
-                match &e.kind {
-                    ExprKind::Var(Var::Value(w, _)) => lower.prog.str_width.get(w).copied(),
-                    ExprKind::Int(code) => lower.prog.string(*code).map(|t| t.len() as u32),
-                    ExprKind::If(_, a, b) => Some(go(lower, a)?.max(go(lower, b)?)),
-                    _ => None,
-                }
-            }
-            go(self, e)
-        };
+        let width = |e: &Expr| self.prog.str_width_of(e, &|_| None);
         let is_field = |e: &Expr| matches!(&e.kind, ExprKind::Var(Var::Value(w, _)) if *w == v);
         let mut wide = Vec::new();
         refinement.visit(|e| {

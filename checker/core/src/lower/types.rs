@@ -15,6 +15,7 @@ impl Lowerer {
         }
         let mut cx = Scopes::default();
         let body = self.global(&c.body, &mut cx);
+        self.jump_widths(&body, &mut Vec::new());
         self.prog.choreography = Some(Choreography { name: c.name.name.clone(), body, span: c.name.span });
         for p in &c.partitions {
             self.distinct_coordinates(&p.point);
@@ -263,6 +264,13 @@ impl Lowerer {
             self.expect_sort(&init, &sort, &format!("initial value of `{}`", p.name.name));
             let v = self.new_value(&p.name, sort.clone(), origin.clone());
             values.push(v);
+            // A string parameter is as wide as its initial value (every jump is checked
+            // against that width after lowering: `jump_widths`).
+            if sort == Sort::Str {
+                if let Some(n) = self.prog.str_width_of(&init, &|_| None) {
+                    self.prog.str_width.insert(v, n);
+                }
+            }
             let refinement = p.refinement.as_ref().map(|r| {
                 let env = Env { values, ..env };
                 self.pred(r, &env, "a refinement")
@@ -270,6 +278,47 @@ impl Lowerer {
             out.push(RecParam { value: v, name: p.name.name.clone(), sort, refinement, init });
         }
         out
+    }
+
+    /// E0236: a jump passes a string parameter a value that may be wider than the
+    /// parameter's initial value, the width every message of the loop was checked with.
+    fn jump_widths(&mut self, g: &Global, loops: &mut Vec<(String, Vec<(usize, ValueId, String)>)>) {
+        match g {
+            Global::Seq(items, _) | Global::Choice(items, _) | Global::Par(items, _) => {
+                items.iter().for_each(|i| self.jump_widths(i, loops))
+            }
+            Global::Rec { var, params, body, .. } => {
+                let strs = params
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, p)| p.sort == Sort::Str)
+                    .map(|(i, p)| (i, p.value, p.name.clone()))
+                    .collect();
+                loops.push((var.clone(), strs));
+                self.jump_widths(body, loops);
+                loops.pop();
+            }
+            Global::Var(j) => {
+                let Some((_, strs)) = loops.iter().rev().find(|(n, _)| *n == j.var) else { return };
+                for (i, v, name) in strs.clone() {
+                    let Some(a) = j.args.get(i) else { continue };
+                    let (n, w) = (self.prog.str_width.get(&v).copied(), self.prog.str_width_of(a, &|_| None));
+                    if n.is_some() && (w.is_none() || w > n) {
+                        let n = n.unwrap_or_default();
+                        let held = w.map_or("a string of a width mochi does not know".to_string(), |w| {
+                            format!("a string of up to {w} characters")
+                        });
+                        self.err(
+                            Code::StringTooLong,
+                            a.loc.0,
+                            format!("this passes {held} to `{name}`, which its initial value makes at most {n} wide"),
+                            format!("pass `{name}` values at most {n} wide: the loop's messages were checked with that width"),
+                        );
+                    }
+                }
+            }
+            Global::Msg(_) | Global::Motion(_) | Global::End(_) | Global::After(_) => {}
+        }
     }
 
     pub(super) fn rec_var(

@@ -107,15 +107,7 @@ impl Checker<'_> {
     /// (char[50]) echoed as a PARAM_SET.param_id (char[16]) would be typed as the text.
     fn sent_string_fits(&mut self, a: &Expr, f: &Field, decl: Loc) {
         let Some(&n) = self.prog.str_width.get(&f.value) else { return };
-        fn width(c: &Checker, e: &Expr) -> Option<u32> {
-            match &e.kind {
-                ExprKind::Var(Var::Value(v, _)) => c.bound_width.get(v).or_else(|| c.prog.str_width.get(v)).copied(),
-                ExprKind::Int(code) => c.prog.string(*code).map(|t| t.len() as u32),
-                ExprKind::If(_, x, y) => Some(width(c, x)?.max(width(c, y)?)),
-                _ => None,
-            }
-        }
-        let w = width(self, a);
+        let w = self.prog.str_width_of(a, &|v| self.bound_width.get(&v).copied());
         if w.is_some_and(|w| w <= n) {
             return;
         }
