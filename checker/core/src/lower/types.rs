@@ -282,7 +282,7 @@ impl Lowerer {
 
     /// E0236: a jump passes a string parameter a value that may be wider than the
     /// parameter's initial value, the width every message of the loop was checked with.
-    fn jump_widths(&mut self, g: &Global, loops: &mut Vec<(String, Vec<(usize, ValueId, String)>)>) {
+    fn jump_widths(&mut self, g: &Global, loops: &mut Vec<(String, StrParams)>) {
         match g {
             Global::Seq(items, _) | Global::Choice(items, _) | Global::Par(items, _) => {
                 items.iter().for_each(|i| self.jump_widths(i, loops))
@@ -462,3 +462,6 @@ fn first_sender(g: &ast::Global) -> Option<&ast::Ident> {
         _ => None,
     }
 }
+
+/// A loop's string parameters: position, value and name ([`Lowerer::jump_widths`]).
+type StrParams = Vec<(usize, ValueId, String)>;
