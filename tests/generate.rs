@@ -437,6 +437,14 @@ fn run_scene(scene: &Scene, rename: &[usize]) -> Result<(), TestCaseError> {
         if what == "turned" && r.verdict == Verdict::Unknown {
             continue;
         }
+        // The same for one part of a verdict that stays the same: a contact the turn puts at
+        // irrational points (two boxes touching face to face, E0710) is undecided (U0001),
+        // while another part still rejects. Never a code the original does not have.
+        let undecided = r.diagnostics.iter().any(|d| d.code.as_str() == "U0001");
+        let fewer = codes(&r).iter().all(|c| codes(&base).contains(c));
+        if what == "turned" && r.verdict == base.verdict && undecided && fewer {
+            continue;
+        }
         prop_assert!(
             r.verdict == base.verdict && codes(&r) == codes(&base),
             "{what}: verdict {:?} codes {:?}, the original {said}\n{text}\n--- original ---\n{src}",
