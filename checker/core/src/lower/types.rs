@@ -264,9 +264,11 @@ impl Lowerer {
             self.expect_sort(&init, &sort, &format!("initial value of `{}`", p.name.name));
             let v = self.new_value(&p.name, sort.clone(), origin.clone());
             values.push(v);
-            // A string parameter is as wide as its initial value (every jump is checked
-            // against that width after lowering: `jump_widths`).
-            if sort == Sort::Str {
+            // A string parameter of the choreography is as wide as its initial value (every
+            // jump is checked against that width after lowering: `jump_widths`). The jumps of
+            // local types and processes are not checked, so their string parameters keep an
+            // unknown width, which E0236 refuses wherever a width is needed.
+            if sort == Sort::Str && who == Who::Nobody {
                 if let Some(n) = self.prog.str_width_of(&init, &|_| None) {
                     self.prog.str_width.insert(v, n);
                 }
