@@ -618,10 +618,12 @@ impl Env<'_> {
 /// report reads the same whichever path evaluated the expression (the fallback runs after an
 /// overflow, and may meet the division by zero the fixed width would have met).
 fn undefined_reason(why: &str) -> &'static str {
+    // The exact evaluator's enclosures (a `sqrt` in the divisor) may leave the sign open:
+    // say so, rather than claim the divisor is zero.
     if why.starts_with("a division by") {
-        "a division by zero"
+        "a division by a divisor that is, or may be, zero"
     } else if why.starts_with("the square root") {
-        "the square root of a negative number"
+        "the square root of a number that is, or may be, negative"
     } else {
         "an operation undefined at these values"
     }
